@@ -1,0 +1,1 @@
+//! Capacities and budgets for `rover` (filled in by the module that uses them).

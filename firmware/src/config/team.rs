@@ -1,0 +1,1 @@
+//! Capacities and budgets for `team` (filled in by the module that uses them).

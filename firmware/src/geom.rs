@@ -1,0 +1,48 @@
+//! Geometry helpers over `nalgebra` (no_std, `libm` backed).
+//!
+//! The 3D map, rover and tether work in `f32` ([`Real`]): the map's resolution (centimetres) is far coarser than
+//! `f32`'s precision over a few hundred metres, and the Cortex-M7 has a single-precision FPU.
+
+/// The scalar of the 3D world model.
+pub type Real = f32;
+/// A point or vector in 3D, metres (world frame: x east, y north, z up).
+pub type Vec3 = nalgebra::Vector3<Real>;
+/// A unit quaternion (orientation).
+pub type Rot3 = nalgebra::UnitQuaternion<Real>;
+/// A rigid transform, SE(3).
+pub type Pose3 = nalgebra::Isometry3<Real>;
+/// A point or vector in 2D (on a plane), metres.
+pub type Vec2 = nalgebra::Vector2<Real>;
+
+/// True when every component is finite (not NaN, not infinite).
+pub fn is_finite3(v: &Vec3) -> bool {
+    v.x.is_finite() && v.y.is_finite() && v.z.is_finite()
+}
+
+/// Euclidean norm through `libm` (bit-identical on every target).
+pub fn norm3(v: &Vec3) -> Real {
+    libm::sqrtf(v.x * v.x + v.y * v.y + v.z * v.z)
+}
+
+/// `v / |v|`, or `None` when `|v|` is below `eps` or not finite.
+pub fn normalize3(v: &Vec3, eps: Real) -> Option<Vec3> {
+    let n = norm3(v);
+    if n.is_finite() && n > eps {
+        Some(v / n)
+    } else {
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normalize_rejects_zero_and_nan() {
+        assert!(normalize3(&Vec3::zeros(), 1e-6).is_none());
+        assert!(normalize3(&Vec3::new(Real::NAN, 0.0, 0.0), 1e-6).is_none());
+        let u = normalize3(&Vec3::new(3.0, 0.0, 4.0), 1e-6);
+        assert_eq!(u.map(|u| norm3(&u)), Some(1.0));
+    }
+}

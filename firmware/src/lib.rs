@@ -1,0 +1,43 @@
+//! # firmware — flight software for tethered extreme-terrain rovers
+//!
+//! A `no_std`, heap-free planning core plus the flight executive, generic over the rover-computer HAL (`hal`).
+//! The same code runs in-process inside the host simulator and cross-compiled on the flight computer
+//! (`firmware/boards/*`).
+//!
+//! ## Layers (each depends only on the ones above it)
+//! - [`config`]: every capacity (arena size) and every budget (iterations, solver steps) in one place.
+//! - [`geom`]: vectors, transforms, planes, polygons over `nalgebra` (no_std) and `libm`.
+//! - [`protocol`]: wire format between simulator / ground and flight software (postcard bodies, COBS, CRC).
+//! - [`map`]: onboard terrain map (TSDF -> ESDF in a fixed pool of voxel blocks) — Paton et al. IV.
+//! - [`rover`], [`tether`], [`stability`]: tether-aware traversability — Paton et al. IV-A, IV-B, IV-C.
+//! - [`plan`]: planners: ABIT* (Paton et al. V), homotopy planning on tether-demand planes (Abad-Manterola et
+//!   al.; Tanner et al.), tethered climbing teams (Morad et al.).
+//! - [`exec`]: the flight executive: mode machine, frame dispatch, per-cycle budgets, telemetry.
+//!
+//! ## Rules of the core
+//! - **No heap, no panic.** Containers are `heapless` or fixed arrays; a full container is a typed outcome.
+//!   Large arenas are owned by the caller (board crate or host) and lent to the core.
+//! - **Every loop is bounded** by a named budget from [`config`]. Running out of budget is an outcome that keeps the
+//!   work done so far.
+//! - **Deterministic.** Randomness comes from a seeded `rand_core` generator passed in; transcendental functions
+//!   go through `libm`; no hash-ordered iteration; time is passed in. Same inputs, same bytes out, on x86_64 and
+//!   on the ARM flight computer.
+//!
+//! Numbers: the 3D map and rover use `f32` ([`geom::Real`]); solvers that need the headroom (QP, L-values) use
+//! `f64` internally. Both are IEEE-exact on the Cortex-M7 (f64 through the compiler's soft-float routines).
+#![no_std]
+#![forbid(unsafe_code)]
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic, clippy::indexing_slicing)
+)]
+
+pub mod config;
+pub mod exec;
+pub mod geom;
+pub mod map;
+pub mod plan;
+pub mod protocol;
+pub mod rover;
+pub mod stability;
+pub mod tether;

@@ -1,0 +1,1 @@
+//! `plan::abit`: not yet implemented (see the issue tracker).

@@ -1,0 +1,1 @@
+//! `plan::homotopy`: not yet implemented (see the issue tracker).

@@ -1,0 +1,1 @@
+//! `plan::team`: not yet implemented (see the issue tracker).

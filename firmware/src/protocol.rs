@@ -1,0 +1,1 @@
+//! `protocol`: not yet implemented (see the issue tracker).

@@ -1,0 +1,1 @@
+//! `rover`: not yet implemented (see the issue tracker).

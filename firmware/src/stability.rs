@@ -1,0 +1,1 @@
+//! `stability`: not yet implemented (see the issue tracker).

@@ -1,0 +1,1 @@
+//! `tether`: not yet implemented (see the issue tracker).
