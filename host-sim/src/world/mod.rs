@@ -1,0 +1,30 @@
+//! Ground-truth worlds: signed distance and ray casts.
+//!
+//! A world is the simulator's truth. The flight software never sees it directly: it sees sensor frames ray-cast
+//! into it and tether readings computed from it. Tests compare the onboard map and the planners' decisions against
+//! it. Every world implements [`firmware::map::DistanceField`] (exact signed distance, negative inside terrain)
+//! and [`World`].
+
+use firmware::geom::{Real, Vec3};
+use firmware::map::DistanceField;
+
+/// Axis-aligned bounds of a world, metres.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aabb {
+    /// Minimum corner.
+    pub min: Vec3,
+    /// Maximum corner.
+    pub max: Vec3,
+}
+
+/// A ground-truth world.
+pub trait World: DistanceField + Send + Sync {
+    /// A short name for logs and pictures.
+    fn name(&self) -> &str;
+    /// Bounds of the terrain (the region where the world is defined and interesting).
+    fn bounds(&self) -> Aabb;
+    /// Distance along the unit direction `dir` from `origin` to the first surface hit, up to `max_range`.
+    fn raycast(&self, origin: &Vec3, dir: &Vec3, max_range: Real) -> Option<Real>;
+    /// Terrain height under (x, y) if the world is a height field (top surface), else `None`.
+    fn height_at(&self, x: Real, y: Real) -> Option<Real>;
+}
