@@ -591,6 +591,10 @@ pub struct Telemetry {
     pub log_dropped: u32,
     /// Outgoing frames dropped because the transmit queue was full.
     pub tx_dropped: u32,
+    /// Errors reported by the link or the watchdog.
+    pub device_errors: u32,
+    /// Mode changes refused because the transition table does not allow them (a bug if ever non-zero).
+    pub illegal_transitions: u32,
     /// High-water marks.
     pub high_water: HighWater,
 }
