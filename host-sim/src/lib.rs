@@ -6,5 +6,6 @@
 
 pub mod cli;
 pub mod movingai;
+pub mod team;
 pub mod terrain;
 pub mod world;

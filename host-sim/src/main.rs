@@ -15,11 +15,14 @@ struct Cli {
 enum Command {
     /// Run every Moving AI scenario of a .map/.scen pair through the team's global planner (D* Lite).
     Movingai(cli::team::MovingaiArgs),
+    /// Simulate the four-robot climbing team on real terrain (HiRISE cliff, Itokawa) and draw it.
+    Team(cli::team::TeamArgs),
 }
 
 fn main() -> ExitCode {
     let result = match Cli::parse().command {
         Command::Movingai(a) => cli::team::movingai(&a),
+        Command::Team(a) => cli::team::team(&a),
     };
     match result {
         Ok(true) => ExitCode::SUCCESS,
