@@ -184,7 +184,7 @@ pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig,
         let leg = team.leg(m).unwrap_or_else(Vec3::zeros);
         let goal = team.slot_goal(m, &v3(cfg.goal));
         let t0 = std::time::Instant::now();
-        let plan = planner.plan(&pts, &v3(sensor), &team.robots[m].pos, &leg, &goal, 0.5 * cfg.goal_tol as Real, &params);
+        let plan = planner.plan(&pts, &v3(n_true), &team.robots[m].pos, &leg, &goal, 0.5 * cfg.goal_tol as Real, &params);
         let dt = t0.elapsed().as_secs_f64();
         rep.plan_times.push(dt);
         let plan = match plan {

@@ -76,20 +76,20 @@ impl<const P: usize, const V: usize, const E: usize> LocalPlanner<P, V, E> {
         }
     }
 
-    /// Plan robot m's hops: scan `points` taken from `sensor`, robot gripping at `robot`, leg `c_m` (hub to
-    /// robot), towards `goal` (region radius `goal_tol`).
+    /// Plan robot m's hops: scan `points`, robot gripping at `robot` with outward direction `up` (from its
+    /// attitude), leg `c_m` (hub to robot, from the draw-wire encoder), towards `goal` (region radius `goal_tol`).
     #[allow(clippy::too_many_arguments)]
     pub fn plan(
         &mut self,
         points: &[Vec3],
-        sensor: &Vec3,
+        up: &Vec3,
         robot: &Vec3,
         c_m: &Vec3,
         goal: &Vec3,
         goal_tol: Real,
         params: &TeamParams,
     ) -> Result<LocalPlan, SceneError> {
-        self.scene.build(points, sensor, params)?;
+        self.scene.build(points, up, params)?;
         score::score_vertices(&self.scene, params, &mut self.scores);
         let c = cull(&self.scores, params, V.saturating_sub(1), &mut self.order);
         self.graph.clear();

@@ -2,7 +2,8 @@
 //! neighbours -> a continuous surface.
 //!
 //! **Scene frame.** A plane is fitted to the whole scan (centroid + smallest-eigenvalue eigenvector of the
-//! covariance, oriented towards the sensor). Everything below is expressed in this frame: plane coordinates
+//! covariance, oriented along the robot's `up`: its outward direction from its attitude — gravity on a cliff, away
+//! from the body's centre on an asteroid; orienting towards the sensor fails in concave scenes such as a pit). Everything below is expressed in this frame: plane coordinates
 //! (a, b) and height z along the plane normal. On a cliff the plane is the wall, on an asteroid the local
 //! tangent plane; "height" is therefore protrusion from the mean surface, not altitude (regolith collects in
 //! depressions of the surface whatever the direction of gravity).
@@ -53,7 +54,7 @@ pub enum CellState {
     Filled,
 }
 
-/// The scene frame: origin, in-plane axes u, v and normal n (right-handed, n towards the sensor).
+/// The scene frame: origin, in-plane axes u, v and normal n (right-handed, n along the robot's `up`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SceneFrame {
     /// Centroid of the scan.
@@ -62,7 +63,7 @@ pub struct SceneFrame {
     pub u: Vec3,
     /// Second in-plane axis.
     pub v: Vec3,
-    /// Plane normal, towards the sensor.
+    /// Plane normal, on the side of `up`.
     pub n: Vec3,
 }
 
@@ -242,9 +243,9 @@ impl<const P: usize> Scene<P> {
         }
     }
 
-    /// Build the scene from world points seen from `sensor`: frame, kNN normals, surface grid.
+    /// Build the scene from world points; `up` is the robot's outward direction (orients the normals).
     /// Non-finite points are skipped.
-    pub fn build(&mut self, points: &[Vec3], sensor: &Vec3, params: &TeamParams) -> Result<(), SceneError> {
+    pub fn build(&mut self, points: &[Vec3], up: &Vec3, params: &TeamParams) -> Result<(), SceneError> {
         let finite = || points.iter().filter(|p| is_finite3(p));
         let count = finite().count();
         if count < 3 {
@@ -264,7 +265,7 @@ impl<const P: usize> Scene<P> {
         }
         c /= count as Real;
         let mut n = normalize3(&n, 1e-9).ok_or(SceneError::Degenerate)?;
-        if n.dot(&(sensor - c)) < 0.0 {
+        if n.dot(up) < 0.0 {
             n = -n;
         }
         let u = any_perpendicular(&n);
@@ -568,7 +569,7 @@ mod tests {
             *p = Vec3::new(x, y, 0.5 * x);
         }
         let mut s: Box<Scene<SCENE_MAX_POINTS>> = Box::default();
-        s.build(&pts, &Vec3::new(5.0, 5.0, 20.0), &TeamParams::DEFAULT).unwrap();
+        s.build(&pts, &Vec3::z(), &TeamParams::DEFAULT).unwrap();
         let expect = normalize3(&Vec3::new(-0.5, 0.0, 1.0), 1e-9).unwrap();
         assert!(s.frame.n.dot(&expect) > 0.9999, "{:?}", s.frame.n);
         for i in 0..400 {
