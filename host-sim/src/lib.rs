@@ -16,6 +16,8 @@ pub mod mcap_export;
 pub mod replay;
 pub mod scenario;
 pub mod session;
+pub mod movingai;
+pub mod team;
 pub mod terrain;
 pub mod testkit;
 pub mod world;

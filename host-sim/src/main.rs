@@ -27,6 +27,10 @@ enum Command {
     Export(cli::export::ExportArgs),
     /// Show a field log's header, frames and damage.
     Inspect(cli::inspect::InspectArgs),
+    /// Run every Moving AI scenario of a .map/.scen pair through the team's global planner (D* Lite).
+    Movingai(cli::team::MovingaiArgs),
+    /// Simulate the four-robot climbing team on real terrain (HiRISE cliff, Itokawa) and draw it.
+    Team(cli::team::TeamArgs),
 }
 
 fn main() -> ExitCode {
@@ -42,6 +46,8 @@ fn main() -> ExitCode {
         Command::Replay(a) => cli::replay::main(&a),
         Command::Export(a) => cli::export::main(&a),
         Command::Inspect(a) => cli::inspect::main(&a),
+        Command::Movingai(a) => cli::check_outcome(cli::team::movingai(&a)),
+        Command::Team(a) => cli::check_outcome(cli::team::team(&a)),
     }
 }
 

@@ -5,6 +5,7 @@ pub mod export;
 pub mod inspect;
 pub mod replay;
 pub mod run;
+pub mod team;
 
 use std::process::ExitCode;
 
@@ -17,6 +18,16 @@ pub const EXIT_FAILED: u8 = 1;
 pub fn fail(msg: impl core::fmt::Display) -> ExitCode {
     eprintln!("error: {msg}");
     ExitCode::from(EXIT_ERROR)
+}
+
+/// Maps a check-style command result (`Ok(true)` passed, `Ok(false)` the check failed, `Err` could not run) to
+/// the CLI's exit codes.
+pub fn check_outcome<E: core::fmt::Display>(result: Result<bool, E>) -> ExitCode {
+    match result {
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::from(EXIT_FAILED),
+        Err(e) => fail(e),
+    }
 }
 
 struct StderrLogger;

@@ -25,3 +25,6 @@ impl Heightmap {
         }
     }
 }
+
+pub mod npy;
+pub mod obj;

@@ -1,1 +1,0 @@
-//! `plan::team`: not yet implemented (see the issue tracker).

@@ -1,0 +1,198 @@
+//! Bounded-leg A*, Morad et al. section V-A.6, Figs. 10-11: A* over the hop graph where robot m may hop from a to
+//! b only if
+//!
+//! - the hop is possible: d_ab <= h_max (edges longer than that are not in the graph), and
+//! - the leg stays within the tether: |c_m + h| <= r_max, with c_m the hub-to-robot vector measured before
+//!   planning (draw-wire encoder length and direction) and h = b - a the hop (Fig. 11's |c_m + h| <= r_max).
+//!
+//! The hub is held by the gripped robots while one hops, and follows the team between rounds, so every hop of the
+//! plan is checked against the same c_m; only the first hop is executed before the next scan and replan (the
+//! paper replans before each hop). Each robot runs this independently, without talking to the others.
+//!
+//! Cost: the edge loss L'_ab; heuristic: straight-line distance to the goal region (admissible since
+//! L'_ab >= d_ab). When the goal region is unreachable within the scene (normal when the goal is in another
+//! scene) the result is the path to the expanded vertex closest to the goal ([`AStarStatus::Approximate`]).
+//!
+//! Parameters: `r_max` (default 15 m) minus `landing_margin` (0.5 m); `astar_budget` expansions (4096).
+//! Open-set selection is a linear scan over at most `V` vertices (V = 512 by default): simple and bounded.
+
+use super::graph::HopGraph;
+use crate::config::team::TeamParams;
+use crate::geom::{norm3, Real, Vec3};
+use heapless::Vec as HVec;
+
+/// Status of a local plan (OMPL-style).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AStarStatus {
+    /// A path reaching the goal region.
+    Exact,
+    /// The goal region is not reachable; the path ends at the reachable vertex closest to the goal.
+    Approximate,
+    /// No hop from the start brings the robot closer to the goal.
+    NoSolution,
+    /// The expansion budget ran out; the path is the best so far (closest to the goal).
+    BudgetExhausted,
+    /// The start vertex does not exist.
+    InvalidInput,
+}
+
+/// A* scratch arena for `V` vertices.
+pub struct AStarArena<const V: usize> {
+    g: [Real; V],
+    parent: [u16; V],
+    open: [bool; V],
+    closed: [bool; V],
+}
+
+impl<const V: usize> AStarArena<V> {
+    /// Empty arena.
+    pub const fn new() -> Self {
+        Self { g: [Real::INFINITY; V], parent: [u16::MAX; V], open: [false; V], closed: [false; V] }
+    }
+}
+
+impl<const V: usize> Default for AStarArena<V> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// A local plan: vertex indices from the start (included) to the end.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LocalPath<const H: usize> {
+    /// Status.
+    pub status: AStarStatus,
+    /// Vertices of the path, start first (truncated to `H` entries from the start if longer).
+    pub vertices: HVec<u16, H>,
+    /// Total loss of the path.
+    pub loss: Real,
+    /// Expansions used.
+    pub expansions: u32,
+}
+
+/// Run bounded-leg A* from vertex `start` towards `goal` (region of radius `goal_tol`) with the leg `c_m`.
+pub fn bounded_leg_astar<const V: usize, const E: usize, const H: usize>(
+    graph: &HopGraph<V, E>,
+    arena: &mut AStarArena<V>,
+    start: u16,
+    goal: &Vec3,
+    goal_tol: Real,
+    c_m: &Vec3,
+    params: &TeamParams,
+) -> LocalPath<H> {
+    let n = graph.n_vertices;
+    let mut out = LocalPath { status: AStarStatus::InvalidInput, vertices: HVec::new(), loss: 0.0, expansions: 0 };
+    if start as usize >= n {
+        return out;
+    }
+    let r_eff = params.r_max - params.landing_margin;
+    let hdist = |v: usize| -> Real {
+        let p = graph.vertices.get(v).map(|x| x.pos).unwrap_or_else(Vec3::zeros);
+        (norm3(&(p - goal)) - goal_tol).max(0.0)
+    };
+    for i in 0..n {
+        if let (Some(g), Some(p), Some(o), Some(c)) =
+            (arena.g.get_mut(i), arena.parent.get_mut(i), arena.open.get_mut(i), arena.closed.get_mut(i))
+        {
+            *g = Real::INFINITY;
+            *p = u16::MAX;
+            *o = false;
+            *c = false;
+        }
+    }
+    if let (Some(g), Some(o)) = (arena.g.get_mut(start as usize), arena.open.get_mut(start as usize)) {
+        *g = 0.0;
+        *o = true;
+    }
+    let mut best = start as usize;
+    let mut best_h = hdist(best);
+    let mut status = AStarStatus::Approximate;
+    let mut reached = None;
+    loop {
+        // pick the open vertex with the smallest f (ties: lower index)
+        let mut u = usize::MAX;
+        let mut fu = Real::INFINITY;
+        for i in 0..n {
+            if arena.open.get(i) == Some(&true) {
+                let f = arena.g.get(i).copied().unwrap_or(Real::INFINITY) + hdist(i);
+                if f < fu {
+                    fu = f;
+                    u = i;
+                }
+            }
+        }
+        if u == usize::MAX {
+            break;
+        }
+        if out.expansions >= params.astar_budget {
+            status = AStarStatus::BudgetExhausted;
+            break;
+        }
+        out.expansions += 1;
+        if let (Some(o), Some(c)) = (arena.open.get_mut(u), arena.closed.get_mut(u)) {
+            *o = false;
+            *c = true;
+        }
+        let hu = hdist(u);
+        if hu < best_h {
+            best_h = hu;
+            best = u;
+        }
+        if hu <= 0.0 {
+            reached = Some(u);
+            status = AStarStatus::Exact;
+            break;
+        }
+        let gu = arena.g.get(u).copied().unwrap_or(Real::INFINITY);
+        let pu = graph.vertices.get(u).map(|x| x.pos).unwrap_or_else(Vec3::zeros);
+        for e in graph.out_edges(u) {
+            let b = e.to as usize;
+            if arena.closed.get(b) == Some(&true) {
+                continue;
+            }
+            let pb = match graph.vertices.get(b) {
+                Some(v) => v.pos,
+                None => continue,
+            };
+            // the bounded leg: the landing point must stay within the tether of the hub
+            if norm3(&(c_m + (pb - pu))) > r_eff {
+                continue;
+            }
+            let cand = gu + e.loss;
+            if cand < arena.g.get(b).copied().unwrap_or(Real::INFINITY) {
+                if let (Some(g), Some(p), Some(o)) = (arena.g.get_mut(b), arena.parent.get_mut(b), arena.open.get_mut(b)) {
+                    *g = cand;
+                    *p = u as u16;
+                    *o = true;
+                }
+            }
+        }
+    }
+    let end = reached.unwrap_or(best);
+    if end == start as usize {
+        out.status = if status == AStarStatus::BudgetExhausted { status } else { AStarStatus::NoSolution };
+        let _ = out.vertices.push(start);
+        return out;
+    }
+    out.status = status;
+    out.loss = arena.g.get(end).copied().unwrap_or(Real::INFINITY);
+    // walk back to the start (bounded by V), then reverse into the output
+    let mut chain: HVec<u16, 1024> = HVec::new();
+    let mut cur = end;
+    for _ in 0..V.min(1024) {
+        let _ = chain.push(cur as u16);
+        if cur == start as usize {
+            break;
+        }
+        cur = arena.parent.get(cur).copied().unwrap_or(u16::MAX) as usize;
+        if cur >= n {
+            break;
+        }
+    }
+    for &v in chain.iter().rev() {
+        if out.vertices.push(v).is_err() {
+            break;
+        }
+    }
+    out
+}

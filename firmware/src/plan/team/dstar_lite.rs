@@ -1,0 +1,847 @@
+//! D* Lite over the global grid of scenes (Morad et al. section V-A.7 and Fig. 12; the algorithm is Koenig and
+//! Likhachev, "D* Lite", AAAI 2002, the optimised version of their Fig. 4).
+//!
+//! Each grid cell is a scene. Moves are octile (straight cost 1, diagonal cost sqrt 2) with **no corner cutting**:
+//! a diagonal move needs both straight detours open, i.e. both side cells free and none of the four straight
+//! edges involved walled. A *wall* is a blocked edge between two neighbouring cells: the team's local planner
+//! (bounded-leg A*) failing to cross from one scene to the next is fed back as a wall, exactly the crevasse of
+//! Fig. 12 — and because a diagonal that would pass the corner of a wall is also closed, the paper's reroute
+//! (1,1),(1,2),(2,2),(2,3),(1,3) comes out as the optimal octile path.
+//!
+//! D* Lite searches backwards from the goal, so when the robot moves (`move_start`) and the map changes
+//! (`block_cell`, `add_wall`), only the affected vertices are updated (`km` keeps old queue keys valid) and
+//! `compute_shortest_path` repairs the search incrementally.
+//!
+//! Storage is lent by the caller ([`DStarStorage`]): per cell `g`, `rhs`, an epoch stamp, a heap slot, the
+//! occupancy and wall bits, plus a binary heap of one entry per cell. Planning from scratch starts a new epoch
+//! instead of clearing the arrays, so a host can run thousands of Moving AI scenarios on a 512 x 512 map without
+//! touching every cell each time. A board uses [`DStarArena`] (capacity [`GLOBAL_GRID_MAX_CELLS`] by default).
+//!
+//! Parameters: the expansion budget per call (a caller's choice; [`DStarLite::plan`] and [`DStarLite::replan`]
+//! take it). Running out of budget is [`DStarOutcome::BudgetExhausted`]; calling `replan` again continues.
+//!
+//! [`GLOBAL_GRID_MAX_CELLS`]: crate::config::team::GLOBAL_GRID_MAX_CELLS
+
+use core::f64::consts::SQRT_2;
+
+/// Octile direction offsets (dx, dy); index = direction id. Straight first, then diagonals.
+pub const DIRS: [(i32, i32); 8] = [(1, 0), (0, 1), (-1, 0), (0, -1), (1, 1), (-1, 1), (-1, -1), (1, -1)];
+
+const NOT_IN_HEAP: u32 = u32::MAX;
+const INF: f64 = f64::INFINITY;
+
+/// One entry of the priority queue.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct HeapEntry {
+    k1: f64,
+    k2: f64,
+    cell: u32,
+}
+
+/// Storage lent to the planner; every slice must hold at least `width * height` entries.
+pub struct DStarStorage<'a> {
+    /// Cost-to-goal estimates g.
+    pub g: &'a mut [f64],
+    /// One-step lookahead values rhs.
+    pub rhs: &'a mut [f64],
+    /// Epoch stamp per cell (lazy reset).
+    pub stamp: &'a mut [u32],
+    /// Heap slot per cell.
+    pub heap_pos: &'a mut [u32],
+    /// The priority queue.
+    pub heap: &'a mut [HeapEntry],
+    /// Occupancy: `true` = blocked cell.
+    pub blocked: &'a mut [bool],
+    /// Wall bits per cell: bit d set = the edge in direction `DIRS[d]` is walled.
+    pub walls: &'a mut [u8],
+}
+
+/// Fixed arena for a board: `N` cells.
+pub struct DStarArena<const N: usize> {
+    g: [f64; N],
+    rhs: [f64; N],
+    stamp: [u32; N],
+    heap_pos: [u32; N],
+    heap: [HeapEntry; N],
+    blocked: [bool; N],
+    walls: [u8; N],
+}
+
+impl<const N: usize> DStarArena<N> {
+    /// An empty arena (place it in a `static` or a `Box` — it is large).
+    pub const fn new() -> Self {
+        Self {
+            g: [INF; N],
+            rhs: [INF; N],
+            stamp: [0; N],
+            heap_pos: [NOT_IN_HEAP; N],
+            heap: [HeapEntry { k1: 0.0, k2: 0.0, cell: 0 }; N],
+            blocked: [false; N],
+            walls: [0; N],
+        }
+    }
+
+    /// Lend the arena to a planner.
+    pub fn storage(&mut self) -> DStarStorage<'_> {
+        DStarStorage {
+            g: &mut self.g,
+            rhs: &mut self.rhs,
+            stamp: &mut self.stamp,
+            heap_pos: &mut self.heap_pos,
+            heap: &mut self.heap,
+            blocked: &mut self.blocked,
+            walls: &mut self.walls,
+        }
+    }
+}
+
+impl<const N: usize> Default for DStarArena<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Why the planner could not be set up or asked.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DStarError {
+    /// A storage slice is shorter than `width * height`.
+    StorageTooSmall {
+        /// Cells needed.
+        needed: usize,
+        /// Length of the shortest slice.
+        have: usize,
+    },
+    /// Width or height is zero, or the cell count does not fit in `u32`.
+    BadSize,
+    /// A cell outside the grid.
+    OutOfGrid {
+        /// Column.
+        x: i64,
+        /// Row.
+        y: i64,
+    },
+    /// The two cells of a wall are not 8-neighbours.
+    NotNeighbours,
+    /// `replan`, `move_start` or path extraction before `plan`.
+    NotPlanned,
+}
+
+/// Result of a (re)planning call.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum DStarOutcome {
+    /// Shortest path found; its cost.
+    Found {
+        /// Octile cost from the start to the goal.
+        cost: f64,
+        /// Vertices expanded in this call.
+        expansions: u32,
+    },
+    /// The goal is not reachable from the start (search completed).
+    NoPath {
+        /// Vertices expanded in this call.
+        expansions: u32,
+    },
+    /// The expansion budget ran out; the search state is kept, call `replan` to continue.
+    BudgetExhausted {
+        /// Vertices expanded in this call.
+        expansions: u32,
+    },
+}
+
+/// Result of a path extraction into a caller buffer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PathOutcome {
+    /// The whole path (start and goal included) was written; its length in cells.
+    Complete(usize),
+    /// The buffer filled before the goal; the prefix written is valid.
+    BufferFull(usize),
+    /// No finite path from the start.
+    NoPath,
+}
+
+/// D* Lite on an octile grid with walls, over lent storage.
+pub struct DStarLite<'a> {
+    width: u32,
+    height: u32,
+    s: DStarStorage<'a>,
+    epoch: u32,
+    heap_len: usize,
+    km: f64,
+    start: u32,
+    last: u32,
+    goal: u32,
+    planned: bool,
+}
+
+#[inline]
+fn key_less(a: (f64, f64), b: (f64, f64)) -> bool {
+    a.0 < b.0 || (a.0 == b.0 && a.1 < b.1)
+}
+
+impl<'a> DStarLite<'a> {
+    /// A planner over a `width` x `height` grid, all cells free, no walls.
+    pub fn new(width: u32, height: u32, storage: DStarStorage<'a>) -> Result<Self, DStarError> {
+        if width == 0 || height == 0 {
+            return Err(DStarError::BadSize);
+        }
+        let cells = (width as u64) * (height as u64);
+        if cells >= u32::MAX as u64 {
+            return Err(DStarError::BadSize);
+        }
+        let cells = cells as usize;
+        let have = [
+            storage.g.len(),
+            storage.rhs.len(),
+            storage.stamp.len(),
+            storage.heap_pos.len(),
+            storage.heap.len(),
+            storage.blocked.len(),
+            storage.walls.len(),
+        ]
+        .into_iter()
+        .min()
+        .unwrap_or(0);
+        if have < cells {
+            return Err(DStarError::StorageTooSmall { needed: cells, have });
+        }
+        let mut me = Self { width, height, s: storage, epoch: 0, heap_len: 0, km: 0.0, start: 0, last: 0, goal: 0, planned: false };
+        me.clear_map();
+        me.new_epoch();
+        Ok(me)
+    }
+
+    /// Grid width (columns).
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Grid height (rows).
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    fn cells(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+
+    /// Free every cell and remove every wall (does not update a running search: call `plan` afterwards).
+    pub fn clear_map(&mut self) {
+        let n = self.cells();
+        for b in self.s.blocked.iter_mut().take(n) {
+            *b = false;
+        }
+        for w in self.s.walls.iter_mut().take(n) {
+            *w = 0;
+        }
+        self.planned = false;
+    }
+
+    fn new_epoch(&mut self) {
+        if self.epoch == u32::MAX {
+            let n = self.cells();
+            for st in self.s.stamp.iter_mut().take(n) {
+                *st = 0;
+            }
+            self.epoch = 0;
+        }
+        self.epoch += 1;
+        self.heap_len = 0;
+    }
+
+    /// Cell index of (x, y), if inside the grid.
+    pub fn index(&self, x: i64, y: i64) -> Option<u32> {
+        if x >= 0 && y >= 0 && x < self.width as i64 && y < self.height as i64 {
+            Some((y as u32) * self.width + x as u32)
+        } else {
+            None
+        }
+    }
+
+    /// (x, y) of a cell index.
+    pub fn coords(&self, c: u32) -> (i64, i64) {
+        ((c % self.width) as i64, (c / self.width) as i64)
+    }
+
+    fn idx_or_err(&self, x: i64, y: i64) -> Result<u32, DStarError> {
+        self.index(x, y).ok_or(DStarError::OutOfGrid { x, y })
+    }
+
+    /// Is the cell blocked (outside = blocked).
+    pub fn is_blocked(&self, x: i64, y: i64) -> bool {
+        match self.index(x, y) {
+            Some(c) => self.s.blocked.get(c as usize).copied().unwrap_or(true),
+            None => true,
+        }
+    }
+
+    fn wall_bit(&self, c: u32, d: usize) -> bool {
+        self.s.walls.get(c as usize).map(|w| w & (1u8 << d) != 0).unwrap_or(true)
+    }
+
+    /// Cost of the move from cell (x, y) in direction `d`, `INF` when not allowed.
+    fn move_cost(&self, x: i64, y: i64, d: usize) -> f64 {
+        let (dx, dy) = match DIRS.get(d) {
+            Some(&(dx, dy)) => (dx as i64, dy as i64),
+            None => return INF,
+        };
+        let a = match self.index(x, y) {
+            Some(a) => a,
+            None => return INF,
+        };
+        if self.is_blocked(x, y) || self.is_blocked(x + dx, y + dy) || self.wall_bit(a, d) {
+            return INF;
+        }
+        if dx == 0 || dy == 0 {
+            return 1.0;
+        }
+        // diagonal: both side cells free and the four straight edges of the two detours unwalled
+        if self.is_blocked(x + dx, y) || self.is_blocked(x, y + dy) {
+            return INF;
+        }
+        let (sx, sy) = (self.index(x + dx, y), self.index(x, y + dy));
+        let (sx, sy) = match (sx, sy) {
+            (Some(p), Some(q)) => (p, q),
+            _ => return INF,
+        };
+        let dir_x = if dx > 0 { 0 } else { 2 };
+        let dir_y = if dy > 0 { 1 } else { 3 };
+        if self.wall_bit(a, dir_x) || self.wall_bit(sx, dir_y) || self.wall_bit(a, dir_y) || self.wall_bit(sy, dir_x) {
+            return INF;
+        }
+        SQRT_2
+    }
+
+    fn h(&self, a: u32, b: u32) -> f64 {
+        let (ax, ay) = self.coords(a);
+        let (bx, by) = self.coords(b);
+        let dx = (ax - bx).unsigned_abs() as f64;
+        let dy = (ay - by).unsigned_abs() as f64;
+        let (mx, mn) = if dx > dy { (dx, dy) } else { (dy, dx) };
+        mx + (SQRT_2 - 1.0) * mn
+    }
+
+    fn fresh(&self, c: u32) -> bool {
+        self.s.stamp.get(c as usize).copied() == Some(self.epoch)
+    }
+
+    /// g of a cell in the current search.
+    pub fn g(&self, c: u32) -> f64 {
+        if self.fresh(c) {
+            self.s.g.get(c as usize).copied().unwrap_or(INF)
+        } else {
+            INF
+        }
+    }
+
+    fn rhs(&self, c: u32) -> f64 {
+        if self.fresh(c) {
+            self.s.rhs.get(c as usize).copied().unwrap_or(INF)
+        } else {
+            INF
+        }
+    }
+
+    fn touch(&mut self, c: u32) {
+        let i = c as usize;
+        if !self.fresh(c) {
+            if let Some(v) = self.s.g.get_mut(i) {
+                *v = INF;
+            }
+            if let Some(v) = self.s.rhs.get_mut(i) {
+                *v = INF;
+            }
+            if let Some(v) = self.s.heap_pos.get_mut(i) {
+                *v = NOT_IN_HEAP;
+            }
+            if let Some(v) = self.s.stamp.get_mut(i) {
+                *v = self.epoch;
+            }
+        }
+    }
+
+    fn set_g(&mut self, c: u32, v: f64) {
+        self.touch(c);
+        if let Some(x) = self.s.g.get_mut(c as usize) {
+            *x = v;
+        }
+    }
+
+    fn set_rhs(&mut self, c: u32, v: f64) {
+        self.touch(c);
+        if let Some(x) = self.s.rhs.get_mut(c as usize) {
+            *x = v;
+        }
+    }
+
+    fn calc_key(&self, c: u32) -> (f64, f64) {
+        let m = {
+            let (g, r) = (self.g(c), self.rhs(c));
+            if g < r {
+                g
+            } else {
+                r
+            }
+        };
+        (m + self.h(self.start, c) + self.km, m)
+    }
+
+    // ---- indexed binary heap ----
+    fn heap_key(&self, i: usize) -> (f64, f64) {
+        self.s.heap.get(i).map(|e| (e.k1, e.k2)).unwrap_or((INF, INF))
+    }
+
+    fn heap_swap(&mut self, i: usize, j: usize) {
+        if i >= self.heap_len || j >= self.heap_len {
+            return;
+        }
+        self.s.heap.swap(i, j);
+        for k in [i, j] {
+            if let Some(e) = self.s.heap.get(k).copied() {
+                if let Some(p) = self.s.heap_pos.get_mut(e.cell as usize) {
+                    *p = k as u32;
+                }
+            }
+        }
+    }
+
+    fn sift_up(&mut self, mut i: usize) {
+        // bounded by the heap depth (< 32 for u32 cell counts)
+        for _ in 0..64 {
+            if i == 0 {
+                break;
+            }
+            let parent = (i - 1) / 2;
+            if key_less(self.heap_key(i), self.heap_key(parent)) {
+                self.heap_swap(i, parent);
+                i = parent;
+            } else {
+                break;
+            }
+        }
+    }
+
+    fn sift_down(&mut self, mut i: usize) {
+        for _ in 0..64 {
+            let l = 2 * i + 1;
+            let r = l + 1;
+            let mut m = i;
+            if l < self.heap_len && key_less(self.heap_key(l), self.heap_key(m)) {
+                m = l;
+            }
+            if r < self.heap_len && key_less(self.heap_key(r), self.heap_key(m)) {
+                m = r;
+            }
+            if m == i {
+                break;
+            }
+            self.heap_swap(i, m);
+            i = m;
+        }
+    }
+
+    fn heap_pos_of(&self, c: u32) -> Option<usize> {
+        if !self.fresh(c) {
+            return None;
+        }
+        match self.s.heap_pos.get(c as usize).copied() {
+            Some(NOT_IN_HEAP) | None => None,
+            Some(p) => Some(p as usize),
+        }
+    }
+
+    fn heap_insert_or_update(&mut self, c: u32, k: (f64, f64)) {
+        self.touch(c);
+        match self.heap_pos_of(c) {
+            Some(p) => {
+                let old = self.heap_key(p);
+                if let Some(e) = self.s.heap.get_mut(p) {
+                    e.k1 = k.0;
+                    e.k2 = k.1;
+                }
+                if key_less(k, old) {
+                    self.sift_up(p);
+                } else {
+                    self.sift_down(p);
+                }
+            }
+            None => {
+                let p = self.heap_len;
+                // capacity = cells, and each cell is in the heap at most once, so this always fits
+                if let Some(e) = self.s.heap.get_mut(p) {
+                    *e = HeapEntry { k1: k.0, k2: k.1, cell: c };
+                    self.heap_len += 1;
+                    if let Some(hp) = self.s.heap_pos.get_mut(c as usize) {
+                        *hp = p as u32;
+                    }
+                    self.sift_up(p);
+                }
+            }
+        }
+    }
+
+    fn heap_remove(&mut self, c: u32) {
+        if let Some(p) = self.heap_pos_of(c) {
+            let last = self.heap_len - 1;
+            self.heap_swap(p, last);
+            self.heap_len -= 1;
+            if let Some(hp) = self.s.heap_pos.get_mut(c as usize) {
+                *hp = NOT_IN_HEAP;
+            }
+            if p < self.heap_len {
+                let parent_less = p > 0 && key_less(self.heap_key(p), self.heap_key((p - 1) / 2));
+                if parent_less {
+                    self.sift_up(p);
+                } else {
+                    self.sift_down(p);
+                }
+            }
+        }
+    }
+
+    fn top(&self) -> Option<(u32, (f64, f64))> {
+        if self.heap_len == 0 {
+            None
+        } else {
+            self.s.heap.first().map(|e| (e.cell, (e.k1, e.k2)))
+        }
+    }
+
+    // ---- D* Lite proper ----
+    fn update_vertex(&mut self, u: u32) {
+        let (g, r) = (self.g(u), self.rhs(u));
+        let in_heap = self.heap_pos_of(u).is_some();
+        if g != r {
+            let k = self.calc_key(u);
+            self.heap_insert_or_update(u, k);
+        } else if in_heap {
+            self.heap_remove(u);
+        }
+    }
+
+    /// min over successors s' of c(u, s') + g(s').
+    fn best_succ(&self, u: u32) -> f64 {
+        let (x, y) = self.coords(u);
+        let mut best = INF;
+        for (d, &(dx, dy)) in DIRS.iter().enumerate() {
+            let c = self.move_cost(x, y, d);
+            if c < INF {
+                if let Some(v) = self.index(x + dx as i64, y + dy as i64) {
+                    let t = c + self.g(v);
+                    if t < best {
+                        best = t;
+                    }
+                }
+            }
+        }
+        best
+    }
+
+    fn recompute_rhs(&mut self, u: u32) {
+        if u != self.goal {
+            let b = self.best_succ(u);
+            self.set_rhs(u, b);
+        }
+        self.update_vertex(u);
+    }
+
+    fn compute_shortest_path(&mut self, budget: u32) -> DStarOutcome {
+        let mut expansions = 0u32;
+        loop {
+            let start_key = self.calc_key(self.start);
+            let (u, k_old) = match self.top() {
+                Some(t) => t,
+                None => break,
+            };
+            if !(key_less(k_old, start_key) || self.rhs(self.start) > self.g(self.start)) {
+                break;
+            }
+            if expansions >= budget {
+                return DStarOutcome::BudgetExhausted { expansions };
+            }
+            expansions += 1;
+            let k_new = self.calc_key(u);
+            let (gu, ru) = (self.g(u), self.rhs(u));
+            if key_less(k_old, k_new) {
+                self.heap_insert_or_update(u, k_new);
+            } else if gu > ru {
+                self.set_g(u, ru);
+                self.heap_remove(u);
+                let (x, y) = self.coords(u);
+                for (d, &(dx, dy)) in DIRS.iter().enumerate() {
+                    // moves are symmetric: pred s of u with c(s,u) = c(u,s)
+                    let c = self.move_cost(x, y, d);
+                    if c < INF {
+                        if let Some(s) = self.index(x + dx as i64, y + dy as i64) {
+                            if s != self.goal {
+                                let cand = c + ru;
+                                if cand < self.rhs(s) {
+                                    self.set_rhs(s, cand);
+                                }
+                            }
+                            self.update_vertex(s);
+                        }
+                    }
+                }
+            } else {
+                let g_old = gu;
+                self.set_g(u, INF);
+                let (x, y) = self.coords(u);
+                for (d, &(dx, dy)) in DIRS.iter().enumerate() {
+                    let c = self.move_cost(x, y, d);
+                    if c < INF {
+                        if let Some(s) = self.index(x + dx as i64, y + dy as i64) {
+                            if self.rhs(s) == c + g_old && s != self.goal {
+                                let b = self.best_succ(s);
+                                self.set_rhs(s, b);
+                            }
+                            self.update_vertex(s);
+                        }
+                    }
+                }
+                if self.rhs(u) == g_old && u != self.goal {
+                    let b = self.best_succ(u);
+                    self.set_rhs(u, b);
+                }
+                self.update_vertex(u);
+            }
+        }
+        let cost = self.rhs(self.start);
+        if cost < INF {
+            DStarOutcome::Found { cost, expansions }
+        } else {
+            DStarOutcome::NoPath { expansions }
+        }
+    }
+
+    /// Plan from scratch from `start` to `goal` (cells as (x, y)), expanding at most `budget` vertices.
+    pub fn plan(&mut self, start: (i64, i64), goal: (i64, i64), budget: u32) -> Result<DStarOutcome, DStarError> {
+        let s = self.idx_or_err(start.0, start.1)?;
+        let g = self.idx_or_err(goal.0, goal.1)?;
+        self.new_epoch();
+        self.start = s;
+        self.last = s;
+        self.goal = g;
+        self.km = 0.0;
+        self.planned = true;
+        if self.is_blocked(goal.0, goal.1) || self.is_blocked(start.0, start.1) {
+            return Ok(DStarOutcome::NoPath { expansions: 0 });
+        }
+        self.set_rhs(g, 0.0);
+        let k = (self.h(s, g), 0.0);
+        self.heap_insert_or_update(g, k);
+        Ok(self.compute_shortest_path(budget))
+    }
+
+    /// Continue / repair the search after `move_start`, `block_cell` or `add_wall`.
+    pub fn replan(&mut self, budget: u32) -> Result<DStarOutcome, DStarError> {
+        if !self.planned {
+            return Err(DStarError::NotPlanned);
+        }
+        let (sx, sy) = self.coords(self.start);
+        if self.is_blocked(sx, sy) {
+            return Ok(DStarOutcome::NoPath { expansions: 0 });
+        }
+        Ok(self.compute_shortest_path(budget))
+    }
+
+    /// The robot moved to `start` (any cell; normally the next cell of the path).
+    pub fn move_start(&mut self, start: (i64, i64)) -> Result<(), DStarError> {
+        if !self.planned {
+            return Err(DStarError::NotPlanned);
+        }
+        let s = self.idx_or_err(start.0, start.1)?;
+        self.km += self.h(self.last, s);
+        self.last = s;
+        self.start = s;
+        Ok(())
+    }
+
+    fn refresh_around(&mut self, x: i64, y: i64) {
+        if !self.planned {
+            return;
+        }
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                if let Some(c) = self.index(x + dx, y + dy) {
+                    self.recompute_rhs(c);
+                }
+            }
+        }
+    }
+
+    /// Mark a cell blocked or free; a running search is updated incrementally (call `replan`).
+    pub fn set_blocked(&mut self, x: i64, y: i64, blocked: bool) -> Result<(), DStarError> {
+        let c = self.idx_or_err(x, y)?;
+        if let Some(b) = self.s.blocked.get_mut(c as usize) {
+            if *b == blocked {
+                return Ok(());
+            }
+            *b = blocked;
+        }
+        self.refresh_around(x, y);
+        Ok(())
+    }
+
+    /// Wall the edge between two 8-neighbouring cells (a local crossing failed); incremental like `set_blocked`.
+    pub fn add_wall(&mut self, a: (i64, i64), b: (i64, i64)) -> Result<(), DStarError> {
+        let ca = self.idx_or_err(a.0, a.1)?;
+        let cb = self.idx_or_err(b.0, b.1)?;
+        let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+        let d_ab = DIRS.iter().position(|&(x, y)| x as i64 == dx && y as i64 == dy).ok_or(DStarError::NotNeighbours)?;
+        let d_ba = DIRS.iter().position(|&(x, y)| x as i64 == -dx && y as i64 == -dy).ok_or(DStarError::NotNeighbours)?;
+        if let Some(w) = self.s.walls.get_mut(ca as usize) {
+            *w |= 1u8 << d_ab;
+        }
+        if let Some(w) = self.s.walls.get_mut(cb as usize) {
+            *w |= 1u8 << d_ba;
+        }
+        self.refresh_around(a.0, a.1);
+        self.refresh_around(b.0, b.1);
+        Ok(())
+    }
+
+    /// Cost of the current shortest path from the start (`INF` when none).
+    pub fn cost(&self) -> f64 {
+        self.rhs(self.start)
+    }
+
+    /// Current start cell.
+    pub fn start(&self) -> (i64, i64) {
+        self.coords(self.start)
+    }
+
+    /// Best next cell from `from` (greedy on c + g), `None` at the goal or with no finite path.
+    pub fn next_cell(&self, from: (i64, i64)) -> Option<(i64, i64)> {
+        let u = self.index(from.0, from.1)?;
+        if u == self.goal {
+            return None;
+        }
+        let mut best = INF;
+        let mut arg = None;
+        for (d, &(dx, dy)) in DIRS.iter().enumerate() {
+            let c = self.move_cost(from.0, from.1, d);
+            if c < INF {
+                let (nx, ny) = (from.0 + dx as i64, from.1 + dy as i64);
+                if let Some(v) = self.index(nx, ny) {
+                    let t = c + self.g(v);
+                    if t < best {
+                        best = t;
+                        arg = Some((nx, ny));
+                    }
+                }
+            }
+        }
+        arg
+    }
+
+    /// Write the path from the start to the goal into `out` (cells as (x, y)).
+    pub fn path(&self, out: &mut [(i64, i64)]) -> Result<PathOutcome, DStarError> {
+        if !self.planned {
+            return Err(DStarError::NotPlanned);
+        }
+        if self.cost() == INF {
+            return Ok(PathOutcome::NoPath);
+        }
+        let mut cur = self.coords(self.start);
+        let mut n = 0usize;
+        // a shortest path visits each cell at most once: bounded by the cell count
+        for _ in 0..=self.cells() {
+            match out.get_mut(n) {
+                Some(slot) => *slot = cur,
+                None => return Ok(PathOutcome::BufferFull(n)),
+            }
+            n += 1;
+            match self.next_cell(cur) {
+                Some(nx) => cur = nx,
+                None => break,
+            }
+        }
+        if self.index(cur.0, cur.1) == Some(self.goal) {
+            Ok(PathOutcome::Complete(n))
+        } else {
+            Ok(PathOutcome::NoPath)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    struct Owned {
+        g: [f64; 64],
+        rhs: [f64; 64],
+        stamp: [u32; 64],
+        pos: [u32; 64],
+        heap: [HeapEntry; 64],
+        blocked: [bool; 64],
+        walls: [u8; 64],
+    }
+
+    #[test]
+    fn storage_too_small_is_typed() {
+        let mut o = Owned {
+            g: [0.0; 64],
+            rhs: [0.0; 64],
+            stamp: [0; 64],
+            pos: [0; 64],
+            heap: [HeapEntry::default(); 64],
+            blocked: [false; 64],
+            walls: [0; 64],
+        };
+        let st = DStarStorage {
+            g: &mut o.g,
+            rhs: &mut o.rhs,
+            stamp: &mut o.stamp,
+            heap_pos: &mut o.pos,
+            heap: &mut o.heap[..10],
+            blocked: &mut o.blocked,
+            walls: &mut o.walls,
+        };
+        assert_eq!(DStarLite::new(8, 8, st).err(), Some(DStarError::StorageTooSmall { needed: 64, have: 10 }));
+    }
+
+    #[test]
+    fn open_grid_cost_is_octile_distance() {
+        let mut arena: DStarArena<64> = DStarArena::new();
+        let mut d = DStarLite::new(8, 8, arena.storage()).unwrap();
+        let out = d.plan((0, 0), (7, 3), 10_000).unwrap();
+        match out {
+            DStarOutcome::Found { cost, .. } => assert!((cost - (4.0 + 3.0 * SQRT_2)).abs() < 1e-12),
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(d.plan((0, 0), (9, 0), 10).err(), Some(DStarError::OutOfGrid { x: 9, y: 0 }));
+    }
+
+    #[test]
+    fn budget_exhausted_then_continues() {
+        let mut arena: DStarArena<64> = DStarArena::new();
+        let mut d = DStarLite::new(8, 8, arena.storage()).unwrap();
+        let out = d.plan((0, 0), (7, 7), 2).unwrap();
+        assert!(matches!(out, DStarOutcome::BudgetExhausted { expansions: 2 }));
+        let out = d.replan(10_000).unwrap();
+        assert!(matches!(out, DStarOutcome::Found { cost, .. } if (cost - 7.0 * SQRT_2).abs() < 1e-12));
+    }
+
+    #[test]
+    fn crevasse_reroute_of_fig_12() {
+        // cells (x, y) = (column, row), 1-based as in the paper; (1,1) -> (1,3) is "south".
+        let mut arena: DStarArena<64> = DStarArena::new();
+        let mut d = DStarLite::new(5, 5, arena.storage()).unwrap();
+        // the column x = 0 is off the map in the paper's figure: block it so the reroute must go east
+        for y in 0..5 {
+            d.set_blocked(0, y, true).unwrap();
+        }
+        let out = d.plan((1, 1), (1, 3), 1000).unwrap();
+        assert!(matches!(out, DStarOutcome::Found { cost, .. } if cost == 2.0));
+        let mut p = [(0i64, 0i64); 16];
+        assert_eq!(d.path(&mut p).unwrap(), PathOutcome::Complete(3));
+        assert_eq!(&p[..3], &[(1, 1), (1, 2), (1, 3)]);
+        d.move_start((1, 2)).unwrap();
+        d.add_wall((1, 2), (1, 3)).unwrap();
+        let out = d.replan(1000).unwrap();
+        assert!(matches!(out, DStarOutcome::Found { cost, .. } if cost == 3.0), "{out:?}");
+        assert_eq!(d.path(&mut p).unwrap(), PathOutcome::Complete(4));
+        assert_eq!(&p[..4], &[(1, 2), (2, 2), (2, 3), (1, 3)]);
+    }
+}

@@ -1,0 +1,190 @@
+//! `tetherbot movingai` and `tetherbot team`: the climbing-team subcommands (Morad et al.). See
+//! `host-sim/doc/team.md`.
+
+use crate::movingai::{load_map, load_scen, run_scenarios, tolerance};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// `tetherbot movingai <map> <scen>`: run every scenario through the global planner (D* Lite).
+#[derive(Debug, clap::Args)]
+pub struct MovingaiArgs {
+    /// The `.map` file.
+    pub map: PathBuf,
+    /// The `.scen` file.
+    pub scen: PathBuf,
+    /// Run only every N-th scenario (1 = all).
+    #[arg(long, default_value_t = 1)]
+    pub stride: usize,
+}
+
+/// Run the subcommand; `Ok(true)` when every scenario matched.
+pub fn movingai(args: &MovingaiArgs) -> Result<bool, String> {
+    let map = load_map(&args.map).map_err(|e| format!("{}: {e}", args.map.display()))?;
+    let scens = load_scen(&args.scen).map_err(|e| format!("{}: {e}", args.scen.display()))?;
+    let stride = args.stride.max(1);
+    let t = Instant::now();
+    let r = run_scenarios(&map, &scens, |i, _| i % stride == 0)?;
+    let secs = t.elapsed().as_secs_f64();
+    for m in &r.mismatches {
+        let s = &m.scenario;
+        println!(
+            "MISMATCH line {} bucket {}: ({},{}) -> ({},{}) planned {} published {:.*} (tolerance {:.1e})",
+            s.line,
+            s.bucket,
+            s.start_x,
+            s.start_y,
+            s.goal_x,
+            s.goal_y,
+            m.planned.map(|c| format!("{c:.8}")).unwrap_or_else(|| "no path".into()),
+            s.decimals,
+            s.optimal,
+            tolerance(s.decimals)
+        );
+    }
+    println!(
+        "movingai {}: scenarios run {}, mismatches {}, max |error| {:.3e}, expansions {}, time {:.3} s ({:.0} scenarios/s)",
+        args.map.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default(),
+        r.run,
+        r.mismatches.len(),
+        r.max_abs_error,
+        r.expansions,
+        secs,
+        r.run as f64 / secs.max(1e-9)
+    );
+    Ok(r.mismatches.is_empty())
+}
+
+/// `tetherbot team`: simulate the four-robot team on real terrain and draw the graph and paths (SVG).
+#[derive(Debug, clap::Args)]
+pub struct TeamArgs {
+    /// World: `cliff` (HiRISE crop scaled into a cliff, 10 m hops) or `itokawa` (shape model, 30 m hops).
+    #[arg(long, default_value = "cliff")]
+    pub world: String,
+    /// Directory of the shared data (`terrain/`, `asteroids/`).
+    #[arg(long, default_value = "../shared/data")]
+    pub data: PathBuf,
+    /// Write the picture here (SVG).
+    #[arg(long)]
+    pub svg: Option<PathBuf>,
+    /// Scripted node loss `ROBOT:TURN` (0-based), e.g. `2:3`.
+    #[arg(long)]
+    pub fail: Option<String>,
+    /// Noise seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+/// The scenario set-up shared by the CLI, the tests and the benchmark: (surface, start, config, view, background).
+pub type TeamScenario = (Box<dyn crate::team::terrain::Surface>, [[f64; 3]; 4], crate::team::SimConfig, [f64; 3], Vec<[f64; 3]>);
+
+/// Build a named team scenario.
+pub fn team_scenario(world: &str, data: &std::path::Path, fail: Option<(usize, usize)>, seed: u64) -> Result<TeamScenario, String> {
+    use crate::team::terrain::Surface;
+    use crate::team::{cliff_from_hirise, itokawa, x_start, RangeSensor, SimConfig};
+    use firmware::config::team::TeamParams;
+    match world {
+        "cliff" => {
+            let (surf, _slope) = cliff_from_hirise(&data.join("terrain/hirise_DTEEC_010228_1490_016320_1490_crop_120x70.npy"), 40, 4.0, 8.0)?;
+            let w = surf.hm.width as f64 * surf.hm.spacing_m;
+            // start low on the cliff, goal at the top: find the lowest and highest posts away from the border
+            let (mut lo, mut hi) = ((f64::MAX, 0.0, 0.0), (f64::MIN, 0.0, 0.0));
+            for y in 6..surf.hm.height - 6 {
+                for x in 6..surf.hm.width - 6 {
+                    if let Some(z) = surf.hm.get(x, y) {
+                        let (px, py) = (x as f64 * surf.hm.spacing_m, y as f64 * surf.hm.spacing_m);
+                        if z < lo.0 {
+                            lo = (z, px, py);
+                        }
+                        if z > hi.0 {
+                            hi = (z, px, py);
+                        }
+                    }
+                }
+            }
+            let center = surf.point(lo.1, lo.2).ok_or("no start point")?;
+            let goal = surf.point(hi.1, hi.2).ok_or("no goal point")?;
+            let start = x_start(&surf, center, [center[0], center[1], center[2] - 1000.0], 6.0).ok_or("cannot place the team")?;
+            let bg: Vec<[f64; 3]> = (0..surf.hm.height)
+                .flat_map(|y| (0..surf.hm.width).map(move |x| (x, y)))
+                .filter_map(|(x, y)| surf.hm.get(x, y).map(|z| [x as f64 * surf.hm.spacing_m, y as f64 * surf.hm.spacing_m, z]))
+                .collect();
+            let _ = w;
+            let cfg = SimConfig {
+                params: TeamParams { landing_margin: 1.0, ..TeamParams::DEFAULT },
+                sensor: RangeSensor { rays: 3000, range: 25.0, noise: 0.03, height: 0.3 },
+                goal,
+                goal_tol: 8.0,
+                max_rounds: 60,
+                fail,
+                seed,
+            };
+            Ok((Box::new(surf), start, cfg, [0.0, 0.0, 1.0], bg))
+        }
+        "itokawa" => {
+            let surf = itokawa(&data.join("asteroids/itokawa.obj"))?;
+            let (lo, hi) = surf.mesh.bounds().ok_or("empty mesh")?;
+            let c = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0, (lo[2] + hi[2]) / 2.0];
+            // start and goal on the +z face, 150 m apart along the long axis (x)
+            let top = |x: f64| -> Option<[f64; 3]> {
+                let o = [x, c[1], hi[2] + 100.0];
+                surf.raycast(o, [0.0, 0.0, -1.0], 1000.0).map(|t| [o[0], o[1], o[2] - t])
+            };
+            let center = top(c[0] - 75.0).ok_or("no start point")?;
+            let goal = top(c[0] + 75.0).ok_or("no goal point")?;
+            let start = x_start(&surf, center, c, 12.0).ok_or("cannot place the team")?;
+            let cfg = SimConfig {
+                params: TeamParams { h_max: 30.0, r_max: 45.0, landing_margin: 2.0, score_radius: 8.0, flatness_scale: 1.5, ..TeamParams::DEFAULT },
+                sensor: RangeSensor { rays: 3000, range: 70.0, noise: 0.05, height: 0.3 },
+                goal,
+                goal_tol: 20.0,
+                max_rounds: 40,
+                fail,
+                seed,
+            };
+            let bg = surf.mesh.vertices.clone();
+            Ok((Box::new(surf), start, cfg, [0.0, 0.0, 1.0], bg))
+        }
+        other => Err(format!("unknown world {other:?} (cliff, itokawa)")),
+    }
+}
+
+/// Run the subcommand; `Ok(true)` when the referee found no violation.
+pub fn team(args: &TeamArgs) -> Result<bool, String> {
+    let fail = match &args.fail {
+        None => None,
+        Some(s) => {
+            let (a, b) = s.split_once(':').ok_or("--fail wants ROBOT:TURN")?;
+            Some((a.parse().map_err(|_| "bad robot")?, b.parse().map_err(|_| "bad turn")?))
+        }
+    };
+    let (surf, start, cfg, view, bg) = team_scenario(&args.world, &args.data, fail, args.seed)?;
+    let mut rng = rand_pcg::Pcg64::new(args.seed as u128, 0xa02b_dbf7_bb3c_0a7a_c28f_a16a_64ab_f96);
+    let t = Instant::now();
+    let rep = crate::team::simulate(surf.as_ref(), &start, &cfg, &mut rng);
+    let secs = t.elapsed().as_secs_f64();
+    let mut times = rep.plan_times.clone();
+    times.sort_by(|a, b| a.total_cmp(b));
+    let med = times.get(times.len() / 2).copied().unwrap_or(0.0);
+    let max = times.last().copied().unwrap_or(0.0);
+    for v in &rep.violations {
+        println!("VIOLATION {v}");
+    }
+    println!(
+        "team {}: hops {}, rounds {}, lost {:?}, reached {}, violations {}, local plans {} (median {:.1} ms, max {:.1} ms), wall {:.2} s",
+        rep.world,
+        rep.hops.len(),
+        rep.rounds,
+        rep.lost,
+        rep.reached,
+        rep.violations.len(),
+        times.len(),
+        med * 1e3,
+        max * 1e3,
+        secs
+    );
+    if let Some(p) = &args.svg {
+        std::fs::write(p, crate::team::svg::render(&rep, view, &bg)).map_err(|e| format!("{}: {e}", p.display()))?;
+        println!("picture: {}", p.display());
+    }
+    Ok(rep.violations.is_empty())
+}

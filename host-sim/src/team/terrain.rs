@@ -1,0 +1,228 @@
+//! True surfaces for the team simulation: a height field (DEM) and a triangle mesh (shape model), each with a ray
+//! cast (for the range sensors and for landing) and a surface normal.
+
+use crate::terrain::obj::TriMesh;
+use crate::terrain::Heightmap;
+
+/// A 3-vector in f64 (the simulator's truth works in f64).
+pub type P3 = [f64; 3];
+
+pub(crate) fn sub(a: P3, b: P3) -> P3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+pub(crate) fn add(a: P3, b: P3) -> P3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+pub(crate) fn scale(a: P3, s: f64) -> P3 {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+pub(crate) fn dot(a: P3, b: P3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+pub(crate) fn cross(a: P3, b: P3) -> P3 {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+pub(crate) fn norm(a: P3) -> f64 {
+    dot(a, a).sqrt()
+}
+pub(crate) fn unit(a: P3) -> P3 {
+    let n = norm(a);
+    if n > 0.0 {
+        scale(a, 1.0 / n)
+    } else {
+        [0.0, 0.0, 1.0]
+    }
+}
+pub(crate) fn dist(a: P3, b: P3) -> f64 {
+    norm(sub(a, b))
+}
+
+/// A true surface.
+pub trait Surface: Sync {
+    /// Name for reports and pictures.
+    fn name(&self) -> &str;
+    /// Distance along unit `dir` from `origin` to the first hit, up to `max`.
+    fn raycast(&self, origin: P3, dir: P3, max: f64) -> Option<f64>;
+    /// Outward unit normal of the surface near `p`.
+    fn normal_near(&self, p: P3) -> P3;
+    /// Cast many rays from one origin.
+    fn scan(&self, o: P3, dirs: &[P3], max: f64) -> Vec<Option<f64>> {
+        dirs.iter().map(|&d| self.raycast(o, d, max)).collect()
+    }
+}
+
+/// A height field z = h(x, y), bilinear between posts, x east = column * spacing, y north = row * spacing.
+pub struct HeightSurface {
+    name: String,
+    /// The grid (heights in metres).
+    pub hm: Heightmap,
+}
+
+impl HeightSurface {
+    /// Wrap a heightmap; `None` values are not allowed (fill them first).
+    pub fn new(name: &str, hm: Heightmap) -> Self {
+        Self { name: name.to_string(), hm }
+    }
+
+    /// Bilinear height, `None` outside the grid or on missing data.
+    pub fn height(&self, x: f64, y: f64) -> Option<f64> {
+        let s = self.hm.spacing_m;
+        let (fx, fy) = (x / s, y / s);
+        if fx < 0.0 || fy < 0.0 {
+            return None;
+        }
+        let (ix, iy) = (fx.floor() as usize, fy.floor() as usize);
+        if ix + 1 >= self.hm.width || iy + 1 >= self.hm.height {
+            return None;
+        }
+        let (tx, ty) = (fx - ix as f64, fy - iy as f64);
+        let h00 = self.hm.get(ix, iy)?;
+        let h10 = self.hm.get(ix + 1, iy)?;
+        let h01 = self.hm.get(ix, iy + 1)?;
+        let h11 = self.hm.get(ix + 1, iy + 1)?;
+        Some(h00 * (1.0 - tx) * (1.0 - ty) + h10 * tx * (1.0 - ty) + h01 * (1.0 - tx) * ty + h11 * tx * ty)
+    }
+
+    /// The point of the surface above (x, y).
+    pub fn point(&self, x: f64, y: f64) -> Option<P3> {
+        self.height(x, y).map(|z| [x, y, z])
+    }
+}
+
+impl Surface for HeightSurface {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn raycast(&self, o: P3, d: P3, max: f64) -> Option<f64> {
+        let step = self.hm.spacing_m * 0.25;
+        let above = |t: f64| -> Option<bool> {
+            let p = add(o, scale(d, t));
+            self.height(p[0], p[1]).map(|h| p[2] > h)
+        };
+        let mut t0 = 0.0;
+        if above(0.0) != Some(true) {
+            return None;
+        }
+        let n = (max / step).ceil() as usize;
+        for i in 1..=n {
+            let t1 = (i as f64 * step).min(max);
+            match above(t1) {
+                None => return None,
+                Some(true) => t0 = t1,
+                Some(false) => {
+                    let (mut lo, mut hi) = (t0, t1);
+                    for _ in 0..30 {
+                        let mid = 0.5 * (lo + hi);
+                        if above(mid) == Some(true) {
+                            lo = mid;
+                        } else {
+                            hi = mid;
+                        }
+                    }
+                    return Some(0.5 * (lo + hi));
+                }
+            }
+        }
+        None
+    }
+
+    fn normal_near(&self, p: P3) -> P3 {
+        let e = self.hm.spacing_m * 0.5;
+        let hx = match (self.height(p[0] + e, p[1]), self.height(p[0] - e, p[1])) {
+            (Some(a), Some(b)) => (a - b) / (2.0 * e),
+            _ => 0.0,
+        };
+        let hy = match (self.height(p[0], p[1] + e), self.height(p[0], p[1] - e)) {
+            (Some(a), Some(b)) => (a - b) / (2.0 * e),
+            _ => 0.0,
+        };
+        unit([-hx, -hy, 1.0])
+    }
+}
+
+/// A closed triangle mesh (outward counter-clockwise faces).
+pub struct MeshSurface {
+    name: String,
+    /// The mesh, metres.
+    pub mesh: TriMesh,
+    centers: Vec<(P3, f64)>,
+}
+
+impl MeshSurface {
+    /// Wrap a mesh.
+    pub fn new(name: &str, mesh: TriMesh) -> Self {
+        let centers = (0..mesh.triangles.len())
+            .filter_map(|t| mesh.triangle(t))
+            .map(|[a, b, c]| {
+                let m = scale(add(add(a, b), c), 1.0 / 3.0);
+                let r = dist(m, a).max(dist(m, b)).max(dist(m, c));
+                (m, r)
+            })
+            .collect();
+        Self { name: name.to_string(), mesh, centers }
+    }
+
+    fn hit(&self, t: usize, o: P3, d: P3) -> Option<f64> {
+        // Moller-Trumbore, both sides
+        let [a, b, c] = self.mesh.triangle(t)?;
+        let e1 = sub(b, a);
+        let e2 = sub(c, a);
+        let p = cross(d, e2);
+        let det = dot(e1, p);
+        if det.abs() < 1e-12 {
+            return None;
+        }
+        let inv = 1.0 / det;
+        let s = sub(o, a);
+        let u = dot(s, p) * inv;
+        if !(0.0..=1.0).contains(&u) {
+            return None;
+        }
+        let q = cross(s, e1);
+        let v = dot(d, q) * inv;
+        if v < 0.0 || u + v > 1.0 {
+            return None;
+        }
+        let t = dot(e2, q) * inv;
+        (t > 1e-9).then_some(t)
+    }
+
+    /// Triangles whose bounding sphere reaches within `r` of `p` (a per-scan prefilter).
+    pub fn near(&self, p: P3, r: f64) -> Vec<usize> {
+        self.centers.iter().enumerate().filter(|(_, (m, rad))| dist(*m, p) <= r + rad).map(|(i, _)| i).collect()
+    }
+
+    /// Ray cast against a candidate list.
+    pub fn raycast_in(&self, cands: &[usize], o: P3, d: P3, max: f64) -> Option<f64> {
+        cands.iter().filter_map(|&t| self.hit(t, o, d)).filter(|&t| t <= max).min_by(|a, b| a.total_cmp(b))
+    }
+
+    /// Index of the triangle whose centre is closest to `p`.
+    pub fn closest_triangle(&self, p: P3) -> Option<usize> {
+        self.centers.iter().enumerate().min_by(|a, b| dist(a.1 .0, p).total_cmp(&dist(b.1 .0, p))).map(|(i, _)| i)
+    }
+}
+
+impl Surface for MeshSurface {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn raycast(&self, o: P3, d: P3, max: f64) -> Option<f64> {
+        let c = self.near(o, max);
+        self.raycast_in(&c, o, d, max)
+    }
+
+    fn scan(&self, o: P3, dirs: &[P3], max: f64) -> Vec<Option<f64>> {
+        let c = self.near(o, max);
+        dirs.iter().map(|&d| self.raycast_in(&c, o, d, max)).collect()
+    }
+
+    fn normal_near(&self, p: P3) -> P3 {
+        match self.closest_triangle(p).and_then(|t| self.mesh.triangle(t)) {
+            Some([a, b, c]) => unit(cross(sub(b, a), sub(c, a))),
+            None => [0.0, 0.0, 1.0],
+        }
+    }
+}
