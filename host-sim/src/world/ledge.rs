@@ -563,7 +563,7 @@ mod tests {
                     assert_eq!(w.raycast_f64(o, [0.0, 0.0, -1.0], 100.0), Some(0.0));
                     continue;
                 }
-                let (th, ph) = (unif(&mut r, 0.0, 6.283), unif(&mut r, -1.5, 1.2));
+                let (th, ph) = (unif(&mut r, 0.0, core::f64::consts::TAU), unif(&mut r, -1.5, 1.2));
                 let d = [ph.cos() * th.cos(), ph.cos() * th.sin(), ph.sin()];
                 let got = w.raycast_f64(o, d, 30.0);
                 // oracle: march with the inside test, then bisect
