@@ -178,8 +178,7 @@ pub fn attach_anchors(
 ) -> Result<u32, TetherError> {
     let mut piv = pivot.point;
     let mut start = *x0;
-    let mut added = 0;
-    for _ in 0..MAX_ATTACH_PER_SWEEP {
+    for added in 0..MAX_ATTACH_PER_SWEEP as u32 {
         // first blocked sweep line (smallest angle from the current tether)
         let mut first: Option<(Real, Real)> = None; // (t_free, t_blocked)
         let mut t_prev = 0.0;
@@ -243,7 +242,6 @@ pub fn attach_anchors(
         let anchor = Anchor { point: p - n * d, gradient: n };
         out.push(anchor).map_err(|_| TetherError::HistoryFull)?;
         stats.attached += 1;
-        added += 1;
         piv = anchor.point;
         start = end;
     }
@@ -358,7 +356,7 @@ mod tests {
             } else if x >= 0.0 && z >= 4.0 {
                 let v = Vec3::new(x, 0.0, z - 4.0);
                 let n = crate::geom::norm3(&v);
-                (n, if n > 1e-9 { v / n } else { Vec3::new(0.7071, 0.0, 0.7071) })
+                (n, if n > 1e-9 { v / n } else { Vec3::new(core::f32::consts::FRAC_1_SQRT_2, 0.0, core::f32::consts::FRAC_1_SQRT_2) })
             } else if x >= 0.0 {
                 // right of the cliff, below the lip: nearest is the wall or the ground
                 if x < z { (x, Vec3::x()) } else { (z, Vec3::z()) }
