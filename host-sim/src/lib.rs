@@ -5,4 +5,5 @@
 //! The `tetherbot` binary is the CLI over this library.
 
 pub mod terrain;
+pub mod truth;
 pub mod world;
