@@ -1,1 +1,503 @@
-//! `rover`: not yet implemented (see the issue tracker).
+//! The Axel rover model and rover settling (Paton et al., *Navigation on the Line*, section IV-A, Fig. 2), the
+//! body-collision check, the boom configurations (inline / in contact) and the assembly of the static-stability
+//! problem of section IV-C (Fig. 6) for a settled pose.
+//!
+//! # Rover frame
+//! Origin at the axle centre; x forward (the rolling direction), y along the axle (left wheel at `+track/2`), z up
+//! (away from the terrain). A wheel is a circle of radius `wheel_radius_m` in the rover's x-z plane; the body is a
+//! cylinder of radius `body_radius_m` around the axle; the boom turns about the axle in the x-z plane: at boom angle
+//! `beta` its tip (the tether exit orifice) is at `boom_length_m * (cos beta, 0, sin beta)` (beta = pi: trailing
+//! straight back).
+//!
+//! # Settling (Fig. 2)
+//! Input: a query point `p_m` near the surface and a yaw `theta_m` about the surface normal.
+//! 1. Surface normal `n`: the mean of the ESDF gradients at the query point and at `FOOTPRINT_POINTS` points on a
+//!    ring of radius `track/2` around it (the gradient points away from the terrain's interior, so `n` is oriented
+//!    as the paper asks). This replaces the paper's fit to the surface points of the footprint: for a plane both are
+//!    the plane's normal, and it needs only the `DistanceField` trait.
+//! 2. Orientation: x is world x projected on the tangent plane (world y if x is parallel to `n`), turned by
+//!    `theta_m` about `n`; the start pose is at `p_m + delta n`.
+//! 3. Each wheel is `WHEEL_CONTACT_POINTS` = 12 points. Drop along `n` by sphere tracing (move by the smallest ESDF
+//!    distance of all contact points) until one touches (`contact_threshold_m`).
+//! 4. Search discrete roll perturbations (`roll_step_rad` steps, up to `SETTLE_ROLL_STEPS` each way) for the roll
+//!    at which the two wheels' lowest points are equally far from the surface; drop again; repeat until both wheels
+//!    touch (at most `SETTLE_MAX_ITERATIONS`).
+//! 5. Body collision: `BODY_COLLISION_POINTS` points on the axle between the wheels must keep
+//!    `body_radius_m + body_clearance_m` from the terrain.
+//!
+//! Every ESDF query may answer `Unknown`: settling then stops with [`SettleOutcome::UnknownSpace`] (unsafe).
+//!
+//! # Boom (section IV-A, last paragraph)
+//! *Inline*: the boom points at the most recent anchor ([`boom_inline_angle`]). *In contact*: from the inline angle
+//! the boom is swept (`BOOM_SWEEP_STEPS` steps of 2 degrees, in the direction that lowers its tip) until its tip
+//! touches the terrain ([`boom_in_contact`]). [`check_pose_stability`] tries both: a pose is stable when one boom
+//! configuration admits static equilibrium (the rover chooses its boom angle).
+//!
+//! # Parameters
+//! `config::rover::RoverParams::AXEL` (wheel radius 0.35 m, track 1.0 m, body radius 0.15 m, boom 1.0 m, masses
+//! 40 kg + 10 kg, wheel mu 0.6, wheel mu_m 0.05 m, boom mu 0.4, tether max tension 2000 N, gravity 3.71 m/s^2,
+//! delta 0.8 m, contact threshold 0.01 m, roll step 0.5 deg, body clearance 0.02 m, max drop 1.5 m) and the
+//! capacities/budgets of `config::rover` (12 wheel points, 9 body points, 24 settle iterations, 64 drop steps,
+//! 60 roll steps, 180 boom steps, 8 footprint points).
+
+use crate::config::rover::{
+    RoverParams, BODY_COLLISION_POINTS, BOOM_SWEEP_STEPS, FOOTPRINT_POINTS, SETTLE_MAX_DROP_STEPS,
+    SETTLE_MAX_ITERATIONS, SETTLE_ROLL_STEPS, WHEEL_CONTACT_POINTS,
+};
+use crate::geom::{normalize3, Pose3, Real, Rot3, Vec3};
+use crate::map::{DistanceField, DistanceQuery};
+use crate::stability::{
+    check_stability, BodyMass, Contact, StabilityError, StabilityOutcome, StabilityProblem, TetherForce,
+};
+use nalgebra::{Matrix3, Translation3, UnitVector3};
+
+/// One wheel's contact with the terrain.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WheelContact {
+    /// Contact point on the surface (the lowest contact point projected onto the surface), world frame.
+    pub point: Vec3,
+    /// Surface normal there (the ESDF gradient), unit.
+    pub normal: Vec3,
+    /// ESDF distance of the lowest contact point (within the contact threshold).
+    pub gap_m: Real,
+}
+
+/// A rover settled on the terrain.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SettledPose {
+    /// Rover frame in the world (origin at the axle centre), `T_RM` of the paper.
+    pub pose: Pose3,
+    /// Roll found by the search, radians (about the rover x axis, relative to the surface-normal frame).
+    pub roll_rad: Real,
+    /// Left (`+y`) and right (`-y`) wheel contacts.
+    pub wheels: [WheelContact; 2],
+    /// Settling iterations used.
+    pub iterations: u32,
+}
+
+/// The answer of [`settle`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SettleOutcome {
+    /// The rover rests on both wheels without body collision.
+    Settled(SettledPose),
+    /// No surface within `max_drop_m` below the query point along the normal.
+    NoGround,
+    /// The settled body hits the terrain at this collision point (world frame).
+    Collision {
+        /// The pose found.
+        pose: Pose3,
+        /// The offending body collision point.
+        point: Vec3,
+    },
+    /// An ESDF query answered `Unknown` (unobserved space): unsafe.
+    UnknownSpace,
+    /// The iteration budget ran out; the best pose so far is kept.
+    BudgetExhausted {
+        /// Last pose tried.
+        pose: Pose3,
+    },
+    /// The query point or yaw is not finite, or no normal could be computed.
+    InvalidInput,
+}
+
+fn query(map: &impl DistanceField, p: &Vec3) -> Option<(Real, Vec3)> {
+    match map.query(p) {
+        DistanceQuery::Known { distance, gradient } if distance.is_finite() && crate::geom::is_finite3(&gradient) => {
+            Some((distance, gradient))
+        }
+        _ => None,
+    }
+}
+
+/// Contact points of both wheels in the rover frame: `[left; right]`, each `WHEEL_CONTACT_POINTS` long.
+fn wheel_points(params: &RoverParams) -> [[Vec3; WHEEL_CONTACT_POINTS]; 2] {
+    let mut out = [[Vec3::zeros(); WHEEL_CONTACT_POINTS]; 2];
+    for (w, side) in out.iter_mut().zip([1.0 as Real, -1.0]) {
+        for (k, p) in w.iter_mut().enumerate() {
+            let a = 2.0 * core::f32::consts::PI * k as Real / WHEEL_CONTACT_POINTS as Real;
+            *p = Vec3::new(
+                params.wheel_radius_m * libm::cosf(a),
+                side * 0.5 * params.track_m,
+                params.wheel_radius_m * libm::sinf(a),
+            );
+        }
+    }
+    out
+}
+
+/// Smallest ESDF distance over each wheel's points (and the point index), for rover pose (origin, rotation).
+fn wheel_gaps(
+    map: &impl DistanceField,
+    pts: &[[Vec3; WHEEL_CONTACT_POINTS]; 2],
+    origin: &Vec3,
+    rot: &Matrix3<Real>,
+) -> Option<[(Real, Vec3, Vec3); 2]> {
+    let mut out = [(Real::INFINITY, Vec3::zeros(), Vec3::z()); 2];
+    for (o, wheel) in out.iter_mut().zip(pts.iter()) {
+        for p in wheel {
+            let q = origin + rot * p;
+            let (d, g) = query(map, &q)?;
+            if d < o.0 {
+                *o = (d, q, g);
+            }
+        }
+    }
+    Some(out)
+}
+
+fn roll_matrix(base: &Matrix3<Real>, roll: Real) -> Matrix3<Real> {
+    let (s, c) = (libm::sinf(roll), libm::cosf(roll));
+    let rx = Matrix3::new(1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c);
+    base * rx
+}
+
+/// The surface normal at `p` from the footprint (see the module docs), or `None` in unknown space.
+pub fn footprint_normal(map: &impl DistanceField, p: &Vec3, params: &RoverParams) -> Option<Vec3> {
+    let (_, g0) = query(map, p)?;
+    let mut sum = g0;
+    // ring in the plane perpendicular to the first gradient
+    let n0 = normalize3(&g0, 1e-6)?;
+    let alt = if libm::fabsf(n0.x) < 0.9 { Vec3::x() } else { Vec3::y() };
+    let u = normalize3(&(alt - n0 * n0.dot(&alt)), 1e-6)?;
+    let v = n0.cross(&u);
+    let r = 0.5 * params.track_m;
+    for k in 0..FOOTPRINT_POINTS {
+        let a = 2.0 * core::f32::consts::PI * k as Real / FOOTPRINT_POINTS as Real;
+        let q = p + (u * libm::cosf(a) + v * libm::sinf(a)) * r;
+        let (d, g) = query(map, &q)?;
+        // project onto the surface and take the gradient there (its own closest-surface direction)
+        let on = q - g * d;
+        let (_, gs) = query(map, &(on + g * 0.02)).unwrap_or((d, g));
+        sum += gs;
+    }
+    normalize3(&sum, 1e-6)
+}
+
+/// Settle the rover at query point `p_m` with yaw `theta_m` about the surface normal (Paton et al. IV-A).
+pub fn settle(map: &impl DistanceField, p_m: &Vec3, theta_m: Real, params: &RoverParams) -> SettleOutcome {
+    if !(crate::geom::is_finite3(p_m) && theta_m.is_finite()) {
+        return SettleOutcome::InvalidInput;
+    }
+    let n = match map.query(p_m) {
+        DistanceQuery::Unknown => return SettleOutcome::UnknownSpace,
+        DistanceQuery::Known { .. } => match footprint_normal(map, p_m, params) {
+            Some(n) => n,
+            None => return SettleOutcome::UnknownSpace,
+        },
+    };
+    let reference = if libm::fabsf(n.x) < 0.95 { Vec3::x() } else { Vec3::y() };
+    let Some(t0) = normalize3(&(reference - n * n.dot(&reference)), 1e-6) else {
+        return SettleOutcome::InvalidInput;
+    };
+    let x = t0 * libm::cosf(theta_m) + n.cross(&t0) * libm::sinf(theta_m);
+    let y = n.cross(&x);
+    let base = Matrix3::from_columns(&[x, y, n]);
+    let pts = wheel_points(params);
+    let thr = params.contact_threshold_m;
+    let mut origin = p_m + n * params.settle_delta_m;
+    let mut roll: Real = 0.0;
+    let mut rot = base;
+    let mut iterations = 0;
+    let mut settled = false;
+    while iterations < SETTLE_MAX_ITERATIONS {
+        iterations += 1;
+        // drop along n by sphere tracing
+        let mut touched = false;
+        for _ in 0..SETTLE_MAX_DROP_STEPS {
+            let Some(g) = wheel_gaps(map, &pts, &origin, &rot) else {
+                return SettleOutcome::UnknownSpace;
+            };
+            let dmin = if g[0].0 < g[1].0 { g[0].0 } else { g[1].0 };
+            if libm::fabsf(dmin) <= thr {
+                touched = true;
+                break;
+            }
+            origin -= n * (dmin - 0.5 * thr);
+            if (origin - p_m).dot(&n) < -params.max_drop_m {
+                return SettleOutcome::NoGround;
+            }
+        }
+        if !touched {
+            break;
+        }
+        let Some(g) = wheel_gaps(map, &pts, &origin, &rot) else {
+            return SettleOutcome::UnknownSpace;
+        };
+        if libm::fabsf(g[0].0 - g[1].0) <= thr {
+            settled = true;
+            break;
+        }
+        // discrete roll search: the roll at which both wheels' lowest points are equally far from the surface
+        let mut best = (libm::fabsf(g[0].0 - g[1].0), roll);
+        for k in -SETTLE_ROLL_STEPS..=SETTLE_ROLL_STEPS {
+            if k == 0 {
+                continue;
+            }
+            let r = roll + k as Real * params.roll_step_rad;
+            let Some(gk) = wheel_gaps(map, &pts, &origin, &roll_matrix(&base, r)) else {
+                return SettleOutcome::UnknownSpace;
+            };
+            let e = libm::fabsf(gk[0].0 - gk[1].0);
+            if e < best.0 {
+                best = (e, r);
+            }
+        }
+        if best.1 == roll {
+            // no perturbation improves: the wheels are as level as the roll grid allows
+            settled = libm::fabsf(g[0].0) <= 2.0 * thr && libm::fabsf(g[1].0) <= 2.0 * thr;
+            break;
+        }
+        roll = best.1;
+        rot = roll_matrix(&base, roll);
+    }
+    let pose = pose_from(&origin, &rot);
+    if !settled {
+        return SettleOutcome::BudgetExhausted { pose };
+    }
+    let Some(g) = wheel_gaps(map, &pts, &origin, &rot) else {
+        return SettleOutcome::UnknownSpace;
+    };
+    let wheels = g.map(|(d, q, grad)| WheelContact {
+        point: q - grad * d,
+        normal: normalize3(&grad, 1e-6).unwrap_or(n),
+        gap_m: d,
+    });
+    // body collision points along the axle between the wheels
+    let half = 0.5 * params.track_m - 0.1;
+    for k in 0..BODY_COLLISION_POINTS {
+        let t = if BODY_COLLISION_POINTS > 1 { k as Real / (BODY_COLLISION_POINTS - 1) as Real } else { 0.5 };
+        let q = origin + rot * Vec3::new(0.0, -half + 2.0 * half * t, 0.0);
+        let Some((d, _)) = query(map, &q) else {
+            return SettleOutcome::UnknownSpace;
+        };
+        if d < params.body_radius_m + params.body_clearance_m {
+            return SettleOutcome::Collision { pose, point: q };
+        }
+    }
+    SettleOutcome::Settled(SettledPose { pose, roll_rad: roll, wheels, iterations })
+}
+
+fn pose_from(origin: &Vec3, rot: &Matrix3<Real>) -> Pose3 {
+    let r = Rot3::from_matrix_eps(rot, 1e-6, 8, Rot3::identity());
+    Pose3::from_parts(Translation3::new(origin.x, origin.y, origin.z), r)
+}
+
+/// Boom angle (rover frame, see the module docs) that points the boom at `anchor`: the *inline* configuration.
+pub fn boom_inline_angle(settled: &SettledPose, anchor: &Vec3) -> Real {
+    let v = settled.pose.inverse_transform_vector(&(anchor - settled.pose.translation.vector));
+    libm::atan2f(v.z, v.x)
+}
+
+/// Tip (tether exit) of the boom at angle `beta`, world frame.
+pub fn boom_tip(settled: &SettledPose, beta: Real, params: &RoverParams) -> Vec3 {
+    settled.pose * nalgebra::Point3::new(
+        params.boom_length_m * libm::cosf(beta),
+        0.0,
+        params.boom_length_m * libm::sinf(beta),
+    )
+    .coords
+}
+
+/// A boom resting on the terrain.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BoomContact {
+    /// Boom angle.
+    pub angle_rad: Real,
+    /// Tip position (tether exit), world frame.
+    pub tip: Vec3,
+    /// Surface contact point under the tip.
+    pub point: Vec3,
+    /// Surface normal there.
+    pub normal: Vec3,
+}
+
+/// Sweep the boom from `start_angle` in the direction that lowers its tip until the tip touches the terrain: the
+/// *in contact* configuration. `None` if it never touches within `BOOM_SWEEP_STEPS` or meets unknown space.
+pub fn boom_in_contact(
+    map: &impl DistanceField,
+    settled: &SettledPose,
+    start_angle: Real,
+    params: &RoverParams,
+) -> Option<BoomContact> {
+    let step = 2.0 * core::f32::consts::PI / BOOM_SWEEP_STEPS as Real;
+    let up = settled.pose.rotation * Vec3::z();
+    let h0 = boom_tip(settled, start_angle, params).dot(&up);
+    let h1 = boom_tip(settled, start_angle + step, params).dot(&up);
+    let dir = if h1 < h0 { 1.0 } else { -1.0 };
+    for k in 0..BOOM_SWEEP_STEPS {
+        let beta = start_angle + dir * step * k as Real;
+        let tip = boom_tip(settled, beta, params);
+        let (d, g) = query(map, &tip)?;
+        if d <= params.contact_threshold_m * 2.0 {
+            return Some(BoomContact {
+                angle_rad: beta,
+                tip,
+                point: tip - g * d,
+                normal: normalize3(&g, 1e-6).unwrap_or(up),
+            });
+        }
+    }
+    None
+}
+
+/// The static-stability problem (section IV-C, Fig. 6) of a settled pose with the boom at `boom_angle`, the tether
+/// pulling from the boom tip towards `last_anchor` (`None`: slack tether), and an optional boom ground contact.
+pub fn stability_problem(
+    settled: &SettledPose,
+    boom_angle: Real,
+    boom_contact: Option<&BoomContact>,
+    last_anchor: Option<&Vec3>,
+    params: &RoverParams,
+) -> StabilityProblem {
+    let forward = settled.pose.rotation * Vec3::x();
+    let mut contacts = heapless::Vec::new();
+    for w in &settled.wheels {
+        let _ = contacts.push(Contact::new(w.point, w.normal, forward, params.wheel_mu, params.wheel_mu_m));
+    }
+    if let Some(b) = boom_contact {
+        let _ = contacts.push(Contact::new(b.point, b.normal, forward, params.boom_mu, 0.0));
+    }
+    let tip = boom_tip(settled, boom_angle, params);
+    let origin = settled.pose.translation.vector;
+    let tether = match last_anchor.and_then(|a| normalize3(&(a - tip), 1e-4)) {
+        Some(direction) => {
+            TetherForce::Taut { exit: tip, direction, max_tension_n: params.tether_max_tension_n }
+        }
+        None => TetherForce::Slack,
+    };
+    StabilityProblem {
+        contacts,
+        masses: [
+            BodyMass { mass_kg: params.body_mass_kg, com: origin },
+            BodyMass { mass_kg: params.boom_mass_kg, com: (origin + tip) * 0.5 },
+        ],
+        gravity: Vec3::new(0.0, 0.0, -params.gravity_mps2),
+        tether,
+    }
+}
+
+/// Which boom configuration decided a pose's stability.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BoomConfig {
+    /// Boom inline with the tether (or trailing straight back with a slack tether), tip off the ground.
+    Inline,
+    /// Boom swept down until its tip rests on the terrain.
+    InContact,
+}
+
+/// Static stability of a settled pose given the last anchor of its anchor history (`None`: slack tether). Tries
+/// the inline boom (if its tip is clear of the terrain) and the in-contact boom; returns the better answer
+/// (Stable beats Unstable beats Unknown; among equals the larger margin).
+pub fn check_pose_stability(
+    map: &impl DistanceField,
+    settled: &SettledPose,
+    last_anchor: Option<&Vec3>,
+    params: &RoverParams,
+) -> Result<(StabilityOutcome, BoomConfig), StabilityError> {
+    let inline = match last_anchor {
+        Some(a) => boom_inline_angle(settled, a),
+        None => core::f32::consts::PI,
+    };
+    let mut best: Option<(StabilityOutcome, BoomConfig)> = None;
+    let rank = |o: &StabilityOutcome| match o {
+        StabilityOutcome::Stable(r) => (2, r.margin),
+        StabilityOutcome::Unstable(r) => (1, r.margin),
+        StabilityOutcome::Unknown(_) => (0, f64::NEG_INFINITY),
+    };
+    let mut consider = |o: StabilityOutcome, c: BoomConfig| {
+        let better = match &best {
+            None => true,
+            Some((b, _)) => {
+                let (ra, ma) = rank(&o);
+                let (rb, mb) = rank(b);
+                ra > rb || (ra == rb && ma > mb)
+            }
+        };
+        if better {
+            best = Some((o, c));
+        }
+    };
+    let tip = boom_tip(settled, inline, params);
+    if matches!(query(map, &tip), Some((d, _)) if d > params.contact_threshold_m) {
+        let p = stability_problem(settled, inline, None, last_anchor, params);
+        consider(check_stability(&p)?, BoomConfig::Inline);
+    }
+    if let Some(bc) = boom_in_contact(map, settled, inline, params) {
+        let p = stability_problem(settled, bc.angle_rad, Some(&bc), last_anchor, params);
+        consider(check_stability(&p)?, BoomConfig::InContact);
+    }
+    Ok(best.unwrap_or((
+        StabilityOutcome::Unknown(crate::stability::UnknownReason::NumericalFailure),
+        BoomConfig::Inline,
+    )))
+}
+
+/// Unit axis helper for tests and callers: the rover's up axis in the world.
+pub fn rover_up(settled: &SettledPose) -> UnitVector3<Real> {
+    UnitVector3::new_normalize(settled.pose.rotation * Vec3::z())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An inclined plane through the origin: z = -tan(alpha) x (descending towards +x), exact SDF.
+    struct Plane {
+        n: Vec3,
+    }
+    impl Plane {
+        fn new(alpha: Real) -> Self {
+            Plane { n: Vec3::new(libm::sinf(alpha), 0.0, libm::cosf(alpha)) }
+        }
+    }
+    impl DistanceField for Plane {
+        fn query(&self, p: &Vec3) -> DistanceQuery {
+            DistanceQuery::Known { distance: p.dot(&self.n), gradient: self.n }
+        }
+    }
+    struct Nothing;
+    impl DistanceField for Nothing {
+        fn query(&self, _: &Vec3) -> DistanceQuery {
+            DistanceQuery::Unknown
+        }
+    }
+
+    #[test]
+    fn settles_on_planes_with_axle_one_radius_above() {
+        let params = RoverParams::AXEL;
+        for alpha_deg in [0.0f32, 20.0, 40.0] {
+            for yaw in [0.0f32, 0.7, 1.57, 2.5] {
+                let plane = Plane::new(alpha_deg.to_radians());
+                let SettleOutcome::Settled(s) = settle(&plane, &Vec3::new(0.3, 0.2, 0.0), yaw, &params) else {
+                    panic!("no settle at {alpha_deg} {yaw}");
+                };
+                // exact: the axle centre sits one wheel radius above the plane, the rover's up axis is the normal
+                let h = s.pose.translation.vector.dot(&plane.n);
+                assert!((h - params.wheel_radius_m).abs() < 2.0 * params.contact_threshold_m, "height {h}");
+                assert!(rover_up(&s).dot(&plane.n) > 0.9995, "up {:?}", rover_up(&s));
+                for w in &s.wheels {
+                    assert!(w.point.dot(&plane.n).abs() < 1e-3);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn unknown_space_and_no_ground_are_outcomes() {
+        let params = RoverParams::AXEL;
+        assert_eq!(settle(&Nothing, &Vec3::zeros(), 0.0, &params), SettleOutcome::UnknownSpace);
+        // query 3 m above a plane: more than max_drop below the start
+        let plane = Plane::new(0.0);
+        assert_eq!(settle(&plane, &Vec3::new(0.0, 0.0, 3.0), 0.0, &params), SettleOutcome::NoGround);
+        assert_eq!(settle(&plane, &Vec3::new(Real::NAN, 0.0, 0.0), 0.0, &params), SettleOutcome::InvalidInput);
+    }
+
+    #[test]
+    fn flat_ground_slack_tether_is_stable() {
+        let params = RoverParams::AXEL;
+        let plane = Plane::new(0.0);
+        let SettleOutcome::Settled(s) = settle(&plane, &Vec3::zeros(), 0.3, &params) else { panic!() };
+        let (o, _) = check_pose_stability(&plane, &s, None, &params).unwrap_or_else(|e| panic!("{e:?}"));
+        assert!(o.is_stable(), "{o:?}");
+    }
+}

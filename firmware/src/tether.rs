@@ -1,1 +1,401 @@
-//! `tether`: not yet implemented (see the issue tracker).
+//! Anchor-point prediction (Paton et al., *Navigation on the Line*, section IV-B, Alg. 1, Figs. 3-5).
+//!
+//! The tether runs from the root anchor `a_0` over intermediate anchors (points where it touches the terrain) to
+//! the rover. The **anchor history** `A = {a_0, ..., a_N}` is a stack of (point, ESDF gradient) pairs; anchors are
+//! removed in reverse order only. [`predict_anchors`] computes the anchor history `A_1` of the rover at `x_1` from
+//! the history `A_0` at an adjacent position `x_0`, under the paper's assumptions: small motion, taut massless
+//! straight tether between anchors, stack order.
+//!
+//! Positions `x` are the tether's end on the rover (the caller chooses: the boom tip, or the axle centre).
+//!
+//! # Attachment (IV-B a, Fig. 4)
+//! The tether sweeps the triangle `(a, x_0, x_1)` (pivot `a` = the last anchor). The triangle is sampled on
+//! `SWEEP_SAMPLES_ACROSS` sweep lines `a -> x(t)`, `x(t) = (1 - t) x_0 + t x_1`, with `SWEEP_SAMPLES_ALONG` points
+//! each; a sample within `TETHER_CONTACT_DISTANCE_M` of the terrain (or inside it) is an obstacle. The angle
+//! between the current tether `x_0 - a` and `p - a` grows monotonically with `t`, so the obstacle at the smallest
+//! angle lies on the first blocked sweep line; `SWEEP_REFINE_STEPS` bisection steps refine that line, and its
+//! closest-to-terrain sample, projected onto the surface, becomes the new anchor (with its gradient). The tether
+//! is then inline with the new anchor at `x(t*)`, and the search repeats with the new anchor as pivot over the
+//! triangle `(a_new, x(t*), x_1)` until no obstacle is found (at most `MAX_ATTACH_PER_SWEEP` times).
+//! Samples within `PIVOT_EXCLUSION_M` of the pivot are skipped (the pivot is on the surface).
+//!
+//! # Detachment (IV-B b, Fig. 5)
+//! Frame `F_d` at anchor `a_N`: `b` = unit(`a_N - a_{N-1}`) (the incoming tether), `z` = the anchor's gradient made
+//! orthogonal to `b`. The XY plane of `F_d` contains the incoming tether's straight continuation; if the rover is
+//! above it, `(x - a_N) . z > 0`, the tether no longer bends at `a_N`: detachment. The detachment position on the
+//! motion is where `(x(t) - a_N) . z = 0` (linear in `t`).
+//!
+//! # Parameters (`config::tether`)
+//! `ANCHOR_HISTORY_CAPACITY = 16`, `SWEEP_SAMPLES_ALONG = 48`, `SWEEP_SAMPLES_ACROSS = 24`, `SWEEP_REFINE_STEPS =
+//! 14`, `MAX_ATTACH_PER_SWEEP = 8`, `MAX_DETACH_ITERATIONS = 16`, `TETHER_CONTACT_DISTANCE_M = 0.005`,
+//! `PIVOT_EXCLUSION_M = 0.05`.
+
+use crate::config::tether::{
+    ANCHOR_HISTORY_CAPACITY, MAX_ATTACH_PER_SWEEP, MAX_DETACH_ITERATIONS, PIVOT_EXCLUSION_M, SWEEP_REFINE_STEPS,
+    SWEEP_SAMPLES_ACROSS, SWEEP_SAMPLES_ALONG, TETHER_CONTACT_DISTANCE_M,
+};
+use crate::geom::{normalize3, Real, Vec3};
+use crate::map::{DistanceField, DistanceQuery};
+
+/// A tether-terrain contact point: the point and the ESDF gradient there (Paton: `a_i = (p, g)`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Anchor {
+    /// Contact point, world frame.
+    pub point: Vec3,
+    /// ESDF gradient at the contact (away from the terrain). Zero for a root anchor in free space.
+    pub gradient: Vec3,
+}
+
+impl Anchor {
+    /// A root anchor (lander, mast): a point with no surface gradient.
+    pub fn root(point: Vec3) -> Self {
+        Anchor { point, gradient: Vec3::zeros() }
+    }
+}
+
+/// The anchor history: a bounded stack, root anchor first.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct AnchorHistory {
+    anchors: heapless::Vec<Anchor, ANCHOR_HISTORY_CAPACITY>,
+}
+
+impl AnchorHistory {
+    /// A history holding only the root anchor.
+    pub fn new(root: Anchor) -> Self {
+        let mut anchors = heapless::Vec::new();
+        let _ = anchors.push(root);
+        AnchorHistory { anchors }
+    }
+    /// Push an anchor; a full stack hands it back.
+    pub fn push(&mut self, a: Anchor) -> Result<(), Anchor> {
+        self.anchors.push(a)
+    }
+    /// Pop the most recent anchor.
+    pub fn pop(&mut self) -> Option<Anchor> {
+        self.anchors.pop()
+    }
+    /// The most recent anchor (the one the tether leaves towards the rover).
+    pub fn last(&self) -> Option<&Anchor> {
+        self.anchors.last()
+    }
+    /// Number of anchors, root included.
+    pub fn len(&self) -> usize {
+        self.anchors.len()
+    }
+    /// True when empty (no root anchor).
+    pub fn is_empty(&self) -> bool {
+        self.anchors.is_empty()
+    }
+    /// The anchors, root first.
+    pub fn as_slice(&self) -> &[Anchor] {
+        &self.anchors
+    }
+    /// Tether length along the anchors to `x`.
+    pub fn length_to(&self, x: &Vec3) -> Real {
+        let mut len = 0.0;
+        let mut prev: Option<&Anchor> = None;
+        for a in self.anchors.iter() {
+            if let Some(p) = prev {
+                len += crate::geom::norm3(&(a.point - p.point));
+            }
+            prev = Some(a);
+        }
+        if let Some(p) = prev {
+            len += crate::geom::norm3(&(x - p.point));
+        }
+        len
+    }
+}
+
+/// Why anchor prediction stopped early. The output history holds the work done so far.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TetherError {
+    /// The input history has no root anchor.
+    EmptyHistory,
+    /// The anchor history reached `ANCHOR_HISTORY_CAPACITY`.
+    HistoryFull,
+    /// A sample of the sweep triangle was in unobserved space (unsafe).
+    UnknownSpace,
+    /// `MAX_DETACH_ITERATIONS` or `MAX_ATTACH_PER_SWEEP` ran out.
+    BudgetExhausted,
+    /// A position is not finite.
+    InvalidInput,
+}
+
+/// Counters of one prediction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct PredictStats {
+    /// Anchors attached.
+    pub attached: u32,
+    /// Anchors detached.
+    pub detached: u32,
+    /// ESDF queries made.
+    pub queries: u32,
+}
+
+fn lerp(a: &Vec3, b: &Vec3, t: Real) -> Vec3 {
+    a * (1.0 - t) + b * t
+}
+
+/// Closest-to-terrain sample on the sweep line `pivot -> end` (its line parameter `s`, gradient and distance), if
+/// any sample is an obstacle.
+fn blocked_line(
+    map: &impl DistanceField,
+    pivot: &Vec3,
+    end: &Vec3,
+    stats: &mut PredictStats,
+) -> Result<Option<(Real, Vec3, Real)>, TetherError> {
+    let len = crate::geom::norm3(&(end - pivot));
+    let mut best: Option<(Real, Vec3, Real)> = None;
+    for k in 1..=SWEEP_SAMPLES_ALONG {
+        let s = k as Real / SWEEP_SAMPLES_ALONG as Real;
+        if s * len < PIVOT_EXCLUSION_M {
+            continue;
+        }
+        let p = lerp(pivot, end, s);
+        stats.queries += 1;
+        match map.query(&p) {
+            DistanceQuery::Unknown => return Err(TetherError::UnknownSpace),
+            DistanceQuery::Known { distance, gradient } => {
+                if distance <= TETHER_CONTACT_DISTANCE_M && best.is_none_or(|b| distance < b.2) {
+                    best = Some((s, gradient, distance));
+                }
+            }
+        }
+    }
+    Ok(best)
+}
+
+/// Attachment search (IV-B a) for the tether pivoting about `pivot` while its end moves `x0 -> x1`. New anchors are
+/// pushed onto `out` in order; returns how many.
+pub fn attach_anchors(
+    map: &impl DistanceField,
+    x0: &Vec3,
+    x1: &Vec3,
+    pivot: &Anchor,
+    out: &mut AnchorHistory,
+    stats: &mut PredictStats,
+) -> Result<u32, TetherError> {
+    let mut piv = pivot.point;
+    let mut start = *x0;
+    for added in 0..MAX_ATTACH_PER_SWEEP as u32 {
+        // first blocked sweep line (smallest angle from the current tether)
+        let mut first: Option<(Real, Real)> = None; // (t_free, t_blocked)
+        let mut t_prev = 0.0;
+        for k in 0..=SWEEP_SAMPLES_ACROSS {
+            let t = k as Real / SWEEP_SAMPLES_ACROSS as Real;
+            if blocked_line(map, &piv, &lerp(&start, x1, t), stats)?.is_some() {
+                first = Some((t_prev, t));
+                break;
+            }
+            t_prev = t;
+        }
+        let Some((mut lo, mut hi)) = first else {
+            return Ok(added);
+        };
+        if hi == 0.0 {
+            // already blocked at the start: the contact is at the current tether itself
+            lo = 0.0;
+        } else {
+            for _ in 0..SWEEP_REFINE_STEPS {
+                let mid = 0.5 * (lo + hi);
+                if blocked_line(map, &piv, &lerp(&start, x1, mid), stats)?.is_some() {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+        }
+        let _ = lo;
+        let end = lerp(&start, x1, hi);
+        let Some((s_best, g, d)) = blocked_line(map, &piv, &end, stats)? else {
+            return Ok(added);
+        };
+        // refine the contact along the line: ternary search for the distance minimum between the neighbours
+        let ds = 1.0 / SWEEP_SAMPLES_ALONG as Real;
+        let (mut s_lo, mut s_hi) = ((s_best - ds).max(0.0), (s_best + ds).min(1.0));
+        let mut best = (lerp(&piv, &end, s_best), g, d);
+        for _ in 0..SWEEP_REFINE_STEPS {
+            let m1 = s_lo + (s_hi - s_lo) / 3.0;
+            let m2 = s_hi - (s_hi - s_lo) / 3.0;
+            let (p1, p2) = (lerp(&piv, &end, m1), lerp(&piv, &end, m2));
+            stats.queries += 2;
+            let (DistanceQuery::Known { distance: d1, gradient: g1 }, DistanceQuery::Known { distance: d2, gradient: g2 }) =
+                (map.query(&p1), map.query(&p2))
+            else {
+                return Err(TetherError::UnknownSpace);
+            };
+            if d1 < d2 {
+                s_hi = m2;
+                if d1 < best.2 {
+                    best = (p1, g1, d1);
+                }
+            } else {
+                s_lo = m1;
+                if d2 < best.2 {
+                    best = (p2, g2, d2);
+                }
+            }
+        }
+        let (p, g, d) = best;
+        let n = normalize3(&g, 1e-6).unwrap_or(g);
+        let anchor = Anchor { point: p - n * d, gradient: n };
+        out.push(anchor).map_err(|_| TetherError::HistoryFull)?;
+        stats.attached += 1;
+        piv = anchor.point;
+        start = end;
+    }
+    Err(TetherError::BudgetExhausted)
+}
+
+/// The detachment normal `z` of frame `F_d` at `a` with predecessor `prev`, or `None` if degenerate.
+fn detach_axis(prev: &Anchor, a: &Anchor) -> Option<Vec3> {
+    let b = normalize3(&(a.point - prev.point), 1e-6)?;
+    normalize3(&(a.gradient - b * b.dot(&a.gradient)), 1e-6)
+}
+
+/// Detachment test (IV-B b): is the tether at `x` no longer bent at `a` (predecessor `prev`)?
+pub fn is_detached(prev: &Anchor, a: &Anchor, x: &Vec3) -> bool {
+    match detach_axis(prev, a) {
+        Some(z) => (x - a.point).dot(&z) > 0.0,
+        // no usable normal (root-like anchor): it cannot hold the tether
+        None => true,
+    }
+}
+
+/// Position on the motion `x0 -> x1` at which the tether detaches from `a` (IV-B b, `detach_line`).
+pub fn detach_line(prev: &Anchor, a: &Anchor, x0: &Vec3, x1: &Vec3) -> Vec3 {
+    let Some(z) = detach_axis(prev, a) else {
+        return *x0;
+    };
+    let f0 = (x0 - a.point).dot(&z);
+    let f1 = (x1 - a.point).dot(&z);
+    let den = f1 - f0;
+    let t = if libm::fabsf(den) > 1e-9 { (-f0 / den).clamp(0.0, 1.0) } else { 0.0 };
+    lerp(x0, x1, t)
+}
+
+/// Alg. 1: the anchor history of the rover at `x1`, given history `a0` at the adjacent position `x0`. `out` is
+/// overwritten with the result; on error it holds the work done so far.
+pub fn predict_anchors(
+    map: &impl DistanceField,
+    a0: &AnchorHistory,
+    x0: &Vec3,
+    x1: &Vec3,
+    out: &mut AnchorHistory,
+) -> Result<PredictStats, TetherError> {
+    let mut stats = PredictStats::default();
+    out.clone_from(a0);
+    if a0.is_empty() {
+        return Err(TetherError::EmptyHistory);
+    }
+    if !(crate::geom::is_finite3(x0) && crate::geom::is_finite3(x1)) {
+        return Err(TetherError::InvalidInput);
+    }
+    let mut xn = *x0;
+    for _ in 0..MAX_DETACH_ITERATIONS {
+        let Some(ax) = out.pop() else {
+            return Err(TetherError::EmptyHistory);
+        };
+        let detached = match out.last() {
+            Some(prev) => is_detached(prev, &ax, x1).then_some(*prev),
+            None => None, // the root anchor never detaches
+        };
+        match detached {
+            Some(prev) => {
+                let xn1 = detach_line(&prev, &ax, &xn, x1);
+                // sweep about ax up to the detachment position; anchors found there keep ax
+                let mut scratch = AnchorHistory::default();
+                let n = attach_anchors(map, &xn, &xn1, &ax, &mut scratch, &mut stats)?;
+                if n > 0 {
+                    out.push(ax).map_err(|_| TetherError::HistoryFull)?;
+                    for a in scratch.as_slice() {
+                        out.push(*a).map_err(|_| TetherError::HistoryFull)?;
+                    }
+                } else {
+                    stats.detached += 1;
+                }
+                xn = xn1;
+            }
+            None => {
+                out.push(ax).map_err(|_| TetherError::HistoryFull)?;
+                attach_anchors(map, &xn, x1, &ax, out, &mut stats)?;
+                return Ok(stats);
+            }
+        }
+    }
+    Err(TetherError::BudgetExhausted)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A "step" terrain: solid where z < 0, or where x < 0 and z < 4 (a vertical cliff with a lip at x=0, z=4).
+    struct Cliff;
+    impl DistanceField for Cliff {
+        fn query(&self, p: &Vec3) -> DistanceQuery {
+            // exact SDF of the union of half-space z<0 and quadrant {x<0, z<4}
+            let (x, z) = (p.x, p.z);
+            let inside = z < 0.0 || (x < 0.0 && z < 4.0);
+            let (d, g) = if inside {
+                // distance to the boundary
+                let dz0 = z; // to z=0 plane (only where x>0 matters) ...
+                let cands = [
+                    (if x > 0.0 { dz0 } else { Real::INFINITY }, Vec3::z()),
+                    (if x < 0.0 { 4.0 - z } else { Real::INFINITY }, Vec3::z()),
+                    (if z > 0.0 && z < 4.0 { -x } else { Real::INFINITY }, Vec3::x()),
+                ];
+                let mut best = (Real::INFINITY, Vec3::z());
+                for c in cands {
+                    if c.0 < best.0 {
+                        best = c;
+                    }
+                }
+                (-best.0, best.1)
+            } else if x >= 0.0 && z >= 4.0 {
+                let v = Vec3::new(x, 0.0, z - 4.0);
+                let n = crate::geom::norm3(&v);
+                (n, if n > 1e-9 { v / n } else { Vec3::new(core::f32::consts::FRAC_1_SQRT_2, 0.0, core::f32::consts::FRAC_1_SQRT_2) })
+            } else if x >= 0.0 {
+                // right of the cliff, below the lip: nearest is the wall or the ground
+                if x < z { (x, Vec3::x()) } else { (z, Vec3::z()) }
+            } else {
+                (z - 4.0, Vec3::z())
+            };
+            DistanceQuery::Known { distance: d, gradient: g }
+        }
+    }
+
+    #[test]
+    fn tether_attaches_on_the_lip_and_detaches_when_the_rover_climbs_back() {
+        let root = Anchor::root(Vec3::new(-5.0, 0.0, 6.0));
+        let a0 = AnchorHistory::new(root);
+        let mut a1 = AnchorHistory::default();
+        // rover on the ground at x=2 moving to x=1 (under the line from root over the lip)
+        let x0 = Vec3::new(3.0, 0.0, 4.5);
+        let x1 = Vec3::new(1.0, 0.0, 0.5);
+        let stats = predict_anchors(&Cliff, &a0, &x0, &x1, &mut a1).unwrap_or_else(|e| panic!("{e:?}"));
+        assert_eq!(a1.len(), 2, "{a1:?} {stats:?}");
+        let lip = a1.last().map(|a| a.point).unwrap_or_default();
+        assert!((lip - Vec3::new(0.0, 0.0, 4.0)).norm() < 0.02, "lip anchor {lip:?}");
+        // moving back up and out over the lip line detaches it
+        let mut a2 = AnchorHistory::default();
+        predict_anchors(&Cliff, &a1, &x1, &x0, &mut a2).unwrap_or_else(|e| panic!("{e:?}"));
+        assert_eq!(a2.len(), 1, "{a2:?}");
+    }
+
+    #[test]
+    fn full_history_is_a_typed_error() {
+        let mut h = AnchorHistory::new(Anchor::root(Vec3::zeros()));
+        for _ in 1..ANCHOR_HISTORY_CAPACITY {
+            assert!(h.push(Anchor::root(Vec3::x())).is_ok());
+        }
+        assert!(h.push(Anchor::root(Vec3::y())).is_err());
+        let mut out = AnchorHistory::default();
+        assert_eq!(
+            predict_anchors(&Cliff, &AnchorHistory::default(), &Vec3::zeros(), &Vec3::x(), &mut out),
+            Err(TetherError::EmptyHistory)
+        );
+    }
+}

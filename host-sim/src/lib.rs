@@ -20,4 +20,5 @@ pub mod movingai;
 pub mod team;
 pub mod terrain;
 pub mod testkit;
+pub mod truth;
 pub mod world;

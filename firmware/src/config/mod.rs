@@ -12,3 +12,4 @@ pub mod protocol;
 pub mod rover;
 pub mod stability;
 pub mod team;
+pub mod tether;

@@ -5,6 +5,8 @@
 //! it. Every world implements [`firmware::map::DistanceField`] (exact signed distance, negative inside terrain)
 //! and [`World`].
 
+pub mod ledge;
+
 use firmware::geom::{Real, Vec3};
 use firmware::map::DistanceField;
 

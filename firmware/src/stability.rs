@@ -1,1 +1,0 @@
-//! `stability`: not yet implemented (see the issue tracker).

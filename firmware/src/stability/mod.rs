@@ -1,0 +1,465 @@
+//! Tether-based static stability (Paton et al., *Navigation on the Line*, section IV-C, Fig. 6, eqs. 1-9).
+//!
+//! Given a settled pose's ground contacts, the two body masses and the tether (exit point on the boom and the
+//! direction to the most recent anchor of the anchor history), decide whether contact and tether forces exist that
+//! hold the rover in static equilibrium, and how much friction headroom the best such forces leave.
+//!
+//! # Model (eqs. 1-8)
+//! Each contact `i` carries a full wrench `(lambda_i, M_i)` in its contact frame (z along the contact normal, x and y
+//! tangent): `lambda_z >= 0` (1), friction pyramid `|lambda_x|, |lambda_y| <= mu lambda_z` (2, 3), moment limits
+//! `|M_x|, |M_y|, |M_z| <= mu_m lambda_z` (4-6) (the grouser contact patch; a contact with `mu_m = 0` is a point
+//! contact and carries no moment). The tether pulls at the exit point `r_t` along the unit direction to the last
+//! anchor with tension `0 <= T <= T_max` (a slack tether has `T = 0`). Force (7) and moment (8) balance include both
+//! body masses `m_1 g`, `m_2 g` at their centres of mass `r_1`, `r_2`. Moments are taken about the combined centre
+//! of mass; all forces are divided by the total weight `W = (m_1 + m_2) |g|`, so the numbers are O(1).
+//!
+//! # Objective: a convex replacement of (9)
+//! The paper's objective (9), `sum (lambda_x^2 + lambda_y^2) / mu^2 - 2 lambda_z^2 + sum |M|^2 / mu_m^2 -
+//! 3 lambda_z^2`, is not convex (the `-lambda_z^2` terms), so a local solver can stop anywhere. We keep its intent —
+//! prefer the forces with the most headroom on the friction and moment pyramids — with a linear program:
+//!
+//! maximise `s` subject to (1), (7), (8), `0 <= T <= T_max`, and for every contact
+//! `+-lambda_x <= mu lambda_z - s`, `+-lambda_y <= mu lambda_z - s`, `+-M_k <= mu_m lambda_z - l s` with
+//! `l = mu_m / mu` (metres, so that moment headroom is measured in the same units), `lambda_z <= NORMAL_FORCE_CAP`
+//! (a load limit of 10 rover weights per contact: without it, two opposed contacts (a wedge) admit unbounded
+//! squeezing forces and the LP becomes badly conditioned), and `s <= 1`.
+//!
+//! `s*` (the **margin**, a fraction of the rover's weight) is the largest friction headroom that every pyramid facet
+//! of every contact can keep at once. The pose is statically stable exactly when `s* >= 0` (the feasibility problem of
+//! eqs. 1-8 is the `s = 0` slice), and the pose is stable with a safety buffer when `s* >= MIN_MARGIN`. A larger margin
+//! means the pose tolerates a larger error in the friction coefficients: lowering every `mu lambda_z` limit by
+//! `s* W` newtons keeps it stable. The LP is always feasible when the equilibrium equations can be met (take `s`
+//! very negative), and bounded (`s <= 1`), so "no optimum" can only mean bad numerics or a problem with no
+//! equilibrium at all; both end as [`StabilityOutcome::Unknown`], which callers must treat as unstable.
+//! The report also gives the cone utilisation of the solution, `max |lambda_t| / (mu lambda_z)` over loaded
+//! contacts (the quantity (9) tries to keep small).
+//!
+//! # Solver
+//! [`lp`]: a dense Mehrotra primal-dual interior point method over fixed-size nalgebra matrices in `f64`, bounded by
+//! `config::stability::SOLVER_MAX_ITERATIONS`. Stack use of one solve is a few tens of KiB (the LP has
+//! [`LP_VARS`] variables, 6 equations and [`LP_INEQS`] inequalities).
+//!
+//! # Parameters (`config::stability`)
+//! - `MAX_CONTACTS = 4`: contacts per problem.
+//! - `SOLVER_MAX_ITERATIONS = 50`, `SOLVER_TOLERANCE = 1e-9`: LP budget and tolerance.
+//! - `MIN_MARGIN = 0.0`: margin needed to call a pose stable.
+//! - `MARGIN_CAP = 1.0`: upper bound of `s` (keeps the LP bounded).
+//! - `NORMAL_FORCE_CAP = 10.0`: largest normal load per contact, in rover weights.
+//!
+//! Friction coefficients come with the contacts (`Contact::mu`, `Contact::mu_m`); Axel's defaults live in
+//! `config::rover`.
+
+pub mod lp;
+
+use crate::config::stability::{
+    MARGIN_CAP, MAX_CONTACTS, MIN_MARGIN, NORMAL_FORCE_CAP, SOLVER_MAX_ITERATIONS, SOLVER_TOLERANCE,
+};
+use crate::geom::{Real, Vec3};
+use lp::{LinearProgram, LpStatus};
+use nalgebra::{Matrix3, Vector3};
+
+/// Variables of the stability LP: 6 per contact slot, the tension and the margin.
+pub const LP_VARS: usize = 6 * MAX_CONTACTS + 2;
+/// Equations of the stability LP: force and moment balance.
+pub const LP_EQS: usize = 6;
+/// Inequalities of the stability LP: 12 per contact slot, tension bounds and the margin cap.
+pub const LP_INEQS: usize = 12 * MAX_CONTACTS + 3;
+/// The stability LP's type.
+pub type StabilityLp = LinearProgram<LP_VARS, LP_EQS, LP_INEQS>;
+
+const T_COL: usize = 6 * MAX_CONTACTS;
+const S_COL: usize = 6 * MAX_CONTACTS + 1;
+
+/// One ground contact (a wheel's contact patch or the boom's tip).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contact {
+    /// Contact point, world frame, metres.
+    pub position: Vec3,
+    /// Contact normal (unit, pointing out of the terrain into the rover).
+    pub normal: Vec3,
+    /// Contact-frame x axis (unit, tangent): orientation of the friction pyramid. For a wheel, the rolling
+    /// direction.
+    pub tangent: Vec3,
+    /// Friction coefficient of the pyramid (eqs. 2, 3).
+    pub mu: Real,
+    /// Moment coefficient, metres (eqs. 4-6); 0 for a point contact.
+    pub mu_m: Real,
+}
+
+impl Contact {
+    /// A contact whose pyramid x axis is the projection of `hint` onto the tangent plane (or any tangent if `hint`
+    /// is parallel to the normal).
+    pub fn new(position: Vec3, normal: Vec3, hint: Vec3, mu: Real, mu_m: Real) -> Self {
+        let n = crate::geom::normalize3(&normal, 1e-9).unwrap_or(Vec3::z());
+        let t = hint - n * n.dot(&hint);
+        let t = crate::geom::normalize3(&t, 1e-6).unwrap_or_else(|| {
+            let alt = if libm::fabsf(n.x) < 0.9 { Vec3::x() } else { Vec3::y() };
+            let t = alt - n * n.dot(&alt);
+            crate::geom::normalize3(&t, 1e-9).unwrap_or(Vec3::x())
+        });
+        Contact { position, normal: n, tangent: t, mu, mu_m }
+    }
+}
+
+/// A point mass of the rover model (body or wheel assembly).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyMass {
+    /// Mass, kg.
+    pub mass_kg: Real,
+    /// Centre of mass, world frame, metres.
+    pub com: Vec3,
+}
+
+/// The tether's pull on the rover.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TetherForce {
+    /// No tension (tether paid out, or no anchor).
+    Slack,
+    /// Taut tether from the exit orifice towards the most recent anchor.
+    Taut {
+        /// Tether exit orifice (end of the boom), world frame.
+        exit: Vec3,
+        /// Unit direction from the exit towards the last anchor.
+        direction: Vec3,
+        /// Largest tension the winch holds, newtons (> 0).
+        max_tension_n: Real,
+    },
+}
+
+/// A static-stability question (section IV-C).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StabilityProblem {
+    /// Ground contacts (at most `MAX_CONTACTS`).
+    pub contacts: heapless::Vec<Contact, MAX_CONTACTS>,
+    /// The two body masses (eqs. 7, 8: `m_1`, `m_2`).
+    pub masses: [BodyMass; 2],
+    /// Gravity acceleration vector, m/s^2 (e.g. `(0, 0, -3.71)` on Mars).
+    pub gravity: Vec3,
+    /// The tether force.
+    pub tether: TetherForce,
+}
+
+/// Why a problem was rejected before solving.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StabilityError {
+    /// Total mass or gravity is zero, negative or not finite.
+    NoWeight,
+    /// A contact has a non-finite position or normal, `mu <= 0`, or `mu_m < 0`.
+    BadContact,
+    /// The tether direction is not a unit vector, or its maximum tension is not positive and finite.
+    BadTether,
+}
+
+/// Why the solver could not decide.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum UnknownReason {
+    /// `SOLVER_MAX_ITERATIONS` ran out.
+    BudgetExhausted,
+    /// A factorisation failed or an iterate became non-finite (e.g. no equilibrium is possible at all).
+    NumericalFailure,
+}
+
+/// Numbers describing a solved stability problem.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StabilityReport {
+    /// Optimal margin `s*`, fraction of the rover's weight (see the module docs).
+    pub margin: f64,
+    /// Largest friction/moment cone utilisation of the optimal forces over loaded contacts (1 = at the limit).
+    pub max_utilisation: f64,
+    /// Tether tension of the optimal forces, newtons.
+    pub tension_n: f64,
+    /// Solver iterations used.
+    pub iterations: u32,
+}
+
+/// The answer of [`check_stability`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StabilityOutcome {
+    /// `margin >= MIN_MARGIN`.
+    Stable(StabilityReport),
+    /// `margin < MIN_MARGIN`.
+    Unstable(StabilityReport),
+    /// The solver could not decide: treat as unstable.
+    Unknown(UnknownReason),
+}
+
+impl StabilityOutcome {
+    /// True only for [`StabilityOutcome::Stable`].
+    pub fn is_stable(&self) -> bool {
+        matches!(self, StabilityOutcome::Stable(_))
+    }
+    /// The margin, if solved.
+    pub fn margin(&self) -> Option<f64> {
+        match self {
+            StabilityOutcome::Stable(r) | StabilityOutcome::Unstable(r) => Some(r.margin),
+            StabilityOutcome::Unknown(_) => None,
+        }
+    }
+}
+
+fn put<const R: usize, const C: usize>(m: &mut nalgebra::SMatrix<f64, R, C>, i: usize, j: usize, v: f64) {
+    if let Some(e) = m.get_mut((i, j)) {
+        *e = v;
+    }
+}
+
+fn putv<const R: usize>(m: &mut nalgebra::SVector<f64, R>, i: usize, v: f64) {
+    if let Some(e) = m.get_mut(i) {
+        *e = v;
+    }
+}
+
+fn get(m: &Matrix3<f64>, i: usize, j: usize) -> f64 {
+    m.get((i, j)).copied().unwrap_or(0.0)
+}
+
+fn getv<const R: usize>(m: &nalgebra::SVector<f64, R>, i: usize) -> f64 {
+    m.get(i).copied().unwrap_or(0.0)
+}
+
+fn v64(v: &Vec3) -> Vector3<f64> {
+    Vector3::new(f64::from(v.x), f64::from(v.y), f64::from(v.z))
+}
+
+fn finite(v: &Vec3) -> bool {
+    crate::geom::is_finite3(v)
+}
+
+impl StabilityProblem {
+    /// Validate and build the margin LP described in the module docs (also used by host-side oracles).
+    pub fn to_lp(&self) -> Result<StabilityLp, StabilityError> {
+        let mtot = f64::from(self.masses[0].mass_kg) + f64::from(self.masses[1].mass_kg);
+        let g = v64(&self.gravity);
+        let gn = g.norm();
+        let weight = mtot * gn;
+        if !(weight.is_finite() && weight > 0.0 && self.masses.iter().all(|m| m.mass_kg >= 0.0 && finite(&m.com))) {
+            return Err(StabilityError::NoWeight);
+        }
+        let ghat = g / gn;
+        let com = (v64(&self.masses[0].com) * f64::from(self.masses[0].mass_kg)
+            + v64(&self.masses[1].com) * f64::from(self.masses[1].mass_kg))
+            / mtot;
+        let mut lp = StabilityLp::zeros();
+        // Rows of unused contact slots (and moment rows of point contacts) stay `0 <= 1`: trivially true, with an
+        // interior, so they do not disturb the interior-point iterates. Used rows set their `h` to 0 below.
+        lp.h = nalgebra::SVector::repeat(1.0);
+        // Equations: sum of forces = -ghat (weight units), sum of moments about com = 0 (gravity has no moment
+        // about the combined centre of mass).
+        putv(&mut lp.b, 0, -ghat.x);
+        putv(&mut lp.b, 1, -ghat.y);
+        putv(&mut lp.b, 2, -ghat.z);
+        for (i, c) in self.contacts.iter().enumerate() {
+            let ok = finite(&c.position)
+                && finite(&c.normal)
+                && finite(&c.tangent)
+                && c.mu.is_finite()
+                && c.mu > 0.0
+                && c.mu_m.is_finite()
+                && c.mu_m >= 0.0;
+            if !ok {
+                return Err(StabilityError::BadContact);
+            }
+            let z = v64(&c.normal).try_normalize(1e-9).ok_or(StabilityError::BadContact)?;
+            let xt = v64(&c.tangent);
+            let x = (xt - z * z.dot(&xt)).try_normalize(1e-6).ok_or(StabilityError::BadContact)?;
+            let y = z.cross(&x);
+            let r = Matrix3::from_columns(&[x, y, z]);
+            let p = v64(&c.position) - com;
+            let pr = p.cross_matrix() * r;
+            let col = 6 * i;
+            let mu = f64::from(c.mu);
+            let mu_m = f64::from(c.mu_m);
+            for k in 0..3 {
+                for row in 0..3 {
+                    put(&mut lp.a, row, col + k, get(&r, row, k));
+                    put(&mut lp.a, row + 3, col + k, get(&pr, row, k));
+                    if mu_m > 0.0 {
+                        put(&mut lp.a, row + 3, col + 3 + k, get(&r, row, k));
+                    }
+                }
+            }
+            let r0 = 12 * i;
+            // (1) lambda_z >= 0
+            put(&mut lp.g, r0, col + 2, -1.0);
+            putv(&mut lp.h, r0, 0.0);
+            // normal-load cap (physical load limit; keeps the LP well conditioned in wedge configurations)
+            put(&mut lp.g, r0 + 11, col + 2, 1.0);
+            putv(&mut lp.h, r0 + 11, NORMAL_FORCE_CAP);
+            // (2), (3) with margin
+            for (j, (k, sign)) in [(0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0)].iter().enumerate() {
+                put(&mut lp.g, r0 + 1 + j, col + k, *sign);
+                put(&mut lp.g, r0 + 1 + j, col + 2, -mu);
+                put(&mut lp.g, r0 + 1 + j, S_COL, 1.0);
+                putv(&mut lp.h, r0 + 1 + j, 0.0);
+            }
+            // (4)-(6) with margin, only for contacts that carry moments
+            if mu_m > 0.0 {
+                for j in 0..6 {
+                    let k = 3 + j / 2;
+                    let sign = if j % 2 == 0 { 1.0 } else { -1.0 };
+                    put(&mut lp.g, r0 + 5 + j, col + k, sign);
+                    put(&mut lp.g, r0 + 5 + j, col + 2, -mu_m);
+                    put(&mut lp.g, r0 + 5 + j, S_COL, mu_m / mu);
+                    putv(&mut lp.h, r0 + 5 + j, 0.0);
+                }
+            }
+        }
+        let tr = 12 * MAX_CONTACTS;
+        put(&mut lp.g, tr, T_COL, -1.0);
+        putv(&mut lp.h, tr, 0.0);
+        put(&mut lp.g, tr + 1, T_COL, 1.0);
+        putv(&mut lp.h, tr + 1, 1.0);
+        if let TetherForce::Taut { exit, direction, max_tension_n } = self.tether {
+            let d = v64(&direction);
+            let tmax = f64::from(max_tension_n);
+            if !(finite(&exit) && finite(&direction) && (d.norm() - 1.0).abs() < 1e-3 && tmax.is_finite() && tmax > 0.0)
+            {
+                return Err(StabilityError::BadTether);
+            }
+            let d = d / d.norm();
+            let m = (v64(&exit) - com).cross(&d);
+            for row in 0..3 {
+                put(&mut lp.a, row, T_COL, d.get(row).copied().unwrap_or(0.0));
+                put(&mut lp.a, row + 3, T_COL, m.get(row).copied().unwrap_or(0.0));
+            }
+            putv(&mut lp.h, tr + 1, tmax / weight);
+        }
+        put(&mut lp.g, tr + 2, S_COL, 1.0);
+        putv(&mut lp.h, tr + 2, MARGIN_CAP);
+        putv(&mut lp.c, S_COL, -1.0);
+        Ok(lp)
+    }
+
+    fn weight(&self) -> f64 {
+        (f64::from(self.masses[0].mass_kg) + f64::from(self.masses[1].mass_kg)) * v64(&self.gravity).norm()
+    }
+}
+
+/// Decide static stability (section IV-C) with the convex margin LP of the module docs.
+pub fn check_stability(problem: &StabilityProblem) -> Result<StabilityOutcome, StabilityError> {
+    let lp = problem.to_lp()?;
+    let sol = lp.solve(SOLVER_MAX_ITERATIONS, SOLVER_TOLERANCE);
+    match sol.status {
+        LpStatus::Optimal | LpStatus::AlmostOptimal => {}
+        LpStatus::BudgetExhausted => return Ok(StabilityOutcome::Unknown(UnknownReason::BudgetExhausted)),
+        LpStatus::NumericalFailure => return Ok(StabilityOutcome::Unknown(UnknownReason::NumericalFailure)),
+    }
+    let x = sol.x;
+    let margin = -sol.objective;
+    let mut util: f64 = 0.0;
+    for (i, c) in problem.contacts.iter().enumerate() {
+        let col = 6 * i;
+        let fz = getv(&x, col + 2);
+        if fz > 1e-9 {
+            util = util.max(getv(&x, col).abs().max(getv(&x, col + 1).abs()) / (f64::from(c.mu) * fz));
+            if c.mu_m > 0.0 {
+                let m = getv(&x, col + 3).abs().max(getv(&x, col + 4).abs()).max(getv(&x, col + 5).abs());
+                util = util.max(m / (f64::from(c.mu_m) * fz));
+            }
+        }
+    }
+    let report = StabilityReport {
+        margin,
+        max_utilisation: util,
+        tension_n: getv(&x, T_COL) * problem.weight(),
+        iterations: sol.iterations,
+    };
+    Ok(if margin >= MIN_MARGIN { StabilityOutcome::Stable(report) } else { StabilityOutcome::Unstable(report) })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pm(mu: Real) -> impl Fn(Real, Real) -> StabilityOutcome {
+        // Point mass on an incline of angle alpha (rad), tether in the slope plane at angle theta from upslope.
+        move |alpha: Real, theta: Real| {
+            let n = Vec3::new(libm::sinf(alpha), 0.0, libm::cosf(alpha));
+            let up = Vec3::new(-libm::cosf(alpha), 0.0, libm::sinf(alpha));
+            let side = n.cross(&up);
+            let d = up * libm::cosf(theta) + side * libm::sinf(theta);
+            // pyramid aligned with the tether: x axis perpendicular to the tether in the plane
+            let tangent = n.cross(&d);
+            let mut contacts = heapless::Vec::new();
+            let _ = contacts.push(Contact { position: Vec3::zeros(), normal: n, tangent, mu, mu_m: 0.0 });
+            let p = StabilityProblem {
+                contacts,
+                masses: [
+                    BodyMass { mass_kg: 1.0, com: Vec3::zeros() },
+                    BodyMass { mass_kg: 0.0, com: Vec3::zeros() },
+                ],
+                gravity: Vec3::new(0.0, 0.0, -9.81),
+                tether: TetherForce::Taut { exit: Vec3::zeros(), direction: d, max_tension_n: 1e3 },
+            };
+            match check_stability(&p) {
+                Ok(o) => o,
+                Err(e) => panic!("{e:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn point_mass_on_incline_holds_up_to_theta_max() {
+        // Abad-Manterola et al. section VI: |theta_max| = asin(mu cot alpha).
+        for (mu, alpha_deg) in [(0.5f32, 45.0f32), (0.6, 55.0), (0.3, 40.0), (0.8, 70.0)] {
+            let f = pm(mu);
+            let alpha = alpha_deg.to_radians();
+            let theta_max = libm::asinf(mu / libm::tanf(alpha));
+            for k in 0..=20 {
+                let th = -1.4 + 2.8 * k as f32 / 20.0;
+                let o = f(alpha, th);
+                let expect = libm::fabsf(th) <= theta_max;
+                if libm::fabsf(libm::fabsf(th) - theta_max) > 1e-3 {
+                    assert_eq!(o.is_stable(), expect, "mu {mu} alpha {alpha_deg} theta {th} tmax {theta_max} {o:?}");
+                }
+            }
+            // the boundary itself: bisect the sign change of the margin
+            let (mut lo, mut hi) = (0.0f32, 1.5f32);
+            for _ in 0..30 {
+                let m = 0.5 * (lo + hi);
+                if f(alpha, m).is_stable() {
+                    lo = m
+                } else {
+                    hi = m
+                }
+            }
+            assert!((lo - theta_max).abs() < 2e-4, "boundary {lo} vs asin(mu cot alpha) {theta_max}");
+        }
+    }
+
+    #[test]
+    fn slack_tether_on_flat_ground_is_stable_and_steep_slope_is_not() {
+        let mk = |normal: Vec3| {
+            let mut contacts = heapless::Vec::new();
+            for y in [-0.5f32, 0.5] {
+                let _ = contacts.push(Contact::new(Vec3::new(0.0, y, 0.0), normal, Vec3::x(), 0.6, 0.05));
+            }
+            StabilityProblem {
+                contacts,
+                masses: [
+                    BodyMass { mass_kg: 30.0, com: Vec3::new(0.0, 0.0, 0.35) },
+                    BodyMass { mass_kg: 20.0, com: Vec3::new(-0.1, 0.0, 0.3) },
+                ],
+                gravity: Vec3::new(0.0, 0.0, -3.71),
+                tether: TetherForce::Slack,
+            }
+        };
+        let flat = check_stability(&mk(Vec3::z()));
+        assert!(matches!(flat, Ok(StabilityOutcome::Stable(_))), "{flat:?}");
+        // 45 degrees with mu 0.6 and no tether: tan 45 = 1 > 0.6, must slide
+        let n = Vec3::new(libm::sinf(0.785), 0.0, libm::cosf(0.785));
+        let steep = check_stability(&mk(n));
+        assert!(matches!(steep, Ok(StabilityOutcome::Unstable(_))), "{steep:?}");
+    }
+
+    #[test]
+    fn bad_input_is_rejected() {
+        let p = StabilityProblem {
+            contacts: heapless::Vec::new(),
+            masses: [BodyMass { mass_kg: 0.0, com: Vec3::zeros() }; 2],
+            gravity: Vec3::new(0.0, 0.0, -9.81),
+            tether: TetherForce::Slack,
+        };
+        assert_eq!(check_stability(&p), Err(StabilityError::NoWeight));
+    }
+}

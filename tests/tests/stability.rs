@@ -1,0 +1,216 @@
+//! The flight core's stability LP solver (`firmware::stability::lp`, Mehrotra interior point, no_std) against
+//! clarabel (host-only interior-point conic solver) on random stability problems.
+//!
+//! Stated tolerance: when clarabel solves the margin LP, ours must report `Optimal` and the optimal margins must
+//! agree within 1e-6 (1 + |margin|) (margins are fractions of the rover's weight). Feasibility: clarabel's verdict on the `s = 0` slice
+//! (eqs. 1-8 alone: solved = stable, infeasible = unstable) must match the sign of our margin, except within 1e-7
+//! of the boundary.
+
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{
+    DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus, SupportedConeT, ZeroConeT,
+};
+use firmware::config::stability::MAX_CONTACTS;
+use firmware::geom::{Real, Vec3};
+use firmware::stability::{
+    check_stability, lp::LpStatus, BodyMass, Contact, StabilityLp, StabilityOutcome, StabilityProblem, TetherForce,
+    LP_EQS, LP_INEQS, LP_VARS,
+};
+use rand_core::Rng;
+use rand_pcg::Pcg64;
+
+fn unif(r: &mut Pcg64, lo: f64, hi: f64) -> f64 {
+    lo + (hi - lo) * (r.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+}
+
+fn unit(r: &mut Pcg64, min_z: f64) -> Vec3 {
+    loop {
+        let v = Vec3::new(unif(r, -1.0, 1.0) as Real, unif(r, -1.0, 1.0) as Real, unif(r, -1.0, 1.0) as Real);
+        let n = v.norm();
+        if n > 0.1 && n <= 1.0 && f64::from(v.z / n) >= min_z {
+            return v / n;
+        }
+    }
+}
+
+fn random_problem(r: &mut Pcg64) -> StabilityProblem {
+    let k = 1 + (r.next_u64() % MAX_CONTACTS as u64) as usize;
+    let mut contacts = heapless::Vec::new();
+    for _ in 0..k {
+        let pos = Vec3::new(unif(r, -0.6, 0.6) as Real, unif(r, -0.6, 0.6) as Real, unif(r, -0.3, 0.1) as Real);
+        let n = unit(r, 0.0);
+        let mu = unif(r, 0.2, 1.2) as Real;
+        let mu_m = if r.next_u64().is_multiple_of(2) { 0.0 } else { unif(r, 0.01, 0.15) as Real };
+        let _ = contacts.push(Contact::new(pos, n, unit(r, -1.0), mu, mu_m));
+    }
+    let m1 = unif(r, 10.0, 40.0) as Real;
+    let m2 = unif(r, 5.0, 20.0) as Real;
+    let c = |r: &mut Pcg64| {
+        Vec3::new(unif(r, -0.3, 0.3) as Real, unif(r, -0.3, 0.3) as Real, unif(r, 0.1, 0.5) as Real)
+    };
+    let masses = [BodyMass { mass_kg: m1, com: c(r) }, BodyMass { mass_kg: m2, com: c(r) }];
+    let gravity = Vec3::new(0.0, 0.0, -3.71);
+    let w = (m1 + m2) * 3.71;
+    let tether = if r.next_u64() % 10 < 3 {
+        TetherForce::Slack
+    } else {
+        TetherForce::Taut {
+            exit: Vec3::new(unif(r, -1.2, 1.2) as Real, unif(r, -0.3, 0.3) as Real, unif(r, 0.0, 0.8) as Real),
+            direction: unit(r, -0.3),
+            max_tension_n: w * unif(r, 0.2, 3.0) as Real,
+        }
+    };
+    StabilityProblem { contacts, masses, gravity, tether }
+}
+
+/// Solve `lp` with clarabel; `pin_margin` adds the equation s = 0 (feasibility of eqs. 1-8).
+fn clarabel_solve(lp: &StabilityLp, pin_margin: bool) -> (SolverStatus, f64) {
+    let extra = usize::from(pin_margin);
+    let rows = LP_EQS + extra + LP_INEQS;
+    let dense = |i: usize, j: usize| -> f64 {
+        if i < LP_EQS {
+            lp.a[(i, j)]
+        } else if i < LP_EQS + extra {
+            if j == LP_VARS - 1 {
+                1.0
+            } else {
+                0.0
+            }
+        } else {
+            lp.g[(i - LP_EQS - extra, j)]
+        }
+    };
+    let (mut colptr, mut rowval, mut nzval) = (vec![0usize], Vec::new(), Vec::new());
+    for j in 0..LP_VARS {
+        for i in 0..rows {
+            let v = dense(i, j);
+            if v != 0.0 {
+                rowval.push(i);
+                nzval.push(v);
+            }
+        }
+        colptr.push(rowval.len());
+    }
+    let a = CscMatrix::new(rows, LP_VARS, colptr, rowval, nzval);
+    let p = CscMatrix::<f64>::zeros((LP_VARS, LP_VARS));
+    let q: Vec<f64> = if pin_margin { vec![0.0; LP_VARS] } else { lp.c.iter().copied().collect() };
+    let mut b: Vec<f64> = lp.b.iter().copied().collect();
+    b.extend(core::iter::repeat_n(0.0, extra));
+    b.extend(lp.h.iter().copied());
+    let cones: [SupportedConeT<f64>; 2] = [ZeroConeT(LP_EQS + extra), NonnegativeConeT(LP_INEQS)];
+    let settings = DefaultSettingsBuilder::default()
+        .verbose(false)
+        .max_iter(200)
+        .tol_gap_abs(1e-10)
+        .tol_gap_rel(1e-10)
+        .tol_feas(1e-10)
+        .build().expect("settings");
+    let mut solver = DefaultSolver::new(&p, &q, &a, &b, &cones, settings).expect("clarabel setup");
+    solver.solve();
+    (solver.solution.status, solver.solution.obj_val)
+}
+
+/// Run random instances until `n` of them are well-posed (clarabel solves the margin LP) and compared.
+fn campaign(n: usize, seed: u128) {
+    let mut r = Pcg64::new(seed, 0xa02_bdbf_7bb3_c0a7);
+    let (mut agree_opt, mut feas_checked, mut stable, mut near_boundary, mut clar_not_solved) = (0, 0, 0, 0, 0);
+    let mut max_err: f64 = 0.0;
+    let mut oracle_failed = 0;
+    let mut ours_unknown = 0;
+    let mut max_iter = 0;
+    let t0 = std::time::Instant::now();
+    let mut ours_time = core::time::Duration::ZERO;
+    let mut case = 0usize;
+    while agree_opt + ours_unknown < n {
+        case += 1;
+        let prob = random_problem(&mut r);
+        let lp = prob.to_lp().expect("valid random problem");
+        let t = std::time::Instant::now();
+        let ours = lp.solve(
+            firmware::config::stability::SOLVER_MAX_ITERATIONS,
+            firmware::config::stability::SOLVER_TOLERANCE,
+        );
+        ours_time += t.elapsed();
+        let (status, obj) = clarabel_solve(&lp, false);
+        match status {
+            SolverStatus::Solved if !matches!(ours.status, LpStatus::Optimal | LpStatus::AlmostOptimal) => {
+                // Ours ran out of budget: allowed only far inside the unstable region (huge internal forces make
+                // the interior-point path long); the verdict is then Unknown, which callers treat as unstable.
+                assert!(-obj < -0.1, "case {case}: clarabel margin {}, ours {:?}\n{prob:?}", -obj, ours.status);
+                assert!(!check_stability(&prob).expect("valid").is_stable());
+                ours_unknown += 1;
+                continue;
+            }
+            SolverStatus::Solved => {
+                let err = (ours.objective - obj).abs();
+                assert!(err <= 1e-6 * (1.0 + obj.abs()), "case {case}: ours {} clarabel {obj}\n{prob:?}", ours.objective);
+                max_err = max_err.max(err);
+                max_iter = max_iter.max(ours.iterations);
+                agree_opt += 1;
+            }
+            SolverStatus::PrimalInfeasible => {
+                // no equilibrium at all: ours must not claim an optimum, and the check must not say stable
+                assert!(
+                    !matches!(ours.status, LpStatus::Optimal | LpStatus::AlmostOptimal),
+                    "case {case}: clarabel infeasible, ours {:?}",
+                    ours.status
+                );
+                let verdict = check_stability(&prob).expect("valid");
+                assert!(!verdict.is_stable());
+                clar_not_solved += 1;
+                continue;
+            }
+            _ => {
+                // the oracle itself did not converge: not a well-posed instance for it; counted and reported
+                oracle_failed += 1;
+                continue;
+            }
+        }
+        let margin = -ours.objective;
+        if margin.abs() < 1e-7 {
+            near_boundary += 1;
+            continue;
+        }
+        let (fs, _) = clarabel_solve(&lp, true);
+        let clar_stable = match fs {
+            SolverStatus::Solved | SolverStatus::AlmostSolved => true,
+            SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => false,
+            _ => {
+                oracle_failed += 1;
+                continue;
+            }
+        };
+        assert_eq!(margin >= 0.0, clar_stable, "case {case}: margin {margin}, clarabel feasibility {fs:?}");
+        let verdict = check_stability(&prob).expect("valid");
+        assert_eq!(verdict.is_stable(), clar_stable);
+        assert!(matches!(verdict, StabilityOutcome::Stable(_) | StabilityOutcome::Unstable(_)));
+        feas_checked += 1;
+        stable += usize::from(clar_stable);
+    }
+    println!(
+        "{case} instances, {n} well-posed: {agree_opt} optimal values agree (max |diff| {max_err:.2e}, max iterations {max_iter}), \
+         {clar_not_solved} without any equilibrium, {ours_unknown} deeply unstable (clarabel margin < -0.1) where ours ran out of budget (Unknown = unstable), feasibility agrees on {feas_checked} ({stable} stable), \
+         {near_boundary} within 1e-7 of the boundary skipped, {oracle_failed} where clarabel did not converge; ours {:.1} us/solve, total {:.1} s",
+        ours_time.as_secs_f64() * 1e6 / case as f64,
+        t0.elapsed().as_secs_f64()
+    );
+    assert!(oracle_failed <= case / 100, "oracle failed too often: {oracle_failed}");
+    assert!(ours_unknown <= n / 50, "ours ran out of budget too often: {ours_unknown}");
+    assert!(stable > feas_checked / 10 && stable < feas_checked * 9 / 10, "unbalanced campaign: {stable}");
+}
+
+/// Default test run: 2,000 well-posed instances (~5 s).
+#[test]
+fn lp_solver_agrees_with_clarabel_on_random_instances() {
+    campaign(2_000, 0x5eed_0002);
+}
+
+/// The full campaign: 10,000 well-posed instances (~25 s at the test profile's opt-level 1).
+/// Run with `cargo test -p tests --test stability -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn lp_solver_agrees_with_clarabel_on_10000_random_instances() {
+    campaign(10_000, 0x5eed_0001);
+}
+
+
