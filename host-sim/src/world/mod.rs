@@ -5,6 +5,10 @@
 //! it. Every world implements [`firmware::map::DistanceField`] (exact signed distance, negative inside terrain)
 //! and [`World`].
 
+pub mod crater;
+pub mod geometry;
+pub mod heightmap;
+
 use firmware::geom::{Real, Vec3};
 use firmware::map::DistanceField;
 
