@@ -8,6 +8,7 @@
 pub mod crater;
 pub mod geometry;
 pub mod heightmap;
+pub mod ledge;
 
 use firmware::geom::{Real, Vec3};
 use firmware::map::DistanceField;
