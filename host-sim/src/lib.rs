@@ -4,6 +4,9 @@
 //! (in-process, or the emulated board in QEMU), field logs (record, replay, MCAP export), campaigns and pictures.
 //! The `tetherbot` binary is the CLI over this library.
 
+pub mod cli;
+pub mod mapcheck;
+pub mod scenario;
 pub mod sensor;
 pub mod terrain;
 pub mod world;

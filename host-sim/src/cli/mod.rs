@@ -1,0 +1,3 @@
+//! Subcommand implementations of the `tetherbot` CLI, one module per area.
+
+pub mod map;

@@ -1,0 +1,550 @@
+//! Scenario files (TOML): the world, the rover's start, the tether's root anchor, the goal, the sensor, seeds,
+//! budgets and map parameters. The schema is documented in `host-sim/doc/scenario.md`; files live in
+//! `host-sim/scenarios/`.
+//!
+//! [`load`] parses, builds the world and checks the scenario against it; every rejection is a [`ScenarioError`]
+//! naming the file, the field and the reason (syntax errors, unknown fields and kinds, NaN or infinite numbers,
+//! a missing terrain file, a start or goal outside the world's bounds, a start or root anchor inside the terrain).
+
+use crate::sensor::RangeSensorParams;
+use crate::terrain::asc::load_asc;
+use crate::terrain::geotiff::{load_geotiff, GeoTiffOptions};
+use crate::world::crater::{CraterWall, CraterWallParams};
+use crate::world::heightmap::HeightmapWorld;
+use crate::world::ledge::LedgeWorld;
+use crate::world::World;
+use firmware::config::map::MapConfig;
+use firmware::geom::{Real, Vec3};
+use firmware::map::DistanceQuery;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// A rejected scenario: file, field (dotted TOML path) and reason.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScenarioError {
+    /// The scenario file.
+    pub file: PathBuf,
+    /// Dotted path of the offending field (`"(syntax)"` for TOML syntax or type errors, with line/column).
+    pub field: String,
+    /// What is wrong, in words a user can act on.
+    pub reason: String,
+}
+
+impl std::fmt::Display for ScenarioError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}: {}", self.file.display(), self.field, self.reason)
+    }
+}
+
+impl std::error::Error for ScenarioError {}
+
+/// `[world.terrain]`: a DEM file.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TerrainSection {
+    /// Path of the DEM, relative to the scenario file.
+    pub file: PathBuf,
+    /// `geotiff` or `asc`; default from the extension (`.tif`, `.tiff`, `.asc`).
+    #[serde(default)]
+    pub format: Option<String>,
+    /// Stored sample to metres (e.g. 0.5 for the LOLA Kepler file). Default 1.
+    #[serde(default = "one")]
+    pub height_scale: f64,
+    /// Multiplies the post spacing. Default 1.
+    #[serde(default = "one")]
+    pub horizontal_scale: f64,
+    /// Multiplies the heights (after `height_scale`). Default 1.
+    #[serde(default = "one")]
+    pub vertical_scale: f64,
+    /// Post spacing override, metres (GeoTIFF without a pixel-scale tag). Default: from the file.
+    #[serde(default)]
+    pub spacing_m: Option<f64>,
+    /// "No data" override (GeoTIFF). Default: from the file's GDAL_NODATA tag.
+    #[serde(default)]
+    pub nodata: Option<f64>,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// `[world]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WorldSection {
+    /// `crater_wall`, `ledge`, `ledge_pole` or `terrain`.
+    pub kind: String,
+    /// Parameters when `kind = "crater_wall"` (all optional, defaults in [`CraterWallParams`]).
+    #[serde(default)]
+    pub crater_wall: Option<CraterWallParams>,
+    /// The DEM when `kind = "terrain"`.
+    #[serde(default)]
+    pub terrain: Option<TerrainSection>,
+}
+
+/// `[rover]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RoverSection {
+    /// Start position of the rover reference point (axle centre), metres.
+    pub start: [f64; 3],
+    /// Start heading, degrees from +x. Default 0.
+    #[serde(default)]
+    pub yaw_deg: f64,
+}
+
+/// `[tether]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TetherSection {
+    /// Root anchor, metres.
+    pub root_anchor: [f64; 3],
+    /// Tether length available, metres. Default 100.
+    #[serde(default = "hundred")]
+    pub length_m: f64,
+}
+
+fn hundred() -> f64 {
+    100.0
+}
+
+/// `[goal]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GoalSection {
+    /// Goal position, metres.
+    pub position: [f64; 3],
+    /// Goal region radius, metres. Default 0.5.
+    #[serde(default = "half")]
+    pub tolerance_m: f64,
+}
+
+fn half() -> f64 {
+    0.5
+}
+
+/// `[seeds]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Seeds {
+    /// Sensor noise and dropouts. Default 1.
+    pub sensor: u64,
+    /// Planner sampling. Default 1.
+    pub planner: u64,
+    /// Trials of a campaign use seeds `planner .. planner + trials`. Default 1.
+    pub trials: u32,
+}
+
+impl Default for Seeds {
+    fn default() -> Self {
+        Seeds { sensor: 1, planner: 1, trials: 1 }
+    }
+}
+
+/// `[budgets]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Budgets {
+    /// Planner iterations per plan. Default 750 (Paton et al. VI-A).
+    pub planner_iterations: u32,
+    /// ESDF sweeps per update. Default 32.
+    pub esdf_max_sweeps: usize,
+    /// Voxels per integrated ray. Default 128 (at 5 cm).
+    pub max_ray_voxels: usize,
+}
+
+impl Default for Budgets {
+    fn default() -> Self {
+        Budgets { planner_iterations: 750, esdf_max_sweeps: 32, max_ray_voxels: 128 }
+    }
+}
+
+/// `[map]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MapSection {
+    /// Voxel edge, metres. Default 0.05.
+    pub voxel_size_m: f64,
+    /// TSDF truncation, metres. Default 3 voxels.
+    pub truncation_m: Option<f64>,
+    /// ESDF saturation distance, metres. Default 1.5.
+    pub esdf_max_distance_m: f64,
+    /// Pool size in blocks. Default 3584 (the flight board's pool).
+    pub pool_blocks: usize,
+}
+
+impl Default for MapSection {
+    fn default() -> Self {
+        MapSection {
+            voxel_size_m: 0.05,
+            truncation_m: None,
+            esdf_max_distance_m: 1.5,
+            pool_blocks: firmware::config::map::FLIGHT_BLOCKS,
+        }
+    }
+}
+
+/// A parsed scenario file.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Short name.
+    pub name: String,
+    /// What the scenario is for.
+    #[serde(default)]
+    pub description: String,
+    /// The world.
+    pub world: WorldSection,
+    /// The rover's start.
+    pub rover: RoverSection,
+    /// The tether.
+    pub tether: TetherSection,
+    /// The goal.
+    pub goal: GoalSection,
+    /// The range sensor (all fields optional).
+    #[serde(default)]
+    pub sensor: RangeSensorParams,
+    /// Seeds.
+    #[serde(default)]
+    pub seeds: Seeds,
+    /// Budgets.
+    #[serde(default)]
+    pub budgets: Budgets,
+    /// Map parameters.
+    #[serde(default)]
+    pub map: MapSection,
+    /// The file it came from (set by [`load`]).
+    #[serde(skip)]
+    pub file: PathBuf,
+}
+
+/// A world description, resolved (paths absolute).
+#[derive(Debug, Clone, PartialEq)]
+pub enum WorldSpec {
+    /// The three-plane crater wall.
+    CraterWall(CraterWallParams),
+    /// Paton et al.'s ledge.
+    Ledge,
+    /// The ledge with a pole.
+    LedgePole,
+    /// A DEM.
+    Terrain(TerrainSection),
+}
+
+impl WorldSpec {
+    /// The built-in worlds by name: `crater_wall`, `ledge`, `ledge_pole`, `marsyard` (the ERC Mars Yard DEM).
+    pub fn by_name(name: &str) -> Option<WorldSpec> {
+        Some(match name {
+            "crater_wall" => WorldSpec::CraterWall(CraterWallParams::default()),
+            "ledge" => WorldSpec::Ledge,
+            "ledge_pole" => WorldSpec::LedgePole,
+            "marsyard" => WorldSpec::Terrain(TerrainSection {
+                file: PathBuf::from("terrain/erc_marsyard2021_hm.tif"),
+                format: None,
+                height_scale: 1.0,
+                horizontal_scale: 1.0,
+                vertical_scale: 1.0,
+                spacing_m: None,
+                nodata: None,
+            }),
+            _ => return None,
+        })
+    }
+
+    /// Builds the world; relative terrain paths are resolved against `base`. Errors: `(field, reason)`.
+    pub fn build(&self, base: &Path) -> Result<Box<dyn World>, (String, String)> {
+        match self {
+            WorldSpec::CraterWall(p) => CraterWall::new(p.clone())
+                .map(|w| Box::new(w) as Box<dyn World>)
+                .map_err(|(f, r)| (format!("world.crater_wall.{f}"), r)),
+            WorldSpec::Ledge => Ok(Box::new(LedgeWorld::new())),
+            WorldSpec::LedgePole => Ok(Box::new(LedgeWorld::with_pole())),
+            WorldSpec::Terrain(t) => {
+                let f = |r: String| ("world.terrain".to_string(), r);
+                let path = base.join(&t.file);
+                if !path.is_file() {
+                    return Err(("world.terrain.file".into(), format!("no such file: {}", path.display())));
+                }
+                let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+                let format = t.format.clone().unwrap_or_else(|| match ext.as_str() {
+                    "tif" | "tiff" => "geotiff".into(),
+                    other => other.to_string(),
+                });
+                let hm = match format.as_str() {
+                    "geotiff" => load_geotiff(
+                        &path,
+                        &GeoTiffOptions { height_scale: t.height_scale, spacing_m: t.spacing_m, nodata: t.nodata },
+                    )
+                    .map_err(|e| f(format!("{}: {e}", path.display())))?,
+                    "asc" => load_asc(&path, t.height_scale).map_err(|e| f(format!("{}: {e}", path.display())))?,
+                    "npy" | "obj" => {
+                        return Err((
+                            "world.terrain.format".into(),
+                            format!("{format} terrain is loaded by the npy/obj loaders of the `team` branch, not merged here"),
+                        ))
+                    }
+                    other => {
+                        return Err((
+                            "world.terrain.format".into(),
+                            format!("unknown format {other:?}: use geotiff or asc"),
+                        ))
+                    }
+                };
+                let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("terrain").to_string();
+                HeightmapWorld::new(&name, &hm, t.horizontal_scale, t.vertical_scale)
+                    .map(|w| Box::new(w) as Box<dyn World>)
+                    .map_err(|e| f(e.0))
+            }
+        }
+    }
+}
+
+impl Scenario {
+    /// The world kind as written.
+    pub fn world_kind(&self) -> String {
+        self.world.kind.clone()
+    }
+
+    fn err(&self, field: &str, reason: impl Into<String>) -> ScenarioError {
+        ScenarioError { file: self.file.clone(), field: field.into(), reason: reason.into() }
+    }
+
+    /// The world spec of this scenario.
+    pub fn world_spec(&self) -> Result<WorldSpec, ScenarioError> {
+        let w = &self.world;
+        match w.kind.as_str() {
+            "crater_wall" => Ok(WorldSpec::CraterWall(w.crater_wall.clone().unwrap_or_default())),
+            "ledge" => Ok(WorldSpec::Ledge),
+            "ledge_pole" => Ok(WorldSpec::LedgePole),
+            "terrain" => w
+                .terrain
+                .clone()
+                .map(WorldSpec::Terrain)
+                .ok_or_else(|| self.err("world.terrain", "kind = \"terrain\" needs a [world.terrain] table with `file`")),
+            other => Err(self.err(
+                "world.kind",
+                format!("unknown world kind {other:?}: use crater_wall, ledge, ledge_pole or terrain"),
+            )),
+        }
+    }
+
+    /// Builds the world (terrain paths relative to the scenario file).
+    pub fn build_world(&self) -> Result<Box<dyn World>, ScenarioError> {
+        let base = self.file.parent().unwrap_or(Path::new("."));
+        self.world_spec()?.build(base).map_err(|(f, r)| self.err(&f, r))
+    }
+
+    /// The map configuration of this scenario.
+    pub fn map_config(&self) -> Result<MapConfig, ScenarioError> {
+        let mut c = MapConfig::with_voxel_size(self.map.voxel_size_m as Real);
+        if let Some(t) = self.map.truncation_m {
+            c.truncation = t as Real;
+        }
+        c.esdf_max_distance = self.map.esdf_max_distance_m as Real;
+        c.esdf_max_sweeps = self.budgets.esdf_max_sweeps;
+        c.max_ray_voxels = self.budgets.max_ray_voxels;
+        c.validate().map_err(|e| {
+            let field = match e.field {
+                "voxel_size" => "map.voxel_size_m".to_string(),
+                "truncation" => "map.truncation_m".to_string(),
+                "esdf_max_distance" => "map.esdf_max_distance_m".to_string(),
+                "esdf_max_sweeps" => "budgets.esdf_max_sweeps".to_string(),
+                "max_ray_voxels" => "budgets.max_ray_voxels".to_string(),
+                f => format!("map.{f}"),
+            };
+            self.err(&field, e.reason)
+        })?;
+        Ok(c)
+    }
+
+    /// Checks numbers, then the geometry against `world`.
+    pub fn check(&self, world: &dyn World) -> Result<(), ScenarioError> {
+        let finite3 = |field: &str, v: &[f64; 3]| {
+            if v.iter().all(|x| x.is_finite()) {
+                Ok(())
+            } else {
+                Err(self.err(field, format!("must be three finite numbers, got {v:?}")))
+            }
+        };
+        finite3("rover.start", &self.rover.start)?;
+        finite3("tether.root_anchor", &self.tether.root_anchor)?;
+        finite3("goal.position", &self.goal.position)?;
+        if !self.rover.yaw_deg.is_finite() {
+            return Err(self.err("rover.yaw_deg", "must be finite"));
+        }
+        if !(self.goal.tolerance_m.is_finite() && self.goal.tolerance_m > 0.0) {
+            return Err(self.err("goal.tolerance_m", format!("must be > 0, got {}", self.goal.tolerance_m)));
+        }
+        if !(self.tether.length_m.is_finite() && self.tether.length_m > 0.0) {
+            return Err(self.err("tether.length_m", format!("must be > 0, got {}", self.tether.length_m)));
+        }
+        if self.seeds.trials == 0 {
+            return Err(self.err("seeds.trials", "must be >= 1"));
+        }
+        if self.budgets.planner_iterations == 0 {
+            return Err(self.err("budgets.planner_iterations", "must be >= 1"));
+        }
+        if !(self.map.pool_blocks > 0 && self.map.pool_blocks <= 1 << 20) {
+            return Err(self.err("map.pool_blocks", format!("must be in 1..=1048576, got {}", self.map.pool_blocks)));
+        }
+        self.sensor.validate().map_err(|(f, r)| self.err(&format!("sensor.{f}"), r))?;
+        self.map_config()?;
+        let b = world.bounds();
+        let inside_xy = |p: &[f64; 3]| {
+            p[0] >= b.min.x as f64 && p[0] <= b.max.x as f64 && p[1] >= b.min.y as f64 && p[1] <= b.max.y as f64
+        };
+        for (field, p) in [("rover.start", &self.rover.start), ("goal.position", &self.goal.position)] {
+            if !inside_xy(p) {
+                return Err(self.err(
+                    field,
+                    format!(
+                        "({:.2}, {:.2}) is outside the world's bounds x [{:.2}, {:.2}], y [{:.2}, {:.2}]",
+                        p[0], p[1], b.min.x, b.max.x, b.min.y, b.max.y
+                    ),
+                ));
+            }
+        }
+        let sd = |p: &[f64; 3]| match world.query(&Vec3::new(p[0] as Real, p[1] as Real, p[2] as Real)) {
+            DistanceQuery::Known { distance, .. } => Some(distance),
+            DistanceQuery::Unknown => None,
+        };
+        for (field, p) in [("rover.start", &self.rover.start), ("tether.root_anchor", &self.tether.root_anchor), ("goal.position", &self.goal.position)] {
+            if let Some(d) = sd(p) {
+                if d < -0.01 {
+                    return Err(self.err(field, format!("{p:?} is inside the terrain (signed distance {d:.3} m)")));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Parses a scenario from text (`file` is used in errors and to resolve terrain paths); does not build the world.
+pub fn parse(text: &str, file: &Path) -> Result<Scenario, ScenarioError> {
+    let mut sc: Scenario = toml::from_str(text).map_err(|e| ScenarioError {
+        file: file.to_path_buf(),
+        field: "(syntax)".into(),
+        reason: e.to_string().trim().replace('\n', " "),
+    })?;
+    sc.file = file.to_path_buf();
+    Ok(sc)
+}
+
+/// Reads, parses, builds the world and checks the scenario.
+pub fn load(file: &Path) -> Result<Scenario, ScenarioError> {
+    let text = std::fs::read_to_string(file).map_err(|e| ScenarioError {
+        file: file.to_path_buf(),
+        field: "(file)".into(),
+        reason: format!("cannot read: {e}"),
+    })?;
+    let sc = parse(&text, file)?;
+    let world = sc.build_world()?;
+    sc.check(world.as_ref())?;
+    Ok(sc)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const CRATER: &str = r#"
+name = "crater"
+[world]
+kind = "crater_wall"
+[world.crater_wall]
+wall_angle_deg = 55.0
+rocks = 4
+[rover]
+start = [-2.0, 0.0, 6.4]
+[tether]
+root_anchor = [-5.0, 0.0, 8.0]
+[goal]
+position = [7.0, 0.0, 0.4]
+"#;
+
+    fn dir() -> PathBuf {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenarios")
+    }
+
+    fn check_text(text: &str) -> Result<Scenario, ScenarioError> {
+        let sc = parse(text, &dir().join("inline.toml"))?;
+        let w = sc.build_world()?;
+        sc.check(w.as_ref())?;
+        Ok(sc)
+    }
+
+    #[test]
+    fn a_valid_scenario_loads_with_defaults() {
+        let sc = check_text(CRATER).unwrap();
+        assert_eq!(sc.world.crater_wall.as_ref().unwrap().wall_angle_deg, 55.0);
+        assert_eq!(sc.world.crater_wall.as_ref().unwrap().rim_height_m, 6.0);
+        assert_eq!(sc.budgets.planner_iterations, 750);
+        assert_eq!(sc.sensor, RangeSensorParams::default());
+    }
+
+    #[test]
+    fn bad_scenarios_name_file_field_and_reason() {
+        let cases: Vec<(String, &str, &str)> = vec![
+            (CRATER.replace("start = [-2.0, 0.0, 6.4]", "start = [-2.0, 0.0, 5.0]"), "rover.start", "inside the terrain"),
+            (CRATER.replace("position = [7.0, 0.0, 0.4]", "position = [70.0, 0.0, 0.4]"), "goal.position", "outside the world's bounds"),
+            (CRATER.replace("start = [-2.0, 0.0, 6.4]", "start = [-2.0, nan, 6.4]"), "rover.start", "finite"),
+            (CRATER.replace("kind = \"crater_wall\"", "kind = \"volcano\""), "world.kind", "unknown world kind"),
+            (CRATER.replace("wall_angle_deg = 55.0", "wall_angle_deg = 91.0"), "world.crater_wall.wall_angle_deg", "(0, 90)"),
+            (CRATER.replace("rocks = 4", "rocks = 4\ncolour = 3"), "(syntax)", "unknown field"),
+            (CRATER.replace("[goal]\nposition = [7.0, 0.0, 0.4]", ""), "(syntax)", "goal"),
+            (CRATER.replace("root_anchor = [-5.0, 0.0, 8.0]", "root_anchor = [-5.0, 0.0, 3.0]"), "tether.root_anchor", "inside the terrain"),
+            (format!("{CRATER}[sensor]\ndropout_probability = 1.5\n"), "sensor.dropout_probability", "[0, 1]"),
+            (format!("{CRATER}[map]\nvoxel_size_m = 0.001\n"), "map.esdf_max_distance_m", "127 voxels"),
+            (
+                CRATER.replace("kind = \"crater_wall\"", "kind = \"terrain\"\n[world.terrain]\nfile = \"no/such.tif\""),
+                "world.terrain.file",
+                "no such file",
+            ),
+        ];
+        for (text, field, reason) in cases {
+            let e = check_text(&text).unwrap_err();
+            assert_eq!(e.field, field, "{e}");
+            assert!(e.reason.contains(reason), "{e}");
+            assert!(e.to_string().contains("inline.toml"), "{e}");
+        }
+    }
+
+    #[test]
+    fn shipped_scenarios_load() {
+        let mut n = 0;
+        for entry in std::fs::read_dir(dir()).unwrap() {
+            let p = entry.unwrap().path();
+            if p.extension().is_some_and(|e| e == "toml") {
+                load(&p).unwrap_or_else(|e| panic!("{e}"));
+                n += 1;
+            }
+        }
+        assert!(n >= 4, "{n} scenarios");
+    }
+}
+
+#[cfg(test)]
+mod placement {
+    use super::*;
+
+    /// The shipped scenarios put the rover on the ground (axle 0.2 - 0.6 m above the terrain) and the goal
+    /// within 1 m of it.
+    #[test]
+    fn shipped_scenarios_start_and_goal_are_on_the_ground() {
+        let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let p = entry.unwrap().path();
+            if p.extension().is_none_or(|e| e != "toml") {
+                continue;
+            }
+            let text = std::fs::read_to_string(&p).unwrap();
+            let sc = parse(&text, &p).unwrap();
+            let w = sc.build_world().unwrap();
+            let h = |q: &[f64; 3]| w.height_at(q[0] as Real, q[1] as Real).unwrap() as f64;
+            let (s, g, a) = (sc.rover.start, sc.goal.position, sc.tether.root_anchor);
+            let msg = format!("{}: ground under start {:.3}, goal {:.3}, anchor {:.3}", p.display(), h(&s), h(&g), h(&a));
+            assert!((0.2..0.6).contains(&(s[2] - h(&s))), "{msg}");
+            assert!((0.0..1.0).contains(&(g[2] - h(&g))), "{msg}");
+        }
+    }
+}
