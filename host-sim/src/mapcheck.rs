@@ -116,8 +116,12 @@ pub struct CheckReport {
     /// Errors over sampled voxels with true |SD| < near_m.
     pub near: ErrorStats,
     /// Sampled voxels that are free in the map but inside the terrain by more than one voxel, or occupied in
-    /// the map but outside by more than one voxel (sign errors).
+    /// the map but outside by more than one voxel (sign errors). The TSDF writes negative values up to the
+    /// truncation distance behind each hit, so at convex edges and thin rocks such errors exist by construction
+    /// (as in Voxblox); they must stay within `truncation + voxel` of the surface.
     pub sign_errors: usize,
+    /// Sign errors farther than `truncation + voxel` from the surface (must be 0).
+    pub sign_errors_far: usize,
 }
 
 impl CheckReport {
@@ -232,6 +236,9 @@ pub fn esdf_errors(world: &dyn World, map: &Map<'_>, cfg: &CheckConfig, rep: &mu
                     }
                     if (m < 0.0 && t > vs) || (m >= 0.0 && t < -vs) {
                         rep.sign_errors += 1;
+                        if t.abs() > map.config().truncation as f64 + vs {
+                            rep.sign_errors_far += 1;
+                        }
                     }
                 }
             }

@@ -44,7 +44,8 @@ pub struct MapConfig {
     /// Points closer than this are ignored (the rover's own body). Default 0.1 m.
     pub min_range: Real,
     /// ESDF fixed band, in voxels: voxels with |TSDF| below `esdf_band * voxel_size` are ESDF sites whose
-    /// distance is their TSDF value (Voxblox's "fixed band"). Default 1.0. Must be <= 2.5.
+    /// distance is their TSDF value (Voxblox's "fixed band"). Default 1.0. Must be <= 1.25 (site values are stored as
+    /// signed hundredths of a voxel in an `i8`).
     pub esdf_band: Real,
     /// ESDF saturation distance, metres: beyond it the ESDF reports exactly this value (a lower bound on the true
     /// distance). Default 1.5 (covers Axel's 1 m wheel base and the tether sweep). At most 127 voxels.
@@ -99,8 +100,8 @@ impl MapConfig {
         if !pos(self.max_range) || self.min_range.is_nan() || self.min_range < 0.0 || self.min_range >= self.max_range {
             return Err(ConfigError { field: "max_range", reason: "need 0 <= min_range < max_range, finite" });
         }
-        if !pos(self.esdf_band) || self.esdf_band > 2.5 {
-            return Err(ConfigError { field: "esdf_band", reason: "must be in (0, 2.5] voxels" });
+        if !pos(self.esdf_band) || self.esdf_band > 1.25 {
+            return Err(ConfigError { field: "esdf_band", reason: "must be in (0, 1.25] voxels" });
         }
         if !pos(self.esdf_max_distance) || self.esdf_max_distance / self.voxel_size > 127.0 {
             return Err(ConfigError {

@@ -24,22 +24,23 @@ pub struct EsdfOutcome {
     pub converged: bool,
 }
 
-/// Site value of a voxel with TSDF `d` (metres): hundredths of a voxel if inside the fixed band, else
+/// Site value of a voxel with TSDF `d` (metres): signed hundredths of a voxel if inside the fixed band, else
 /// [`NO_SITE`].
-pub(crate) fn band_site(d: Real, band: Real, vs: Real) -> u8 {
-    let a = libm::fabsf(d);
-    if a < band {
-        (libm::roundf(a / vs * 100.0) as u32).min(250) as u8
+pub(crate) fn band_site(d: Real, band: Real, vs: Real) -> i8 {
+    if libm::fabsf(d) < band {
+        (libm::roundf(d / vs * 100.0) as i32).clamp(-127, 127) as i8
     } else {
         NO_SITE
     }
 }
 
-/// Site distance in voxels: band value plus the Euclidean length of the offset.
+/// Distance in voxels from a voxel (inside the terrain if `inside`) to the surface through a site at offset
+/// `off` with signed value `w`: `|off| + sign * w` (see the module docs), at least 0.
 #[inline]
-pub(crate) fn site_distance(w: u8, off: [i32; 3]) -> Real {
+pub(crate) fn site_distance(w: i8, off: [i32; 3], inside: bool) -> Real {
     let n2 = (off[0] * off[0] + off[1] * off[1] + off[2] * off[2]) as Real;
-    w as Real * 0.01 + libm::sqrtf(n2)
+    let t = w as Real * 0.01;
+    (libm::sqrtf(n2) + if inside { -t } else { t }).max(0.0)
 }
 
 /// The 26 neighbour offsets.
@@ -211,13 +212,16 @@ impl Map<'_> {
                 let i = if pass == 0 { k } else { BLOCK_VOXELS - 1 - k };
                 let l = local_coords(i);
                 let Some(b) = self.blocks.get(s) else { return changed };
-                let (Some(&w0), Some(&o0)) = (b.site_w.get(i), b.site.get(i)) else { return changed };
+                let (Some(&w0), Some(&o0), Some(&t0)) = (b.site_w.get(i), b.site.get(i), b.tsdf.get(i)) else {
+                    return changed;
+                };
+                let inside = t0 < 0;
                 let mut best_d = if w0 == NO_SITE {
                     Real::INFINITY
                 } else {
-                    site_distance(w0, [o0[0] as i32, o0[1] as i32, o0[2] as i32])
+                    site_distance(w0, [o0[0] as i32, o0[1] as i32, o0[2] as i32], inside)
                 };
-                let mut best: Option<([i8; 3], u8)> = None;
+                let mut best: Option<([i8; 3], i8)> = None;
                 for d in NEIGHBOURS.iter() {
                     let nl = [l[0] as i32 + d[0], l[1] as i32 + d[1], l[2] as i32 + d[2]];
                     let ob = [
@@ -240,7 +244,7 @@ impl Map<'_> {
                     if off.iter().any(|o| o.abs() > 127) {
                         continue;
                     }
-                    let dist = site_distance(w, off);
+                    let dist = site_distance(w, off, inside);
                     if dist < best_d - 1e-5 && dist <= dmax {
                         best_d = dist;
                         best = Some(([off[0] as i8, off[1] as i8, off[2] as i8], w));

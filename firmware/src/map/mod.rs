@@ -8,7 +8,7 @@
 //! ## Layout
 //! - [`Block`]: `BLOCK_EDGE`^3 voxels (8^3 by default), [`VOXEL_BYTES`] = 8 bytes per voxel: quantised TSDF
 //!   (`i16`, units of truncation / 32767), weight (`u16`, 1/64 units), the ESDF site (`[i8; 3]` offset to the
-//!   nearest fixed-band voxel) and that site's band distance (`u8`, hundredths of a voxel).
+//!   nearest fixed-band voxel) and that site's signed TSDF (`i8`, hundredths of a voxel).
 //! - [`MapStorage`]: the block pool plus the block index, owned by the caller (`static` on the board, `Box` on the
 //!   host) and lent to [`Map::new`]. The index is open addressing with linear probing, bounded by
 //!   [`MAX_PROBE`](crate::config::map::MAX_PROBE). Blocks are allocated on demand and never evicted: a full pool
@@ -26,8 +26,12 @@
 //!
 //! ## ESDF ([`Map::update_esdf`])
 //! Sites are the observed voxels inside the fixed band `|TSDF| < esdf_band` voxels; a site's distance is its own
-//! `|TSDF|`. Every other voxel gets `min over sites s (|TSDF_s| + |c - c_s|)`, capped at `esdf_max_distance`, with
-//! the sign of its own TSDF. The minimum is found by vector propagation (each voxel stores the offset of its
+//! `|TSDF|`. Every other voxel `v` gets `min over sites s (|c_v - c_s| + sign_v * TSDF_s)`, capped at
+//! `esdf_max_distance`, with the sign `sign_v` of its own TSDF. Both cases of the sum are upper bounds of the
+//! true distance: a site on the same side as `v` is `|TSDF_s|` from the surface, so the surface is within
+//! `|c_v - c_s| + |TSDF_s|`; a site on the other side is `|TSDF_s|` beyond the surface along the segment from
+//! `v`, so the surface is within `|c_v - c_s| - |TSDF_s|` (Voxblox's fixed band, with the opposite-side case made
+//! tight; without it the ESDF is biased by up to two band widths). The minimum is found by vector propagation (each voxel stores the offset of its
 //! nearest site and takes the best site of its 26 neighbours), run as forward/backward raster sweeps over the dirty
 //! blocks until nothing changes or the sweep budget `esdf_max_sweeps` runs out (then the next call continues).
 //! Updates are incremental: sites inside blocks whose TSDF changed are rebuilt, voxels within
@@ -82,7 +86,7 @@ pub trait DistanceField {
 pub const VOXEL_BYTES: usize = 8;
 
 /// Site-distance value meaning "no site within `esdf_max_distance`".
-pub(crate) const NO_SITE: u8 = u8::MAX;
+pub(crate) const NO_SITE: i8 = i8::MIN;
 
 const FLAG_IN_USE: u8 = 1;
 const FLAG_TSDF_DIRTY: u8 = 2;
@@ -98,7 +102,7 @@ pub struct Block {
     tsdf: [i16; BLOCK_VOXELS],
     weight: [u16; BLOCK_VOXELS],
     site: [[i8; 3]; BLOCK_VOXELS],
-    site_w: [u8; BLOCK_VOXELS],
+    site_w: [i8; BLOCK_VOXELS],
 }
 
 impl Block {

@@ -77,7 +77,7 @@ impl Map<'_> {
             return None;
         }
         let o = b.site.get(i)?;
-        Some(site_distance(w, [o[0] as i32, o[1] as i32, o[2] as i32]))
+        Some(site_distance(w, [o[0] as i32, o[1] as i32, o[2] as i32], *b.tsdf.get(i)? < 0))
     }
 
     fn esdf_at(&self, s: usize, i: usize) -> Option<Real> {
@@ -91,7 +91,8 @@ impl Map<'_> {
             dmax
         } else {
             let o = b.site.get(i)?;
-            (site_distance(w, [o[0] as i32, o[1] as i32, o[2] as i32]) * self.cfg.voxel_size).min(dmax)
+            let inside = *b.tsdf.get(i)? < 0;
+            (site_distance(w, [o[0] as i32, o[1] as i32, o[2] as i32], inside) * self.cfg.voxel_size).min(dmax)
         };
         Some(if *b.tsdf.get(i)? < 0 { -d } else { d })
     }

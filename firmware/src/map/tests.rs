@@ -123,12 +123,15 @@ fn plane_distance_and_gradient_match_analytic_plane() {
     assert_eq!(&chunked[..], &all[..n]);
 }
 
-/// Brute force: for every voxel of the grid, min over sites of (site value + |c - c_s|), capped.
-fn brute_force(sites: &[([i32; 3], u8)], g: [i32; 3], dmax: Real) -> Option<Real> {
+/// Brute force: for every voxel of the grid, min over sites of (|c - c_s| + sign_v * site value), capped; the
+/// voxel is inside (sign -1) only if it is itself a site with a negative value.
+fn brute_force(sites: &[([i32; 3], i8)], g: [i32; 3], dmax: Real) -> Option<Real> {
+    let inside = sites.iter().any(|(s, w)| *s == g && *w < 0);
+    let sign = if inside { -1.0 } else { 1.0 };
     let mut best = Real::INFINITY;
     for (s, w) in sites {
         let d = [(g[0] - s[0]) as f64, (g[1] - s[1]) as f64, (g[2] - s[2]) as f64];
-        let v = *w as f64 * 0.01 + (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let v = ((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() + sign * *w as f64 * 0.01).max(0.0);
         best = best.min(v as Real);
     }
     if best <= dmax { Some(best) } else { None }
@@ -140,7 +143,7 @@ fn random_site_map<'a>(
     rng: &mut impl Rng,
     n: i32,
     nsites: usize,
-) -> Vec<([i32; 3], u8)> {
+) -> Vec<([i32; 3], i8)> {
     let vs = map.config().voxel_size;
     let t = map.config().truncation;
     for z in 0..n {
@@ -157,7 +160,9 @@ fn random_site_map<'a>(
             (rng.next_u32() % n as u32) as i32 - n / 2,
             (rng.next_u32() % n as u32) as i32 - n / 2,
         ];
-        let hundredths = (rng.next_u32() % 100) as u8; // site value in [0, 0.99] voxels, inside the band
+        // signed site value in [-0.99, 0.99] voxels, inside the band; negative = behind the surface
+        let hundredths = (rng.next_u32() % 199) as i32 - 99;
+        let hundredths = hundredths as i8;
         let sdf = hundredths as Real * 0.01 * vs;
         map.set_voxel(g, sdf, 1.0).unwrap();
         sites.retain(|(s, _)| *s != g);
@@ -166,7 +171,7 @@ fn random_site_map<'a>(
     sites
 }
 
-fn compare_with_brute_force(map: &Map<'_>, sites: &[([i32; 3], u8)], n: i32) -> (Real, usize, usize) {
+fn compare_with_brute_force(map: &Map<'_>, sites: &[([i32; 3], i8)], n: i32) -> (Real, usize, usize) {
     let dmax = map.config().esdf_max_distance / map.config().voxel_size;
     let mut max_err: Real = 0.0;
     let mut inexact = 0;

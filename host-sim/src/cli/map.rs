@@ -97,7 +97,10 @@ pub fn map_check(a: &MapCheckArgs) -> Result<(), String> {
     println!("ESDF update per scan: mean {:.2} ms, max {:.2} ms, all converged: {}", rep.esdf_ms_mean, rep.esdf_ms_max, rep.esdf_all_converged);
     println!("ESDF error, all observed voxels:  {}", rep.all);
     println!("ESDF error, near (|SD| < {} m): {}", cfg.near_m, rep.near);
-    println!("sign errors (beyond one voxel): {}", rep.sign_errors);
+    println!(
+        "sign errors beyond one voxel: {} of {} samples ({} beyond truncation + voxel)",
+        rep.sign_errors, rep.all.n, rep.sign_errors_far
+    );
     let mib = |b: f64| b / (1024.0 * 1024.0);
     println!(
         "memory: {} blocks x {} B = {:.2} MiB (dropped voxel updates: {}); observed surface {:.1} m^2 -> {:.0} B/m^2",
