@@ -6,13 +6,13 @@
 //! printed by `tetherbot map-check`.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use firmware::geom::Vec3;
 use firmware::map::Map;
 use host_sim::mapcheck::{host_storage, standard_poses, CheckConfig};
 use host_sim::sensor::{scan, Scan};
 use host_sim::world::crater::{CraterWall, CraterWallParams};
-use std::hint::black_box;
-use std::time::{Duration, Instant};
+use core::hint::black_box;
+use core::time::Duration;
+use std::time::Instant;
 
 fn scans() -> Vec<Scan> {
     let w = CraterWall::new(CraterWallParams::default()).unwrap();
@@ -62,7 +62,6 @@ fn bench(c: &mut Criterion) {
             })
         });
         g.finish();
-        let _ = Vec3::zeros();
     }
 }
 

@@ -45,8 +45,8 @@ impl ErrorStats {
     }
 }
 
-impl std::fmt::Display for ErrorStats {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+impl core::fmt::Display for ErrorStats {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         write!(
             f,
             "n={:>7}  rms={:.4} m  p95={:.4} m  max={:.4} m  bias={:+.4} m",
@@ -221,7 +221,7 @@ pub fn esdf_errors(world: &dyn World, map: &Map<'_>, cfg: &CheckConfig, rep: &mu
             for y in 0..e {
                 for x in 0..e {
                     k += 1;
-                    if k % cfg.sample_stride != 0 {
+                    if !k.is_multiple_of(cfg.sample_stride) {
                         continue;
                     }
                     let g = [bc[0] * e + x, bc[1] * e + y, bc[2] * e + z];

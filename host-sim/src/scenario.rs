@@ -30,13 +30,13 @@ pub struct ScenarioError {
     pub reason: String,
 }
 
-impl std::fmt::Display for ScenarioError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+impl core::fmt::Display for ScenarioError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         write!(f, "{}: {}: {}", self.file.display(), self.field, self.reason)
     }
 }
 
-impl std::error::Error for ScenarioError {}
+impl core::error::Error for ScenarioError {}
 
 /// `[world.terrain]`: a DEM file.
 #[derive(Debug, Clone, PartialEq, Deserialize)]

@@ -22,8 +22,8 @@ pub enum AscError {
     },
 }
 
-impl std::fmt::Display for AscError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+impl core::fmt::Display for AscError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             AscError::Io(e) => write!(f, "cannot read file: {e}"),
             AscError::Parse { line, reason } => write!(f, "line {line}: {reason}"),
@@ -31,7 +31,7 @@ impl std::fmt::Display for AscError {
     }
 }
 
-impl std::error::Error for AscError {}
+impl core::error::Error for AscError {}
 
 /// Loads an Esri ASCII grid from a file.
 pub fn load_asc(path: &Path, height_scale: f64) -> Result<Heightmap, AscError> {

@@ -41,8 +41,8 @@ pub enum GeoTiffError {
     Unsupported(String),
 }
 
-impl std::fmt::Display for GeoTiffError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+impl core::fmt::Display for GeoTiffError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             GeoTiffError::Io(e) => write!(f, "cannot read file: {e}"),
             GeoTiffError::Tiff(e) => write!(f, "not a readable TIFF: {e}"),
@@ -51,7 +51,7 @@ impl std::fmt::Display for GeoTiffError {
     }
 }
 
-impl std::error::Error for GeoTiffError {}
+impl core::error::Error for GeoTiffError {}
 
 /// Loads a GeoTIFF DEM from a file.
 pub fn load_geotiff(path: &Path, opts: &GeoTiffOptions) -> Result<Heightmap, GeoTiffError> {

@@ -45,13 +45,13 @@ pub struct HeightmapWorld {
 #[derive(Debug, Clone, PartialEq)]
 pub struct HeightmapWorldError(pub String);
 
-impl std::fmt::Display for HeightmapWorldError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+impl core::fmt::Display for HeightmapWorldError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.write_str(&self.0)
     }
 }
 
-impl std::error::Error for HeightmapWorldError {}
+impl core::error::Error for HeightmapWorldError {}
 
 impl HeightmapWorld {
     /// Builds the world from `hm`, multiplying post spacing by `horizontal_scale` and heights by
