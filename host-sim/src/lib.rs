@@ -6,7 +6,7 @@
 //!
 //! Foundation modules: [`link`] (the host-side [`link::FlightLink`] trait, the in-process link, the recording
 //! wrapper), [`session`] (host side of the protocol), [`fieldlog`] (the log format), [`replay`], [`mcap_export`],
-//! [`scenario`] (built-in scripted scenarios), [`testkit`] (the bad-input matrix, reusable over any link),
+//! [`scripted`] (built-in scripted scenarios), [`scenario`] (scenario files, TOML), [`testkit`] (the bad-input matrix, reusable over any link),
 //! [`cli`] (subcommand implementations).
 
 pub mod cli;
@@ -15,9 +15,12 @@ pub mod link;
 pub mod mcap_export;
 pub mod replay;
 pub mod scenario;
+pub mod scripted;
 pub mod session;
 pub mod movingai;
 pub mod team;
+pub mod mapcheck;
+pub mod sensor;
 pub mod terrain;
 pub mod testkit;
 pub mod truth;

@@ -31,6 +31,12 @@ enum Command {
     Movingai(cli::team::MovingaiArgs),
     /// Simulate the four-robot climbing team on real terrain (HiRISE cliff, Itokawa) and draw it.
     Team(cli::team::TeamArgs),
+    /// Build the onboard map from a scan sequence and print its ESDF error against ground truth, timing, memory.
+    MapCheck(cli::map::MapCheckArgs),
+    /// Render the onboard map built from a scan sequence as a PNG (top view or vertical slice).
+    RenderMap(cli::map::RenderMapArgs),
+    /// Time a full distance transform: the onboard ESDF vs libdynamicedt3d on the same grid.
+    EdtBench(cli::map::EdtBenchArgs),
 }
 
 fn main() -> ExitCode {
@@ -48,6 +54,9 @@ fn main() -> ExitCode {
         Command::Inspect(a) => cli::inspect::main(&a),
         Command::Movingai(a) => cli::check_outcome(cli::team::movingai(&a)),
         Command::Team(a) => cli::check_outcome(cli::team::team(&a)),
+        Command::MapCheck(a) => cli::done(cli::map::map_check(&a)),
+        Command::RenderMap(a) => cli::done(cli::map::render_map(&a)),
+        Command::EdtBench(a) => cli::done(cli::map::edt_bench(&a)),
     }
 }
 

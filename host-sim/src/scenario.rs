@@ -1,313 +1,550 @@
-//! Built-in scenarios. For now one: `protocol`, a scripted conversation that exercises every host -> flight
-//! message kind (configure, time ticks, tether readings, a chunked synthetic range scan, telemetry requests, a goal
-//! request, one deliberately damaged frame, shutdown) and checks every reply. Worlds and planners replace the
-//! synthetic data in later scenarios.
+//! Scenario files (TOML): the world, the rover's start, the tether's root anchor, the goal, the sensor, seeds,
+//! budgets and map parameters. The schema is documented in `host-sim/doc/scenario.md`; files live in
+//! `host-sim/scenarios/`.
+//!
+//! [`load`] parses, builds the world and checks the scenario against it; every rejection is a [`ScenarioError`]
+//! naming the file, the field and the reason (syntax errors, unknown fields and kinds, NaN or infinite numbers,
+//! a missing terrain file, a start or goal outside the world's bounds, a start or root anchor inside the terrain).
 
-use std::collections::BTreeMap;
+use crate::sensor::RangeSensorParams;
+use crate::terrain::asc::load_asc;
+use crate::terrain::geotiff::{load_geotiff, GeoTiffOptions};
+use crate::world::crater::{CraterWall, CraterWallParams};
+use crate::world::heightmap::HeightmapWorld;
+use crate::world::ledge::LedgeWorld;
+use crate::world::World;
+use firmware::config::map::MapConfig;
+use firmware::geom::{Real, Vec3};
+use firmware::map::DistanceQuery;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
 
-use firmware::config::protocol::MAX_POINTS_PER_CHUNK;
-use firmware::protocol::*;
-use rand_core::Rng;
-
-use crate::link::FlightLink;
-use crate::session::{HostSession, SessionError};
-
-/// Names of the built-in scenarios.
-pub const SCENARIOS: &[&str] = &["protocol"];
-
-/// What a scenario run saw.
-#[derive(Debug, Clone, Default)]
-pub struct ScenarioReport {
-    /// Host frames sent.
-    pub frames_sent: u32,
-    /// Replies received, by kind name.
-    pub received: BTreeMap<String, u32>,
-    /// Nacks received, with reason.
-    pub nacks: Vec<(u32, NackReason)>,
-    /// The final telemetry.
-    pub final_telemetry: Option<Telemetry>,
-    /// Final state of the goal.
-    pub plan_state: Option<PlanState>,
-    /// Expectations that failed (empty = pass).
-    pub failures: Vec<String>,
-    /// Link time at the end, microseconds.
-    pub end_us: u64,
+/// A rejected scenario: file, field (dotted TOML path) and reason.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScenarioError {
+    /// The scenario file.
+    pub file: PathBuf,
+    /// Dotted path of the offending field (`"(syntax)"` for TOML syntax or type errors, with line/column).
+    pub field: String,
+    /// What is wrong, in words a user can act on.
+    pub reason: String,
 }
 
-impl ScenarioReport {
-    /// True when every expectation held.
-    pub fn passed(&self) -> bool {
-        self.failures.is_empty()
-    }
-}
-
-impl core::fmt::Display for ScenarioReport {
+impl core::fmt::Display for ScenarioError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        writeln!(f, "frames sent: {}", self.frames_sent)?;
-        let recv: Vec<String> = self
-            .received
-            .iter()
-            .map(|(k, v)| format!("{k} {v}"))
-            .collect();
-        writeln!(f, "frames received: {}", recv.join(", "))?;
-        for (seq, r) in &self.nacks {
-            writeln!(f, "nack: seq {seq} {r:?}")?;
-        }
-        if let Some(s) = self.plan_state {
-            writeln!(f, "plan state: {s:?}")?;
-        }
-        if let Some(t) = &self.final_telemetry {
-            let rejected: u32 = t.frames_rejected.iter().sum();
-            writeln!(
-                f,
-                "final telemetry: mode {:?}, accepted {}, rejected {}, scans {}, tether readings {}, steps {}, \
-                 tx high water {} B, largest frame {} B",
-                t.mode,
-                t.frames_accepted,
-                rejected,
-                t.scans_completed,
-                t.tether_readings,
-                t.steps,
-                t.high_water.tx_queue,
-                t.high_water.frame_len
-            )?;
-        }
-        writeln!(f, "link time: {:.3} s", self.end_us as f64 / 1e6)?;
-        if self.passed() {
-            write!(f, "result: PASS")
-        } else {
-            write!(f, "result: FAIL\n  {}", self.failures.join("\n  "))
+        write!(f, "{}: {}: {}", self.file.display(), self.field, self.reason)
+    }
+}
+
+impl core::error::Error for ScenarioError {}
+
+/// `[world.terrain]`: a DEM file.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TerrainSection {
+    /// Path of the DEM, relative to the scenario file.
+    pub file: PathBuf,
+    /// `geotiff` or `asc`; default from the extension (`.tif`, `.tiff`, `.asc`).
+    #[serde(default)]
+    pub format: Option<String>,
+    /// Stored sample to metres (e.g. 0.5 for the LOLA Kepler file). Default 1.
+    #[serde(default = "one")]
+    pub height_scale: f64,
+    /// Multiplies the post spacing. Default 1.
+    #[serde(default = "one")]
+    pub horizontal_scale: f64,
+    /// Multiplies the heights (after `height_scale`). Default 1.
+    #[serde(default = "one")]
+    pub vertical_scale: f64,
+    /// Post spacing override, metres (GeoTIFF without a pixel-scale tag). Default: from the file.
+    #[serde(default)]
+    pub spacing_m: Option<f64>,
+    /// "No data" override (GeoTIFF). Default: from the file's GDAL_NODATA tag.
+    #[serde(default)]
+    pub nodata: Option<f64>,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// `[world]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WorldSection {
+    /// `crater_wall`, `ledge`, `ledge_pole` or `terrain`.
+    pub kind: String,
+    /// Parameters when `kind = "crater_wall"` (all optional, defaults in [`CraterWallParams`]).
+    #[serde(default)]
+    pub crater_wall: Option<CraterWallParams>,
+    /// The DEM when `kind = "terrain"`.
+    #[serde(default)]
+    pub terrain: Option<TerrainSection>,
+}
+
+/// `[rover]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RoverSection {
+    /// Start position of the rover reference point (axle centre), metres.
+    pub start: [f64; 3],
+    /// Start heading, degrees from +x. Default 0.
+    #[serde(default)]
+    pub yaw_deg: f64,
+}
+
+/// `[tether]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TetherSection {
+    /// Root anchor, metres.
+    pub root_anchor: [f64; 3],
+    /// Tether length available, metres. Default 100.
+    #[serde(default = "hundred")]
+    pub length_m: f64,
+}
+
+fn hundred() -> f64 {
+    100.0
+}
+
+/// `[goal]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GoalSection {
+    /// Goal position, metres.
+    pub position: [f64; 3],
+    /// Goal region radius, metres. Default 0.5.
+    #[serde(default = "half")]
+    pub tolerance_m: f64,
+}
+
+fn half() -> f64 {
+    0.5
+}
+
+/// `[seeds]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Seeds {
+    /// Sensor noise and dropouts. Default 1.
+    pub sensor: u64,
+    /// Planner sampling. Default 1.
+    pub planner: u64,
+    /// Trials of a campaign use seeds `planner .. planner + trials`. Default 1.
+    pub trials: u32,
+}
+
+impl Default for Seeds {
+    fn default() -> Self {
+        Seeds { sensor: 1, planner: 1, trials: 1 }
+    }
+}
+
+/// `[budgets]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Budgets {
+    /// Planner iterations per plan. Default 750 (Paton et al. VI-A).
+    pub planner_iterations: u32,
+    /// ESDF sweeps per update. Default 32.
+    pub esdf_max_sweeps: usize,
+    /// Voxels per integrated ray. Default 128 (at 5 cm).
+    pub max_ray_voxels: usize,
+}
+
+impl Default for Budgets {
+    fn default() -> Self {
+        Budgets { planner_iterations: 750, esdf_max_sweeps: 32, max_ray_voxels: 128 }
+    }
+}
+
+/// `[map]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MapSection {
+    /// Voxel edge, metres. Default 0.05.
+    pub voxel_size_m: f64,
+    /// TSDF truncation, metres. Default 3 voxels.
+    pub truncation_m: Option<f64>,
+    /// ESDF saturation distance, metres. Default 1.5.
+    pub esdf_max_distance_m: f64,
+    /// Pool size in blocks. Default 3584 (the flight board's pool).
+    pub pool_blocks: usize,
+}
+
+impl Default for MapSection {
+    fn default() -> Self {
+        MapSection {
+            voxel_size_m: 0.05,
+            truncation_m: None,
+            esdf_max_distance_m: 1.5,
+            pool_blocks: firmware::config::map::FLIGHT_BLOCKS,
         }
     }
 }
 
-/// The configuration the scenarios send.
-pub fn default_configure(seed: u64) -> Configure {
-    Configure {
-        rover: RoverParams {
-            mass_kg: 45.0,
-            wheel_radius_m: 0.35,
-            axle_length_m: 0.9,
-            boom_length_m: 0.6,
-            friction_coefficient: 0.7,
-        },
-        tether: TetherParams {
-            root_anchor: Point3::new(-4.9, 0.0, 6.0),
-            max_payout_m: 100.0,
-            max_tension_n: 800.0,
-        },
-        planner: PlannerParams {
-            rng_seed: seed,
-            max_iterations: 750,
-            batch_size: 100,
-            goal_bias: 0.05,
-        },
-        telemetry: TelemetryParams {
-            period_ms: 500,
-            forward_log_level: LogLevel::Info,
-        },
-    }
+/// A parsed scenario file.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Short name.
+    pub name: String,
+    /// What the scenario is for.
+    #[serde(default)]
+    pub description: String,
+    /// The world.
+    pub world: WorldSection,
+    /// The rover's start.
+    pub rover: RoverSection,
+    /// The tether.
+    pub tether: TetherSection,
+    /// The goal.
+    pub goal: GoalSection,
+    /// The range sensor (all fields optional).
+    #[serde(default)]
+    pub sensor: RangeSensorParams,
+    /// Seeds.
+    #[serde(default)]
+    pub seeds: Seeds,
+    /// Budgets.
+    #[serde(default)]
+    pub budgets: Budgets,
+    /// Map parameters.
+    #[serde(default)]
+    pub map: MapSection,
+    /// The file it came from (set by [`load`]).
+    #[serde(skip)]
+    pub file: PathBuf,
 }
 
-/// A synthetic scan: `n` returns of a sensor 1 m above flat ground, looking down-forward, with seeded range noise.
-/// Split into chunks of `MAX_POINTS_PER_CHUNK`.
-pub fn synthetic_scan(scan_id: u32, n: usize, rng: &mut impl Rng) -> Vec<SensorChunk> {
-    let pose = Pose {
-        position: Point3::new(0.0, 0.0, 1.0),
-        // 30 degrees pitch down about y: q = (0, sin 15deg, 0, cos 15deg)
-        orientation: Quat {
-            x: 0.0,
-            y: 0.258_819_04,
-            z: 0.0,
-            w: 0.965_925_8,
-        },
-    };
-    let mut points = Vec::with_capacity(n);
-    for i in 0..n {
-        let az = (i as f32 / n as f32 - 0.5) * 1.5;
-        let noise = (rng.next_u32() as f32 / u32::MAX as f32 - 0.5) * 0.02;
-        let r = 2.0 + noise;
-        points.push(Point3::new(r * az.cos(), r * az.sin(), -0.2 * r));
-    }
-    let chunks: Vec<&[Point3]> = points.chunks(MAX_POINTS_PER_CHUNK).collect();
-    let count = chunks.len() as u16;
-    chunks
-        .iter()
-        .enumerate()
-        .map(|(i, c)| SensorChunk {
-            scan_id,
-            chunk_index: i as u16,
-            chunk_count: count,
-            sensor_pose: pose,
-            points: heapless::Vec::from_slice(c).unwrap_or_default(),
+/// A world description, resolved (paths absolute).
+#[derive(Debug, Clone, PartialEq)]
+pub enum WorldSpec {
+    /// The three-plane crater wall.
+    CraterWall(CraterWallParams),
+    /// Paton et al.'s ledge.
+    Ledge,
+    /// The ledge with a pole.
+    LedgePole,
+    /// A DEM.
+    Terrain(TerrainSection),
+}
+
+impl WorldSpec {
+    /// The built-in worlds by name: `crater_wall`, `ledge`, `ledge_pole`, `marsyard` (the ERC Mars Yard DEM).
+    pub fn by_name(name: &str) -> Option<WorldSpec> {
+        Some(match name {
+            "crater_wall" => WorldSpec::CraterWall(CraterWallParams::default()),
+            "ledge" => WorldSpec::Ledge,
+            "ledge_pole" => WorldSpec::LedgePole,
+            "marsyard" => WorldSpec::Terrain(TerrainSection {
+                file: PathBuf::from("terrain/erc_marsyard2021_hm.tif"),
+                format: None,
+                height_scale: 1.0,
+                horizontal_scale: 1.0,
+                vertical_scale: 1.0,
+                spacing_m: None,
+                nodata: None,
+            }),
+            _ => return None,
         })
-        .collect()
-}
+    }
 
-fn expect(rep: &mut ScenarioReport, ok: bool, what: &str) {
-    if !ok {
-        rep.failures.push(what.to_string());
+    /// Builds the world; relative terrain paths are resolved against `base`. Errors: `(field, reason)`.
+    pub fn build(&self, base: &Path) -> Result<Box<dyn World>, (String, String)> {
+        match self {
+            WorldSpec::CraterWall(p) => CraterWall::new(p.clone())
+                .map(|w| Box::new(w) as Box<dyn World>)
+                .map_err(|(f, r)| (format!("world.crater_wall.{f}"), r)),
+            WorldSpec::Ledge => Ok(Box::new(LedgeWorld::new())),
+            WorldSpec::LedgePole => Ok(Box::new(LedgeWorld::with_pole())),
+            WorldSpec::Terrain(t) => {
+                let f = |r: String| ("world.terrain".to_string(), r);
+                let path = base.join(&t.file);
+                if !path.is_file() {
+                    return Err(("world.terrain.file".into(), format!("no such file: {}", path.display())));
+                }
+                let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+                let format = t.format.clone().unwrap_or_else(|| match ext.as_str() {
+                    "tif" | "tiff" => "geotiff".into(),
+                    other => other.to_string(),
+                });
+                let hm = match format.as_str() {
+                    "geotiff" => load_geotiff(
+                        &path,
+                        &GeoTiffOptions { height_scale: t.height_scale, spacing_m: t.spacing_m, nodata: t.nodata },
+                    )
+                    .map_err(|e| f(format!("{}: {e}", path.display())))?,
+                    "asc" => load_asc(&path, t.height_scale).map_err(|e| f(format!("{}: {e}", path.display())))?,
+                    "npy" | "obj" => {
+                        return Err((
+                            "world.terrain.format".into(),
+                            format!("{format} terrain is loaded by the npy/obj loaders of the `team` branch, not merged here"),
+                        ))
+                    }
+                    other => {
+                        return Err((
+                            "world.terrain.format".into(),
+                            format!("unknown format {other:?}: use geotiff or asc"),
+                        ))
+                    }
+                };
+                let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("terrain").to_string();
+                HeightmapWorld::new(&name, &hm, t.horizontal_scale, t.vertical_scale)
+                    .map(|w| Box::new(w) as Box<dyn World>)
+                    .map_err(|e| f(e.0))
+            }
+        }
     }
 }
 
-fn acked(replies: &[Message], seq: u32) -> bool {
-    replies.iter().any(|m| *m == Message::Ack(Ack { seq }))
-}
+impl Scenario {
+    /// The world kind as written.
+    pub fn world_kind(&self) -> String {
+        self.world.kind.clone()
+    }
 
-fn kind_name(m: &Message) -> String {
-    format!("{:?}", m.kind())
-}
+    fn err(&self, field: &str, reason: impl Into<String>) -> ScenarioError {
+        ScenarioError { file: self.file.clone(), field: field.into(), reason: reason.into() }
+    }
 
-/// Runs the `protocol` scenario over `link`.
-pub fn run_protocol(link: impl FlightLink, seed: u64) -> Result<ScenarioReport, SessionError> {
-    let mut s = HostSession::new(link);
-    let mut rep = ScenarioReport::default();
-    let mut rng = rand_pcg::Pcg64Mcg::new(u128::from(seed) | 1);
-    let boot = s.recv()?;
-    expect(
-        &mut rep,
-        matches!(boot.first(), Some(Message::Telemetry(_))),
-        "boot telemetry first",
-    );
+    /// The world spec of this scenario.
+    pub fn world_spec(&self) -> Result<WorldSpec, ScenarioError> {
+        let w = &self.world;
+        match w.kind.as_str() {
+            "crater_wall" => Ok(WorldSpec::CraterWall(w.crater_wall.clone().unwrap_or_default())),
+            "ledge" => Ok(WorldSpec::Ledge),
+            "ledge_pole" => Ok(WorldSpec::LedgePole),
+            "terrain" => w
+                .terrain
+                .clone()
+                .map(WorldSpec::Terrain)
+                .ok_or_else(|| self.err("world.terrain", "kind = \"terrain\" needs a [world.terrain] table with `file`")),
+            other => Err(self.err(
+                "world.kind",
+                format!("unknown world kind {other:?}: use crater_wall, ledge, ledge_pole or terrain"),
+            )),
+        }
+    }
 
-    let cfg = default_configure(seed);
-    let seq = s.send(&Message::Configure(cfg))?;
-    let r = s.recv()?;
-    expect(&mut rep, acked(&r, seq), "configure acked");
+    /// Builds the world (terrain paths relative to the scenario file).
+    pub fn build_world(&self) -> Result<Box<dyn World>, ScenarioError> {
+        let base = self.file.parent().unwrap_or(Path::new("."));
+        self.world_spec()?.build(base).map_err(|(f, r)| self.err(&f, r))
+    }
 
-    for k in 0..5u64 {
-        let t = s.link().now_us();
-        let seq = s.send(&Message::TimeTick(TimeTick { host_time_us: t }))?;
-        let r = s.recv()?;
-        expect(&mut rep, acked(&r, seq), "time tick acked");
-        let reading = TetherReading {
-            time_us: t,
-            payout_m: 3.0 + 0.1 * k as f32,
-            tension_n: 120.0 + (rng.next_u32() % 100) as f32 * 0.1,
-            boom_angle_rad: 0.3,
+    /// The map configuration of this scenario.
+    pub fn map_config(&self) -> Result<MapConfig, ScenarioError> {
+        let mut c = MapConfig::with_voxel_size(self.map.voxel_size_m as Real);
+        if let Some(t) = self.map.truncation_m {
+            c.truncation = t as Real;
+        }
+        c.esdf_max_distance = self.map.esdf_max_distance_m as Real;
+        c.esdf_max_sweeps = self.budgets.esdf_max_sweeps;
+        c.max_ray_voxels = self.budgets.max_ray_voxels;
+        c.validate().map_err(|e| {
+            let field = match e.field {
+                "voxel_size" => "map.voxel_size_m".to_string(),
+                "truncation" => "map.truncation_m".to_string(),
+                "esdf_max_distance" => "map.esdf_max_distance_m".to_string(),
+                "esdf_max_sweeps" => "budgets.esdf_max_sweeps".to_string(),
+                "max_ray_voxels" => "budgets.max_ray_voxels".to_string(),
+                f => format!("map.{f}"),
+            };
+            self.err(&field, e.reason)
+        })?;
+        Ok(c)
+    }
+
+    /// Checks numbers, then the geometry against `world`.
+    pub fn check(&self, world: &dyn World) -> Result<(), ScenarioError> {
+        let finite3 = |field: &str, v: &[f64; 3]| {
+            if v.iter().all(|x| x.is_finite()) {
+                Ok(())
+            } else {
+                Err(self.err(field, format!("must be three finite numbers, got {v:?}")))
+            }
         };
-        let seq = s.send(&Message::TetherReading(reading))?;
-        let r = s.recv()?;
-        expect(&mut rep, acked(&r, seq), "tether reading acked");
-    }
-
-    let chunks = synthetic_scan(1, 1000, &mut rng);
-    let mut seqs = Vec::new();
-    for c in &chunks {
-        seqs.push(s.send(&Message::SensorChunk(c.clone()))?);
-    }
-    let r = s.recv()?;
-    expect(
-        &mut rep,
-        seqs.iter().all(|&q| acked(&r, q)),
-        "every scan chunk acked",
-    );
-
-    let t = s.telemetry()?;
-    expect(&mut rep, t.scans_completed == 1, "scan reassembled");
-    expect(
-        &mut rep,
-        t.mode == Mode::Mapping,
-        "mapping after the first scan",
-    );
-    expect(
-        &mut rep,
-        t.tether_readings == 5,
-        "five tether readings counted",
-    );
-
-    let goal = GoalRequest {
-        goal_id: 1,
-        position: Point3::new(8.0, 0.0, -4.0),
-        tolerance_m: 0.5,
-        planner: PlannerChoice::Abit,
-        max_iterations: 750,
-        time_budget_ms: 0,
-    };
-    let seq = s.send(&Message::GoalRequest(goal))?;
-    let r = s.recv()?;
-    expect(&mut rep, acked(&r, seq), "goal acked");
-    rep.plan_state = r.iter().find_map(|m| {
-        if let Message::PlanStatus(p) = m {
-            Some(p.state)
-        } else {
-            None
+        finite3("rover.start", &self.rover.start)?;
+        finite3("tether.root_anchor", &self.tether.root_anchor)?;
+        finite3("goal.position", &self.goal.position)?;
+        if !self.rover.yaw_deg.is_finite() {
+            return Err(self.err("rover.yaw_deg", "must be finite"));
         }
-    });
-    let has_status = rep.plan_state.is_some();
-    expect(&mut rep, has_status, "plan status after goal");
+        if !(self.goal.tolerance_m.is_finite() && self.goal.tolerance_m > 0.0) {
+            return Err(self.err("goal.tolerance_m", format!("must be > 0, got {}", self.goal.tolerance_m)));
+        }
+        if !(self.tether.length_m.is_finite() && self.tether.length_m > 0.0) {
+            return Err(self.err("tether.length_m", format!("must be > 0, got {}", self.tether.length_m)));
+        }
+        if self.seeds.trials == 0 {
+            return Err(self.err("seeds.trials", "must be >= 1"));
+        }
+        if self.budgets.planner_iterations == 0 {
+            return Err(self.err("budgets.planner_iterations", "must be >= 1"));
+        }
+        if !(self.map.pool_blocks > 0 && self.map.pool_blocks <= 1 << 20) {
+            return Err(self.err("map.pool_blocks", format!("must be in 1..=1048576, got {}", self.map.pool_blocks)));
+        }
+        self.sensor.validate().map_err(|(f, r)| self.err(&format!("sensor.{f}"), r))?;
+        self.map_config()?;
+        let b = world.bounds();
+        let inside_xy = |p: &[f64; 3]| {
+            p[0] >= b.min.x as f64 && p[0] <= b.max.x as f64 && p[1] >= b.min.y as f64 && p[1] <= b.max.y as f64
+        };
+        for (field, p) in [("rover.start", &self.rover.start), ("goal.position", &self.goal.position)] {
+            if !inside_xy(p) {
+                return Err(self.err(
+                    field,
+                    format!(
+                        "({:.2}, {:.2}) is outside the world's bounds x [{:.2}, {:.2}], y [{:.2}, {:.2}]",
+                        p[0], p[1], b.min.x, b.max.x, b.min.y, b.max.y
+                    ),
+                ));
+            }
+        }
+        let sd = |p: &[f64; 3]| match world.query(&Vec3::new(p[0] as Real, p[1] as Real, p[2] as Real)) {
+            DistanceQuery::Known { distance, .. } => Some(distance),
+            DistanceQuery::Unknown => None,
+        };
+        for (field, p) in [("rover.start", &self.rover.start), ("tether.root_anchor", &self.tether.root_anchor), ("goal.position", &self.goal.position)] {
+            if let Some(d) = sd(p) {
+                if d < -0.01 {
+                    return Err(self.err(field, format!("{p:?} is inside the terrain (signed distance {d:.3} m)")));
+                }
+            }
+        }
+        Ok(())
+    }
+}
 
-    // One damaged frame: a time tick with a flipped bit. It must be rejected with BadCrc and change nothing.
-    let before = s.telemetry()?;
-    let mut frame = vec![0u8; 64];
-    let seq = s.take_seq();
-    let body = [0xE8, 0x07];
-    let n = build_raw(
-        Header {
-            version: 1,
-            kind: MessageKind::TimeTick as u8,
-            seq,
-        },
-        &body,
-        &mut frame,
-    )
-    .map_err(SessionError::Encode)?;
-    frame[7] ^= 0x04;
-    let mut wire = vec![0u8; 80];
-    let w = stuff(&frame[..n], &mut wire).map_err(SessionError::Encode)?;
-    s.send_raw(&wire[..w])?;
-    let r = s.recv()?;
-    expect(
-        &mut rep,
-        r.contains(&Message::Nack(Nack {
-            seq,
-            reason: NackReason::BadCrc,
-        })),
-        "damaged frame nacked BadCrc",
-    );
-    let after = s.telemetry()?;
-    expect(
-        &mut rep,
-        after.mode == before.mode,
-        "damaged frame left the mode",
-    );
-    expect(
-        &mut rep,
-        after.frames_accepted == before.frames_accepted + 1,
-        "only the telemetry request accepted",
-    );
+/// Parses a scenario from text (`file` is used in errors and to resolve terrain paths); does not build the world.
+pub fn parse(text: &str, file: &Path) -> Result<Scenario, ScenarioError> {
+    let mut sc: Scenario = toml::from_str(text).map_err(|e| ScenarioError {
+        file: file.to_path_buf(),
+        field: "(syntax)".into(),
+        reason: e.to_string().trim().replace('\n', " "),
+    })?;
+    sc.file = file.to_path_buf();
+    Ok(sc)
+}
 
-    // Let periodic telemetry run for a second of link time.
-    let until = s.link().now_us() + 1_000_000;
-    s.advance_to(until)?;
+/// Reads, parses, builds the world and checks the scenario.
+pub fn load(file: &Path) -> Result<Scenario, ScenarioError> {
+    let text = std::fs::read_to_string(file).map_err(|e| ScenarioError {
+        file: file.to_path_buf(),
+        field: "(file)".into(),
+        reason: format!("cannot read: {e}"),
+    })?;
+    let sc = parse(&text, file)?;
+    let world = sc.build_world()?;
+    sc.check(world.as_ref())?;
+    Ok(sc)
+}
 
-    let seq = s.send(&Message::Shutdown(Shutdown))?;
-    let r = s.recv()?;
-    expect(&mut rep, acked(&r, seq), "shutdown acked");
-    expect(
-        &mut rep,
-        r.iter().any(|m| {
-            matches!(
-                m,
-                Message::DriveCommand(DriveCommand {
-                    motion: Motion::Stop,
-                    ..
-                })
-            )
-        }),
-        "stop commanded at shutdown",
-    );
-    let t = s.telemetry()?;
-    expect(&mut rep, t.mode == Mode::Safe, "safe mode after shutdown");
-    rep.final_telemetry = Some(t);
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-    for m in s.log.iter().map(|r| &r.message) {
-        *rep.received.entry(kind_name(m)).or_default() += 1;
-        if let Message::Nack(n) = m {
-            rep.nacks.push((n.seq, n.reason));
+    const CRATER: &str = r#"
+name = "crater"
+[world]
+kind = "crater_wall"
+[world.crater_wall]
+wall_angle_deg = 55.0
+rocks = 4
+[rover]
+start = [-2.0, 0.0, 6.4]
+[tether]
+root_anchor = [-5.0, 0.0, 8.0]
+[goal]
+position = [7.0, 0.0, 0.4]
+"#;
+
+    fn dir() -> PathBuf {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenarios")
+    }
+
+    fn check_text(text: &str) -> Result<Scenario, ScenarioError> {
+        let sc = parse(text, &dir().join("inline.toml"))?;
+        let w = sc.build_world()?;
+        sc.check(w.as_ref())?;
+        Ok(sc)
+    }
+
+    #[test]
+    fn a_valid_scenario_loads_with_defaults() {
+        let sc = check_text(CRATER).unwrap();
+        assert_eq!(sc.world.crater_wall.as_ref().unwrap().wall_angle_deg, 55.0);
+        assert_eq!(sc.world.crater_wall.as_ref().unwrap().rim_height_m, 6.0);
+        assert_eq!(sc.budgets.planner_iterations, 750);
+        assert_eq!(sc.sensor, RangeSensorParams::default());
+    }
+
+    #[test]
+    fn bad_scenarios_name_file_field_and_reason() {
+        let cases: Vec<(String, &str, &str)> = vec![
+            (CRATER.replace("start = [-2.0, 0.0, 6.4]", "start = [-2.0, 0.0, 5.0]"), "rover.start", "inside the terrain"),
+            (CRATER.replace("position = [7.0, 0.0, 0.4]", "position = [70.0, 0.0, 0.4]"), "goal.position", "outside the world's bounds"),
+            (CRATER.replace("start = [-2.0, 0.0, 6.4]", "start = [-2.0, nan, 6.4]"), "rover.start", "finite"),
+            (CRATER.replace("kind = \"crater_wall\"", "kind = \"volcano\""), "world.kind", "unknown world kind"),
+            (CRATER.replace("wall_angle_deg = 55.0", "wall_angle_deg = 91.0"), "world.crater_wall.wall_angle_deg", "(0, 90)"),
+            (CRATER.replace("rocks = 4", "rocks = 4\ncolour = 3"), "(syntax)", "unknown field"),
+            (CRATER.replace("[goal]\nposition = [7.0, 0.0, 0.4]", ""), "(syntax)", "goal"),
+            (CRATER.replace("root_anchor = [-5.0, 0.0, 8.0]", "root_anchor = [-5.0, 0.0, 3.0]"), "tether.root_anchor", "inside the terrain"),
+            (format!("{CRATER}[sensor]\ndropout_probability = 1.5\n"), "sensor.dropout_probability", "[0, 1]"),
+            (format!("{CRATER}[map]\nvoxel_size_m = 0.001\n"), "map.esdf_max_distance_m", "127 voxels"),
+            (
+                CRATER.replace("kind = \"crater_wall\"", "kind = \"terrain\"\n[world.terrain]\nfile = \"no/such.tif\""),
+                "world.terrain.file",
+                "no such file",
+            ),
+        ];
+        for (text, field, reason) in cases {
+            let e = check_text(&text).unwrap_err();
+            assert_eq!(e.field, field, "{e}");
+            assert!(e.reason.contains(reason), "{e}");
+            assert!(e.to_string().contains("inline.toml"), "{e}");
         }
     }
-    rep.frames_sent = s.next_seq();
-    rep.end_us = s.link().now_us();
-    Ok(rep)
+
+    #[test]
+    fn shipped_scenarios_load() {
+        let mut n = 0;
+        for entry in std::fs::read_dir(dir()).unwrap() {
+            let p = entry.unwrap().path();
+            if p.extension().is_some_and(|e| e == "toml") {
+                load(&p).unwrap_or_else(|e| panic!("{e}"));
+                n += 1;
+            }
+        }
+        assert!(n >= 4, "{n} scenarios");
+    }
+}
+
+#[cfg(test)]
+mod placement {
+    use super::*;
+
+    /// The shipped scenarios put the rover on the ground (axle 0.2 - 0.6 m above the terrain) and the goal
+    /// within 1 m of it.
+    #[test]
+    fn shipped_scenarios_start_and_goal_are_on_the_ground() {
+        let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let p = entry.unwrap().path();
+            if p.extension().is_none_or(|e| e != "toml") {
+                continue;
+            }
+            let text = std::fs::read_to_string(&p).unwrap();
+            let sc = parse(&text, &p).unwrap();
+            let w = sc.build_world().unwrap();
+            let h = |q: &[f64; 3]| w.height_at(q[0] as Real, q[1] as Real).unwrap() as f64;
+            let (s, g, a) = (sc.rover.start, sc.goal.position, sc.tether.root_anchor);
+            let msg = format!("{}: ground under start {:.3}, goal {:.3}, anchor {:.3}", p.display(), h(&s), h(&g), h(&a));
+            assert!((0.2..0.6).contains(&(s[2] - h(&s))), "{msg}");
+            assert!((0.0..1.0).contains(&(g[2] - h(&g))), "{msg}");
+        }
+    }
 }

@@ -14,7 +14,7 @@ use firmware::config::protocol::{
 use firmware::protocol::*;
 
 use crate::link::FlightLink;
-use crate::scenario::default_configure;
+use crate::scripted::default_configure;
 use crate::session::{HostSession, SessionError};
 
 /// Result of one bad input.

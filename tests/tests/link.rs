@@ -5,7 +5,7 @@ use host_sim::fieldlog::{self, DamageReason, Direction};
 use host_sim::link::inproc::{InProcLink, DEFAULT_STEP_US};
 use host_sim::link::recording::RecordingLink;
 use host_sim::replay::{replay, ReplayOutcome, RunConfig};
-use host_sim::scenario;
+use host_sim::scripted as scenario;
 use host_sim::testkit::bad_input_matrix;
 
 #[test]

@@ -1,1 +1,132 @@
-//! Capacities and budgets for `map` (filled in by the module that uses them).
+//! Capacities and budgets for [`crate::map`], the onboard TSDF -> ESDF map (Paton et al. section IV, after
+//! Voxblox, Oleynikova et al. 2017).
+//!
+//! Compile-time capacities (block edge, pool sizes, probe bound) are `const`s; per-mission numbers (voxel size,
+//! truncation distance, budgets) live in [`MapConfig`], whose [`MapConfig::DEFAULT`] lists every default.
+
+use crate::geom::Real;
+
+/// Voxels along one edge of a voxel block. Default 8 (Voxblox's default): a block of 8^3 = 512 voxels is
+/// 4 KiB at [`crate::map::VOXEL_BYTES`] = 8 bytes per voxel, a good unit of allocation for a static pool.
+pub const BLOCK_EDGE: usize = 8;
+/// Voxels per block (`BLOCK_EDGE^3`).
+pub const BLOCK_VOXELS: usize = BLOCK_EDGE * BLOCK_EDGE * BLOCK_EDGE;
+
+/// Default number of blocks in the flight computer's pool. 3584 blocks x ~4.1 KiB = ~14.4 MiB, which fits the
+/// mps2-an500 board's 16 MiB PSRAM with room for the planner's arenas in SRAM. At 5 cm voxels a block is 0.4 m
+/// on a side; flat ground observed with free space above costs ~2 blocks per 0.16 m^2 column.
+pub const FLIGHT_BLOCKS: usize = 3584;
+/// Default size of the block index (open addressing, power of two, at least 2x the pool so probes stay short).
+pub const FLIGHT_INDEX: usize = 8192;
+
+/// Longest probe sequence in the block index before an insert gives up with
+/// [`crate::map::MapError::IndexProbeExhausted`]. Default 32: at load factor <= 0.5 linear probing needs ~1.5
+/// probes on average; 32 is a generous bound that keeps every lookup O(1) and bounded.
+pub const MAX_PROBE: usize = 32;
+
+/// Per-mission map parameters (runtime). Every field is validated by [`MapConfig::validate`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MapConfig {
+    /// Voxel edge, metres. Default 0.05 (5 cm, Voxblox's and Paton et al.'s resolution scale).
+    pub voxel_size: Real,
+    /// TSDF truncation distance, metres. Default 0.15 (3 voxels; Voxblox recommends 2-4 voxels).
+    pub truncation: Real,
+    /// Cap of the accumulated TSDF weight. Default 100 observations: old observations still count, but a moved
+    /// surface is re-learned within ~100 frames.
+    pub max_weight: Real,
+    /// Free-space carving: TSDF voxels are updated along at most this length of each ray in front of the surface
+    /// (metres). Default 4.0. Together with `max_ray_voxels` this bounds the work per point.
+    pub max_carve_length: Real,
+    /// Hard bound on voxels visited by one ray (the integration budget per point). Default 128.
+    pub max_ray_voxels: usize,
+    /// Points farther than this from the sensor origin are ignored (metres). Default 20.0.
+    pub max_range: Real,
+    /// Points closer than this are ignored (the rover's own body). Default 0.1 m.
+    pub min_range: Real,
+    /// ESDF fixed band, in voxels: voxels with |TSDF| below `esdf_band * voxel_size` are ESDF sites whose
+    /// distance is their TSDF value (Voxblox's "fixed band"). Default 1.0. Must be <= 1.25 (site values are stored as
+    /// signed hundredths of a voxel in an `i8`).
+    pub esdf_band: Real,
+    /// ESDF saturation distance, metres: beyond it the ESDF reports exactly this value (a lower bound on the true
+    /// distance). Default 1.5 (covers Axel's 1 m wheel base and the tether sweep). At most 127 voxels.
+    pub esdf_max_distance: Real,
+    /// ESDF budget: sweeps over the dirty blocks per [`crate::map::Map::update_esdf`] call. Default 32. A call that
+    /// runs out returns `converged: false` and the next call continues from where it stopped.
+    pub esdf_max_sweeps: usize,
+}
+
+impl MapConfig {
+    /// The defaults listed on each field.
+    pub const DEFAULT: MapConfig = MapConfig {
+        voxel_size: 0.05,
+        truncation: 0.15,
+        max_weight: 100.0,
+        max_carve_length: 4.0,
+        max_ray_voxels: 128,
+        max_range: 20.0,
+        min_range: 0.1,
+        esdf_band: 1.0,
+        esdf_max_distance: 1.5,
+        esdf_max_sweeps: 32,
+    };
+
+    /// Same defaults at another voxel size: truncation 3 voxels, carving and ray budget scaled to keep 4 m.
+    pub fn with_voxel_size(voxel_size: Real) -> MapConfig {
+        let mut c = MapConfig::DEFAULT;
+        c.voxel_size = voxel_size;
+        c.truncation = 3.0 * voxel_size;
+        c.max_ray_voxels = (c.max_carve_length / voxel_size) as usize + 16;
+        c
+    }
+
+    /// Checks every field; the error names the field and why.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let pos = |v: Real| v.is_finite() && v > 0.0;
+        if !pos(self.voxel_size) {
+            return Err(ConfigError { field: "voxel_size", reason: "must be finite and > 0" });
+        }
+        if !pos(self.truncation) || self.truncation < self.voxel_size {
+            return Err(ConfigError { field: "truncation", reason: "must be finite and >= voxel_size" });
+        }
+        if !pos(self.max_weight) || self.max_weight > 1000.0 {
+            return Err(ConfigError { field: "max_weight", reason: "must be in (0, 1000]" });
+        }
+        if !pos(self.max_carve_length) {
+            return Err(ConfigError { field: "max_carve_length", reason: "must be finite and > 0" });
+        }
+        if self.max_ray_voxels == 0 {
+            return Err(ConfigError { field: "max_ray_voxels", reason: "must be > 0" });
+        }
+        if !pos(self.max_range) || self.min_range.is_nan() || self.min_range < 0.0 || self.min_range >= self.max_range {
+            return Err(ConfigError { field: "max_range", reason: "need 0 <= min_range < max_range, finite" });
+        }
+        if !pos(self.esdf_band) || self.esdf_band > 1.25 {
+            return Err(ConfigError { field: "esdf_band", reason: "must be in (0, 1.25] voxels" });
+        }
+        if !pos(self.esdf_max_distance) || self.esdf_max_distance / self.voxel_size > 127.0 {
+            return Err(ConfigError {
+                field: "esdf_max_distance",
+                reason: "must be > 0 and at most 127 voxels (site offsets are stored as i8)",
+            });
+        }
+        if self.esdf_max_sweeps == 0 {
+            return Err(ConfigError { field: "esdf_max_sweeps", reason: "must be > 0" });
+        }
+        Ok(())
+    }
+}
+
+impl Default for MapConfig {
+    fn default() -> Self {
+        MapConfig::DEFAULT
+    }
+}
+
+/// A rejected [`MapConfig`]: which field and why.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ConfigError {
+    /// The field name.
+    pub field: &'static str,
+    /// What is wrong with it.
+    pub reason: &'static str,
+}

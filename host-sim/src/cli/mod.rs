@@ -3,6 +3,7 @@
 
 pub mod export;
 pub mod inspect;
+pub mod map;
 pub mod replay;
 pub mod run;
 pub mod team;
@@ -26,6 +27,14 @@ pub fn check_outcome<E: core::fmt::Display>(result: Result<bool, E>) -> ExitCode
     match result {
         Ok(true) => ExitCode::SUCCESS,
         Ok(false) => ExitCode::from(EXIT_FAILED),
+        Err(e) => fail(e),
+    }
+}
+
+/// Maps a command result (`Ok(())` done, `Err` could not run) to the CLI's exit codes.
+pub fn done<E: core::fmt::Display>(result: Result<(), E>) -> ExitCode {
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
         Err(e) => fail(e),
     }
 }

@@ -7,7 +7,7 @@ use crate::fieldlog::{self, Writer};
 use crate::link::inproc::{InProcLink, DEFAULT_STEP_US};
 use crate::link::recording::RecordingLink;
 use crate::replay::RunConfig;
-use crate::scenario::{self, ScenarioReport};
+use crate::scripted::{self, ScenarioReport};
 
 /// Arguments of `run` / `record`.
 #[derive(Debug, Clone, clap::Args)]
@@ -31,17 +31,17 @@ pub struct RunArgs {
 
 /// Runs a scenario on the in-process link, optionally recording it.
 pub fn run_scenario(args: &RunArgs) -> Result<ScenarioReport, Box<dyn core::error::Error>> {
-    if !scenario::SCENARIOS.contains(&args.scenario.as_str()) {
+    if !scripted::SCENARIOS.contains(&args.scenario.as_str()) {
         return Err(format!(
             "unknown scenario '{}'; built in: {}",
             args.scenario,
-            scenario::SCENARIOS.join(", ")
+            scripted::SCENARIOS.join(", ")
         )
         .into());
     }
     let link = InProcLink::new(args.step_us);
     let Some(path) = &args.log else {
-        return Ok(scenario::run_protocol(link, args.seed)?);
+        return Ok(scripted::run_protocol(link, args.seed)?);
     };
     let config = RunConfig {
         scenario: args.scenario.clone(),
@@ -63,7 +63,7 @@ pub fn run_scenario(args: &RunArgs) -> Result<ScenarioReport, Box<dyn core::erro
         .map_err(|e| format!("cannot create {}: {e}", path.display()))?;
     let writer = Writer::new(std::io::BufWriter::new(file), &header)?;
     let mut rec = RecordingLink::new(link, writer);
-    let report = scenario::run_protocol(&mut rec, args.seed)?;
+    let report = scripted::run_protocol(&mut rec, args.seed)?;
     rec.finish()?;
     Ok(report)
 }

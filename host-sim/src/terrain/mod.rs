@@ -2,6 +2,9 @@
 //!
 //! Every DEM loader returns a [`Heightmap`]; mesh loaders return a triangle mesh.
 
+pub mod asc;
+pub mod geotiff;
+
 /// A regular grid of terrain heights, row-major, row 0 at the minimum y (south) edge.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Heightmap {

@@ -5,6 +5,9 @@
 //! it. Every world implements [`firmware::map::DistanceField`] (exact signed distance, negative inside terrain)
 //! and [`World`].
 
+pub mod crater;
+pub mod geometry;
+pub mod heightmap;
 pub mod ledge;
 
 use firmware::geom::{Real, Vec3};

@@ -1,0 +1,368 @@
+//! The onboard terrain map: TSDF integration into a fixed pool of voxel blocks, an ESDF with distance and gradient
+//! queries, and surface points with normals (Paton et al., section IV, which plans on a Voxblox map: Oleynikova et
+//! al., "Voxblox: Incremental 3D Euclidean Signed Distance Fields for On-Board MAV Planning", IROS 2017).
+//!
+//! The rover, tether and planners program against [`DistanceField`]; the simulator's ground-truth worlds implement
+//! it too, so every check can run on exact geometry and on the onboard map alike.
+//!
+//! ## Layout
+//! - [`Block`]: `BLOCK_EDGE`^3 voxels (8^3 by default), [`VOXEL_BYTES`] = 8 bytes per voxel: quantised TSDF
+//!   (`i16`, units of truncation / 32767), weight (`u16`, 1/64 units), the ESDF site (`[i8; 3]` offset to the
+//!   nearest fixed-band voxel) and that site's signed TSDF (`i8`, hundredths of a voxel).
+//! - [`MapStorage`]: the block pool plus the block index, owned by the caller (`static` on the board, `Box` on the
+//!   host) and lent to [`Map::new`]. The index is open addressing with linear probing, bounded by
+//!   [`MAX_PROBE`](crate::config::map::MAX_PROBE). Blocks are allocated on demand and never evicted: a full pool
+//!   or an exhausted probe is reported in [`IntegrationOutcome::pool_error`], and the voxels that fell into
+//!   unallocated blocks are counted in [`IntegrationOutcome::voxels_dropped`] (the rest of the frame still lands).
+//!
+//! ## TSDF integration ([`Map::integrate_points`], Voxblox's ray-casting integrator)
+//! Each point of a sensor frame is a ray from the sensor origin. Voxels along the ray from `depth -
+//! max_carve_length` to `depth + truncation` (at most `max_ray_voxels` of them, the ones nearest the surface
+//! first kept) get the projective signed distance `depth - (c - o).d`, truncated to `[-truncation, truncation]`,
+//! averaged with weight 1 (linearly dropping to 0 between one voxel and `truncation` behind the surface, as in
+//! Voxblox). Voxels with weight 0 are **unknown**; observed voxels with TSDF >= 0 are free, < 0 occupied.
+//! Deviation from Voxblox's "fast" integrator: no per-scan ray merging; the carving length budget bounds the cost
+//! per point instead, which is what a flight budget needs.
+//!
+//! ## ESDF ([`Map::update_esdf`])
+//! Sites are the observed voxels inside the fixed band `|TSDF| < esdf_band` voxels; a site's distance is its own
+//! `|TSDF|`. Every other voxel `v` gets `min over sites s (|c_v - c_s| + sign_v * TSDF_s)`, capped at
+//! `esdf_max_distance`, with the sign `sign_v` of its own TSDF. Both cases of the sum are upper bounds of the
+//! true distance: a site on the same side as `v` is `|TSDF_s|` from the surface, so the surface is within
+//! `|c_v - c_s| + |TSDF_s|`; a site on the other side is `|TSDF_s|` beyond the surface along the segment from
+//! `v`, so the surface is within `|c_v - c_s| - |TSDF_s|` (Voxblox's fixed band, with the opposite-side case made
+//! tight; without it the ESDF is biased by up to two band widths). The minimum is found by vector propagation (each voxel stores the offset of its
+//! nearest site and takes the best site of its 26 neighbours), run as forward/backward raster sweeps over the dirty
+//! blocks until nothing changes or the sweep budget `esdf_max_sweeps` runs out (then the next call continues).
+//! Updates are incremental: sites inside blocks whose TSDF changed are rebuilt, voxels within
+//! `esdf_max_distance` whose site lay in such a block are reset (Voxblox's "raise" wave, done directly since
+//! each voxel knows its site), and the sweeps lower the rest. Vector propagation with 26 neighbours is not
+//! guaranteed exact in every configuration (Danielsson 1980; Cuisenaire & Macq 1999); the tests measure it
+//! against brute force.
+//!
+//! ## Queries
+//! [`DistanceField::query`] interpolates trilinearly between the 8 voxel centres around the point, with the
+//! analytic gradient of that interpolant (normalised). If any of the 8 voxels is unknown, the answer is
+//! [`DistanceQuery::Unknown`]. [`Map::extract_surface`] fills a caller's slice with surface points (zero
+//! crossings of the TSDF between neighbouring observed voxels) and normals (TSDF gradient), resumable through a
+//! [`SurfaceCursor`].
+//!
+//! Parameters and their defaults: see [`MapConfig`](crate::config::map::MapConfig).
+
+mod esdf;
+mod query;
+mod tsdf;
+
+pub use esdf::EsdfOutcome;
+pub use query::{SurfaceCursor, SurfacePoint, VoxelState};
+pub use tsdf::IntegrationOutcome;
+
+use crate::config::map::{ConfigError, MapConfig, BLOCK_EDGE, BLOCK_VOXELS, MAX_PROBE};
+use crate::geom::{Real, Vec3};
+
+/// What a signed-distance query can say about a point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum DistanceQuery {
+    /// The point is in observed space: signed distance to the nearest surface (metres, negative inside terrain)
+    /// and the distance gradient (points away from the terrain, unit length where defined).
+    Known {
+        /// Signed distance, metres.
+        distance: Real,
+        /// Gradient of the distance field.
+        gradient: Vec3,
+    },
+    /// Nobody has observed this point: neither free nor occupied. Callers treat it as unsafe.
+    Unknown,
+}
+
+/// A Euclidean signed distance field: the onboard ESDF implements it, and so do the simulator's ground-truth worlds
+/// and analytic test scenes, so rover settling, anchor prediction and planning can be tested on exact geometry.
+pub trait DistanceField {
+    /// Signed distance and gradient at `p`.
+    fn query(&self, p: &Vec3) -> DistanceQuery;
+}
+
+/// Bytes of voxel payload per voxel (TSDF 2 + weight 2 + site offset 3 + site distance 1).
+pub const VOXEL_BYTES: usize = 8;
+
+/// Site-distance value meaning "no site within `esdf_max_distance`".
+pub(crate) const NO_SITE: i8 = i8::MIN;
+
+const FLAG_IN_USE: u8 = 1;
+const FLAG_TSDF_DIRTY: u8 = 2;
+const FLAG_ESDF_DIRTY: u8 = 4;
+const FLAG_ESDF_NEXT: u8 = 8;
+const FLAG_REGION: u8 = 16;
+
+/// One voxel block: `BLOCK_EDGE`^3 voxels, structure of arrays, voxel `(x, y, z)` at `x + E * (y + E * z)`.
+#[derive(Clone, Copy)]
+pub struct Block {
+    coord: [i32; 3],
+    flags: u8,
+    tsdf: [i16; BLOCK_VOXELS],
+    weight: [u16; BLOCK_VOXELS],
+    site: [[i8; 3]; BLOCK_VOXELS],
+    site_w: [i8; BLOCK_VOXELS],
+}
+
+impl Block {
+    /// An unused block (for building storage).
+    pub const EMPTY: Block = Block {
+        coord: [0; 3],
+        flags: 0,
+        tsdf: [0; BLOCK_VOXELS],
+        weight: [0; BLOCK_VOXELS],
+        site: [[0; 3]; BLOCK_VOXELS],
+        site_w: [NO_SITE; BLOCK_VOXELS],
+    };
+}
+
+impl core::fmt::Debug for Block {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Block").field("coord", &self.coord).field("flags", &self.flags).finish()
+    }
+}
+
+/// The map's memory: a pool of `B` blocks and an index of `I` slots (`I` a power of two, `I >= B`). Owned by the
+/// caller: `static mut`-free on the board via a `static` cell, `Box` on the host (see [`MapStorage::new`]).
+pub struct MapStorage<const B: usize, const I: usize> {
+    /// The block pool.
+    pub blocks: [Block; B],
+    /// The block index: 0 = empty, else pool slot + 1.
+    pub index: [u32; I],
+}
+
+impl<const B: usize, const I: usize> MapStorage<B, I> {
+    /// Empty storage. Checked at compile time: `I` is a power of two and at least `B`.
+    pub const fn new() -> Self {
+        const {
+            assert!(I.is_power_of_two() && I >= B && B > 0, "index must be a power of two >= pool size");
+        }
+        MapStorage { blocks: [Block::EMPTY; B], index: [0; I] }
+    }
+
+    /// Bytes of this storage (what a board must reserve).
+    pub const fn bytes() -> usize {
+        core::mem::size_of::<Self>()
+    }
+}
+
+impl<const B: usize, const I: usize> Default for MapStorage<B, I> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Why the map could not be built or a block could not be allocated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MapError {
+    /// A configuration field is invalid.
+    Config(ConfigError),
+    /// The index length is not a power of two, or is smaller than the pool, or the pool is empty.
+    BadStorage,
+    /// Every block of the pool is in use.
+    PoolFull,
+    /// The index probe bound ([`MAX_PROBE`]) ran out before a free slot was found.
+    IndexProbeExhausted,
+}
+
+/// Global voxel index.
+pub type VoxelIndex = [i32; 3];
+
+/// The onboard map over lent storage.
+pub struct Map<'a> {
+    cfg: MapConfig,
+    blocks: &'a mut [Block],
+    index: &'a mut [u32],
+    used: usize,
+}
+
+/// Floor division by the block edge (a power of two) and the local coordinate.
+#[inline]
+fn split(g: i32) -> (i32, usize) {
+    const SHIFT: u32 = BLOCK_EDGE.trailing_zeros();
+    (g >> SHIFT, (g & (BLOCK_EDGE as i32 - 1)) as usize)
+}
+
+#[inline]
+fn local_index(l: [usize; 3]) -> usize {
+    l[0] + BLOCK_EDGE * (l[1] + BLOCK_EDGE * l[2])
+}
+
+#[inline]
+fn local_coords(i: usize) -> [usize; 3] {
+    [i % BLOCK_EDGE, (i / BLOCK_EDGE) % BLOCK_EDGE, i / (BLOCK_EDGE * BLOCK_EDGE)]
+}
+
+#[inline]
+fn hash(c: [i32; 3]) -> usize {
+    ((c[0] as u32).wrapping_mul(73_856_093) ^ (c[1] as u32).wrapping_mul(19_349_663)
+        ^ (c[2] as u32).wrapping_mul(83_492_791)) as usize
+}
+
+impl<'a> Map<'a> {
+    /// A map over `storage`, which is cleared.
+    pub fn new<const B: usize, const I: usize>(
+        cfg: MapConfig,
+        storage: &'a mut MapStorage<B, I>,
+    ) -> Result<Map<'a>, MapError> {
+        Map::from_slices(cfg, &mut storage.blocks, &mut storage.index)
+    }
+
+    /// A map over separately lent slices (the host can `vec!` them). `index.len()` must be a power of two
+    /// `>= blocks.len() > 0`. Both are cleared.
+    pub fn from_slices(cfg: MapConfig, blocks: &'a mut [Block], index: &'a mut [u32]) -> Result<Map<'a>, MapError> {
+        cfg.validate().map_err(MapError::Config)?;
+        if blocks.is_empty() || !index.len().is_power_of_two() || index.len() < blocks.len() {
+            return Err(MapError::BadStorage);
+        }
+        index.iter_mut().for_each(|e| *e = 0);
+        blocks.iter_mut().for_each(|b| b.flags = 0);
+        Ok(Map { cfg, blocks, index, used: 0 })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &MapConfig {
+        &self.cfg
+    }
+
+    /// Blocks in use.
+    pub fn blocks_used(&self) -> usize {
+        self.used
+    }
+
+    /// Pool capacity in blocks.
+    pub fn blocks_capacity(&self) -> usize {
+        self.blocks.len()
+    }
+
+    /// Forget everything (the storage stays lent).
+    pub fn clear(&mut self) {
+        self.index.iter_mut().for_each(|e| *e = 0);
+        self.blocks.iter_mut().take(self.used).for_each(|b| b.flags = 0);
+        self.used = 0;
+    }
+
+    /// The voxel containing `p`.
+    pub fn voxel_index(&self, p: &Vec3) -> VoxelIndex {
+        let s = 1.0 / self.cfg.voxel_size;
+        [libm::floorf(p.x * s) as i32, libm::floorf(p.y * s) as i32, libm::floorf(p.z * s) as i32]
+    }
+
+    /// Centre of voxel `g`, metres.
+    pub fn voxel_center(&self, g: VoxelIndex) -> Vec3 {
+        let v = self.cfg.voxel_size;
+        Vec3::new((g[0] as Real + 0.5) * v, (g[1] as Real + 0.5) * v, (g[2] as Real + 0.5) * v)
+    }
+
+    /// Block coordinates of the blocks in use, in allocation order (`slot < blocks_used()`).
+    pub fn block_coord(&self, slot: usize) -> Option<[i32; 3]> {
+        if slot < self.used {
+            self.blocks.get(slot).map(|b| b.coord)
+        } else {
+            None
+        }
+    }
+
+    pub(crate) fn find_block(&self, c: [i32; 3]) -> Option<usize> {
+        let mask = self.index.len() - 1;
+        let mut h = hash(c) & mask;
+        for _ in 0..MAX_PROBE.min(self.index.len()) {
+            match self.index.get(h).copied() {
+                Some(0) | None => return None,
+                Some(e) => {
+                    let slot = (e - 1) as usize;
+                    if self.blocks.get(slot).is_some_and(|b| b.coord == c) {
+                        return Some(slot);
+                    }
+                }
+            }
+            h = (h + 1) & mask;
+        }
+        None
+    }
+
+    pub(crate) fn find_or_alloc_block(&mut self, c: [i32; 3]) -> Result<usize, MapError> {
+        let mask = self.index.len() - 1;
+        let mut h = hash(c) & mask;
+        for _ in 0..MAX_PROBE.min(self.index.len()) {
+            match self.index.get(h).copied() {
+                Some(0) => {
+                    let slot = self.used;
+                    let b = self.blocks.get_mut(slot).ok_or(MapError::PoolFull)?;
+                    *b = Block::EMPTY;
+                    b.coord = c;
+                    b.flags = FLAG_IN_USE | FLAG_TSDF_DIRTY;
+                    if let Some(e) = self.index.get_mut(h) {
+                        *e = slot as u32 + 1;
+                    }
+                    self.used += 1;
+                    return Ok(slot);
+                }
+                Some(e) => {
+                    let slot = (e - 1) as usize;
+                    if self.blocks.get(slot).is_some_and(|b| b.coord == c) {
+                        return Ok(slot);
+                    }
+                }
+                None => return Err(MapError::IndexProbeExhausted),
+            }
+            h = (h + 1) & mask;
+        }
+        Err(MapError::IndexProbeExhausted)
+    }
+
+    /// Block slot and local voxel index of global voxel `g`, if its block exists.
+    pub(crate) fn locate(&self, g: VoxelIndex) -> Option<(usize, usize)> {
+        let (bx, lx) = split(g[0]);
+        let (by, ly) = split(g[1]);
+        let (bz, lz) = split(g[2]);
+        self.find_block([bx, by, bz]).map(|s| (s, local_index([lx, ly, lz])))
+    }
+
+    /// Sets one voxel's TSDF observation directly (signed distance in metres, clamped to the truncation, and
+    /// weight), allocating its block. For fixtures, tests and reference grids; flight code integrates frames.
+    pub fn set_voxel(&mut self, g: VoxelIndex, sdf: Real, weight: Real) -> Result<(), MapError> {
+        let (bx, lx) = split(g[0]);
+        let (by, ly) = split(g[1]);
+        let (bz, lz) = split(g[2]);
+        let slot = self.find_or_alloc_block([bx, by, bz])?;
+        let q = self.quantize_tsdf(sdf);
+        let w = quantize_weight(weight, self.cfg.max_weight);
+        if let Some(b) = self.blocks.get_mut(slot) {
+            let li = local_index([lx, ly, lz]);
+            if let (Some(t), Some(wt)) = (b.tsdf.get_mut(li), b.weight.get_mut(li)) {
+                *t = q;
+                *wt = w;
+            }
+            b.flags |= FLAG_TSDF_DIRTY;
+        }
+        Ok(())
+    }
+
+    pub(crate) fn quantize_tsdf(&self, sdf: Real) -> i16 {
+        let t = self.cfg.truncation;
+        let r = (sdf.clamp(-t, t) / t) * 32767.0;
+        libm::roundf(r) as i16
+    }
+
+    pub(crate) fn dequantize_tsdf(&self, q: i16) -> Real {
+        q as Real * (self.cfg.truncation / 32767.0)
+    }
+
+    /// Bytes of storage per block (what the pool costs per allocated block, index share excluded).
+    pub const fn block_bytes() -> usize {
+        core::mem::size_of::<Block>()
+    }
+}
+
+/// Weights are stored in 1/64 units.
+pub(crate) const WEIGHT_SCALE: Real = 64.0;
+
+pub(crate) fn quantize_weight(w: Real, max_weight: Real) -> u16 {
+    let w = if w.is_finite() { w.clamp(0.0, max_weight) } else { 0.0 };
+    libm::roundf(w * WEIGHT_SCALE) as u16
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,199 @@
+//! Queries: voxel state, interpolated signed distance and gradient, surface points and normals.
+
+use super::esdf::site_distance;
+use super::{local_coords, DistanceField, DistanceQuery, Map, VoxelIndex, BLOCK_EDGE, BLOCK_VOXELS, NO_SITE};
+use crate::geom::{normalize3, Real, Vec3};
+
+/// What the map knows about one voxel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum VoxelState {
+    /// Never observed (no block, or weight 0).
+    Unknown,
+    /// Observed, TSDF >= 0.
+    Free,
+    /// Observed, TSDF < 0 (behind the surface).
+    Occupied,
+}
+
+/// A surface point for the settler and the planners.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfacePoint {
+    /// Position on the TSDF zero crossing, metres.
+    pub position: Vec3,
+    /// Unit normal pointing into free space (TSDF gradient).
+    pub normal: Vec3,
+}
+
+/// Where [`Map::extract_surface`] resumes. Start with `SurfaceCursor::default()`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct SurfaceCursor {
+    slot: usize,
+    voxel: usize,
+    axis: usize,
+    done: bool,
+}
+
+impl SurfaceCursor {
+    /// True once every block has been scanned.
+    pub fn is_done(&self) -> bool {
+        self.done
+    }
+}
+
+impl Map<'_> {
+    /// Observation state of voxel `g`.
+    pub fn voxel_state(&self, g: VoxelIndex) -> VoxelState {
+        match self.tsdf_voxel(g) {
+            None => VoxelState::Unknown,
+            Some((d, _)) if d < 0.0 => VoxelState::Occupied,
+            Some(_) => VoxelState::Free,
+        }
+    }
+
+    /// TSDF (metres) and weight of voxel `g`, `None` if unknown.
+    pub fn tsdf_voxel(&self, g: VoxelIndex) -> Option<(Real, Real)> {
+        let (s, i) = self.locate(g)?;
+        let b = self.blocks.get(s)?;
+        let w = *b.weight.get(i)?;
+        if w == 0 {
+            return None;
+        }
+        Some((self.dequantize_tsdf(*b.tsdf.get(i)?), w as Real / super::WEIGHT_SCALE))
+    }
+
+    /// ESDF value of voxel `g` (metres, signed, saturated at `esdf_max_distance`), `None` if unknown.
+    pub fn esdf_voxel(&self, g: VoxelIndex) -> Option<Real> {
+        let (s, i) = self.locate(g)?;
+        self.esdf_at(s, i)
+    }
+
+    /// Unsigned distance in voxels of voxel `g` to its ESDF site, `None` if the block is missing or no site is
+    /// within range (used by the tests' brute-force oracle; independent of observation state).
+    pub fn site_distance_voxels(&self, g: VoxelIndex) -> Option<Real> {
+        let (s, i) = self.locate(g)?;
+        let b = self.blocks.get(s)?;
+        let w = *b.site_w.get(i)?;
+        if w == NO_SITE {
+            return None;
+        }
+        let o = b.site.get(i)?;
+        Some(site_distance(w, [o[0] as i32, o[1] as i32, o[2] as i32], *b.tsdf.get(i)? < 0))
+    }
+
+    fn esdf_at(&self, s: usize, i: usize) -> Option<Real> {
+        let b = self.blocks.get(s)?;
+        if *b.weight.get(i)? == 0 {
+            return None;
+        }
+        let dmax = self.cfg.esdf_max_distance;
+        let w = *b.site_w.get(i)?;
+        let d = if w == NO_SITE {
+            dmax
+        } else {
+            let o = b.site.get(i)?;
+            let inside = *b.tsdf.get(i)? < 0;
+            (site_distance(w, [o[0] as i32, o[1] as i32, o[2] as i32], inside) * self.cfg.voxel_size).min(dmax)
+        };
+        Some(if *b.tsdf.get(i)? < 0 { -d } else { d })
+    }
+
+    /// Trilinear interpolation of a per-voxel field `f` at `p`, with the gradient of the interpolant.
+    fn trilinear(&self, p: &Vec3, f: impl Fn(VoxelIndex) -> Option<Real>) -> Option<(Real, Vec3)> {
+        let vs = self.cfg.voxel_size;
+        let u = p / vs - Vec3::new(0.5, 0.5, 0.5);
+        let i0 = [libm::floorf(u.x), libm::floorf(u.y), libm::floorf(u.z)];
+        let fx = u.x - i0[0];
+        let fy = u.y - i0[1];
+        let fz = u.z - i0[2];
+        let g0 = [i0[0] as i32, i0[1] as i32, i0[2] as i32];
+        let mut v = [0.0 as Real; 8];
+        for (k, vk) in v.iter_mut().enumerate() {
+            let g = [g0[0] + (k & 1) as i32, g0[1] + ((k >> 1) & 1) as i32, g0[2] + ((k >> 2) & 1) as i32];
+            *vk = f(g)?;
+        }
+        let [v000, v100, v010, v110, v001, v101, v011, v111] = v;
+        let lerp = |a: Real, b: Real, t: Real| a + (b - a) * t;
+        let x00 = lerp(v000, v100, fx);
+        let x10 = lerp(v010, v110, fx);
+        let x01 = lerp(v001, v101, fx);
+        let x11 = lerp(v011, v111, fx);
+        let y0 = lerp(x00, x10, fy);
+        let y1 = lerp(x01, x11, fy);
+        let value = lerp(y0, y1, fz);
+        let dx = lerp(lerp(v100 - v000, v110 - v010, fy), lerp(v101 - v001, v111 - v011, fy), fz);
+        let dy = lerp(x10 - x00, x11 - x01, fz);
+        let dz = y1 - y0;
+        Some((value, Vec3::new(dx, dy, dz) / vs))
+    }
+
+    /// Interpolated TSDF at `p` (metres) with its gradient, `None` if any of the 8 voxels is unknown.
+    pub fn tsdf_interpolated(&self, p: &Vec3) -> Option<(Real, Vec3)> {
+        self.trilinear(p, |g| self.tsdf_voxel(g).map(|(d, _)| d))
+    }
+
+    /// Fills `out` with surface points, resuming at `cursor`; returns how many were written. Call again with the
+    /// same cursor until [`SurfaceCursor::is_done`]. A surface point is the zero crossing of the TSDF between
+    /// a voxel and its +x, +y or +z neighbour, both observed; its normal is the interpolated TSDF gradient there
+    /// (falling back to the axis direction, signed towards free space, where a neighbour is unknown).
+    pub fn extract_surface(&self, cursor: &mut SurfaceCursor, out: &mut [SurfacePoint]) -> usize {
+        let mut n = 0;
+        let vs = self.cfg.voxel_size;
+        let e = BLOCK_EDGE as i32;
+        while cursor.slot < self.used {
+            let Some(b) = self.blocks.get(cursor.slot) else { break };
+            let bc = b.coord;
+            while cursor.voxel < BLOCK_VOXELS {
+                let l = local_coords(cursor.voxel);
+                let g = [bc[0] * e + l[0] as i32, bc[1] * e + l[1] as i32, bc[2] * e + l[2] as i32];
+                if let Some((d0, _)) = self.tsdf_voxel(g) {
+                    while cursor.axis < 3 {
+                        let a = cursor.axis;
+                        let mut g1 = g;
+                        if let Some(c) = g1.get_mut(a) {
+                            *c += 1;
+                        }
+                        if let Some((d1, _)) = self.tsdf_voxel(g1) {
+                            if (d0 < 0.0) != (d1 < 0.0) {
+                                let Some(slot) = out.get_mut(n) else { return n };
+                                let t = d0 / (d0 - d1);
+                                let mut axis = Vec3::zeros();
+                                if let Some(c) = axis.get_mut(a) {
+                                    *c = 1.0;
+                                }
+                                let position = self.voxel_center(g) + axis * (t * vs);
+                                let fallback = if d1 > d0 { axis } else { -axis };
+                                let normal = self
+                                    .tsdf_interpolated(&position)
+                                    .and_then(|(_, gr)| normalize3(&gr, 1e-6))
+                                    .unwrap_or(fallback);
+                                *slot = SurfacePoint { position, normal };
+                                n += 1;
+                            }
+                        }
+                        cursor.axis += 1;
+                    }
+                }
+                cursor.axis = 0;
+                cursor.voxel += 1;
+            }
+            cursor.voxel = 0;
+            cursor.slot += 1;
+        }
+        cursor.done = true;
+        n
+    }
+}
+
+impl DistanceField for Map<'_> {
+    fn query(&self, p: &Vec3) -> DistanceQuery {
+        if !crate::geom::is_finite3(p) {
+            return DistanceQuery::Unknown;
+        }
+        match self.trilinear(p, |g| self.esdf_voxel(g)) {
+            Some((distance, gr)) => {
+                DistanceQuery::Known { distance, gradient: normalize3(&gr, 1e-6).unwrap_or_else(Vec3::zeros) }
+            }
+            None => DistanceQuery::Unknown,
+        }
+    }
+}

@@ -1,0 +1,276 @@
+//! Unit tests of the map against independent oracles (brute force, analytic planes).
+
+use super::*;
+use crate::config::map::MapConfig;
+use crate::geom::{Pose3, Rot3};
+use rand_core::Rng;
+
+extern crate std;
+use std::boxed::Box;
+use std::vec;
+use std::vec::Vec;
+
+fn slices(blocks: usize, index: usize) -> (Vec<Block>, Vec<u32>) {
+    (vec![Block::EMPTY; blocks], vec![0u32; index])
+}
+
+#[test]
+fn bad_storage_and_config_are_typed_errors() {
+    let (mut b, mut i) = slices(8, 6);
+    assert_eq!(Map::from_slices(MapConfig::DEFAULT, &mut b, &mut i).err(), Some(MapError::BadStorage));
+    let (mut b, mut i) = slices(8, 16);
+    let mut cfg = MapConfig::DEFAULT;
+    cfg.truncation = Real::NAN;
+    match Map::from_slices(cfg, &mut b, &mut i) {
+        Err(MapError::Config(e)) => assert_eq!(e.field, "truncation"),
+        _ => panic!("NaN truncation accepted"),
+    }
+}
+
+#[test]
+fn static_storage_builds() {
+    let mut st: Box<MapStorage<4, 8>> = Box::default();
+    let map = Map::new(MapConfig::DEFAULT, &mut st);
+    assert!(map.is_ok());
+}
+
+#[test]
+fn full_pool_is_an_outcome_and_keeps_work() {
+    let (mut b, mut i) = slices(2, 4);
+    let mut map = Map::from_slices(MapConfig::DEFAULT, &mut b, &mut i).unwrap();
+    // A long ray crosses many blocks; only two can be allocated.
+    let pts = [Vec3::new(3.0, 0.01, 0.01)];
+    let out = map.integrate_points(&Pose3::identity(), &pts);
+    assert_eq!(out.points_integrated, 1);
+    assert!(out.voxels_dropped > 0);
+    assert!(out.voxels_updated > 0);
+    assert_eq!(out.pool_error, Some(MapError::PoolFull));
+    assert_eq!(map.blocks_used(), 2);
+}
+
+/// Points on the plane z = 0 seen from a sensor at `origin`, on a grid of directions (a synthetic scan).
+fn plane_scan(origin: Vec3, n: usize) -> Vec<Vec3> {
+    let mut pts = Vec::new();
+    for a in 0..n {
+        for b in 0..n {
+            let x = -1.5 + 3.0 * a as Real / (n - 1) as Real;
+            let y = -1.5 + 3.0 * b as Real / (n - 1) as Real;
+            pts.push(Vec3::new(x, y, 0.0) - origin);
+        }
+    }
+    pts
+}
+
+#[test]
+fn plane_distance_and_gradient_match_analytic_plane() {
+    let (mut b, mut i) = slices(2048, 4096);
+    let cfg = MapConfig::with_voxel_size(0.05);
+    let mut map = Map::from_slices(cfg, &mut b, &mut i).unwrap();
+    let origin = Vec3::new(0.0, 0.0, 1.2);
+    let pose = Pose3::from_parts(origin.into(), Rot3::identity());
+    for _ in 0..3 {
+        let out = map.integrate_points(&pose, &plane_scan(origin, 120));
+        assert_eq!(out.pool_error, None);
+    }
+    let e = map.update_esdf();
+    assert!(e.converged, "{e:?}");
+    // Analytic truth: distance to z = 0 is z. Check a column of heights over the central part.
+    let mut worst: Real = 0.0;
+    for k in 0..40 {
+        let z = -0.1 + 0.9 * k as Real / 40.0; // inside the sensor cone for the columns below
+        for &(x, y) in &[(0.0, 0.0), (0.21, -0.17), (-0.27, 0.13)] {
+            match map.query(&Vec3::new(x, y, z)) {
+                DistanceQuery::Known { distance, gradient } => {
+                    worst = worst.max((distance - z).abs());
+                    if z > 0.1 {
+                        assert!(gradient.z > 0.95, "gradient {gradient:?} at z {z}");
+                    }
+                }
+                DistanceQuery::Unknown => panic!("unknown at ({x}, {y}, {z})"),
+            }
+        }
+    }
+    // Half a voxel covers the TSDF quantisation of the sign change plus interpolation.
+    assert!(worst < 0.5 * cfg.voxel_size, "worst error {worst}");
+    // Deep under the plane nobody has looked: unknown, not occupied-and-known.
+    assert_eq!(map.query(&Vec3::new(0.0, 0.0, -0.6)), DistanceQuery::Unknown);
+    // Never observed (outside the sensor's cone, far away): unknown.
+    assert_eq!(map.query(&Vec3::new(10.0, 10.0, 0.5)), DistanceQuery::Unknown);
+    assert_eq!(map.voxel_state(map.voxel_index(&Vec3::new(0.0, 0.0, 0.6))), VoxelState::Free);
+    assert_eq!(map.voxel_state(map.voxel_index(&Vec3::new(0.0, 0.0, -0.06))), VoxelState::Occupied);
+
+    // Surface points lie on the plane with upward normals; chunked extraction equals one-shot extraction.
+    let mut all = vec![SurfacePoint { position: Vec3::zeros(), normal: Vec3::zeros() }; 20000];
+    let mut cur = SurfaceCursor::default();
+    let n = map.extract_surface(&mut cur, &mut all);
+    assert!(cur.is_done());
+    assert!(n > 1000, "only {n} surface points");
+    // The edge of the observed patch (grazing, one-sided rays) is excluded: check the interior.
+    for sp in all.iter().take(n).filter(|s| s.position.x.abs() < 1.3 && s.position.y.abs() < 1.3) {
+        assert!(sp.position.z.abs() < 0.02, "{sp:?}");
+        assert!(sp.normal.z > 0.9, "{sp:?}");
+    }
+    let mut cur = SurfaceCursor::default();
+    let mut chunked = Vec::new();
+    let mut buf = [SurfacePoint { position: Vec3::zeros(), normal: Vec3::zeros() }; 37];
+    for _ in 0..10_000 {
+        let k = map.extract_surface(&mut cur, &mut buf);
+        chunked.extend_from_slice(&buf[..k]);
+        if cur.is_done() {
+            break;
+        }
+    }
+    assert_eq!(&chunked[..], &all[..n]);
+}
+
+/// Brute force: for every voxel of the grid, min over sites of (|c - c_s| + sign_v * site value), capped; the
+/// voxel is inside (sign -1) only if it is itself a site with a negative value.
+fn brute_force(sites: &[([i32; 3], i8)], g: [i32; 3], dmax: Real) -> Option<Real> {
+    let inside = sites.iter().any(|(s, w)| *s == g && *w < 0);
+    let sign = if inside { -1.0 } else { 1.0 };
+    let mut best = Real::INFINITY;
+    for (s, w) in sites {
+        let d = [(g[0] - s[0]) as f64, (g[1] - s[1]) as f64, (g[2] - s[2]) as f64];
+        let v = ((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() + sign * *w as f64 * 0.01).max(0.0);
+        best = best.min(v as Real);
+    }
+    if best <= dmax { Some(best) } else { None }
+}
+
+/// Builds a map over a `n`^3 voxel cube with random sites; every other voxel free (TSDF = truncation).
+fn random_site_map<'a>(
+    map: &mut Map<'a>,
+    rng: &mut impl Rng,
+    n: i32,
+    nsites: usize,
+) -> Vec<([i32; 3], i8)> {
+    let vs = map.config().voxel_size;
+    let t = map.config().truncation;
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                map.set_voxel([x - n / 2, y - n / 2, z - n / 2], t, 1.0).unwrap();
+            }
+        }
+    }
+    let mut sites = Vec::new();
+    for _ in 0..nsites {
+        let g = [
+            (rng.next_u32() % n as u32) as i32 - n / 2,
+            (rng.next_u32() % n as u32) as i32 - n / 2,
+            (rng.next_u32() % n as u32) as i32 - n / 2,
+        ];
+        // signed site value in [-0.99, 0.99] voxels, inside the band; negative = behind the surface
+        let hundredths = (rng.next_u32() % 199) as i32 - 99;
+        let hundredths = hundredths as i8;
+        let sdf = hundredths as Real * 0.01 * vs;
+        map.set_voxel(g, sdf, 1.0).unwrap();
+        sites.retain(|(s, _)| *s != g);
+        sites.push((g, hundredths));
+    }
+    sites
+}
+
+fn compare_with_brute_force(map: &Map<'_>, sites: &[([i32; 3], i8)], n: i32) -> (Real, usize, usize) {
+    let dmax = map.config().esdf_max_distance / map.config().voxel_size;
+    let mut max_err: Real = 0.0;
+    let mut inexact = 0;
+    let mut total = 0;
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let g = [x - n / 2, y - n / 2, z - n / 2];
+                let want = brute_force(sites, g, dmax);
+                let got = map.site_distance_voxels(g);
+                total += 1;
+                match (want, got) {
+                    (Some(a), Some(b)) => {
+                        let e = (a - b).abs();
+                        max_err = max_err.max(e);
+                        if e > 1e-4 {
+                            inexact += 1;
+                        }
+                    }
+                    (None, None) => {}
+                    (a, b) => panic!("voxel {g:?}: brute force {a:?}, map {b:?}"),
+                }
+            }
+        }
+    }
+    (max_err, inexact, total)
+}
+
+#[test]
+fn esdf_matches_brute_force_on_random_small_grids() {
+    let mut rng = rand_pcg::Pcg32::new(7, 11);
+    for trial in 0..6 {
+        let (mut b, mut i) = slices(256, 512);
+        let mut cfg = MapConfig::with_voxel_size(0.1);
+        cfg.esdf_max_distance = 1.2;
+        let mut map = Map::from_slices(cfg, &mut b, &mut i).unwrap();
+        let n = 24;
+        let sites = random_site_map(&mut map, &mut rng, n, 3 + trial * 4);
+        let e = map.update_esdf();
+        assert!(e.converged);
+        let (max_err, inexact, total) = compare_with_brute_force(&map, &sites, n);
+        std::eprintln!("trial {trial}: max error {max_err} voxels, {inexact} of {total} voxels inexact");
+        // Vector propagation is exact except in rare configurations; bound the error at a tenth of a voxel and
+        // the inexact voxels at 1 %.
+        assert!(max_err < 0.1, "trial {trial}: max error {max_err} voxels");
+        assert!(inexact * 100 <= total, "trial {trial}: {inexact} of {total} voxels inexact");
+    }
+}
+
+#[test]
+fn incremental_update_matches_brute_force_after_sites_vanish_and_appear() {
+    let mut rng = rand_pcg::Pcg32::new(3, 5);
+    let (mut b, mut i) = slices(256, 512);
+    let mut cfg = MapConfig::with_voxel_size(0.1);
+    cfg.esdf_max_distance = 1.2;
+    let mut map = Map::from_slices(cfg, &mut b, &mut i).unwrap();
+    let n = 24;
+    let mut sites = random_site_map(&mut map, &mut rng, n, 10);
+    assert!(map.update_esdf().converged);
+    // Remove half the sites (they become free space) and add new ones.
+    let t = map.config().truncation;
+    for (g, _) in sites.iter().take(5) {
+        map.set_voxel(*g, t, 1.0).unwrap();
+    }
+    sites.drain(..5);
+    for _ in 0..4 {
+        let g = [
+            (rng.next_u32() % n as u32) as i32 - n / 2,
+            (rng.next_u32() % n as u32) as i32 - n / 2,
+            (rng.next_u32() % n as u32) as i32 - n / 2,
+        ];
+        map.set_voxel(g, 0.0, 1.0).unwrap();
+        sites.retain(|(s, _)| *s != g);
+        sites.push((g, 0));
+    }
+    let e = map.update_esdf();
+    assert!(e.converged);
+    let (max_err, inexact, total) = compare_with_brute_force(&map, &sites, n);
+    assert!(max_err < 0.1, "max error {max_err} voxels");
+    assert!(inexact * 100 <= total, "{inexact} of {total} voxels inexact");
+}
+
+#[test]
+fn esdf_budget_exhaustion_is_resumable() {
+    let mut rng = rand_pcg::Pcg32::new(1, 2);
+    let (mut b, mut i) = slices(256, 512);
+    let mut cfg = MapConfig::with_voxel_size(0.1);
+    cfg.esdf_max_distance = 1.2;
+    cfg.esdf_max_sweeps = 1;
+    let mut map = Map::from_slices(cfg, &mut b, &mut i).unwrap();
+    let n = 24;
+    let sites = random_site_map(&mut map, &mut rng, n, 2);
+    let first = map.update_esdf();
+    assert!(!first.converged, "one sweep should not reach the far corners: {first:?}");
+    let mut calls = 1;
+    while !map.update_esdf().converged {
+        calls += 1;
+        assert!(calls < 50);
+    }
+    let (max_err, _, _) = compare_with_brute_force(&map, &sites, n);
+    assert!(max_err < 0.1);
+}

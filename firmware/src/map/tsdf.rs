@@ -1,0 +1,161 @@
+//! TSDF integration by ray casting (Voxblox's "simple" integrator with a carving-length budget per ray).
+
+use super::esdf::band_site;
+use super::{quantize_weight, split, local_index, Map, MapError, FLAG_TSDF_DIRTY, WEIGHT_SCALE};
+use crate::geom::{norm3, Pose3, Real, Vec3};
+
+/// What one call of [`Map::integrate_points`] did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct IntegrationOutcome {
+    /// Points whose ray was integrated.
+    pub points_integrated: u32,
+    /// Points ignored: not finite, closer than `min_range` or beyond `max_range`.
+    pub points_rejected: u32,
+    /// Voxel updates applied.
+    pub voxels_updated: u32,
+    /// Voxel updates lost because their block could not be allocated.
+    pub voxels_dropped: u32,
+    /// Rays whose carving was shortened by `max_ray_voxels`.
+    pub rays_truncated: u32,
+    /// The first allocation failure, if any (the pool is full or the index probe ran out).
+    pub pool_error: Option<MapError>,
+}
+
+impl Map<'_> {
+    /// Integrates one sensor frame (or a chunk of one): `points` in the sensor frame, `sensor_pose` the sensor's
+    /// pose in the map frame. Work is bounded by `points.len() * max_ray_voxels` voxel updates.
+    pub fn integrate_points(&mut self, sensor_pose: &Pose3, points: &[Vec3]) -> IntegrationOutcome {
+        let mut out = IntegrationOutcome::default();
+        let origin = sensor_pose.translation.vector;
+        for p in points {
+            let pw = sensor_pose.transform_point(&(*p).into()).coords;
+            let v = pw - origin;
+            let depth = norm3(&v);
+            if !depth.is_finite() || depth < self.cfg.min_range || depth > self.cfg.max_range {
+                out.points_rejected += 1;
+                continue;
+            }
+            let dir = v / depth;
+            self.integrate_ray(&origin, &dir, depth, &mut out);
+            out.points_integrated += 1;
+        }
+        out
+    }
+
+    fn integrate_ray(&mut self, o: &Vec3, d: &Vec3, depth: Real, out: &mut IntegrationOutcome) {
+        let vs = self.cfg.voxel_size;
+        let trunc = self.cfg.truncation;
+        let t_end = depth + trunc;
+        let mut t_start = (depth - self.cfg.max_carve_length).max(0.0);
+        // Keep the voxels nearest the surface: shorten the carved part if the budget is too small.
+        // A ray crosses at most ~sqrt(3) voxels per voxel length.
+        let budget = self.cfg.max_ray_voxels;
+        let max_len = budget as Real * vs / 1.75;
+        if t_end - t_start > max_len {
+            t_start = t_end - max_len;
+            out.rays_truncated += 1;
+        }
+        let p0 = o + d * t_start;
+        let inv = 1.0 / vs;
+        let mut g = [
+            libm::floorf(p0.x * inv) as i32,
+            libm::floorf(p0.y * inv) as i32,
+            libm::floorf(p0.z * inv) as i32,
+        ];
+        let axis = |da: Real, pa: Real, ga: i32| -> (i32, Real, Real) {
+            if da > 0.0 {
+                (1, t_start + (((ga + 1) as Real) * vs - pa) / da, vs / da)
+            } else if da < 0.0 {
+                (-1, t_start + ((ga as Real) * vs - pa) / da, -vs / da)
+            } else {
+                (0, Real::INFINITY, Real::INFINITY)
+            }
+        };
+        let ax = axis(d.x, p0.x, g[0]);
+        let ay = axis(d.y, p0.y, g[1]);
+        let az = axis(d.z, p0.z, g[2]);
+        let step = [ax.0, ay.0, az.0];
+        let mut t_max = [ax.1, ay.1, az.1];
+        let t_delta = [ax.2, ay.2, az.2];
+        let mut cache: Option<([i32; 3], Result<usize, MapError>)> = None;
+        for _ in 0..budget {
+            let c = self.voxel_center(g);
+            let sdf = depth - (c - o).dot(d);
+            if sdf >= -trunc {
+                let mut w = 1.0;
+                if sdf < -vs {
+                    w = (trunc + sdf) / (trunc - vs);
+                }
+                if w > 0.0 {
+                    let (bx, lx) = split(g[0]);
+                    let (by, ly) = split(g[1]);
+                    let (bz, lz) = split(g[2]);
+                    let bc = [bx, by, bz];
+                    let slot = match cache {
+                        Some((cc, r)) if cc == bc => r,
+                        _ => {
+                            let r = self.find_or_alloc_block(bc);
+                            cache = Some((bc, r));
+                            r
+                        }
+                    };
+                    match slot {
+                        Ok(s) => {
+                            self.update_voxel(s, local_index([lx, ly, lz]), sdf.min(trunc), w);
+                            out.voxels_updated += 1;
+                        }
+                        Err(e) => {
+                            out.voxels_dropped += 1;
+                            if out.pool_error.is_none() {
+                                out.pool_error = Some(e);
+                            }
+                        }
+                    }
+                }
+            }
+            // Next voxel along the ray.
+            let a = if t_max[0] < t_max[1] {
+                if t_max[0] < t_max[2] { 0 } else { 2 }
+            } else if t_max[1] < t_max[2] {
+                1
+            } else {
+                2
+            };
+            let (Some(tm), Some(ga), Some(st), Some(td)) =
+                (t_max.get_mut(a), g.get_mut(a), step.get(a), t_delta.get(a))
+            else {
+                break;
+            };
+            if *tm > t_end {
+                break;
+            }
+            *ga += *st;
+            *tm += *td;
+        }
+    }
+
+    fn update_voxel(&mut self, slot: usize, li: usize, sdf: Real, w: Real) {
+        let max_w = self.cfg.max_weight;
+        let trunc = self.cfg.truncation;
+        let vs = self.cfg.voxel_size;
+        let band = self.cfg.esdf_band * vs;
+        let Some(b) = self.blocks.get_mut(slot) else { return };
+        let (Some(tq), Some(wq)) = (b.tsdf.get_mut(li), b.weight.get_mut(li)) else { return };
+        let w_old = *wq as Real / WEIGHT_SCALE;
+        let d_old = *tq as Real * (trunc / 32767.0);
+        let w_new = w_old + w;
+        let d_new = (d_old * w_old + sdf * w) / w_new;
+        let q = libm::roundf((d_new.clamp(-trunc, trunc) / trunc) * 32767.0) as i16;
+        let wn = quantize_weight(w_new, max_w);
+        // The ESDF only depends on: observed or not, the sign, and the site value inside the fixed band.
+        let key = |q: i16, w: u16| (w > 0, q < 0, band_site(q as Real * (trunc / 32767.0), band, vs));
+        let before = key(*tq, *wq);
+        let wn = wn.max(1);
+        let after = key(q, wn);
+        *tq = q;
+        *wq = wn;
+        if before != after {
+            b.flags |= FLAG_TSDF_DIRTY;
+        }
+    }
+}

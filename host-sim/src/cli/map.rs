@@ -1,0 +1,252 @@
+//! `tetherbot map-check`, `render-map` and `edt-bench`: the onboard map against ground truth, pictures of it,
+//! and the distance transform against `libdynamicedt3d` (see `host-sim/doc/map.md`).
+
+use crate::mapcheck::{build_map, esdf_errors, host_storage, observed_surface_m2, standard_poses, CheckConfig};
+use crate::world::World;
+use firmware::geom::Real;
+use firmware::map::{Map, VoxelState};
+use std::path::PathBuf;
+
+/// Arguments of `map-check`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct MapCheckArgs {
+    /// World: crater_wall, ledge, ledge_pole, marsyard, or a scenario file (.toml).
+    #[arg(long, default_value = "crater_wall")]
+    pub world: String,
+    /// Voxel size, metres.
+    #[arg(long, default_value_t = 0.05)]
+    pub voxel: Real,
+    /// Sensor noise seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Evaluate every n-th voxel.
+    #[arg(long, default_value_t = 7)]
+    pub stride: usize,
+}
+
+/// Arguments of `render-map`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct RenderMapArgs {
+    /// World: as for map-check.
+    #[arg(long, default_value = "crater_wall")]
+    pub world: String,
+    /// Voxel size, metres.
+    #[arg(long, default_value_t = 0.1)]
+    pub voxel: Real,
+    /// Output PNG file.
+    #[arg(long, default_value = "map.png")]
+    pub out: PathBuf,
+    /// Vertical slice at this y (metres) instead of the top view.
+    #[arg(long)]
+    pub slice_y: Option<Real>,
+}
+
+/// Arguments of `edt-bench`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct EdtBenchArgs {
+    /// Edge of the cubic grid, voxels (a multiple of 8).
+    #[arg(long, default_value_t = 128)]
+    pub size: usize,
+    /// Obstacle density of the random part of the grid.
+    #[arg(long, default_value_t = 0.001)]
+    pub density: f64,
+    /// The reference binary (built by host-sim/bench-ref/build.sh).
+    #[arg(long, default_value = "target/bench-ref/edt3d")]
+    pub reference: PathBuf,
+}
+
+/// Directory of the shared terrain data (compile-time default, overridable with TETHERBOT_DATA).
+pub fn data_dir() -> PathBuf {
+    std::env::var_os("TETHERBOT_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data"))
+}
+
+/// A world by name, or from a scenario file.
+pub fn world_by_name(name: &str) -> Result<(Box<dyn World>, String), String> {
+    if name.ends_with(".toml") {
+        let sc = crate::scenario::load(std::path::Path::new(name)).map_err(|e| e.to_string())?;
+        let kind = sc.world_kind();
+        let w = sc.build_world().map_err(|e| e.to_string())?;
+        return Ok((w, kind));
+    }
+    let spec = crate::scenario::WorldSpec::by_name(name).ok_or_else(|| {
+        format!("unknown world {name:?}: use crater_wall, ledge, ledge_pole, marsyard or a .toml scenario")
+    })?;
+    let w = spec.build(&data_dir()).map_err(|(f, r)| format!("{f}: {r}"))?;
+    Ok((w, name.to_string()))
+}
+
+/// `map-check`: prints ESDF error, timing and memory figures.
+pub fn map_check(a: &MapCheckArgs) -> Result<(), String> {
+    let (world, kind) = world_by_name(&a.world)?;
+    let mut cfg = CheckConfig::at_voxel_size(a.voxel);
+    cfg.seed = a.seed;
+    cfg.sample_stride = a.stride.max(1);
+    cfg.map.validate().map_err(|e| format!("voxel: {} {}", e.field, e.reason))?;
+    let poses = standard_poses(world.as_ref(), &kind);
+    let (mut blocks, mut index) = host_storage(cfg.pool_blocks);
+    let mut map = Map::from_slices(cfg.map, &mut blocks, &mut index).map_err(|e| format!("{e:?}"))?;
+    let mut rep = build_map(world.as_ref(), &poses, &cfg, &mut map);
+    esdf_errors(world.as_ref(), &map, &cfg, &mut rep);
+    rep.surface_m2 = observed_surface_m2(&map);
+    let bb = Map::block_bytes();
+    println!("world {} ({kind}), voxel {} m, truncation {} m, ESDF cap {} m", world.name(), a.voxel, cfg.map.truncation, cfg.map.esdf_max_distance);
+    println!("scans {}  points {}  sensor {} rays/scan  seed {}", rep.scans, rep.points, cfg.sensor.ray_count(), cfg.seed);
+    println!("integration: {:.3} s total, {:.0} points/s, {:.2} ms/scan", rep.integrate_s, rep.points_per_s(), 1e3 * rep.integrate_s / rep.scans.max(1) as f64);
+    println!("ESDF update per scan: mean {:.2} ms, max {:.2} ms, all converged: {}", rep.esdf_ms_mean, rep.esdf_ms_max, rep.esdf_all_converged);
+    println!("ESDF error, all observed voxels:  {}", rep.all);
+    println!("ESDF error, near (|SD| < {} m): {}", cfg.near_m, rep.near);
+    println!(
+        "sign errors beyond one voxel: {} of {} samples ({} beyond truncation + voxel)",
+        rep.sign_errors, rep.all.n, rep.sign_errors_far
+    );
+    let mib = |b: f64| b / (1024.0 * 1024.0);
+    println!(
+        "memory: {} blocks x {} B = {:.2} MiB (dropped voxel updates: {}); observed surface {:.1} m^2 -> {:.0} B/m^2",
+        rep.blocks_used,
+        bb,
+        mib(rep.bytes_used() as f64),
+        rep.voxels_dropped,
+        rep.surface_m2,
+        rep.bytes_used() as f64 / rep.surface_m2.max(1e-9)
+    );
+    let need = rep.bytes_used() as f64 / rep.surface_m2.max(1e-9) * 400.0;
+    println!(
+        "20 m x 20 m at this density: {:.1} MiB of blocks (+ index) vs 4 MiB SRAM + 16 MiB PSRAM = 20 MiB: {}",
+        mib(need),
+        if need + (8192.0 * 4.0) < 20.0 * 1024.0 * 1024.0 { "fits" } else { "does NOT fit" }
+    );
+    Ok(())
+}
+
+fn colour(d: Real, dmax: Real) -> [u8; 3] {
+    // Blue (inside) through white (surface) to red-yellow (far).
+    let t = (d / dmax).clamp(-1.0, 1.0);
+    if t < 0.0 {
+        let s = -t;
+        [(255.0 * (1.0 - s)) as u8, (255.0 * (1.0 - s)) as u8, 255]
+    } else {
+        [255, (255.0 * t) as u8, (255.0 * (1.0 - t) * 0.6) as u8]
+    }
+}
+
+/// `render-map`: PNG top view (ESDF at 0.5 m above the highest observed surface in each column... simplified:
+/// the ESDF of the first known voxel from the top) or a vertical slice at `y`. Unknown is grey, surface black.
+pub fn render_map(a: &RenderMapArgs) -> Result<(), String> {
+    let (world, kind) = world_by_name(&a.world)?;
+    let cfg = CheckConfig::at_voxel_size(a.voxel);
+    let poses = standard_poses(world.as_ref(), &kind);
+    let (mut blocks, mut index) = host_storage(cfg.pool_blocks);
+    let mut map = Map::from_slices(cfg.map, &mut blocks, &mut index).map_err(|e| format!("{e:?}"))?;
+    build_map(world.as_ref(), &poses, &cfg, &mut map);
+    let b = world.bounds();
+    let vs = a.voxel;
+    let dmax = cfg.map.esdf_max_distance;
+    let (w, h, pixels) = match a.slice_y {
+        Some(y) => {
+            let gx0 = (b.min.x / vs).floor() as i32;
+            let gz0 = (b.min.z / vs).floor() as i32;
+            let w = ((b.max.x - b.min.x) / vs).ceil() as usize;
+            let h = ((b.max.z - b.min.z) / vs).ceil() as usize;
+            let gy = (y / vs).floor() as i32;
+            let mut px = Vec::with_capacity(w * h * 3);
+            for r in 0..h {
+                for c in 0..w {
+                    let g = [gx0 + c as i32, gy, gz0 + (h - 1 - r) as i32];
+                    let rgb = match (map.voxel_state(g), map.esdf_voxel(g)) {
+                        (VoxelState::Unknown, _) | (_, None) => [128, 128, 128],
+                        (_, Some(d)) if d.abs() < 0.5 * vs => [0, 0, 0],
+                        (_, Some(d)) => colour(d, dmax),
+                    };
+                    px.extend_from_slice(&rgb);
+                }
+            }
+            (w, h, px)
+        }
+        None => {
+            let gx0 = (b.min.x / vs).floor() as i32;
+            let gy0 = (b.min.y / vs).floor() as i32;
+            let w = ((b.max.x - b.min.x) / vs).ceil() as usize;
+            let h = ((b.max.y - b.min.y) / vs).ceil() as usize;
+            let gz_top = (b.max.z / vs).ceil() as i32 + 4;
+            let gz_bot = (b.min.z / vs).floor() as i32 - 4;
+            let mut px = Vec::with_capacity(w * h * 3);
+            for r in 0..h {
+                for c in 0..w {
+                    let (gx, gy) = (gx0 + c as i32, gy0 + (h - 1 - r) as i32);
+                    // From the top down: the first occupied voxel is the surface; shade by height, and mark
+                    // columns whose surface was never seen as unknown.
+                    let mut rgb = [128, 128, 128];
+                    for gz in (gz_bot..=gz_top).rev() {
+                        if map.voxel_state([gx, gy, gz]) == VoxelState::Occupied {
+                            let t = ((gz as Real * vs - b.min.z) / (b.max.z - b.min.z)).clamp(0.0, 1.0);
+                            rgb = [(60.0 + 195.0 * t) as u8, (40.0 + 150.0 * t) as u8, (30.0 + 80.0 * t) as u8];
+                            break;
+                        }
+                    }
+                    px.extend_from_slice(&rgb);
+                }
+            }
+            (w, h, px)
+        }
+    };
+    let f = std::fs::File::create(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(f), w as u32, h as u32);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    let mut wr = enc.write_header().map_err(|e| e.to_string())?;
+    wr.write_image_data(&pixels).map_err(|e| e.to_string())?;
+    println!("wrote {} ({w} x {h} px, {} blocks)", a.out.display(), map.blocks_used());
+    Ok(())
+}
+
+/// `edt-bench`: a full distance transform of the same occupancy grid by the onboard ESDF (all blocks dirty,
+/// sites = occupied voxels) and by `libdynamicedt3d` (`host-sim/bench-ref/edt3d.cpp`), timed in one run.
+pub fn edt_bench(a: &EdtBenchArgs) -> Result<(), String> {
+    let n = (a.size / 8).max(1) * 8;
+    let grid = crate::mapcheck::reference_grid(n, a.density, 42);
+    let (ms_ours, ours) = crate::mapcheck::full_esdf_on_grid(&grid, n)?;
+    let path = std::env::temp_dir().join(format!("tetherbot-edt-{}.bin", std::process::id()));
+    let dpath = path.with_extension("dist");
+    crate::mapcheck::write_grid(&path, &grid, n).map_err(|e| e.to_string())?;
+    let out = std::process::Command::new(&a.reference)
+        .arg(&path)
+        .arg(&dpath)
+        .output()
+        .map_err(|e| format!("cannot run {} ({e}); build it with host-sim/bench-ref/build.sh", a.reference.display()))?;
+    std::fs::remove_file(&path).ok();
+    if !out.status.success() {
+        return Err(format!("reference failed: {}", String::from_utf8_lossy(&out.stderr)));
+    }
+    let text = String::from_utf8_lossy(&out.stdout);
+    let ms_ref: f64 = text
+        .split_whitespace()
+        .find_map(|t| t.strip_prefix("ms="))
+        .and_then(|v| v.parse().ok())
+        .ok_or_else(|| format!("unexpected reference output: {text}"))?;
+    let reference: Vec<f32> = std::fs::read(&dpath)
+        .map_err(|e| format!("reference distances: {e}"))?
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect();
+    std::fs::remove_file(&dpath).ok();
+    let mut max_diff: f32 = 0.0;
+    let mut differ = 0usize;
+    for (o, r) in ours.iter().zip(&reference) {
+        if *o < 126.0 && *r < 126.0 {
+            let d = (o - r).abs();
+            max_diff = max_diff.max(d);
+            if d > 1e-3 {
+                differ += 1;
+            }
+        }
+    }
+    let occupied = grid.iter().filter(|o| **o).count();
+    println!("grid {n}^3 = {} voxels, {occupied} occupied", n * n * n);
+    println!("onboard ESDF (full, vector propagation, {} voxel cap): {ms_ours:.1} ms", n);
+    println!("libdynamicedt3d DynamicEDT3D::update (full):          {ms_ref:.1} ms");
+    println!("ratio onboard / dynamicedt3d: {:.2}", ms_ours / ms_ref);
+    println!("agreement: {differ} of {} voxels differ by > 0.001 voxel, max difference {max_diff:.4} voxel", ours.len());
+    Ok(())
+}

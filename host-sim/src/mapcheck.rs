@@ -1,0 +1,346 @@
+//! Ground-truth checks of the onboard map: drive a scan sequence through a world, integrate every scan into
+//! `firmware::map` exactly as the flight software does (chunk by chunk, then one ESDF update per scan), and
+//! compare the ESDF with the world's true signed distance.
+//!
+//! Error figures are over observed voxel centres (every `sample_stride`-th voxel of the allocated blocks, in
+//! pool order): `map ESDF - clamp(true SD, -D, D)` with `D = esdf_max_distance` (the map saturates there by
+//! design). "Near" = voxels whose true |SD| is below `near_m` (default 0.25 m), the band the settler and the
+//! tether sweep use.
+
+use crate::sensor::{scan, RangeSensorParams};
+use crate::world::World;
+use firmware::config::map::MapConfig;
+use firmware::geom::{Pose3, Real, Rot3, Vec3};
+use firmware::map::{Block, DistanceField, DistanceQuery, Map, SurfaceCursor, SurfacePoint};
+use std::time::Instant;
+
+/// Error statistics, metres.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ErrorStats {
+    /// Samples.
+    pub n: usize,
+    /// Mean signed error (bias).
+    pub mean: f64,
+    /// Root mean square error.
+    pub rms: f64,
+    /// 95th percentile of |error|.
+    pub p95: f64,
+    /// Largest |error|.
+    pub max: f64,
+}
+
+impl ErrorStats {
+    /// Statistics of a list of signed errors.
+    pub fn of(errors: &[f64]) -> ErrorStats {
+        if errors.is_empty() {
+            return ErrorStats::default();
+        }
+        let n = errors.len();
+        let mean = errors.iter().sum::<f64>() / n as f64;
+        let rms = (errors.iter().map(|e| e * e).sum::<f64>() / n as f64).sqrt();
+        let mut abs: Vec<f64> = errors.iter().map(|e| e.abs()).collect();
+        abs.sort_by(f64::total_cmp);
+        let p95 = abs[((n as f64 * 0.95).ceil() as usize).clamp(1, n) - 1];
+        ErrorStats { n, mean, rms, p95, max: abs[n - 1] }
+    }
+}
+
+impl core::fmt::Display for ErrorStats {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "n={:>7}  rms={:.4} m  p95={:.4} m  max={:.4} m  bias={:+.4} m",
+            self.n, self.rms, self.p95, self.max, self.mean
+        )
+    }
+}
+
+/// Settings of a check run.
+#[derive(Debug, Clone)]
+pub struct CheckConfig {
+    /// Map parameters (voxel size etc.).
+    pub map: MapConfig,
+    /// Pool size in blocks (the host boxes it).
+    pub pool_blocks: usize,
+    /// The sensor.
+    pub sensor: RangeSensorParams,
+    /// Seed of the sensor noise.
+    pub seed: u64,
+    /// Points per protocol chunk.
+    pub chunk_points: usize,
+    /// Evaluate every n-th voxel.
+    pub sample_stride: usize,
+    /// "Near the surface" threshold, metres.
+    pub near_m: f64,
+}
+
+impl CheckConfig {
+    /// Defaults at a voxel size: pool of 16384 blocks, default sensor, seed 1, 128-point chunks, stride 7,
+    /// near = 0.25 m.
+    pub fn at_voxel_size(voxel: Real) -> CheckConfig {
+        CheckConfig {
+            map: MapConfig::with_voxel_size(voxel),
+            pool_blocks: 16384,
+            sensor: RangeSensorParams::default(),
+            seed: 1,
+            chunk_points: 128,
+            sample_stride: 7,
+            near_m: 0.25,
+        }
+    }
+}
+
+/// Figures of a check run.
+#[derive(Debug, Clone, Default)]
+pub struct CheckReport {
+    /// Scans integrated.
+    pub scans: usize,
+    /// Points integrated.
+    pub points: usize,
+    /// Total TSDF integration time, seconds.
+    pub integrate_s: f64,
+    /// ESDF update time per scan, milliseconds: mean and max.
+    pub esdf_ms_mean: f64,
+    /// See `esdf_ms_mean`.
+    pub esdf_ms_max: f64,
+    /// Every ESDF update converged within its sweep budget.
+    pub esdf_all_converged: bool,
+    /// Blocks in use at the end.
+    pub blocks_used: usize,
+    /// Voxel updates dropped for lack of blocks.
+    pub voxels_dropped: u64,
+    /// Surface area observed (from the TSDF zero crossings), m^2.
+    pub surface_m2: f64,
+    /// Errors over all sampled observed voxels.
+    pub all: ErrorStats,
+    /// Errors over sampled voxels with true |SD| < near_m.
+    pub near: ErrorStats,
+    /// Sampled voxels that are free in the map but inside the terrain by more than one voxel, or occupied in
+    /// the map but outside by more than one voxel (sign errors). The TSDF writes negative values up to the
+    /// truncation distance behind each hit, so at convex edges and thin rocks such errors exist by construction
+    /// (as in Voxblox); they must stay within `truncation + voxel` of the surface.
+    pub sign_errors: usize,
+    /// Sign errors farther than `truncation + voxel` from the surface (must be 0).
+    pub sign_errors_far: usize,
+}
+
+impl CheckReport {
+    /// Integration throughput, points per second.
+    pub fn points_per_s(&self) -> f64 {
+        self.points as f64 / self.integrate_s.max(1e-12)
+    }
+    /// Memory of the blocks in use.
+    pub fn bytes_used(&self) -> usize {
+        self.blocks_used * Map::block_bytes()
+    }
+}
+
+/// Rover poses on a straight drive from `(x0, y0)` to `(x1, y1)`: one station every `step_m`, the rover origin
+/// `clearance_m` above the terrain, and at each station one pose per yaw offset (degrees) from the drive direction.
+pub fn drive_poses(world: &dyn World, from: [f64; 2], to: [f64; 2], step_m: f64, clearance_m: f64, yaws_deg: &[f64]) -> Vec<Pose3> {
+    let d = [to[0] - from[0], to[1] - from[1]];
+    let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
+    let n = (len / step_m).floor() as usize + 1;
+    let heading = d[1].atan2(d[0]);
+    let mut out = Vec::new();
+    for k in 0..n {
+        let t = if n > 1 { k as f64 / (n - 1) as f64 } else { 0.0 };
+        let (x, y) = (from[0] + d[0] * t, from[1] + d[1] * t);
+        let Some(h) = world.height_at(x as Real, y as Real) else { continue };
+        for yaw in yaws_deg {
+            out.push(Pose3::from_parts(
+                Vec3::new(x as Real, y as Real, h + clearance_m as Real).into(),
+                Rot3::from_euler_angles(0.0, 0.0, (heading + yaw.to_radians()) as Real),
+            ));
+        }
+    }
+    out
+}
+
+/// Empty host-side storage for a pool of `blocks` blocks (index = next power of two of 2 x blocks).
+pub fn host_storage(blocks: usize) -> (Vec<Block>, Vec<u32>) {
+    (vec![Block::EMPTY; blocks], vec![0u32; (2 * blocks).next_power_of_two()])
+}
+
+/// Integrates scans from `poses` into `map` (chunked, one ESDF update per scan); returns the timing figures.
+pub fn build_map(world: &dyn World, poses: &[Pose3], cfg: &CheckConfig, map: &mut Map<'_>) -> CheckReport {
+    let mut rng = rand_pcg::Pcg64::new(cfg.seed as u128, 0x5851_f42d_4c95_7f2d_1405_7b7e_f767_814f);
+    let mut rep = CheckReport { esdf_all_converged: true, ..Default::default() };
+    let mut esdf_ms = Vec::new();
+    for (k, pose) in poses.iter().enumerate() {
+        let s = scan(world, &cfg.sensor, pose, &mut rng);
+        let Ok(chunks) = s.to_chunks(k as u32, cfg.chunk_points) else { continue };
+        let t0 = Instant::now();
+        for c in &chunks {
+            let pts: Vec<Vec3> = c.points.iter().map(|p| Vec3::new(p.x, p.y, p.z)).collect();
+            let o = map.integrate_points(&c.sensor_pose.to_isometry(), &pts);
+            rep.points += o.points_integrated as usize;
+            rep.voxels_dropped += o.voxels_dropped as u64;
+        }
+        rep.integrate_s += t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        let e = map.update_esdf();
+        esdf_ms.push(t1.elapsed().as_secs_f64() * 1e3);
+        rep.esdf_all_converged &= e.converged;
+        rep.scans += 1;
+    }
+    rep.esdf_ms_mean = esdf_ms.iter().sum::<f64>() / esdf_ms.len().max(1) as f64;
+    rep.esdf_ms_max = esdf_ms.iter().copied().fold(0.0, f64::max);
+    rep.blocks_used = map.blocks_used();
+    rep
+}
+
+/// Observed surface area from the TSDF zero crossings: each crossing along axis `a` stands for
+/// `voxel^2 / (|n_x| + |n_y| + |n_z|)` of surface with normal `n`.
+pub fn observed_surface_m2(map: &Map<'_>) -> f64 {
+    let vs = map.config().voxel_size as f64;
+    let mut cur = SurfaceCursor::default();
+    let mut buf = vec![SurfacePoint { position: Vec3::zeros(), normal: Vec3::zeros() }; 4096];
+    let mut area = 0.0;
+    while !cur.is_done() {
+        let n = map.extract_surface(&mut cur, &mut buf);
+        for sp in &buf[..n] {
+            let l1 = (sp.normal.x.abs() + sp.normal.y.abs() + sp.normal.z.abs()) as f64;
+            area += vs * vs / l1.max(1.0);
+        }
+    }
+    area
+}
+
+/// Compares the map's ESDF with the world's true signed distance (see the module docs).
+pub fn esdf_errors(world: &dyn World, map: &Map<'_>, cfg: &CheckConfig, rep: &mut CheckReport) {
+    let d = map.config().esdf_max_distance as f64;
+    let vs = map.config().voxel_size as f64;
+    let mut all = Vec::new();
+    let mut near = Vec::new();
+    let e = firmware::config::map::BLOCK_EDGE as i32;
+    let mut k = 0usize;
+    for slot in 0..map.blocks_used() {
+        let Some(bc) = map.block_coord(slot) else { break };
+        for z in 0..e {
+            for y in 0..e {
+                for x in 0..e {
+                    k += 1;
+                    if !k.is_multiple_of(cfg.sample_stride) {
+                        continue;
+                    }
+                    let g = [bc[0] * e + x, bc[1] * e + y, bc[2] * e + z];
+                    let Some(m) = map.esdf_voxel(g) else { continue };
+                    let c = map.voxel_center(g);
+                    let DistanceQuery::Known { distance: t, .. } = world.query(&c) else { continue };
+                    let t = t as f64;
+                    let err = m as f64 - t.clamp(-d, d);
+                    all.push(err);
+                    if t.abs() < cfg.near_m {
+                        near.push(err);
+                    }
+                    if (m < 0.0 && t > vs) || (m >= 0.0 && t < -vs) {
+                        rep.sign_errors += 1;
+                        if t.abs() > map.config().truncation as f64 + vs {
+                            rep.sign_errors_far += 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    rep.all = ErrorStats::of(&all);
+    rep.near = ErrorStats::of(&near);
+}
+
+/// Builds the map over host storage and runs [`build_map`], [`esdf_errors`] and [`observed_surface_m2`].
+pub fn run_check(world: &dyn World, poses: &[Pose3], cfg: &CheckConfig) -> CheckReport {
+    let (mut blocks, mut index) = host_storage(cfg.pool_blocks);
+    let Ok(mut map) = Map::from_slices(cfg.map, &mut blocks, &mut index) else {
+        return CheckReport::default();
+    };
+    let mut rep = build_map(world, poses, cfg, &mut map);
+    esdf_errors(world, &map, cfg, &mut rep);
+    rep.surface_m2 = observed_surface_m2(&map);
+    rep
+}
+
+/// The standard scan sequences of the checks, by world name: `crater_wall` (descend the wall from the rim to the
+/// floor), `ledge` / `ledge_pole` (top of the ledge down the slope to the goal), `marsyard` (a 20 m diagonal
+/// across the yard). Three yaws (-30, 0, +30 degrees) per station; stations every 0.5 m (1 m on the Mars Yard).
+pub fn standard_poses(world: &dyn World, kind: &str) -> Vec<Pose3> {
+    let yaws = [-30.0, 0.0, 30.0];
+    match kind {
+        "crater_wall" => drive_poses(world, [-3.0, 0.0], [7.0, 0.0], 0.5, 0.35, &yaws),
+        "ledge" | "ledge_pole" => drive_poses(world, [-3.5, 0.0], [6.0, 0.0], 0.5, 0.35, &yaws),
+        _ => drive_poses(world, [-10.0, -10.0], [10.0, 10.0], 1.0, 0.35, &yaws),
+    }
+}
+
+/// A quick signed-distance probe for reports.
+pub fn query_distance(f: &dyn DistanceField, p: Vec3) -> Option<Real> {
+    match f.query(&p) {
+        DistanceQuery::Known { distance, .. } => Some(distance),
+        DistanceQuery::Unknown => None,
+    }
+}
+
+/// A synthetic occupancy grid for the distance-transform comparisons: a rolling solid ground (a quarter of the
+/// height, +-n/10 undulation) and random single-voxel obstacles above it with probability `density`. Index
+/// `x + n (y + n z)`.
+pub fn reference_grid(n: usize, density: f64, seed: u64) -> Vec<bool> {
+    use rand_core::Rng;
+    let mut rng = rand_pcg::Pcg64::new(seed as u128, 0x5851_f42d_4c95_7f2d);
+    let mut g = vec![false; n * n * n];
+    let tau = core::f64::consts::TAU;
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let ground = n as f64 / 4.0
+                    + n as f64 / 10.0 * (tau * x as f64 / n as f64).sin() * (tau * y as f64 / n as f64).cos();
+                let r = (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+                g[x + n * (y + n * z)] = (z as f64) < ground || r < density;
+            }
+        }
+    }
+    g
+}
+
+/// Writes a grid for `host-sim/bench-ref/edt3d`: u32 n (LE), then n^3 bytes.
+pub fn write_grid(path: &std::path::Path, grid: &[bool], n: usize) -> std::io::Result<()> {
+    let mut bytes = Vec::with_capacity(4 + grid.len());
+    bytes.extend_from_slice(&(n as u32).to_le_bytes());
+    bytes.extend(grid.iter().map(|o| *o as u8));
+    std::fs::write(path, bytes)
+}
+
+/// Runs the onboard ESDF on an occupancy grid (occupied voxels are sites of value 0, everything observed, cap
+/// 127 voxels) and returns the time of the full `update_esdf` in milliseconds and the distances in voxel units
+/// (127 where beyond the cap), in grid order.
+pub fn full_esdf_on_grid(grid: &[bool], n: usize) -> Result<(f64, Vec<f32>), String> {
+    let mut cfg = MapConfig::with_voxel_size(0.1);
+    cfg.esdf_max_distance = 12.7;
+    cfg.esdf_max_sweeps = 10_000;
+    let blocks = (n / 8 + 1).pow(3);
+    let (mut b, mut i) = host_storage(blocks);
+    let mut map = Map::from_slices(cfg, &mut b, &mut i).map_err(|e| format!("{e:?}"))?;
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let occ = grid[x + n * (y + n * z)];
+                map.set_voxel([x as i32, y as i32, z as i32], if occ { 0.0 } else { cfg.truncation }, 1.0)
+                    .map_err(|e| format!("{e:?}"))?;
+            }
+        }
+    }
+    let t0 = Instant::now();
+    let out = map.update_esdf();
+    let ms = t0.elapsed().as_secs_f64() * 1e3;
+    if !out.converged {
+        return Err("ESDF did not converge".into());
+    }
+    let mut d = Vec::with_capacity(n * n * n);
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                d.push(map.site_distance_voxels([x as i32, y as i32, z as i32]).unwrap_or(127.0));
+            }
+        }
+    }
+    Ok((ms, d))
+}
