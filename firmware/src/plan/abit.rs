@@ -32,8 +32,10 @@
 //!
 //! ## Non-Markovian attachments (Paton et al. V-A)
 //! - The attachment of a vertex is set when it is first connected (from the motion validator's result).
-//! - A fraction `attachment_copy_fraction` of new samples copies the attachment of the nearest tree vertex
-//!   (a predetermined history); such a sample only connects through a motion yielding a compatible attachment.
+//! - A fraction `attachment_copy_fraction` of new samples gets a predetermined attachment copied from a
+//!   neighbour: one of the distinct attachments among its k nearest tree vertices, chosen uniformly (so a rare
+//!   history, e.g. the one anchored on the column of Fig. 7d, is copied as often as the common one). Such a
+//!   sample only connects through a motion yielding a compatible attachment.
 //! - No rewiring to a parent whose motion gives an incompatible attachment
 //!   ([`StateSpace::attachments_compatible`]).
 //! - After each improvement a fresh goal state with undetermined attachment is added (up to
