@@ -21,6 +21,7 @@ pub mod movingai;
 pub mod team;
 pub mod mapcheck;
 pub mod sensor;
+pub mod harness;
 pub mod terrain;
 pub mod testkit;
 pub mod truth;

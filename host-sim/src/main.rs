@@ -37,6 +37,8 @@ enum Command {
     RenderMap(cli::map::RenderMapArgs),
     /// Time a full distance transform: the onboard ESDF vs libdynamicedt3d on the same grid.
     EdtBench(cli::map::EdtBenchArgs),
+    /// ABIT* side by side with OMPL 1.5.2's ABIT* on the shared geometric problems.
+    AbitBench(cli::abit_bench::Args),
 }
 
 fn main() -> ExitCode {
@@ -57,6 +59,7 @@ fn main() -> ExitCode {
         Command::MapCheck(a) => cli::done(cli::map::map_check(&a)),
         Command::RenderMap(a) => cli::done(cli::map::render_map(&a)),
         Command::EdtBench(a) => cli::done(cli::map::edt_bench(&a)),
+        Command::AbitBench(a) => cli::printed(cli::abit_bench::run(&a)),
     }
 }
 

@@ -1,1 +1,1755 @@
-//! `plan::abit`: not yet implemented (see the issue tracker).
+//! ABIT* — Advanced Batch Informed Trees (Strub & Gammell, ICRA 2020), as used by Paton et al. (IROS 2020)
+//! section V, with the non-Markovian extensions of section V-A (Fig. 7). Heap-free, every loop bounded.
+//!
+//! ## The algorithm (follows OMPL 1.5.2's `BITstar`/`ABITstar`)
+//! - **Implicit RGG.** Samples arrive in batches of `samples_per_batch` and form, with the start and goals, an
+//!   edge-implicit random geometric graph: k-nearest with `k = ceil(rewire_factor (e + e/d) ln q)` (OMPL's default,
+//!   "kABITstar"; the node itself counts among the k, as in OMPL) or r-disc with
+//!   `r = rewire_factor (2 (1 + 1/d) mu / zeta_d)^(1/d) (ln q / q)^(1/d)`. `q` = the number of states before the
+//!   batch (plus the batch size on the first batch).
+//! - **Informed sampling.** Once a solution of cost `c_best` exists, new samples are drawn from the informed set
+//!   `{x : h(start, x) + h(x, goal) < c_best}` — directly (the prolate hyperspheroid in R^n, through
+//!   [`OptimizationObjective::sample_informed`]) or, for general spaces, by rejection on the heuristic.
+//! - **Edge queue** ordered lexicographically by `[g(u) + c^(u,v) + eps h^(v), g(u) + c^(u,v), g(u)]` with the
+//!   inflation factor `eps`; ties by node indices (deterministic). The very first queue holds only the start's
+//!   edges to its k = |starts| + |goals| nearest states, i.e. the direct start-goal edge, so iteration 1
+//!   evaluates it (Paton et al. test 1: solution on the first iteration).
+//! - **Inflation and truncation.** Every batch starts a search with `eps = initial_inflation_factor` (1e6).
+//!   A search ends when the queue is empty or its front edge cannot improve the solution even after dividing by
+//!   the truncation factor `1 + truncation_scaling_parameter / q` (q = states generated + vertices connected
+//!   so far, as OMPL counts). With a solution, the batch then gets a final search with
+//!   `eps = 1 + inflation_scaling_parameter / q` that re-keys the queue and re-expands the inconsistent vertices
+//!   (vertices improved after their expansion, as in ARA*); then the next batch starts.
+//! - **Lazy edge evaluation.** An edge is checked only when popped and only if it can still improve the tree
+//!   and the solution with its true cost; results are memoised (OMPL's black/white lists) in a fixed hash table.
+//! - **Pruning** before a batch when at least `prune_fraction` of the states cannot improve the solution:
+//!   samples with `h(start,x) + h(x,goal) >= c_best` are dropped, vertices with `g(x) + h(x,goal) > c_best` are
+//!   disconnected (and kept as samples if they can still help).
+//! - **Anytime.** The best solution is kept at all times; [`AbitStar::write_path`] extracts it.
+//!
+//! One **iteration** is one call of [`Planner::step`]: it processes one edge of the queue or starts a
+//! batch / final search — OMPL's `numIterations`.
+//!
+//! ## Non-Markovian attachments (Paton et al. V-A)
+//! - The attachment of a vertex is set when it is first connected (from the motion validator's result).
+//! - A fraction `attachment_copy_fraction` of new samples gets a predetermined attachment copied from a
+//!   neighbour: one of the distinct attachments among its k nearest tree vertices, chosen uniformly (so a rare
+//!   history, e.g. the one anchored on the column of Fig. 7d, is copied as often as the common one). Such a
+//!   sample only connects through a motion yielding a compatible attachment.
+//! - No rewiring to a parent whose motion gives an incompatible attachment
+//!   ([`StateSpace::attachments_compatible`]).
+//! - After each improvement a fresh goal state with undetermined attachment is added (up to
+//!   `config::abit::GOAL_CAPACITY` goals), so the next better path can connect to a goal.
+//!
+//! These are active only when [`StateSpace::NON_MARKOVIAN`] is true.
+//!
+//! ## Parameters ([`AbitParams::ompl_defaults`], from `config::abit`)
+//! | parameter | default |
+//! |---|---|
+//! | `samples_per_batch` | 100 |
+//! | `rewire_factor` | 1.1 |
+//! | `connection` | k-nearest |
+//! | `initial_inflation_factor` | 1e6 |
+//! | `inflation_scaling_parameter` | 10 |
+//! | `truncation_scaling_parameter` | 5 |
+//! | `pruning` / `prune_fraction` | on / 0.05 |
+//! | `attachment_copy_fraction` | 0.25 |
+//! | `fresh_goal_on_improvement` | true |
+//! | `track_approximate` | false (as OMPL) |
+//! | `sample_attempts_per_sample` | 2 |
+//! | `informed_rejection_attempts` | 100 |
+//!
+//! ## Memory
+//! Everything lives in an [`AbitArena`] lent by the caller: `NV` nodes (start, goals, samples, vertices),
+//! `NQ` queued edges, `NM` memo entries. A full node arena or edge queue ends `solve` with
+//! `Termination::ArenaFull` and keeps the best solution; a full memo only costs repeated edge checks.
+
+use heapless::Vec;
+use rand_core::Rng;
+
+use crate::config::abit as cfg;
+
+use super::space::{
+    uniform01, Arena, Cost, Counters, GoalRegion, InformedSample, InvalidInput, MotionCheck, MotionValidator,
+    OptimizationObjective, Planner, PlannerStatus, ProblemDefinition, StateSpace, StateValidityChecker,
+    StepOutcome,
+};
+use super::geometric::unit_ball_measure;
+
+/// "No node".
+const NONE: u32 = u32::MAX;
+/// Probes per memo lookup (open addressing, linear probing).
+const MEMO_PROBES: usize = 8;
+
+/// How the implicit RGG connects states.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Connection {
+    /// k-nearest (OMPL's default for BIT*/ABIT*).
+    KNearest,
+    /// r-disc.
+    RDisc,
+}
+
+/// Planner parameters. See the module docs for the defaults and their sources.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AbitParams {
+    /// Samples per batch.
+    pub samples_per_batch: u32,
+    /// RGG rewire factor.
+    pub rewire_factor: f64,
+    /// k-nearest or r-disc.
+    pub connection: Connection,
+    /// Inflation of the first search of every batch.
+    pub initial_inflation_factor: f64,
+    /// Final search inflation is `1 + inflation_scaling_parameter / q`.
+    pub inflation_scaling_parameter: f64,
+    /// Truncation factor is `1 + truncation_scaling_parameter / q`.
+    pub truncation_scaling_parameter: f64,
+    /// Prune the graph before batches.
+    pub pruning: bool,
+    /// Prune only if at least this fraction of states can be pruned.
+    pub prune_fraction: f64,
+    /// Fraction of new samples that copy the nearest tree vertex's attachment (non-Markovian spaces only).
+    pub attachment_copy_fraction: f64,
+    /// Add a goal with undetermined attachment after each improvement (non-Markovian spaces only).
+    pub fresh_goal_on_improvement: bool,
+    /// Report the vertex closest to the goal as an approximate solution when no exact one exists.
+    pub track_approximate: bool,
+    /// Sampling attempts per requested sample.
+    pub sample_attempts_per_sample: u32,
+    /// Uniform draws per informed sample when the objective has no direct informed sampler.
+    pub informed_rejection_attempts: u32,
+}
+
+impl AbitParams {
+    /// OMPL 1.5.2's ABIT* defaults (plus the non-Markovian defaults of `config::abit`).
+    pub const fn ompl_defaults() -> Self {
+        Self {
+            samples_per_batch: cfg::SAMPLES_PER_BATCH,
+            rewire_factor: cfg::REWIRE_FACTOR,
+            connection: Connection::KNearest,
+            initial_inflation_factor: cfg::INITIAL_INFLATION_FACTOR,
+            inflation_scaling_parameter: cfg::INFLATION_SCALING_PARAMETER,
+            truncation_scaling_parameter: cfg::TRUNCATION_SCALING_PARAMETER,
+            pruning: true,
+            prune_fraction: cfg::PRUNE_FRACTION,
+            attachment_copy_fraction: cfg::ATTACHMENT_COPY_FRACTION,
+            fresh_goal_on_improvement: true,
+            track_approximate: false,
+            sample_attempts_per_sample: cfg::SAMPLE_ATTEMPTS_PER_SAMPLE,
+            informed_rejection_attempts: cfg::INFORMED_REJECTION_ATTEMPTS,
+        }
+    }
+
+    fn check(&self) -> Result<(), InvalidInput> {
+        let p = InvalidInput::Parameter;
+        if self.samples_per_batch == 0 {
+            return Err(p("samples_per_batch must be at least 1"));
+        }
+        if !(self.rewire_factor > 0.0 && self.rewire_factor.is_finite()) {
+            return Err(p("rewire_factor must be positive and finite"));
+        }
+        if !(self.initial_inflation_factor >= 1.0 && self.initial_inflation_factor.is_finite()) {
+            return Err(p("initial_inflation_factor must be >= 1 and finite"));
+        }
+        if !(self.inflation_scaling_parameter >= 0.0 && self.inflation_scaling_parameter.is_finite()) {
+            return Err(p("inflation_scaling_parameter must be >= 0 and finite"));
+        }
+        if !(self.truncation_scaling_parameter >= 0.0 && self.truncation_scaling_parameter.is_finite()) {
+            return Err(p("truncation_scaling_parameter must be >= 0 and finite"));
+        }
+        if !(0.0..=1.0).contains(&self.prune_fraction) {
+            return Err(p("prune_fraction must be in [0, 1]"));
+        }
+        if !(0.0..=1.0).contains(&self.attachment_copy_fraction) {
+            return Err(p("attachment_copy_fraction must be in [0, 1]"));
+        }
+        if self.sample_attempts_per_sample == 0 || self.informed_rejection_attempts == 0 {
+            return Err(p("sampling attempts must be at least 1"));
+        }
+        Ok(())
+    }
+}
+
+impl Default for AbitParams {
+    fn default() -> Self {
+        Self::ompl_defaults()
+    }
+}
+
+const F_IN_TREE: u8 = 1;
+const F_FREE: u8 = 2;
+const F_START: u8 = 4;
+const F_GOAL: u8 = 8;
+const F_INCONSISTENT: u8 = 16;
+
+/// A state of the implicit graph: a sample, or a vertex of the tree when `in_tree`.
+#[derive(Debug, Clone)]
+pub struct Node<St, A> {
+    /// The state.
+    pub state: St,
+    /// Its attachment: `None` while undetermined (unconnected sample that did not copy one).
+    pub attachment: Option<A>,
+    parent: u32,
+    first_child: u32,
+    next_sibling: u32,
+    edge_cost: Cost,
+    cost: Cost,
+    h_come: Cost,
+    h_go: Cost,
+    generation: u32,
+    expanded_search: u32,
+    flags: u8,
+}
+
+impl<St, A> Node<St, A> {
+    fn has(&self, f: u8) -> bool {
+        self.flags & f != 0
+    }
+    /// Is this node a vertex of the tree?
+    pub fn in_tree(&self) -> bool {
+        self.has(F_IN_TREE)
+    }
+    /// Parent index in the arena, if connected and not the root.
+    pub fn parent(&self) -> Option<u32> {
+        (self.parent != NONE).then_some(self.parent)
+    }
+    /// Cost-to-come through the tree (`INFINITY` if not connected).
+    pub fn cost(&self) -> Cost {
+        self.cost
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+struct QueueEdge {
+    key: [f64; 3],
+    c_hat: Cost,
+    parent: u32,
+    child: u32,
+    parent_generation: u32,
+    child_generation: u32,
+}
+
+impl QueueEdge {
+    fn before(&self, other: &Self) -> bool {
+        for (a, b) in self.key.iter().zip(other.key.iter()) {
+            if a < b {
+                return true;
+            }
+            if a > b {
+                return false;
+            }
+        }
+        (self.parent, self.child) < (other.parent, other.child)
+    }
+}
+
+#[derive(Debug, Clone)]
+struct MemoEntry<A> {
+    parent: u32,
+    parent_generation: u32,
+    child: u32,
+    child_generation: u32,
+    result: Option<A>,
+}
+
+/// The planner's storage, owned by the caller (a `static` on the board, a `Box` on the host) and lent to
+/// [`AbitStar::new`]. Capacities: `NV` nodes, `NQ` queued edges, `NM` memo entries (see `config::abit`).
+pub struct AbitArena<St, A, const NV: usize, const NQ: usize, const NM: usize> {
+    nodes: Vec<Node<St, A>, NV>,
+    queue: Vec<QueueEdge, NQ>,
+    memo: Vec<Option<MemoEntry<A>>, NM>,
+}
+
+impl<St, A, const NV: usize, const NQ: usize, const NM: usize> AbitArena<St, A, NV, NQ, NM> {
+    /// An empty arena (const, so it can be a `static`).
+    pub const fn new() -> Self {
+        Self { nodes: Vec::new(), queue: Vec::new(), memo: Vec::new() }
+    }
+    /// Nodes currently used (including freed slots awaiting reuse).
+    pub fn nodes_used(&self) -> usize {
+        self.nodes.len()
+    }
+    /// Edges currently queued.
+    pub fn queue_len(&self) -> usize {
+        self.queue.len()
+    }
+}
+
+impl<St, A, const NV: usize, const NQ: usize, const NM: usize> Default for AbitArena<St, A, NV, NQ, NM> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// High-water marks of the arenas (for sizing the board's arenas).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ArenaUse {
+    /// Most node slots used.
+    pub nodes: usize,
+    /// Longest edge queue.
+    pub queue: usize,
+    /// Memo slots filled.
+    pub memo: usize,
+}
+
+/// Why a path could not be written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PathError {
+    /// No exact (or, if tracked, approximate) solution yet.
+    NoSolution,
+    /// The output buffer is too small for the path; the needed length is given.
+    TooLong(usize),
+}
+
+/// ABIT* over a [`StateSpace`] with attachments. See the module docs.
+pub struct AbitStar<'a, S, V, M, O, G, R, const NV: usize, const NQ: usize, const NM: usize>
+where
+    S: StateSpace,
+{
+    arena: &'a mut AbitArena<S::State, S::Attachment, NV, NQ, NM>,
+    space: &'a mut S,
+    validity: &'a mut V,
+    motion: &'a mut M,
+    pdef: &'a ProblemDefinition<S, G, O>,
+    rng: &'a mut R,
+    params: AbitParams,
+    goal_state: Option<S::State>,
+    goals: Vec<u32, { cfg::GOAL_CAPACITY }>,
+    free_head: u32,
+    live_nodes: usize,
+    best_goal: u32,
+    best_cost: Cost,
+    min_cost: Cost,
+    inflation: f64,
+    truncation: f64,
+    search_id: u32,
+    search_done: bool,
+    final_search: bool,
+    k: usize,
+    r: f64,
+    generated: u32,
+    approx_vertex: u32,
+    approx_h: Cost,
+    pending_full: Option<Arena>,
+    counters: Counters,
+    invalid: Option<InvalidInput>,
+    high_water: ArenaUse,
+}
+
+impl<'a, S, V, M, O, G, R, const NV: usize, const NQ: usize, const NM: usize> AbitStar<'a, S, V, M, O, G, R, NV, NQ, NM>
+where
+    S: StateSpace,
+    V: StateValidityChecker<S>,
+    M: MotionValidator<S>,
+    O: OptimizationObjective<S>,
+    G: GoalRegion<S>,
+    R: Rng,
+{
+    /// Set up the planner on a problem. The arena is cleared. Invalid input (start or goal invalid, bad
+    /// parameters, an arena too small) is reported by [`Planner::status`] as `InvalidInput`; `solve` then
+    /// returns at once.
+    pub fn new(
+        arena: &'a mut AbitArena<S::State, S::Attachment, NV, NQ, NM>,
+        space: &'a mut S,
+        validity: &'a mut V,
+        motion: &'a mut M,
+        pdef: &'a ProblemDefinition<S, G, O>,
+        rng: &'a mut R,
+        params: AbitParams,
+    ) -> Self {
+        arena.nodes.clear();
+        arena.queue.clear();
+        arena.memo.clear();
+        // Bounded by NM.
+        for _ in 0..NM {
+            if arena.memo.push(None).is_err() {
+                break;
+            }
+        }
+        let mut planner = Self {
+            arena,
+            space,
+            validity,
+            motion,
+            pdef,
+            rng,
+            params,
+            goal_state: None,
+            goals: Vec::new(),
+            free_head: NONE,
+            live_nodes: 0,
+            best_goal: NONE,
+            best_cost: f64::INFINITY,
+            min_cost: f64::INFINITY,
+            inflation: params.initial_inflation_factor,
+            truncation: 1.0,
+            search_id: 1,
+            search_done: false,
+            final_search: false,
+            k: 0,
+            r: f64::INFINITY,
+            generated: 0,
+            approx_vertex: NONE,
+            approx_h: f64::INFINITY,
+            pending_full: None,
+            counters: Counters::default(),
+            invalid: None,
+            high_water: ArenaUse::default(),
+        };
+        if let Err(e) = planner.set_up() {
+            planner.invalid = Some(e);
+        }
+        planner
+    }
+
+    fn set_up(&mut self) -> Result<(), InvalidInput> {
+        self.params.check()?;
+        if NV < 3 || NQ < 1 {
+            return Err(InvalidInput::ArenaTooSmall);
+        }
+        let pdef = self.pdef;
+        self.counters.states_checked += 1;
+        if !self.validity.is_valid(&pdef.start) {
+            return Err(InvalidInput::StartInvalid);
+        }
+        let goal = pdef.goal.sample_goal(self.rng).ok_or(InvalidInput::GoalUnsampleable)?;
+        self.counters.states_checked += 1;
+        if !self.validity.is_valid(&goal) {
+            return Err(InvalidInput::GoalInvalid);
+        }
+        let h = pdef.objective.motion_cost_heuristic(self.space, &pdef.start, &goal);
+        if h.is_nan() || h < 0.0 {
+            return Err(InvalidInput::HeuristicNotAdmissible);
+        }
+        self.min_cost = h;
+        self.goal_state = Some(goal.clone());
+        // Start: the root, a vertex with the start attachment.
+        let start = self
+            .alloc(pdef.start.clone(), Some(pdef.start_attachment.clone()), F_START | F_IN_TREE)
+            .ok_or(InvalidInput::ArenaTooSmall)?;
+        if let Some(n) = self.arena.nodes.get_mut(start as usize) {
+            n.cost = 0.0;
+        }
+        self.add_goal_vertex(goal).ok_or(InvalidInput::ArenaTooSmall)?;
+        self.generated = 2;
+        // OMPL: before the first batch, k = |starts| + |goals| and r = infinity, so the first queue holds the
+        // start-goal edge only.
+        self.k = 1 + self.goals.len();
+        self.r = f64::INFINITY;
+        self.insert_outgoing_edges(start, false);
+        Ok(())
+    }
+
+    // ---------------------------------------------------------------- arena helpers
+
+    fn node(&self, i: u32) -> Option<&Node<S::State, S::Attachment>> {
+        self.arena.nodes.get(i as usize)
+    }
+
+    fn node_mut(&mut self, i: u32) -> Option<&mut Node<S::State, S::Attachment>> {
+        self.arena.nodes.get_mut(i as usize)
+    }
+
+    fn g(&self, i: u32) -> Cost {
+        self.node(i).map_or(f64::INFINITY, |n| n.cost)
+    }
+
+    fn heuristics(&self, state: &S::State) -> (Cost, Cost) {
+        let obj = &self.pdef.objective;
+        let h_come = obj.motion_cost_heuristic(self.space, &self.pdef.start, state);
+        let h_go = self.goal_state.as_ref().map_or(f64::INFINITY, |g| obj.motion_cost_heuristic(self.space, state, g));
+        (h_come, h_go)
+    }
+
+    /// Put a state in a free slot (reused first). `None` when the arena is full.
+    fn alloc(&mut self, state: S::State, attachment: Option<S::Attachment>, flags: u8) -> Option<u32> {
+        let (h_come, h_go) = self.heuristics(&state);
+        let fresh = |generation: u32| Node {
+            state,
+            attachment,
+            parent: NONE,
+            first_child: NONE,
+            next_sibling: NONE,
+            edge_cost: 0.0,
+            cost: f64::INFINITY,
+            h_come,
+            h_go,
+            generation,
+            expanded_search: 0,
+            flags,
+        };
+        let index = if self.free_head != NONE {
+            let i = self.free_head;
+            let slot = self.arena.nodes.get_mut(i as usize)?;
+            self.free_head = slot.next_sibling;
+            let generation = slot.generation.wrapping_add(1);
+            *slot = fresh(generation);
+            i
+        } else {
+            let i = self.arena.nodes.len() as u32;
+            self.arena.nodes.push(fresh(0)).ok()?;
+            i
+        };
+        self.live_nodes += 1;
+        self.high_water.nodes = self.high_water.nodes.max(self.live_nodes);
+        Some(index)
+    }
+
+    fn free(&mut self, i: u32) {
+        let head = self.free_head;
+        if let Some(n) = self.node_mut(i) {
+            n.flags = F_FREE;
+            n.generation = n.generation.wrapping_add(1);
+            n.parent = NONE;
+            n.first_child = NONE;
+            n.next_sibling = head;
+            n.cost = f64::INFINITY;
+            n.attachment = None;
+            self.free_head = i;
+            self.live_nodes = self.live_nodes.saturating_sub(1);
+        }
+    }
+
+    fn add_goal_vertex(&mut self, goal: S::State) -> Option<u32> {
+        if self.goals.is_full() {
+            return None;
+        }
+        let i = self.alloc(goal, None, F_GOAL)?;
+        // Cannot fail: checked not full above.
+        let _ = self.goals.push(i);
+        Some(i)
+    }
+
+    // ---------------------------------------------------------------- edge queue (binary heap in the arena)
+
+    fn heap_before(&self, a: usize, b: usize) -> bool {
+        match (self.arena.queue.get(a), self.arena.queue.get(b)) {
+            (Some(x), Some(y)) => x.before(y),
+            _ => false,
+        }
+    }
+
+    fn sift_up(&mut self, mut i: usize) {
+        // Bounded: i halves every round.
+        while i > 0 {
+            let p = (i - 1) / 2;
+            if self.heap_before(i, p) {
+                self.arena.queue.swap(i, p);
+                i = p;
+            } else {
+                break;
+            }
+        }
+    }
+
+    fn sift_down(&mut self, mut i: usize) {
+        let len = self.arena.queue.len();
+        // Bounded: i at least doubles every round.
+        loop {
+            let l = 2 * i + 1;
+            if l >= len {
+                break;
+            }
+            let r = l + 1;
+            let c = if r < len && self.heap_before(r, l) { r } else { l };
+            if self.heap_before(c, i) {
+                self.arena.queue.swap(c, i);
+                i = c;
+            } else {
+                break;
+            }
+        }
+    }
+
+    fn heap_push(&mut self, e: QueueEdge) {
+        if self.arena.queue.push(e).is_err() {
+            self.pending_full = Some(Arena::EdgeQueue);
+            return;
+        }
+        let len = self.arena.queue.len();
+        self.high_water.queue = self.high_water.queue.max(len);
+        self.sift_up(len - 1);
+    }
+
+    fn heap_pop(&mut self) -> Option<QueueEdge> {
+        if self.arena.queue.is_empty() {
+            return None;
+        }
+        let top = self.arena.queue.swap_remove(0);
+        self.sift_down(0);
+        Some(top)
+    }
+
+    fn heap_rebuild(&mut self) {
+        let len = self.arena.queue.len();
+        for i in (0..len / 2).rev() {
+            self.sift_down(i);
+        }
+    }
+
+    fn sort_key(&self, parent: u32, child: u32, c_hat: Cost) -> [f64; 3] {
+        let g = self.g(parent);
+        let h = self.node(child).map_or(f64::INFINITY, |n| n.h_go);
+        [g + c_hat + self.inflation * h, g + c_hat, g]
+    }
+
+    /// Drop stale entries at the front and re-key entries whose parent got cheaper (lazy key update).
+    /// Bounded by the queue length (each entry is dropped or re-keyed at most once here).
+    fn clean_front(&mut self) {
+        let budget = self.arena.queue.len() + 1;
+        for _ in 0..budget {
+            let Some(front) = self.arena.queue.first().copied() else {
+                return;
+            };
+            let valid = match (self.node(front.parent), self.node(front.child)) {
+                (Some(p), Some(c)) => {
+                    p.generation == front.parent_generation
+                        && c.generation == front.child_generation
+                        && p.in_tree()
+                        && !c.has(F_FREE)
+                }
+                _ => false,
+            };
+            if !valid {
+                let _ = self.heap_pop();
+                continue;
+            }
+            let g = self.g(front.parent);
+            if g < front.key[2] {
+                let _ = self.heap_pop();
+                let key = self.sort_key(front.parent, front.child, front.c_hat);
+                self.heap_push(QueueEdge { key, ..front });
+                continue;
+            }
+            return;
+        }
+    }
+
+    // ---------------------------------------------------------------- memo (black / white lists)
+
+    fn memo_slot(parent: u32, child: u32) -> usize {
+        let h = (parent as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (child as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F);
+        if NM == 0 {
+            0
+        } else {
+            ((h ^ (h >> 29)) % NM as u64) as usize
+        }
+    }
+
+    fn generations(&self, parent: u32, child: u32) -> (u32, u32) {
+        (
+            self.node(parent).map_or(NONE, |n| n.generation),
+            self.node(child).map_or(NONE, |n| n.generation),
+        )
+    }
+
+    fn memo_get(&self, parent: u32, child: u32) -> Option<Option<S::Attachment>> {
+        let (pg, cg) = self.generations(parent, child);
+        let home = Self::memo_slot(parent, child);
+        for p in 0..MEMO_PROBES.min(NM) {
+            let slot = self.arena.memo.get((home + p) % NM.max(1))?;
+            match slot {
+                Some(e) if e.parent == parent && e.child == child => {
+                    return (e.parent_generation == pg && e.child_generation == cg).then(|| e.result.clone());
+                }
+                None => return None,
+                _ => {}
+            }
+        }
+        None
+    }
+
+    fn memo_put(&mut self, parent: u32, child: u32, result: Option<S::Attachment>) {
+        let (pg, cg) = self.generations(parent, child);
+        let home = Self::memo_slot(parent, child);
+        let mut target = None;
+        for p in 0..MEMO_PROBES.min(NM) {
+            let idx = (home + p) % NM.max(1);
+            let Some(slot) = self.arena.memo.get(idx) else { break };
+            let reusable = match slot {
+                None => true,
+                Some(e) if e.parent == parent && e.child == child => true,
+                Some(e) => {
+                    // A stale entry (either node freed or disconnected since) may be overwritten.
+                    let (epg, ecg) = self.generations(e.parent, e.child);
+                    epg != e.parent_generation || ecg != e.child_generation
+                }
+            };
+            if reusable {
+                target = Some(idx);
+                break;
+            }
+        }
+        // Full neighbourhood: replace the home slot (the memo is a cache).
+        let idx = target.unwrap_or(home);
+        let was_empty = matches!(self.arena.memo.get(idx), Some(None));
+        if let Some(slot) = self.arena.memo.get_mut(idx) {
+            *slot = Some(MemoEntry { parent, parent_generation: pg, child, child_generation: cg, result });
+            if was_empty {
+                self.high_water.memo += 1;
+            }
+        }
+    }
+
+    /// Is the edge known to be unusable (invalid, or incompatible with the child's attachment)?
+    fn blacklisted(&self, parent: u32, child: u32) -> bool {
+        match self.memo_get(parent, child) {
+            Some(None) => true,
+            Some(Some(att)) => match self.node(child).and_then(|c| c.attachment.as_ref()) {
+                Some(existing) => !self.space.attachments_compatible(&att, existing),
+                None => false,
+            },
+            None => false,
+        }
+    }
+
+    /// Check the motion parent -> child (memoised). Returns the child's attachment after the motion.
+    fn check_edge(&mut self, parent: u32, child: u32) -> Option<S::Attachment> {
+        if let Some(result) = self.memo_get(parent, child) {
+            self.counters.memo_hits += 1;
+            return result;
+        }
+        self.counters.edges_evaluated += 1;
+        let result = match (self.arena.nodes.get(parent as usize), self.arena.nodes.get(child as usize)) {
+            (Some(p), Some(c)) => match p.attachment.as_ref() {
+                Some(att) => match self.motion.check_motion(self.space, &p.state, att, &c.state) {
+                    MotionCheck::Valid { attachment } => Some(attachment),
+                    MotionCheck::Invalid => None,
+                },
+                None => None,
+            },
+            _ => None,
+        };
+        self.memo_put(parent, child, result.clone());
+        result
+    }
+
+    // ---------------------------------------------------------------- graph
+
+    /// Indices of the k nearest nodes (k-nearest, the node itself included as in OMPL) or of the nodes within r.
+    fn neighbours(&mut self, of: u32) -> Vec<(f64, u32), { cfg::NEIGHBOUR_CAPACITY }> {
+        let mut out: Vec<(f64, u32), { cfg::NEIGHBOUR_CAPACITY }> = Vec::new();
+        let Some(center) = self.node(of).map(|n| n.state.clone()) else {
+            return out;
+        };
+        let (limit, radius) = match self.params.connection {
+            Connection::KNearest => (self.k, f64::INFINITY),
+            Connection::RDisc => (usize::MAX, self.r),
+        };
+        let cap = limit.min(cfg::NEIGHBOUR_CAPACITY);
+        let mut truncated = limit > cfg::NEIGHBOUR_CAPACITY && limit != usize::MAX;
+        for (i, n) in self.arena.nodes.iter().enumerate() {
+            if n.has(F_FREE) {
+                continue;
+            }
+            let d = self.space.distance(&center, &n.state);
+            if d > radius || cap == 0 {
+                continue;
+            }
+            let entry = (d, i as u32);
+            if out.len() == cap {
+                match out.last() {
+                    Some(last) if entry < *last => {
+                        let _ = out.pop();
+                        if limit == usize::MAX {
+                            truncated = true;
+                        }
+                    }
+                    _ => {
+                        if limit == usize::MAX {
+                            truncated = true;
+                        }
+                        continue;
+                    }
+                }
+            }
+            // Insertion sort (bounded by NEIGHBOUR_CAPACITY).
+            let pos = out.iter().position(|e| entry < *e).unwrap_or(out.len());
+            let _ = out.insert(pos, entry);
+        }
+        if truncated {
+            self.counters.neighbour_lists_truncated += 1;
+        }
+        out
+    }
+
+    fn enqueue_conditionally(&mut self, parent: u32, child: u32) {
+        if self.blacklisted(parent, child) {
+            return;
+        }
+        let (Some(p), Some(c)) = (self.node(parent), self.node(child)) else {
+            return;
+        };
+        let c_hat = self.pdef.objective.motion_cost_heuristic(self.space, &p.state, &c.state);
+        // Can it ever improve the solution? h(start,u) + c^(u,v) + h(v,goal) <= c_best.
+        if p.h_come + c_hat + c.h_go > self.best_cost {
+            return;
+        }
+        // Can it ever improve the child's cost-to-come? h(start,u) + c^(u,v) <= g(v).
+        if c.in_tree() && p.h_come + c_hat > c.cost {
+            return;
+        }
+        let (pg, cg) = (p.generation, c.generation);
+        let key = self.sort_key(parent, child, c_hat);
+        self.heap_push(QueueEdge { key, c_hat, parent, child, parent_generation: pg, child_generation: cg });
+    }
+
+    /// Queue the outgoing edges of a vertex (to its children, to its unconnected neighbours, and — cascading
+    /// rewirings, ABIT* — to its connected neighbours).
+    fn insert_outgoing_edges(&mut self, v: u32, reexpansion: bool) {
+        let Some(n) = self.node(v) else { return };
+        if n.h_come + n.h_go > self.best_cost {
+            return;
+        }
+        let (own_parent, first_child) = (n.parent, n.first_child);
+        let search = self.search_id;
+        if let Some(n) = self.node_mut(v) {
+            n.expanded_search = search;
+            if reexpansion {
+                n.flags &= !F_INCONSISTENT;
+            }
+        }
+        // Current children first (bounded by the arena size).
+        let mut c = first_child;
+        for _ in 0..NV {
+            if c == NONE {
+                break;
+            }
+            self.enqueue_conditionally(v, c);
+            c = self.node(c).map_or(NONE, |n| n.next_sibling);
+        }
+        let neighbours = self.neighbours(v);
+        for &(_, w) in neighbours.iter() {
+            if w == v {
+                continue;
+            }
+            let Some(wn) = self.node(w) else { continue };
+            // Unconnected samples, and (cascading rewirings) connected vertices other than the root, my
+            // children and my parent.
+            if !wn.in_tree() || (!wn.has(F_START) && wn.parent != v && own_parent != w) {
+                self.enqueue_conditionally(v, w);
+            }
+        }
+    }
+
+    fn unlink_from_parent(&mut self, child: u32) {
+        let Some(parent) = self.node(child).map(|n| n.parent) else { return };
+        if parent == NONE {
+            return;
+        }
+        let next = self.node(child).map_or(NONE, |n| n.next_sibling);
+        let head = self.node(parent).map_or(NONE, |n| n.first_child);
+        if head == child {
+            if let Some(p) = self.node_mut(parent) {
+                p.first_child = next;
+            }
+        } else {
+            let mut c = head;
+            for _ in 0..NV {
+                if c == NONE {
+                    break;
+                }
+                let sib = self.node(c).map_or(NONE, |n| n.next_sibling);
+                if sib == child {
+                    if let Some(cn) = self.node_mut(c) {
+                        cn.next_sibling = next;
+                    }
+                    break;
+                }
+                c = sib;
+            }
+        }
+        if let Some(n) = self.node_mut(child) {
+            n.parent = NONE;
+            n.next_sibling = NONE;
+        }
+    }
+
+    /// Propagate a cost change of `root` to its descendants (pre-order walk via parent links, bounded by NV).
+    fn propagate_costs(&mut self, root: u32) {
+        let search = self.search_id;
+        let mut cur = self.node(root).map_or(NONE, |n| n.first_child);
+        for _ in 0..(2 * NV + 2) {
+            if cur == NONE || cur == root {
+                return;
+            }
+            let (parent, edge_cost, first_child) =
+                self.node(cur).map_or((NONE, 0.0, NONE), |n| (n.parent, n.edge_cost, n.first_child));
+            let g = self.g(parent) + edge_cost;
+            if let Some(n) = self.node_mut(cur) {
+                n.cost = g;
+                if n.expanded_search == search {
+                    n.flags |= F_INCONSISTENT;
+                }
+            }
+            if first_child != NONE {
+                cur = first_child;
+                continue;
+            }
+            // Climb until a node with a next sibling, stopping at root.
+            let mut up = cur;
+            cur = NONE;
+            for _ in 0..NV {
+                if up == root || up == NONE {
+                    break;
+                }
+                let (sib, par) = self.node(up).map_or((NONE, NONE), |n| (n.next_sibling, n.parent));
+                if sib != NONE {
+                    cur = sib;
+                    break;
+                }
+                up = par;
+            }
+        }
+    }
+
+    fn add_edge(&mut self, parent: u32, child: u32, edge_cost: Cost, attachment: S::Attachment) {
+        let was_in_tree = self.node(child).is_some_and(|n| n.in_tree());
+        if was_in_tree {
+            self.counters.rewirings += 1;
+            self.unlink_from_parent(child);
+        } else {
+            self.generated = self.generated.saturating_add(1);
+        }
+        let g = self.g(parent) + edge_cost;
+        let head = self.node(parent).map_or(NONE, |n| n.first_child);
+        if let Some(n) = self.node_mut(child) {
+            n.parent = parent;
+            n.edge_cost = edge_cost;
+            n.cost = g;
+            n.attachment = Some(attachment);
+            n.flags |= F_IN_TREE;
+            n.next_sibling = head;
+        }
+        if let Some(p) = self.node_mut(parent) {
+            p.first_child = child;
+        }
+        self.propagate_costs(child);
+        if self.params.track_approximate {
+            let h = self.node(child).map_or(f64::INFINITY, |n| n.h_go);
+            if h < self.approx_h {
+                self.approx_h = h;
+                self.approx_vertex = child;
+            }
+        }
+        let expanded = self.node(child).is_some_and(|n| n.expanded_search == self.search_id);
+        if !expanded {
+            self.insert_outgoing_edges(child, false);
+        } else if let Some(n) = self.node_mut(child) {
+            n.flags |= F_INCONSISTENT;
+        }
+    }
+
+    /// Recompute the best goal; true if the solution improved.
+    fn update_goal(&mut self) -> bool {
+        let mut best = (self.best_cost, self.best_goal);
+        for &gi in self.goals.iter() {
+            if let Some(n) = self.arena.nodes.get(gi as usize) {
+                if n.in_tree() && n.cost < best.0 {
+                    best = (n.cost, gi);
+                }
+            }
+        }
+        if best.0 < self.best_cost {
+            self.best_cost = best.0;
+            self.best_goal = best.1;
+            self.counters.improvements += 1;
+            if self.counters.first_solution_iteration == 0 {
+                self.counters.first_solution_iteration = self.counters.iterations;
+            }
+            if S::NON_MARKOVIAN && self.params.fresh_goal_on_improvement {
+                let has_open_goal = self.goals.iter().any(|&gi| {
+                    self.node(gi).is_some_and(|n| !n.in_tree() && n.attachment.is_none())
+                });
+                if !has_open_goal {
+                    if let Some(goal) = self.goal_state.clone() {
+                        // A full goal list or arena only means no fresh goal this time.
+                        let _ = self.add_goal_vertex(goal);
+                    }
+                }
+            }
+            true
+        } else {
+            false
+        }
+    }
+
+    fn has_solution(&self) -> bool {
+        self.best_goal != NONE
+    }
+
+    // ---------------------------------------------------------------- batches
+
+    fn prune(&mut self) {
+        if !self.has_solution() {
+            return;
+        }
+        let best = self.best_cost;
+        let total = self.live_nodes.max(1);
+        let prunable = self
+            .arena
+            .nodes
+            .iter()
+            .filter(|n| !n.has(F_FREE) && !n.has(F_START) && n.h_come + n.h_go >= best)
+            .count();
+        if (prunable as f64) / (total as f64) < self.params.prune_fraction {
+            return;
+        }
+        self.counters.prunings += 1;
+        let len = self.arena.nodes.len();
+        // Pass 1: disconnect vertices that cannot be on a better path; drop samples that cannot help.
+        for i in 0..len as u32 {
+            let Some(n) = self.node(i) else { continue };
+            if n.has(F_FREE) || n.has(F_START) {
+                continue;
+            }
+            if n.in_tree() {
+                if i != self.best_goal && n.cost + n.h_go > best {
+                    self.disconnect(i);
+                }
+            } else if !n.has(F_GOAL) && n.h_come + n.h_go >= best {
+                self.free(i);
+            }
+        }
+        // Pass 2 (robust to rounding): vertices whose parent left the tree leave it too. Bounded sweeps.
+        for _ in 0..len {
+            let mut changed = false;
+            for i in 0..len as u32 {
+                let Some(n) = self.node(i) else { continue };
+                if n.in_tree() && !n.has(F_START) {
+                    let parent_ok = self.node(n.parent).is_some_and(|p| p.in_tree());
+                    if !parent_ok {
+                        self.disconnect(i);
+                        changed = true;
+                    }
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+    }
+
+    /// Take a vertex out of the tree; keep it as a sample if it can still help, otherwise free it.
+    fn disconnect(&mut self, i: u32) {
+        self.unlink_from_parent(i);
+        // Orphan the children (they are disconnected by the caller's sweep).
+        let mut c = self.node(i).map_or(NONE, |n| n.first_child);
+        for _ in 0..NV {
+            if c == NONE {
+                break;
+            }
+            let next = self.node(c).map_or(NONE, |n| n.next_sibling);
+            if let Some(cn) = self.node_mut(c) {
+                cn.parent = NONE;
+                cn.next_sibling = NONE;
+            }
+            c = next;
+        }
+        let best = self.best_cost;
+        let Some(n) = self.node_mut(i) else { return };
+        n.first_child = NONE;
+        n.flags &= !(F_IN_TREE | F_INCONSISTENT);
+        n.cost = f64::INFINITY;
+        n.attachment = None;
+        n.generation = n.generation.wrapping_add(1);
+        let keep = n.has(F_GOAL) || n.h_come + n.h_go < best;
+        if !keep {
+            self.free(i);
+        }
+        if self.approx_vertex == i {
+            self.approx_vertex = NONE;
+            self.approx_h = f64::INFINITY;
+        }
+    }
+
+    /// The attachment a new sample copies (Paton et al. V-A): one of the distinct attachments among the k
+    /// nearest tree vertices, chosen uniformly, so rare histories (the one anchored on the column, Fig. 7d) are
+    /// copied as often as the common one. Bounded by the arena size and `NEIGHBOUR_CAPACITY`.
+    fn copied_attachment(&mut self, state: &S::State) -> Option<S::Attachment> {
+        let cap = self.k.clamp(1, cfg::NEIGHBOUR_CAPACITY);
+        let mut near: Vec<(f64, u32), { cfg::NEIGHBOUR_CAPACITY }> = Vec::new();
+        for (i, n) in self.arena.nodes.iter().enumerate() {
+            if !n.in_tree() || n.attachment.is_none() {
+                continue;
+            }
+            let entry = (self.space.distance(state, &n.state), i as u32);
+            if near.len() == cap {
+                match near.last() {
+                    Some(last) if entry < *last => {
+                        let _ = near.pop();
+                    }
+                    _ => continue,
+                }
+            }
+            let pos = near.iter().position(|e| entry < *e).unwrap_or(near.len());
+            let _ = near.insert(pos, entry);
+        }
+        // Distinct attachments, in order of distance (deterministic).
+        let mut distinct: Vec<u32, { cfg::NEIGHBOUR_CAPACITY }> = Vec::new();
+        for &(_, i) in near.iter() {
+            let Some(att) = self.node(i).and_then(|n| n.attachment.as_ref()) else { continue };
+            let seen = distinct
+                .iter()
+                .any(|&j| self.node(j).and_then(|n| n.attachment.as_ref()).is_some_and(|b| b == att));
+            if !seen {
+                let _ = distinct.push(i);
+            }
+        }
+        if distinct.is_empty() {
+            return None;
+        }
+        let pick = ((uniform01(self.rng) * distinct.len() as f64) as usize).min(distinct.len() - 1);
+        distinct.get(pick).and_then(|&i| self.node(i)).and_then(|n| n.attachment.clone())
+    }
+
+    fn draw_sample(&mut self) -> Option<S::State> {
+        if !self.has_solution() {
+            return self.space.sample_uniform(self.rng);
+        }
+        let (start, goal) = (&self.pdef.start, self.goal_state.as_ref()?);
+        match self.pdef.objective.sample_informed(self.space, self.rng, start, goal, self.best_cost) {
+            InformedSample::Sampled(x) => Some(x),
+            InformedSample::Rejected => None,
+            InformedSample::Unsupported => {
+                // Rejection sampling on the heuristic (OMPL RejectionInfSampler), bounded.
+                for _ in 0..self.params.informed_rejection_attempts {
+                    let x = self.space.sample_uniform(self.rng)?;
+                    let (hc, hg) = self.heuristics(&x);
+                    if hc + hg < self.best_cost {
+                        return Some(x);
+                    }
+                }
+                None
+            }
+        }
+    }
+
+    fn new_batch(&mut self) {
+        self.counters.batches += 1;
+        let batch = self.params.samples_per_batch as usize;
+        // RGG terms for the number of states we have (OMPL: plus the batch on the very first batch).
+        let mut q = self.live_nodes;
+        if q == 1 + self.goals.len() {
+            q += batch;
+        }
+        let qf = (q.max(2)) as f64;
+        let d = self.space.dimension().max(1) as f64;
+        let e = core::f64::consts::E;
+        self.k = libm::ceil(self.params.rewire_factor * (e + e / d) * libm::log(qf)) as usize;
+        let r_rgg = libm::pow(
+            2.0 * (1.0 + 1.0 / d) * (self.space.measure() / unit_ball_measure(self.space.dimension().max(1))),
+            1.0 / d,
+        );
+        self.r = self.params.rewire_factor * r_rgg * libm::pow(libm::log(qf) / qf, 1.0 / d);
+
+        let attempts = self.params.sample_attempts_per_sample as usize * batch;
+        let mut added = 0usize;
+        for _ in 0..attempts {
+            if added >= batch {
+                break;
+            }
+            let Some(x) = self.draw_sample() else { continue };
+            self.counters.states_checked += 1;
+            if !self.validity.is_valid(&x) {
+                continue;
+            }
+            let attachment = if S::NON_MARKOVIAN
+                && self.params.attachment_copy_fraction > 0.0
+                && uniform01(self.rng) < self.params.attachment_copy_fraction
+            {
+                self.copied_attachment(&x)
+            } else {
+                None
+            };
+            if self.alloc(x, attachment, 0).is_none() {
+                self.pending_full = Some(Arena::Nodes);
+                break;
+            }
+            added += 1;
+            self.counters.samples_added += 1;
+            self.generated = self.generated.saturating_add(1);
+        }
+    }
+
+    fn start_index(&self) -> u32 {
+        0
+    }
+
+    /// High-water marks of the arenas so far.
+    pub fn arena_use(&self) -> ArenaUse {
+        self.high_water
+    }
+
+    /// Current inflation factor.
+    pub fn inflation_factor(&self) -> f64 {
+        self.inflation
+    }
+
+    /// Current truncation factor.
+    pub fn truncation_factor(&self) -> f64 {
+        self.truncation
+    }
+
+    /// Cost of the best solution (`INFINITY` if none).
+    pub fn best_cost(&self) -> Cost {
+        self.best_cost
+    }
+
+    /// The heuristic lower bound on the solution cost (start-goal heuristic).
+    pub fn min_cost(&self) -> Cost {
+        self.min_cost
+    }
+
+    /// Live nodes (start, goals, samples and vertices).
+    pub fn num_states(&self) -> usize {
+        self.live_nodes
+    }
+
+    /// All live nodes (for pictures and tests).
+    pub fn nodes(&self) -> impl Iterator<Item = &Node<S::State, S::Attachment>> {
+        self.arena.nodes.iter().filter(|n| !n.has(F_FREE))
+    }
+
+    fn path_end(&self) -> Option<u32> {
+        if self.has_solution() {
+            Some(self.best_goal)
+        } else if self.params.track_approximate && self.approx_vertex != NONE {
+            Some(self.approx_vertex)
+        } else {
+            None
+        }
+    }
+
+    /// Write the best path (start first) into `out`, each state with its attachment. Returns the number of
+    /// states written.
+    pub fn write_path<const P: usize>(
+        &self,
+        out: &mut Vec<(S::State, S::Attachment), P>,
+    ) -> Result<usize, PathError> {
+        out.clear();
+        let end = self.path_end().ok_or(PathError::NoSolution)?;
+        let mut len = 0usize;
+        let mut cur = end;
+        for _ in 0..NV {
+            if cur == NONE {
+                break;
+            }
+            len += 1;
+            cur = self.node(cur).map_or(NONE, |n| n.parent);
+        }
+        if len > P {
+            return Err(PathError::TooLong(len));
+        }
+        // Fill from the goal backwards: write in reverse order by walking len times per slot would be O(n^2);
+        // instead push goal->start and reverse in place.
+        let mut cur = end;
+        for _ in 0..len {
+            let Some(n) = self.node(cur) else { break };
+            let Some(att) = n.attachment.clone() else { break };
+            if out.push((n.state.clone(), att)).is_err() {
+                return Err(PathError::TooLong(len));
+            }
+            cur = n.parent;
+        }
+        out.reverse();
+        Ok(out.len())
+    }
+
+    // ---------------------------------------------------------------- the iteration
+
+    fn iterate(&mut self) -> StepOutcome {
+        self.counters.iterations += 1;
+        self.clean_front();
+        if self.search_done || self.arena.queue.is_empty() {
+            if self.final_search || !self.has_solution() {
+                if self.params.pruning {
+                    self.prune();
+                }
+                self.new_batch();
+                self.inflation = self.params.initial_inflation_factor;
+                self.arena.queue.clear();
+                self.search_id = self.search_id.wrapping_add(1);
+                self.insert_outgoing_edges(self.start_index(), false);
+                self.final_search = false;
+                self.truncation = 1.0 + self.params.truncation_scaling_parameter / f64::from(self.generated.max(1));
+                self.search_done = false;
+                return match self.pending_full.take() {
+                    Some(a) => StepOutcome::ArenaFull(a),
+                    None => StepOutcome::NewBatch,
+                };
+            }
+            // Final search of this batch: less inflation, re-key, re-expand the inconsistent vertices.
+            self.inflation = 1.0 + self.params.inflation_scaling_parameter / f64::from(self.generated.max(1));
+            let len = self.arena.queue.len();
+            for i in 0..len {
+                let Some(e) = self.arena.queue.get(i).copied() else { continue };
+                let key = self.sort_key(e.parent, e.child, e.c_hat);
+                if let Some(slot) = self.arena.queue.get_mut(i) {
+                    slot.key = key;
+                }
+            }
+            self.heap_rebuild();
+            for i in 0..self.arena.nodes.len() as u32 {
+                let inconsistent = self.node(i).is_some_and(|n| n.has(F_INCONSISTENT) && n.in_tree());
+                if inconsistent {
+                    self.insert_outgoing_edges(i, true);
+                }
+            }
+            self.final_search = true;
+            self.search_done = false;
+            return match self.pending_full.take() {
+                Some(a) => StepOutcome::ArenaFull(a),
+                None => StepOutcome::FinalSearch,
+            };
+        }
+        let Some(edge) = self.heap_pop() else {
+            return StepOutcome::ProcessedEdge;
+        };
+        self.counters.edges_popped += 1;
+        let (u, v) = (edge.parent, edge.child);
+        let outcome = self.process_edge(u, v, edge.c_hat);
+        match self.pending_full.take() {
+            Some(a) => StepOutcome::ArenaFull(a),
+            None => outcome,
+        }
+    }
+
+    fn process_edge(&mut self, u: u32, v: u32, c_hat: Cost) -> StepOutcome {
+        let (Some(un), Some(vn)) = (self.node(u), self.node(v)) else {
+            return StepOutcome::ProcessedEdge;
+        };
+        // Already in the tree: a freebie, expand the child.
+        if vn.parent == u && vn.in_tree() {
+            if vn.expanded_search != self.search_id {
+                self.insert_outgoing_edges(v, false);
+            }
+            return StepOutcome::ProcessedEdge;
+        }
+        let (g_u, h_come_u, g_v, h_go_v) = (un.cost, un.h_come, vn.cost, vn.h_go);
+        // Truncated search: can this edge improve the solution by more than the truncation factor?
+        if (g_u + c_hat + h_go_v) * self.truncation >= self.best_cost {
+            self.search_done = true;
+            return StepOutcome::ProcessedEdge;
+        }
+        // Could it improve the child's cost-to-come?
+        if g_u + c_hat >= g_v {
+            return StepOutcome::ProcessedEdge;
+        }
+        let Some(att_u) = un.attachment.as_ref() else {
+            return StepOutcome::ProcessedEdge;
+        };
+        let c = self.pdef.objective.motion_cost(self.space, &un.state, att_u, &vn.state);
+        if c.is_nan() || c < 0.0 {
+            return StepOutcome::ProcessedEdge;
+        }
+        // Could the true edge improve the solution?
+        if h_come_u + c + h_go_v >= self.best_cost {
+            return StepOutcome::ProcessedEdge;
+        }
+        let Some(att) = self.check_edge(u, v) else {
+            return StepOutcome::ProcessedEdge;
+        };
+        let compatible = match self.node(v).and_then(|n| n.attachment.as_ref()) {
+            Some(existing) => self.space.attachments_compatible(&att, existing),
+            None => true,
+        };
+        if !compatible {
+            self.counters.incompatible_attachments += 1;
+            return StepOutcome::ProcessedEdge;
+        }
+        if g_u + c < g_v {
+            self.add_edge(u, v, c, att);
+            if self.update_goal() {
+                return StepOutcome::ImprovedSolution;
+            }
+        }
+        StepOutcome::ProcessedEdge
+    }
+}
+
+impl<'a, S, V, M, O, G, R, const NV: usize, const NQ: usize, const NM: usize> Planner
+    for AbitStar<'a, S, V, M, O, G, R, NV, NQ, NM>
+where
+    S: StateSpace,
+    V: StateValidityChecker<S>,
+    M: MotionValidator<S>,
+    O: OptimizationObjective<S>,
+    G: GoalRegion<S>,
+    R: Rng,
+{
+    fn step(&mut self) -> StepOutcome {
+        if self.invalid.is_some() {
+            return StepOutcome::Converged;
+        }
+        // OMPL stops iterating when no better solution is possible (minCost >= bestCost).
+        if self.has_solution() && self.best_cost <= self.min_cost {
+            return StepOutcome::Converged;
+        }
+        self.iterate()
+    }
+
+    fn counters(&self) -> Counters {
+        self.counters
+    }
+
+    fn status(&self) -> PlannerStatus {
+        if let Some(e) = self.invalid {
+            PlannerStatus::InvalidInput(e)
+        } else if self.has_solution() {
+            PlannerStatus::ExactSolution { cost: self.best_cost }
+        } else if self.params.track_approximate && self.approx_vertex != NONE {
+            PlannerStatus::ApproximateSolution { cost_to_go: self.approx_h }
+        } else {
+            PlannerStatus::NoSolutionWithinBudget
+        }
+    }
+
+    fn objective_satisfied(&self) -> bool {
+        self.has_solution() && self.pdef.objective.is_satisfied(self.best_cost)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use std::boxed::Box;
+    use std::vec::Vec as StdVec;
+
+    use rand_core::SeedableRng;
+    use rand_pcg::Pcg64;
+
+    use super::*;
+    use crate::plan::geometric::{
+        box_world_3d, wall_gap, wall_gap_optimal_cost, BoxObstacles, GeometricProblem, RealVectorSpace,
+    };
+    use crate::plan::space::{Budget, BudgetKind, GoalState, PathLength, SolveReport, Termination};
+
+    type Pdef<const N: usize> = ProblemDefinition<RealVectorSpace<N>, GoalState<[f64; N]>, PathLength>;
+
+    fn pdef<const N: usize>(p: &GeometricProblem<N>) -> Pdef<N> {
+        ProblemDefinition {
+            start: p.start,
+            start_attachment: (),
+            goal: GoalState { state: p.goal, tolerance: 0.0 },
+            objective: PathLength::new(),
+        }
+    }
+
+    struct Run<const N: usize> {
+        report: SolveReport,
+        path: StdVec<[f64; N]>,
+        costs: StdVec<f64>,
+    }
+
+    fn run_with<const N: usize, const NV: usize, const NQ: usize>(
+        p: &GeometricProblem<N>,
+        seed: u64,
+        budget: Budget,
+        params: AbitParams,
+    ) -> Run<N> {
+        let mut arena: Box<AbitArena<[f64; N], (), NV, NQ, 4096>> = Box::default();
+        let mut space = p.space;
+        let mut validity = p.obstacles.clone();
+        let mut motion = p.obstacles.clone();
+        let pd = pdef(p);
+        let mut rng = Pcg64::seed_from_u64(seed);
+        let mut planner = AbitStar::new(&mut arena, &mut space, &mut validity, &mut motion, &pd, &mut rng, params);
+        let mut costs = StdVec::new();
+        let report = planner.solve_until(&budget, |_| false);
+        costs.push(planner.best_cost());
+        let mut out: Vec<([f64; N], ()), 512> = Vec::new();
+        let path = match planner.write_path(&mut out) {
+            Ok(_) => out.iter().map(|(s, _)| *s).collect(),
+            Err(_) => StdVec::new(),
+        };
+        Run { report, path, costs }
+    }
+
+    fn run<const N: usize>(p: &GeometricProblem<N>, seed: u64, iterations: u32) -> Run<N> {
+        run_with::<N, 4096, 16384>(p, seed, Budget::iterations(iterations), AbitParams::ompl_defaults())
+    }
+
+    /// Independent path check: every segment valid by the slab test, ends at start and goal, cost = length.
+    fn assert_valid_path<const N: usize>(p: &GeometricProblem<N>, path: &[[f64; N]], cost: f64) {
+        let mut obstacles: BoxObstacles<N> = p.obstacles.clone();
+        assert_eq!(path.first(), Some(&p.start));
+        assert_eq!(path.last(), Some(&p.goal));
+        let mut length = 0.0;
+        for w in path.windows(2) {
+            let (a, b) = (&w[0], &w[1]);
+            assert_eq!(obstacles.check_motion(&p.space, a, &(), b), MotionCheck::Valid { attachment: () });
+            // Independent dense check of the segment too.
+            for i in 0..=200 {
+                let t = i as f64 / 200.0;
+                let x = p.space.interpolate(a, b, t);
+                assert!(StateValidityChecker::is_valid(&mut obstacles, &x), "{x:?} in collision");
+            }
+            length += p.space.distance(a, b);
+        }
+        assert!((length - cost).abs() < 1e-9 * (1.0 + cost), "length {length} vs reported {cost}");
+    }
+
+    #[test]
+    fn open_space_direct_edge_is_the_first_iteration() {
+        let mut p = wall_gap::<2>("open");
+        p.obstacles.boxes.clear();
+        let r = run(&p, 1, 100);
+        assert_eq!(r.report.counters.first_solution_iteration, 1);
+        assert_eq!(r.report.counters.edges_evaluated, 1);
+        assert_eq!(r.report.termination, Termination::Converged);
+        assert_eq!(r.path.len(), 2);
+        assert_valid_path(&p, &r.path, 1.6);
+    }
+
+    #[test]
+    fn finds_valid_paths_on_the_shared_problems() {
+        let w2 = wall_gap::<2>("w2");
+        let r = run(&w2, 7, 2000);
+        assert!(r.report.status.is_exact(), "{:?}", r.report);
+        assert_valid_path(&w2, &r.path, r.costs[0]);
+        assert!(r.costs[0] >= wall_gap_optimal_cost() - 1e-9);
+
+        let w4 = wall_gap::<4>("w4");
+        let r = run(&w4, 7, 3000);
+        assert!(r.report.status.is_exact(), "{:?}", r.report);
+        assert_valid_path(&w4, &r.path, r.costs[0]);
+        assert!(r.costs[0] >= wall_gap_optimal_cost() - 1e-9);
+
+        let b3 = box_world_3d();
+        let r = run(&b3, 7, 3000);
+        assert!(r.report.status.is_exact(), "{:?}", r.report);
+        assert_valid_path(&b3, &r.path, r.costs[0]);
+        assert!(r.costs[0] >= 8.0 * libm::sqrt(3.0) - 1e-9);
+    }
+
+    #[test]
+    fn converges_towards_the_analytic_optimum_in_r2() {
+        let w2 = wall_gap::<2>("w2");
+        let r = run(&w2, 11, 6000);
+        let best = r.costs[0];
+        let opt = wall_gap_optimal_cost();
+        assert!(best >= opt - 1e-9 && best <= 1.03 * opt, "best {best} vs optimum {opt}");
+    }
+
+    #[test]
+    fn cost_never_increases_and_batches_shrink_it() {
+        let w2 = wall_gap::<2>("w2");
+        let mut arena: Box<AbitArena<[f64; 2], (), 4096, 16384, 4096>> = Box::default();
+        let (mut space, mut v, mut m) = (w2.space, w2.obstacles.clone(), w2.obstacles.clone());
+        let pd = pdef(&w2);
+        let mut rng = Pcg64::seed_from_u64(5);
+        let mut planner =
+            AbitStar::new(&mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, AbitParams::ompl_defaults());
+        let mut last = f64::INFINITY;
+        let mut at_batches = StdVec::new();
+        for _ in 0..4000 {
+            let out = planner.step();
+            let c = planner.best_cost();
+            assert!(c <= last, "cost rose from {last} to {c}");
+            last = c;
+            if out == StepOutcome::NewBatch {
+                at_batches.push(c);
+            }
+        }
+        let finite: StdVec<f64> = at_batches.iter().copied().filter(|c| c.is_finite()).collect();
+        assert!(finite.len() >= 3, "{at_batches:?}");
+        assert!(finite.last() < finite.first(), "no improvement across batches: {finite:?}");
+    }
+
+    #[test]
+    fn same_seed_same_path_bits() {
+        let w4 = wall_gap::<4>("w4");
+        let a = run(&w4, 42, 1500);
+        let b = run(&w4, 42, 1500);
+        assert_eq!(a.report, b.report);
+        let bits = |r: &Run<4>| r.path.iter().flat_map(|s| s.iter().map(|x| x.to_bits())).collect::<StdVec<_>>();
+        assert_eq!(bits(&a), bits(&b));
+        let c = run(&w4, 43, 1500);
+        assert_ne!(bits(&a), bits(&c), "different seeds should explore differently");
+    }
+
+    #[test]
+    fn budget_exhaustion_keeps_the_best_solution() {
+        let w2 = box_world_3d();
+        let mut arena: Box<AbitArena<[f64; 3], (), 4096, 16384, 4096>> = Box::default();
+        let (mut space, mut v, mut m) = (w2.space, w2.obstacles.clone(), w2.obstacles.clone());
+        let pd = pdef(&w2);
+        let mut rng = Pcg64::seed_from_u64(3);
+        let mut planner =
+            AbitStar::new(&mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, AbitParams::ompl_defaults());
+        let r1 = planner.solve(&Budget::iterations(2000));
+        assert_eq!(r1.termination, Termination::BudgetExhausted(BudgetKind::Iterations));
+        assert_eq!(r1.counters.iterations, 2000);
+        let PlannerStatus::ExactSolution { cost: c1 } = r1.status else { panic!("{r1:?}") };
+        // Continue: cumulative budget, the solution is kept and can only improve.
+        let r2 = planner.solve(&Budget::iterations(3000));
+        let PlannerStatus::ExactSolution { cost: c2 } = r2.status else { panic!("{r2:?}") };
+        assert!(c2 <= c1);
+        // Other budgets.
+        let r3 = planner.solve(&Budget { edges_evaluated: r2.counters.edges_evaluated, ..Budget::unlimited() });
+        assert_eq!(r3.termination, Termination::BudgetExhausted(BudgetKind::EdgesEvaluated));
+        let r4 = planner.solve(&Budget { batches: r2.counters.batches + 1, ..Budget::unlimited() });
+        assert_eq!(r4.termination, Termination::BudgetExhausted(BudgetKind::Batches));
+        assert_eq!(r4.counters.batches, r2.counters.batches + 1);
+        let r5 = planner.solve_until(&Budget::unlimited(), |c| c.iterations >= r4.counters.iterations + 10);
+        assert_eq!(r5.termination, Termination::Stopped);
+        assert!(matches!(r5.status, PlannerStatus::ExactSolution { cost } if cost <= c2));
+    }
+
+    #[test]
+    fn full_node_arena_is_a_typed_outcome_that_keeps_the_solution() {
+        let w2 = wall_gap::<2>("w2");
+        // 150 nodes: room for the first batch, not for many more.
+        let r = run_with::<2, 150, 16384>(&w2, 9, Budget::iterations(100_000), AbitParams::ompl_defaults());
+        assert_eq!(r.report.termination, Termination::ArenaFull(Arena::Nodes));
+        if r.report.status.is_exact() {
+            assert_valid_path(&w2, &r.path, r.costs[0]);
+        }
+        // A queue of 4 edges overflows on the first batch.
+        let r = run_with::<2, 4096, 4>(&w2, 9, Budget::iterations(100_000), AbitParams::ompl_defaults());
+        assert_eq!(r.report.termination, Termination::ArenaFull(Arena::EdgeQueue));
+    }
+
+    #[test]
+    fn invalid_input_is_reported_not_planned() {
+        let w2 = wall_gap::<2>("w2");
+        let mut bad = w2.clone();
+        bad.start = [0.0, 0.0]; // inside the wall
+        let r = run(&bad, 1, 100);
+        assert_eq!(r.report.status, PlannerStatus::InvalidInput(InvalidInput::StartInvalid));
+        assert_eq!(r.report.termination, Termination::InvalidInput);
+        assert_eq!(r.report.counters.iterations, 0);
+        let mut bad = w2.clone();
+        bad.goal = [0.0, -0.5];
+        assert_eq!(run(&bad, 1, 100).report.status, PlannerStatus::InvalidInput(InvalidInput::GoalInvalid));
+        let mut bad = w2.clone();
+        bad.goal = [3.0, 0.0]; // out of bounds
+        assert_eq!(run(&bad, 1, 100).report.status, PlannerStatus::InvalidInput(InvalidInput::GoalInvalid));
+        let params = AbitParams { initial_inflation_factor: 0.5, ..AbitParams::ompl_defaults() };
+        let r = run_with::<2, 4096, 16384>(&w2, 1, Budget::iterations(10), params);
+        assert!(matches!(r.report.status, PlannerStatus::InvalidInput(InvalidInput::Parameter(_))));
+        let params = AbitParams { samples_per_batch: 0, ..AbitParams::ompl_defaults() };
+        let r = run_with::<2, 4096, 16384>(&w2, 1, Budget::iterations(10), params);
+        assert!(matches!(r.report.status, PlannerStatus::InvalidInput(InvalidInput::Parameter(_))));
+        let r = run_with::<2, 2, 16384>(&w2, 1, Budget::iterations(10), AbitParams::ompl_defaults());
+        assert_eq!(r.report.status, PlannerStatus::InvalidInput(InvalidInput::ArenaTooSmall));
+    }
+
+    #[test]
+    fn no_solution_within_budget_when_walled_off() {
+        let mut p = wall_gap::<2>("closed");
+        // Close the gap.
+        p.obstacles.boxes[1].lo[1] = 0.0;
+        let r = run(&p, 1, 600);
+        assert_eq!(r.report.status, PlannerStatus::NoSolutionWithinBudget);
+        assert!(r.path.is_empty());
+        let params = AbitParams { track_approximate: true, ..AbitParams::ompl_defaults() };
+        let r = run_with::<2, 4096, 16384>(&p, 1, Budget::iterations(600), params);
+        let PlannerStatus::ApproximateSolution { cost_to_go } = r.report.status else { panic!("{:?}", r.report) };
+        // The closest reachable point is at the wall, at least 0.8 - 0.05 from the goal.
+        assert!(cost_to_go >= 0.75 - 1e-9);
+        assert_eq!(r.path.first(), Some(&p.start));
+    }
+
+    // ------------------------------------------------------------ a non-Markovian toy problem (Fig. 7)
+
+    /// R^2 where the attachment records whether the path has visited the "column" box (it anchored there).
+    /// The "slope" (x > 0.5) may only be entered by a motion whose parent has anchored. The direct route
+    /// to the goal (in the slope) does not visit the column, so every solution must detour through it.
+    #[derive(Clone, Copy)]
+    struct Anchored {
+        inner: RealVectorSpace<2>,
+    }
+    const COLUMN: crate::plan::geometric::Aabb<2> =
+        crate::plan::geometric::Aabb { lo: [-0.2, 0.6], hi: [0.0, 0.8] };
+
+    impl StateSpace for Anchored {
+        type State = [f64; 2];
+        type Attachment = bool;
+        const NON_MARKOVIAN: bool = true;
+        fn dimension(&self) -> usize {
+            2
+        }
+        fn measure(&self) -> f64 {
+            self.inner.measure()
+        }
+        fn distance(&self, a: &[f64; 2], b: &[f64; 2]) -> f64 {
+            self.inner.distance(a, b)
+        }
+        fn interpolate(&self, a: &[f64; 2], b: &[f64; 2], t: f64) -> [f64; 2] {
+            self.inner.interpolate(a, b, t)
+        }
+        fn sample_uniform<R2: Rng + ?Sized>(&mut self, rng: &mut R2) -> Option<[f64; 2]> {
+            self.inner.sample_uniform(rng)
+        }
+    }
+    struct AnchoredRules;
+    impl StateValidityChecker<Anchored> for AnchoredRules {
+        fn is_valid(&mut self, x: &[f64; 2]) -> bool {
+            x.iter().all(|v| (-1.0..=1.0).contains(v))
+        }
+    }
+    fn motion_attachment(from: &[f64; 2], anchored: bool, to: &[f64; 2]) -> Option<bool> {
+        let anchored_now = anchored || COLUMN.intersects_segment(from, to);
+        // Entering or moving on the slope needs an anchor from before this motion.
+        let on_slope = from[0] > 0.5 || to[0] > 0.5;
+        if on_slope && !anchored {
+            None
+        } else {
+            Some(anchored_now)
+        }
+    }
+    impl MotionValidator<Anchored> for AnchoredRules {
+        fn check_motion(&mut self, _: &Anchored, a: &[f64; 2], att: &bool, b: &[f64; 2]) -> MotionCheck<bool> {
+            match motion_attachment(a, *att, b) {
+                Some(attachment) => MotionCheck::Valid { attachment },
+                None => MotionCheck::Invalid,
+            }
+        }
+    }
+
+    #[test]
+    fn non_markovian_histories_are_respected_and_a_detour_is_found() {
+        let mut space = Anchored { inner: RealVectorSpace::cube(-1.0, 1.0) };
+        let pd = ProblemDefinition {
+            start: [-0.8, -0.5],
+            start_attachment: false,
+            goal: GoalState { state: [0.8, -0.5], tolerance: 0.0 },
+            objective: PathLength::new(),
+        };
+        let mut found = 0;
+        for seed in 0..10 {
+            let mut arena: Box<AbitArena<[f64; 2], bool, 4096, 16384, 4096>> = Box::default();
+            let (mut v, mut m) = (AnchoredRules, AnchoredRules);
+            let mut rng = Pcg64::seed_from_u64(seed);
+            let mut planner =
+                AbitStar::new(&mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, AbitParams::ompl_defaults());
+            let report = planner.solve(&Budget::iterations(8000));
+            // Invariant: every tree vertex's attachment is what the motion from its parent gives.
+            let nodes: StdVec<_> = planner.arena.nodes.iter().cloned().collect();
+            for n in nodes.iter().filter(|n| n.in_tree() && !n.has(F_START) && !n.has(F_FREE)) {
+                let p = &nodes[n.parent as usize];
+                let expect = motion_attachment(&p.state, p.attachment.unwrap(), &n.state);
+                assert_eq!(expect, n.attachment, "vertex attachment disagrees with its parent's motion");
+            }
+            if report.status.is_exact() {
+                found += 1;
+                let mut out: Vec<([f64; 2], bool), 256> = Vec::new();
+                planner.write_path(&mut out).unwrap();
+                // Replay the path from the root attachment: valid, and it visits the column.
+                let mut att = false;
+                for w in out.windows(2) {
+                    att = motion_attachment(&w[0].0, att, &w[1].0).expect("replayed motion invalid");
+                    assert_eq!(att, w[1].1);
+                }
+                assert!(att, "solution never anchored");
+                assert!(report.counters.first_solution_iteration > 1);
+            }
+        }
+        // Measured with the defaults: 8/10 within 8000 iterations (see the module docs of the campaign for the
+        // ledge figures). This bound only guards against the mechanism breaking (0 or 1 found).
+        assert!(found >= 6, "found {found}/10");
+    }
+}

@@ -1,9 +1,14 @@
 //! Planners.
 //!
+//! - [`space`]: the planner abstractions (OMPL's split: state space, validity checker, motion validator,
+//!   objective, goal region, problem definition, budget, status) with non-Markovian attachments.
+//! - [`geometric`]: R^n with box obstacles — the shared geometric problems (wall with a gap, 3D box world).
 //! - [`abit`]: ABIT* over settled SE(3) states with non-Markovian anchor histories (Paton et al. V).
 //! - [`homotopy`]: homotopy-based planning on tether-demand planes (Abad-Manterola et al.; Tanner et al.).
 //! - [`team`]: tethered climbing teams (Morad et al.).
 
 pub mod abit;
+pub mod geometric;
 pub mod homotopy;
+pub mod space;
 pub mod team;

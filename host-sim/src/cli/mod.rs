@@ -1,6 +1,7 @@
 //! Implementations of the `tetherbot` subcommands. `main.rs` only parses arguments and dispatches here; each
 //! subcommand returns its process exit code (0 success, 1 the check failed, 2 the command could not run).
 
+pub mod abit_bench;
 pub mod export;
 pub mod inspect;
 pub mod map;
@@ -35,6 +36,17 @@ pub fn check_outcome<E: core::fmt::Display>(result: Result<bool, E>) -> ExitCode
 pub fn done<E: core::fmt::Display>(result: Result<(), E>) -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) => fail(e),
+    }
+}
+
+/// Prints a report-style command's text (`Ok(text)`) or its error, and maps that to the CLI's exit codes.
+pub fn printed<E: core::fmt::Display>(result: Result<String, E>) -> ExitCode {
+    match result {
+        Ok(text) => {
+            print!("{text}");
+            ExitCode::SUCCESS
+        }
         Err(e) => fail(e),
     }
 }
