@@ -4,5 +4,6 @@
 //! (in-process, or the emulated board in QEMU), field logs (record, replay, MCAP export), campaigns and pictures.
 //! The `tetherbot` binary is the CLI over this library.
 
+pub mod homotopy;
 pub mod terrain;
 pub mod world;

@@ -1,0 +1,87 @@
+//! Scenario definitions for the homotopy planner (shared/SCENARIOS.md B and C).
+//!
+//! Scenario B (Abad-Manterola et al. VI, Figs. 11-13): a 20 m x 20 m tether-demand plane at alpha = 45 deg between
+//! two tether-free planes (rim above y = 20, floor below y = 0), anchor a0 near the top edge, two convex obstacles,
+//! goal g below; compact soil (mu_c = 0.65, theta_c = 40.5 deg) above the line y = 6, loose sand (mu_s = 0.25,
+//! theta_s = 14.5 deg) below it. The geometry is ours (the paper gives no coordinates), laid out like Fig. 11: the
+//! naive straight tether a0 -> g touches no obstacle but meets g at 24 deg from upslope, more than theta_s.
+//!
+//! Scenario C (Tanner et al. IV, Fig. 11): a plane with two triangular obstacles, a0 at the top, g at the bottom; the
+//! online variants add, remove and move obstacles during the descent.
+
+use firmware::plan::homotopy::geo::{pt, Pt};
+use firmware::plan::homotopy::terrain::{HoldModel, SoilMap};
+
+/// A homotopy-planning scenario on one tether-demand plane.
+#[derive(Clone, Debug)]
+pub struct Scenario {
+    /// Name.
+    pub name: &'static str,
+    /// Plane outline (plane frame, m; y upslope).
+    pub plane: Vec<Pt>,
+    /// Obstacles the rover's map holds before the descent.
+    pub known: Vec<Vec<Pt>>,
+    /// Obstacles that really exist (for the closed loop; equal to `known` when the map is right).
+    pub truth: Vec<Vec<Pt>>,
+    /// Root anchor a0.
+    pub a0: Pt,
+    /// Goal g.
+    pub g: Pt,
+    /// Holding model (slope, soils).
+    pub model: HoldModel,
+}
+
+fn deg(d: f64) -> f64 {
+    d.to_radians()
+}
+
+fn square(w: f64, h: f64) -> Vec<Pt> {
+    vec![pt(0.0, 0.0), pt(w, 0.0), pt(w, h), pt(0.0, h)]
+}
+
+/// Scenario B: compact soil above y = 6, loose sand below.
+pub fn scenario_b() -> Scenario {
+    let o1 = vec![pt(10.0, 12.0), pt(8.6, 11.3), pt(9.6, 9.6)];
+    let o2 = vec![pt(12.8, 7.0), pt(10.8, 5.2), pt(12.0, 4.4)];
+    Scenario {
+        name: "B",
+        plane: square(20.0, 20.0),
+        known: vec![o1.clone(), o2.clone()],
+        truth: vec![o1, o2],
+        a0: pt(4.0, 19.5),
+        g: pt(12.0, 1.5),
+        model: HoldModel {
+            slope_rad: deg(45.0),
+            soil: SoilMap { line_point: pt(0.0, 6.0), line_dir: pt(1.0, 0.0), mu_left: 0.65, mu_right: 0.25 },
+        },
+    }
+}
+
+/// Scenario C: two triangular obstacles; firm soil (theta_max = 50 deg at alpha = 50 deg, mu = 0.91).
+pub fn scenario_c() -> Scenario {
+    let o1 = vec![pt(6.0, 14.0), pt(9.0, 11.0), pt(10.0, 15.0)];
+    let o2 = vec![pt(11.0, 8.0), pt(14.0, 6.0), pt(14.5, 9.5)];
+    Scenario {
+        name: "C",
+        plane: square(20.0, 20.0),
+        known: vec![o1.clone(), o2.clone()],
+        truth: vec![o1, o2],
+        a0: pt(8.0, 19.5),
+        g: pt(12.0, 1.5),
+        model: HoldModel { slope_rad: deg(50.0), soil: SoilMap::uniform(0.91) },
+    }
+}
+
+/// Scenario C online: the map misses a rock in the first sleeve (it appears), holds a phantom rock (it vanishes),
+/// and has one rock 1.5 m off (it moved).
+pub fn scenario_c_online() -> Scenario {
+    let mut s = scenario_c();
+    s.name = "C-online";
+    let phantom = vec![pt(3.0, 5.0), pt(5.0, 5.0), pt(4.0, 7.0)];
+    let moved_map = vec![pt(15.5, 13.0), pt(17.5, 13.0), pt(16.5, 15.0)];
+    let moved_true = vec![pt(15.5, 11.5), pt(17.5, 11.5), pt(16.5, 13.5)];
+    let hidden = vec![pt(9.0, 6.0), pt(11.5, 4.2), pt(11.8, 5.8)];
+    s.known = vec![s.known[0].clone(), s.known[1].clone(), phantom, moved_map];
+    s.truth = vec![s.truth[0].clone(), s.truth[1].clone(), moved_true, hidden];
+    s
+}
