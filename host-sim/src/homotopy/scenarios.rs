@@ -85,3 +85,51 @@ pub fn scenario_c_online() -> Scenario {
     s.truth = vec![s.truth[0].clone(), s.truth[1].clone(), moved_true, hidden];
     s
 }
+
+/// Uniform number in [0, 1) from a seeded generator.
+pub fn unit<R: rand_core::Rng>(rng: &mut R) -> f64 {
+    (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// A random convex obstacle: 3-6 corners on a jittered circle of radius `r` around `c`.
+pub fn random_convex<R: rand_core::Rng>(rng: &mut R, c: Pt, r: f64) -> Vec<Pt> {
+    let n = 3 + (rng.next_u64() % 4) as usize;
+    let phase = unit(rng) * std::f64::consts::TAU;
+    (0..n)
+        .map(|i| {
+            let a = phase + std::f64::consts::TAU * (i as f64 + 0.35 * (unit(rng) - 0.5)) / n as f64;
+            let rr = r * (0.7 + 0.3 * unit(rng));
+            pt(c.x + rr * a.cos(), c.y + rr * a.sin())
+        })
+        .collect()
+}
+
+/// A random obstacle field on a `size` x `size` plane: `n` convex obstacles with disjoint bounding circles
+/// (0.3 m apart), a0 near the top edge, g near the bottom edge, both outside every obstacle. Uniform soil
+/// (`theta_max` = 50 deg at alpha = 50 deg).
+pub fn random_field<R: rand_core::Rng>(rng: &mut R, n: usize, size: f64) -> Scenario {
+    let mut circles: Vec<(Pt, f64)> = Vec::new();
+    let a0 = pt(size * (0.2 + 0.6 * unit(rng)), size - 0.5);
+    let g = pt(size * (0.2 + 0.6 * unit(rng)), 0.5);
+    let mut obstacles = Vec::new();
+    let mut tries = 0;
+    while obstacles.len() < n && tries < 1000 {
+        tries += 1;
+        let r = size * (0.04 + 0.08 * unit(rng));
+        let c = pt(r + 0.3 + (size - 2.0 * r - 0.6) * unit(rng), r + 1.2 + (size - 2.0 * r - 2.4) * unit(rng));
+        let clear = circles.iter().all(|(o, ro)| o.dist(c) > r + ro + 0.3) && a0.dist(c) > r + 0.3 && g.dist(c) > r + 0.3;
+        if clear {
+            circles.push((c, r));
+            obstacles.push(random_convex(rng, c, r));
+        }
+    }
+    Scenario {
+        name: "random",
+        plane: square(size, size),
+        known: obstacles.clone(),
+        truth: obstacles,
+        a0,
+        g,
+        model: HoldModel { slope_rad: deg(50.0), soil: SoilMap::uniform(0.91) },
+    }
+}

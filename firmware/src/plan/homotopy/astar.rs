@@ -3,10 +3,15 @@
 //!
 //! Search states are (triangle, L-value of the path so far); the path runs from the start through the midpoints of
 //! the crossed edges. Two states with the same triangle and L-value are the same homotopy class so far: the later
-//! (costlier, the heuristic being consistent) one is dropped. A state never re-enters a triangle already on its own
-//! chain, so every class found has a simple sleeve (Abad-Manterola: "we only consider shortest paths which do not
-//! wind around an obstacle"). When a state in g's triangle is popped, its L-value (completed to g) is compared with
-//! the classes already found and with the constraint list `Lc`; a new value is a new class.
+//! (costlier, the heuristic being consistent) one is dropped, so the search is Markovian in (triangle, L) and finds
+//! every class in cost order whatever the triangulation. Chains are at most as deep as the BTM has triangles (a
+//! simple sleeve visits each once). When a state in g's triangle is popped, its L-value (completed to g) is compared
+//! with the classes already found and with the constraint list `Lc`; a new value is a new class unless it winds
+//! (Abad-Manterola: "we only consider shortest paths which do not wind around an obstacle"): the loop formed with
+//! the straight line back turns more than 1.5 times around some pole. The class's sleeve is its reduced crossing
+//! sequence; a class that turns round the far side of an obstacle may cross a large triangle twice, so, as in
+//! Hershberger-Snoeyink, the sleeve is taken in the universal cover (a triangle may repeat) and the funnel runs over
+//! its portal sequence. Chains are at most 2 x the BTM's triangle count deep.
 //!
 //! Parameters: `max_classes` (<= `MAX_CLASSES`, default 16), node arena `MAX_SEARCH_NODES` (4096), expansion
 //! budget `ASTAR_EXPANSION_BUDGET` (20 000). Cost: Euclidean length of the midpoint path; heuristic: straight-line
@@ -14,9 +19,9 @@
 
 use super::btm::{Btm, Id, NONE};
 use super::geo::Pt;
-use super::lvalue::{segment_lvalue, LValue};
-use super::sleeve::{is_simple, push_reduced, Sleeve};
-use crate::config::homotopy::{ASTAR_EXPANSION_BUDGET, MAX_CLASSES, MAX_SEARCH_NODES, MAX_SLEEVE, MAX_TRIANGLES};
+use super::lvalue::{segment_log, segment_lvalue, LValue};
+use super::sleeve::{push_reduced, Sleeve};
+use crate::config::homotopy::{ASTAR_EXPANSION_BUDGET, MAX_CLASSES, MAX_OBSTACLES, MAX_SEARCH_NODES, MAX_SLEEVE, MAX_TRIANGLES};
 use heapless::binary_heap::{BinaryHeap, Min};
 use heapless::Vec as HVec;
 
@@ -132,18 +137,6 @@ impl SearchArena {
         }
         false
     }
-    fn on_chain(&self, mut i: u16, tri: Id) -> bool {
-        let mut guard = 0;
-        while i != NO_NODE && guard <= MAX_SLEEVE {
-            guard += 1;
-            let Some(n) = self.node(i) else { return false };
-            if n.tri == tri {
-                return true;
-            }
-            i = n.parent;
-        }
-        false
-    }
 }
 
 fn key(f: f64) -> u64 {
@@ -195,6 +188,8 @@ pub fn enumerate_classes(
     };
     let _ = arena.open.push((key(h0), root));
     let max_classes = max_classes.min(MAX_CLASSES);
+    // A simple sleeve visits each triangle at most once.
+    let depth_limit = (2 * btm.triangle_count()).min(MAX_SLEEVE);
     let mut full = false;
     for _ in 0..ASTAR_EXPANSION_BUDGET {
         let Some((_, ni)) = arena.open.pop() else { return Ok(SearchOutcome::Exhausted) };
@@ -203,7 +198,7 @@ pub fn enumerate_classes(
             let l = n.l.plus(segment_lvalue(btm, n.point, goal));
             let known = constraints.iter().any(|c| c.same_class(l)) || out.iter().any(|c| c.l.same_class(l));
             if !known {
-                if let Some(class) = build_class(arena, ni, start, t0, l, n.g + n.point.dist(goal)) {
+                if let Some(class) = build_class(btm, arena, ni, start, t0, goal, l, n.g + n.point.dist(goal)) {
                     let _ = out.push(class);
                     if out.len() >= max_classes {
                         return Ok(SearchOutcome::Enough);
@@ -211,13 +206,13 @@ pub fn enumerate_classes(
                 }
             }
         }
-        if usize::from(n.depth) + 1 >= MAX_SLEEVE {
+        if usize::from(n.depth) + 1 >= depth_limit {
             continue;
         }
         let Some(tr) = btm.tri(n.tri).copied() else { continue };
         for i in 0..3 {
             let (va, vb, s) = tr.edge(i);
-            if s == NONE || arena.on_chain(ni, s) {
+            if s == NONE {
                 continue;
             }
             let (Some(a), Some(b)) = (btm.vertex(va), btm.vertex(vb)) else { continue };
@@ -244,14 +239,38 @@ pub fn enumerate_classes(
     Ok(SearchOutcome::BudgetExhausted)
 }
 
-fn build_class(arena: &SearchArena, mut ni: u16, start: &SearchStart<'_>, t0: Id, l: LValue, cost: f64) -> Option<HomotopyClass> {
+#[allow(clippy::too_many_arguments)]
+fn build_class(
+    btm: &Btm,
+    arena: &SearchArena,
+    mut ni: u16,
+    start: &SearchStart<'_>,
+    t0: Id,
+    goal: Pt,
+    l: LValue,
+    cost: f64,
+) -> Option<HomotopyClass> {
     let mut rev: Sleeve = HVec::new();
     let mut guard = 0;
+    let mut prev_pt = goal;
+    let mut turns = [0.0f64; MAX_OBSTACLES];
     while ni != NO_NODE && guard <= MAX_SLEEVE {
         guard += 1;
         let n = arena.node(ni)?;
         rev.push(n.tri).ok()?;
+        for ((_, o), t) in btm.obstacles().zip(turns.iter_mut()) {
+            *t += segment_log(n.point, prev_pt, o.rep).im;
+        }
+        prev_pt = n.point;
         ni = n.parent;
+    }
+    // Close the loop with the straight segment start -> goal reversed: the loop's winding number around each pole
+    // tells a class that goes once round the far side of an obstacle (|w| <= 1) from one that winds (|w| >= 2).
+    for ((_, o), t) in btm.obstacles().zip(turns.iter_mut()) {
+        *t += segment_log(goal, start.point, o.rep).im;
+        if libm::fabs(*t) > 3.0 * core::f64::consts::PI {
+            return None;
+        }
     }
     let mut search_part: Sleeve = HVec::new();
     for t in rev.iter().rev() {
@@ -268,5 +287,5 @@ fn build_class(arena: &SearchArena, mut ni: u16, start: &SearchStart<'_>, t0: Id
     for t in search_part.iter().skip(1) {
         push_reduced(&mut sleeve, *t).ok()?;
     }
-    is_simple(&sleeve).then_some(HomotopyClass { sleeve, search_part, l, cost })
+    Some(HomotopyClass { sleeve, search_part, l, cost })
 }

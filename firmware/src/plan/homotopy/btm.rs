@@ -221,6 +221,11 @@ pub struct Btm {
     cand: [(Id, Id, f64); MAX_CANDIDATE_EDGES],
     in_region: [bool; MAX_VERTICES],
     tri_mark: [bool; MAX_TRIANGLES],
+    /// Affected region of the current local update: removed triangles and (for a removal) the removed hole;
+    /// `None` for a full rebuild (the region is the whole plane).
+    region_tris: HVec<[Pt; 3], MAX_TRIANGLES>,
+    region_hole: HVec<Pt, MAX_OBSTACLE_VERTICES>,
+    region_full: bool,
 }
 
 impl Default for Btm {
@@ -250,6 +255,9 @@ impl Btm {
             cand: [(NONE, NONE, 0.0); MAX_CANDIDATE_EDGES],
             in_region: [false; MAX_VERTICES],
             tri_mark: [false; MAX_TRIANGLES],
+            region_tris: HVec::new(),
+            region_hole: HVec::new(),
+            region_full: true,
         }
     }
 
@@ -316,6 +324,7 @@ impl Btm {
             }
         }
         let region = self.in_region.iter().filter(|x| **x).count();
+        self.region_full = true;
         let created = self.triangulate_region()?;
         Ok(UpdateReport { removed, created, region_vertices: region })
     }
@@ -442,10 +451,12 @@ impl Btm {
     pub fn remove_obstacle(&mut self, k: u8) -> Result<UpdateReport, BtmError> {
         let Some(o) = self.obstacle(k) else { return Err(BtmError::UnknownObstacle(k)) };
         let vids = o.vids.clone();
+        let hole = o.corners.clone();
         for (i, m) in self.tri_mark.iter_mut().enumerate() {
             *m = self.tris.get(i).is_some_and(|t| t.alive && t.v.iter().any(|v| vids.contains(v)));
         }
         let (removed, _) = self.clear_marked_region(Some(&vids));
+        self.region_hole = hole;
         for v in vids.iter().copied() {
             let nb = self.neighbours_copy(v);
             for b in nb {
@@ -569,6 +580,9 @@ impl Btm {
         for r in self.in_region.iter_mut() {
             *r = false;
         }
+        self.region_full = false;
+        self.region_tris.clear();
+        self.region_hole.clear();
         let mut removed = 0;
         for t in 0..MAX_TRIANGLES {
             if !self.tri_mark.get(t).copied().unwrap_or(false) {
@@ -576,6 +590,8 @@ impl Btm {
             }
             let Some(tr) = self.tris.get(t).copied() else { continue };
             removed += 1;
+            let ps = tr.v.map(|v| self.verts.get(usize::from(v)).map(|x| x.p).unwrap_or_default());
+            let _ = self.region_tris.push(ps);
             for i in 0..3 {
                 let (a, b, n) = tr.edge(i);
                 let interior = n != NONE && self.tri_mark.get(usize::from(n)).copied().unwrap_or(false);
@@ -631,7 +647,7 @@ impl Btm {
                     continue;
                 }
                 let (Some(pa), Some(pb)) = (self.vertex(a).map(|v| v.p), self.vertex(b).map(|v| v.p)) else { continue };
-                if !self.candidate_free(a, b, pa, pb) {
+                if !self.candidate_free(a, b, pa, pb) || !self.in_affected_region((pa + pb) * 0.5) {
                     continue;
                 }
                 let Some(slot) = self.cand.get_mut(n) else { return Err(BtmError::Full(Arena::Candidates)) };
@@ -683,7 +699,7 @@ impl Btm {
                         continue;
                     }
                     let centroid = (pu + pv + pw) * (1.0 / 3.0);
-                    if !self.is_free(centroid) {
+                    if !self.is_free(centroid) || !self.in_affected_region(centroid) {
                         continue;
                     }
                     let tri = [pu, pv, pw];
@@ -702,6 +718,13 @@ impl Btm {
             return Err(BtmError::Degenerate);
         }
         Ok(created)
+    }
+
+    /// True when `p` is in the affected region of the current update (always, for a full rebuild).
+    fn in_affected_region(&self, p: Pt) -> bool {
+        self.region_full
+            || self.region_tris.iter().any(|t| point_in_polygon(p, t, false))
+            || (self.region_hole.len() >= 3 && point_in_polygon(p, &self.region_hole, false))
     }
 
     fn candidate_free(&self, a: Id, b: Id, pa: Pt, pb: Pt) -> bool {

@@ -122,6 +122,9 @@ impl Path {
         self.pts.windows(2).map(|w| if let [a, b] = w { a.dist(*b) } else { 0.0 }).sum()
     }
     fn push(&mut self, p: Pt, v: Id) -> Result<(), SleeveError> {
+        if self.pts.last() == Some(&p) {
+            return Ok(());
+        }
         self.pts.push(p).map_err(|_| SleeveError::Budget)?;
         self.vids.push(v).map_err(|_| SleeveError::Budget)
     }
