@@ -27,6 +27,8 @@ enum Command {
     Export(cli::export::ExportArgs),
     /// Show a field log's header, frames and damage.
     Inspect(cli::inspect::InspectArgs),
+    /// Homotopy planning on a tether-demand plane (scenarios B, C; closed loop with a range sensor).
+    Homotopy(cli::homotopy::HomotopyArgs),
 }
 
 fn main() -> ExitCode {
@@ -42,6 +44,7 @@ fn main() -> ExitCode {
         Command::Replay(a) => cli::replay::main(&a),
         Command::Export(a) => cli::export::main(&a),
         Command::Inspect(a) => cli::inspect::main(&a),
+        Command::Homotopy(a) => cli::homotopy::main(&a),
     }
 }
 

@@ -184,7 +184,7 @@ fn theta_max_matches_point_mass_equilibrium() {
         let a = alpha_deg.to_radians();
         let t = theta_max(a, mu);
         if mu / a.tan() >= 1.0 {
-            assert_eq!(t, std::f64::consts::PI);
+            assert_eq!(t, core::f64::consts::PI);
             assert_eq!(classify_slope(a, mu), PlaneClass::TetherFree);
         } else {
             assert!((a.sin() * t.sin() - mu * a.cos()).abs() < 1e-12);
@@ -243,7 +243,7 @@ fn scenario_b_naive_path_rejected_and_only_one_class_has_passable_anchors() {
     assert_eq!(seq.as_slice(), plan.class.sleeve.as_slice());
     // Every descent point holds on its proximal anchor, checked directly against the analytic angle. The proximal
     // anchor comes from an independent taut-string unwinding: wrap a1..ai, then unwrap while the turn flips.
-    let chain: Vec<(Pt, f64)> = std::iter::once((s.a0, 0.0)).chain(plan.anchors.iter().map(|a| (a.p, a.turn as f64))).collect();
+    let chain: Vec<(Pt, f64)> = core::iter::once((s.a0, 0.0)).chain(plan.anchors.iter().map(|a| (a.p, a.turn as f64))).collect();
     for (i, w) in plan.descent.windows(2).enumerate() {
         for k in 1..=20 {
             let p = w[0] + (w[1] - w[0]) * (k as f64 / 20.0);
@@ -561,4 +561,57 @@ fn prop_local_updates_keep_invariants_and_match_rebuild() {
             }
         }
     }
+}
+
+// ---------------------------------------------------------------- closed loop (host-sim, range sensor)
+
+#[test]
+fn closed_loop_scenario_c_online_reveal_vanish_move_reaches_goal() {
+    use host_sim::homotopy::sim::{run, SimConfig, SimOutcome};
+    let s = scenario_c_online();
+    let r = run(&s, &SimConfig::default());
+    assert_eq!(r.outcome, SimOutcome::ReachedGoal);
+    assert_eq!(r.collisions, 0, "the rover never drove through a true obstacle");
+    assert!(r.tether_in_plan_class, "the tether ends in the feasible class it planned (it can retreat)");
+    let all: Vec<String> = r.events.iter().flat_map(|e| e.changes.clone()).collect();
+    assert!(all.iter().any(|c| c.contains("phantom")), "{all:?}");
+    assert!(all.iter().any(|c| c.contains("moved")), "{all:?}");
+    assert!(all.iter().any(|c| c.contains("new obstacle")), "{all:?}");
+    assert!(r.events.iter().all(|e| e.touched.iter().all(|&t| t > 0 && t < 2 * e.before.triangle_count() + 10)));
+    // The final map is the truth: same triangle count as a BTM of the true obstacles (Euler).
+    let corners = 4 + s.truth.iter().map(|o| o.len()).sum::<usize>();
+    assert_eq!(r.btm.triangle_count(), corners + 2 * s.truth.len() - 2);
+    r.btm.check_invariants().unwrap();
+}
+
+#[test]
+fn closed_loop_random_fields_reach_goal_or_prove_no_path() {
+    use host_sim::homotopy::sim::{run, SimConfig, SimOutcome};
+    let mut reached = 0;
+    for seed in 0..12u64 {
+        let mut rng = Pcg64::seed_from_u64(1000 + seed);
+        let mut s = random_field(&mut rng, 8, 20.0);
+        s.known.truncate(5);
+        let r = run(&s, &SimConfig { seed, ..SimConfig::default() });
+        assert_eq!(r.collisions, 0);
+        match r.outcome {
+            SimOutcome::ReachedGoal => {
+                reached += 1;
+                let ev: Vec<_> = r.events.iter().map(|e| (e.step, e.changes.clone(), e.action)).collect();
+                assert!(r.tether_in_plan_class, "seed {seed}: {ev:?} traveled {:?}", r.planner.traveled);
+                assert!(r.path.last().unwrap().dist(s.g) < 1e-9);
+            }
+            SimOutcome::NoSafePath | SimOutcome::NoInitialPlan => {
+                // Completeness check: the planner on the full true map from a0 finds nothing either.
+                let mut t = s.clone();
+                t.known = s.truth.clone();
+                let btm = build(&t);
+                let mut ws = Box::new(Workspace::default());
+                let plan = preplan(&btm, &s.model, &PlannerParams::default(), &mut ws, s.a0, s.g, &mut heapless::Vec::new(), &mut PlanReport::default()).unwrap();
+                assert!(plan.is_none() || r.outcome == SimOutcome::NoInitialPlan, "seed {seed}: gave up but a path exists");
+            }
+            SimOutcome::StepLimit => panic!("seed {seed}: step limit"),
+        }
+    }
+    assert!(reached >= 8, "reached {reached}/12");
 }

@@ -2,3 +2,5 @@
 //! sensor, and SVG pictures (see `host-sim/doc/homotopy.md`).
 
 pub mod scenarios;
+pub mod sim;
+pub mod svg;

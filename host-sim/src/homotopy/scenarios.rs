@@ -77,9 +77,9 @@ pub fn scenario_c() -> Scenario {
 pub fn scenario_c_online() -> Scenario {
     let mut s = scenario_c();
     s.name = "C-online";
-    let phantom = vec![pt(3.0, 5.0), pt(5.0, 5.0), pt(4.0, 7.0)];
-    let moved_map = vec![pt(15.5, 13.0), pt(17.5, 13.0), pt(16.5, 15.0)];
-    let moved_true = vec![pt(15.5, 11.5), pt(17.5, 11.5), pt(16.5, 13.5)];
+    let phantom = vec![pt(12.0, 16.0), pt(14.0, 16.0), pt(13.0, 17.8)];
+    let moved_map = vec![pt(6.0, 3.5), pt(8.0, 3.5), pt(7.0, 5.5)];
+    let moved_true = vec![pt(7.2, 2.2), pt(9.2, 2.2), pt(8.2, 4.2)];
     let hidden = vec![pt(9.0, 6.0), pt(11.5, 4.2), pt(11.8, 5.8)];
     s.known = vec![s.known[0].clone(), s.known[1].clone(), phantom, moved_map];
     s.truth = vec![s.truth[0].clone(), s.truth[1].clone(), moved_true, hidden];
@@ -94,10 +94,10 @@ pub fn unit<R: rand_core::Rng>(rng: &mut R) -> f64 {
 /// A random convex obstacle: 3-6 corners on a jittered circle of radius `r` around `c`.
 pub fn random_convex<R: rand_core::Rng>(rng: &mut R, c: Pt, r: f64) -> Vec<Pt> {
     let n = 3 + (rng.next_u64() % 4) as usize;
-    let phase = unit(rng) * std::f64::consts::TAU;
+    let phase = unit(rng) * core::f64::consts::TAU;
     (0..n)
         .map(|i| {
-            let a = phase + std::f64::consts::TAU * (i as f64 + 0.35 * (unit(rng) - 0.5)) / n as f64;
+            let a = phase + core::f64::consts::TAU * (i as f64 + 0.35 * (unit(rng) - 0.5)) / n as f64;
             let rr = r * (0.7 + 0.3 * unit(rng));
             pt(c.x + rr * a.cos(), c.y + rr * a.sin())
         })

@@ -16,7 +16,7 @@
 
 use super::btm::{Btm, BtmError, Id, UpdateReport};
 use super::geo::Pt;
-use super::lvalue::LValue;
+use super::lvalue::{polyline_lvalue, LValue};
 use super::plan::{plan_from, Plan, PlanError, PlanReport, PlannerParams, Workspace};
 use super::sleeve::Path;
 use super::terrain::HoldModel;
@@ -222,6 +222,16 @@ impl OnlinePlanner {
         let route_blocked = route_pts.windows(2).any(|w| matches!(w, [a, b] if !btm.segment_free(*a, *b)));
         out.sleeve_affected = self.plan.is_none() || !self.sleeve_intact(btm) || route_blocked;
         if !out.sleeve_affected {
+            // The plan stands, but L-values are relative to the poles: recompute the class's value.
+            let mut full: HVec<Pt, { 3 * MAX_PATH + 1 }> = HVec::new();
+            for p in self.traveled.iter().chain(route_pts.iter()) {
+                if full.last() != Some(p) {
+                    let _ = full.push(*p);
+                }
+            }
+            if let Some(plan) = self.plan.as_mut() {
+                plan.class.l = polyline_lvalue(btm, &full);
+            }
             return out;
         }
         let old_shp: Option<Path> = self.plan.as_ref().map(|p| p.shp.clone());
@@ -246,6 +256,10 @@ impl OnlinePlanner {
             out.shp_changed = old_shp.as_ref().is_none_or(|o| o.pts != plan.shp.pts);
             match junction {
                 None => {
+                    // The robot's position becomes a tether point: the new descent starts there.
+                    if self.traveled.last() != Some(&robot) {
+                        let _ = self.traveled.push(robot);
+                    }
                     self.adopt(btm, Some(plan), &[]);
                     out.action = OnlineAction::Replanned;
                 }
