@@ -11,6 +11,7 @@
 
 pub mod cli;
 pub mod fieldlog;
+pub mod homotopy;
 pub mod link;
 pub mod mcap_export;
 pub mod replay;

@@ -39,6 +39,8 @@ enum Command {
     EdtBench(cli::map::EdtBenchArgs),
     /// ABIT* side by side with OMPL 1.5.2's ABIT* on the shared geometric problems.
     AbitBench(cli::abit_bench::Args),
+    /// Homotopy planning on a tether-demand plane (scenarios B, C; closed loop with a range sensor).
+    Homotopy(cli::homotopy::HomotopyArgs),
 }
 
 fn main() -> ExitCode {
@@ -60,6 +62,7 @@ fn main() -> ExitCode {
         Command::RenderMap(a) => cli::done(cli::map::render_map(&a)),
         Command::EdtBench(a) => cli::done(cli::map::edt_bench(&a)),
         Command::AbitBench(a) => cli::printed(cli::abit_bench::run(&a)),
+        Command::Homotopy(a) => cli::homotopy::main(&a),
     }
 }
 

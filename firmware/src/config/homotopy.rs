@@ -1,1 +1,44 @@
-//! Capacities and budgets for `homotopy` (filled in by the module that uses them).
+//! Capacities and budgets for [`crate::plan::homotopy`] (Abad-Manterola et al.; Tanner et al.).
+//!
+//! Every array in the homotopy planner is sized by one of these consts; every loop is bounded by one of the
+//! budgets. The defaults fit a tether-demand plane with a few dozen obstacles (the scale of Figs. 11-13 of both
+//! papers) in well under 1 MiB, so the whole workspace can sit in the board's static SRAM/PSRAM.
+
+/// Most vertices of one BTM (plane corners + obstacle corners). Default 160: 24 obstacles x 6 corners + plane.
+pub const MAX_VERTICES: usize = 160;
+/// Most triangles alive in one BTM. Default 2 x [`MAX_VERTICES`] (Euler: a triangulation of V vertices with holes
+/// has fewer than 2V triangles).
+pub const MAX_TRIANGLES: usize = 2 * MAX_VERTICES;
+/// Most BTM edges incident to one vertex. Default 40 (greedy triangulations of random fields stay below 20).
+pub const MAX_DEGREE: usize = 40;
+/// Most corners of the tether-demand plane's outline. Default 8 (the papers use rectangles).
+pub const MAX_PLANE_VERTICES: usize = 8;
+/// Most obstacles on one plane at once. Default 24.
+pub const MAX_OBSTACLES: usize = 24;
+/// Most corners of one obstacle polygon. Default 8 (rocks are coarse polygons).
+pub const MAX_OBSTACLE_VERTICES: usize = 8;
+/// Candidate-edge arena for (re)triangulation: all vertex pairs of one region. Default V(V-1)/2.
+pub const MAX_CANDIDATE_EDGES: usize = MAX_VERTICES * (MAX_VERTICES - 1) / 2;
+/// Most triangles in one sleeve (and in one crossing sequence). Default 128.
+pub const MAX_SLEEVE: usize = 128;
+/// Most points on one path (SHP, descent, ascent, travelled tether). Default 64.
+pub const MAX_PATH: usize = 64;
+/// Most homotopy classes one A* enumeration returns. Default 16.
+pub const MAX_CLASSES: usize = 16;
+/// Most L-value constraints (rejected classes, `Lc` of Alg. 1-3). Default 32.
+pub const MAX_L_CONSTRAINTS: usize = 32;
+/// A* node arena (triangle x L-value states). Default 4096.
+pub const MAX_SEARCH_NODES: usize = 4096;
+/// A* expansions per enumeration call. Default 20 000.
+pub const ASTAR_EXPANSION_BUDGET: usize = 20_000;
+/// Funnel (simple stupid funnel) iterations per SHP, restarts included. Default 16 x [`MAX_SLEEVE`].
+pub const FUNNEL_BUDGET: usize = 16 * MAX_SLEEVE;
+/// Triangle steps when walking a polyline through the BTM. Default 8 x [`MAX_SLEEVE`].
+pub const WALK_BUDGET: usize = 8 * MAX_SLEEVE;
+/// Cells per side of the controllable-set grid (Abad-Manterola V-B computes controllable sets on a grid).
+/// Default 72 (0.28 m cells on a 20 m plane).
+pub const CONTROL_GRID: usize = 72;
+/// Most map changes handled in one online update batch (Tanner III-C). Default 8.
+pub const MAX_UPDATES_PER_BATCH: usize = 8;
+/// Most replanning rounds (backtrack targets tried) per online update. Default 24.
+pub const REPLAN_BUDGET: usize = 24;

@@ -3,6 +3,7 @@
 
 pub mod abit_bench;
 pub mod export;
+pub mod homotopy;
 pub mod inspect;
 pub mod map;
 pub mod replay;

@@ -1,1 +1,0 @@
-//! `plan::homotopy`: not yet implemented (see the issue tracker).

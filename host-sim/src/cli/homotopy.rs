@@ -1,0 +1,160 @@
+//! `tetherbot homotopy SCENARIO`: homotopy planning on a tether-demand plane (Abad-Manterola et al.; Tanner et al.).
+//!
+//! Scenarios: `b` (scenario B: pre-plan, every class with its Alg. 2 verdict), `c` (scenario C pre-plan),
+//! `c-online` (scenario C with a wrong map, closed loop with the range sensor), `random` (a seeded random field,
+//! closed loop with `--hidden` of its obstacles left out of the map). Pictures go to `--out` (SVG).
+//! Exit code 0 when the run ends as the scenario expects (a plan, or the goal reached), 1 otherwise.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use firmware::plan::homotopy::astar::{enumerate_classes, SearchStart};
+use firmware::plan::homotopy::btm::Btm;
+use firmware::plan::homotopy::geo::Pt;
+use firmware::plan::homotopy::lvalue::LValue;
+use firmware::plan::homotopy::plan::{feasibility_check, preplan, PlanReport, PlannerParams, Workspace};
+use firmware::plan::homotopy::sleeve::{anchors, shortest_homotopic_path};
+use rand_core::SeedableRng;
+
+use crate::homotopy::scenarios::{self, Scenario};
+use crate::homotopy::sim::{self, SimConfig, SimOutcome};
+use crate::homotopy::svg::{self, Svg};
+
+/// Arguments of `homotopy`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct HomotopyArgs {
+    /// Scenario: b, c, c-online, random.
+    pub scenario: String,
+    /// Directory for the SVG pictures.
+    #[arg(long, default_value = "homotopy-out")]
+    pub out: PathBuf,
+    /// Seed (sensor noise; the random field).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Obstacles of the random field.
+    #[arg(long, default_value_t = 8)]
+    pub obstacles: usize,
+    /// Obstacles of the random field missing from the rover's map.
+    #[arg(long, default_value_t = 3)]
+    pub hidden: usize,
+}
+
+fn build(s: &Scenario) -> Result<Box<Btm>, String> {
+    let mut btm = Box::new(Btm::new());
+    let obs: Vec<&[Pt]> = s.known.iter().map(|o| o.as_slice()).collect();
+    btm.build(&s.plane, &obs).map_err(|e| format!("cannot triangulate the plane: {e:?}"))?;
+    Ok(btm)
+}
+
+fn write(out: &PathBuf, name: &str, svg: &Svg, title: &str) -> Result<(), String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let p = out.join(name);
+    std::fs::write(&p, svg.finish(title)).map_err(|e| format!("{}: {e}", p.display()))?;
+    println!("  wrote {}", p.display());
+    Ok(())
+}
+
+fn offline(s: &Scenario, out: &PathBuf) -> Result<bool, String> {
+    let btm = build(s)?;
+    let mut ws = Box::new(Workspace::default());
+    println!("scenario {}: {} triangles, {} obstacles", s.name, btm.triangle_count(), s.known.len());
+    // Every class, with Alg. 2's verdict.
+    let mut classes = heapless::Vec::new();
+    let st = SearchStart { point: s.a0, l0: LValue::default(), prefix: &[] };
+    let o = enumerate_classes(&btm, &mut ws.search, &st, s.g, &[], 16, &mut classes).map_err(|e| format!("{e:?}"))?;
+    println!("  A* enumerated {} homotopy classes ({o:?})", classes.len());
+    let mut sv = Svg::for_plane(&btm, 30.0);
+    svg::draw_btm(&mut sv, &btm);
+    for (i, c) in classes.iter().enumerate() {
+        let shp = shortest_homotopic_path(&btm, &c.sleeve, s.a0, s.g).map_err(|e| format!("{e:?}"))?;
+        let an = anchors(&btm, &shp);
+        let f = feasibility_check(&btm, &s.model, &shp, &an, &mut ws.grid);
+        println!("  class {i}: SHP {:.2} m, {} anchors, {:?}", shp.length(), an.len(), f);
+        sv.polyline(&shp.pts, "#bbbbbb", 1.0, "");
+    }
+    let mut lc = heapless::Vec::new();
+    let mut rep = PlanReport::default();
+    let plan = preplan(&btm, &s.model, &PlannerParams::default(), &mut ws, s.a0, s.g, &mut lc, &mut rep)
+        .map_err(|e| format!("{e:?}"))?;
+    for v in rep.examined.iter() {
+        println!("  Alg. 1 examined: SHP {:.2} m, {} anchors -> {:?}", v.shp_length, v.anchors, v.verdict);
+    }
+    svg::draw_soil(&mut sv, &btm, &s.model);
+    if let Some(p) = &plan {
+        svg::draw_sleeve(&mut sv, &btm, &p.class.sleeve, "#7bd389");
+        // The naive shortest path in red (Fig. 13).
+        sv.polyline(&[s.a0, s.g], "#d62728", 1.5, "");
+        svg::draw_plan(&mut sv, p);
+    }
+    svg::draw_ends(&mut sv, s.a0, s.g);
+    let lname = s.name.to_lowercase();
+    write(out, &format!("{lname}_btm_sleeve_shp.svg"), &sv, &format!("Scenario {}: BTM, sleeve of the chosen class, SHP (green), naive path (red), descent (orange)", s.name))?;
+    if let Some(p) = &plan {
+        let mut cs = Svg::for_plane(&btm, 30.0);
+        svg::draw_btm(&mut cs, &btm);
+        svg::draw_soil(&mut cs, &btm, &s.model);
+        svg::draw_controllable_sets(&mut cs, &btm, &s.model, p, s.a0, s.g);
+        svg::draw_plan(&mut cs, p);
+        svg::draw_ends(&mut cs, s.a0, s.g);
+        write(out, &format!("{lname}_controllable_sets.svg"), &cs, &format!("Scenario {}: controllable sets C_k..C_1, SHP edges (dotted), hand-offs", s.name))?;
+        println!("  chosen: SHP {:.2} m through anchors {:?}", p.shp.length(), p.anchors.iter().map(|a| (a.p.x, a.p.y)).collect::<Vec<_>>());
+    } else {
+        println!("  no feasible ascent/descent pair");
+    }
+    Ok(plan.is_some())
+}
+
+fn closed_loop(s: &Scenario, out: &PathBuf, seed: u64) -> Result<bool, String> {
+    let cfg = SimConfig { seed, ..SimConfig::default() };
+    let r = sim::run(s, &cfg);
+    println!("scenario {} closed loop (seed {seed}): {:?} after {} steps, {} replanning events, {} collisions, tether in plan class: {}",
+        s.name, r.outcome, r.path.len() - 1, r.events.len(), r.collisions, r.tether_in_plan_class);
+    for (i, e) in r.events.iter().enumerate() {
+        println!("  event {i} at step {} ({:.2}, {:.2}): {:?}, triangles touched {:?} -> {:?}", e.step, e.robot.x, e.robot.y, e.changes, e.touched, e.action);
+        for (tag, b, shp) in [("before", &e.before, &e.shp_before), ("after", &e.after, &e.shp_after)] {
+            let mut sv = Svg::for_plane(b, 30.0);
+            svg::draw_btm(&mut sv, b);
+            for o in s.truth.iter() {
+                sv.polygon(o, "none", "#d62728", 1.0, 0.0);
+            }
+            sv.polyline(shp, "#1a9a2a", 2.5, "");
+            let upto: Vec<Pt> = r.path.iter().take(e.step + 1).copied().collect();
+            sv.polyline(&upto, "#d62728", 2.0, "");
+            sv.circle(e.robot, 5.0, "#d62728", "black");
+            svg::draw_ends(&mut sv, s.a0, s.g);
+            write(out, &format!("{}_event{i}_{tag}.svg", s.name.to_lowercase()), &sv, &format!("{} event {i} {tag}: {:?} -> {:?}", s.name, e.changes, e.action))?;
+        }
+    }
+    let mut sv = Svg::for_plane(&r.btm, 30.0);
+    svg::draw_btm(&mut sv, &r.btm);
+    if let Some(p) = &r.planner.plan {
+        svg::draw_sleeve(&mut sv, &r.btm, &p.class.sleeve, "#7bd389");
+        sv.polyline(&p.shp.pts, "#1a9a2a", 2.5, "");
+    }
+    sv.polyline(&r.path, "#d62728", 2.0, "");
+    svg::draw_ends(&mut sv, s.a0, s.g);
+    write(out, &format!("{}_final.svg", s.name.to_lowercase()), &sv, &format!("{}: driven path (red), final sleeve and SHP", s.name))?;
+    Ok(r.outcome == SimOutcome::ReachedGoal && r.collisions == 0 && r.tether_in_plan_class)
+}
+
+/// `homotopy` entry point.
+pub fn main(a: &HomotopyArgs) -> ExitCode {
+    let res = match a.scenario.as_str() {
+        "b" | "B" => offline(&scenarios::scenario_b(), &a.out),
+        "c" | "C" => offline(&scenarios::scenario_c(), &a.out),
+        "c-online" | "C-online" => closed_loop(&scenarios::scenario_c_online(), &a.out, a.seed),
+        "random" => {
+            let mut rng = rand_pcg::Pcg64::seed_from_u64(a.seed);
+            let mut s = scenarios::random_field(&mut rng, a.obstacles, 20.0);
+            let keep = s.truth.len().saturating_sub(a.hidden);
+            s.known.truncate(keep);
+            closed_loop(&s, &a.out, a.seed)
+        }
+        other => return super::fail(format!("unknown scenario {other:?}: use b, c, c-online or random")),
+    };
+    match res {
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::from(super::EXIT_FAILED),
+        Err(e) => super::fail(e),
+    }
+}
