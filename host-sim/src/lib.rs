@@ -6,3 +6,4 @@
 
 pub mod terrain;
 pub mod world;
+pub mod qemu;

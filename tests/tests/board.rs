@@ -1,0 +1,80 @@
+//! The emulated flight computer (QEMU mps2-an500): faults end the run with a failure status and a report, the
+//! benchmark mode counts instructions exactly, the ELF's memory layout is what `memory.x` promises.
+//!
+//! These tests build the board binary on first use (about a minute cold, under a second when up to date) and
+//! skip with a plain message when `qemu-system-arm` is absent, unless `CI=true`.
+
+use std::time::Duration;
+
+use host_sim::qemu::{self, report, QemuConfig};
+
+fn board(test: &str) -> Option<std::path::PathBuf> {
+    match qemu::board_for_tests(test) {
+        Ok(elf) => elf,
+        Err(e) => panic!("{e}"),
+    }
+}
+
+/// Boots the board with a fault probe; `None` when QEMU is absent outside CI (the skip was printed).
+fn probe(words: &str) -> Option<qemu::QemuExit> {
+    let elf = board(words)?;
+    let mut cfg = QemuConfig::new(elf);
+    cfg.boot_words = Some(words.into());
+    Some(qemu::run_to_exit(&cfg, Duration::from_secs(20)).unwrap_or_else(|e| panic!("{e}")))
+}
+
+#[test]
+fn panic_on_target_is_reported_with_location_and_fails_the_run() {
+    let Some(exit) = probe("tetherbot.probe=panic") else { return };
+    assert_eq!(exit.status.code(), Some(1), "output: {}", exit.output.both());
+    let text = exit.output.both();
+    assert!(text.contains("board: PANIC fault probe"), "no panic report in: {text}");
+    assert!(text.contains("src/main.rs:"), "panic report lacks its location: {text}");
+}
+
+#[test]
+fn hard_fault_on_target_is_reported_with_registers_and_fails_the_run() {
+    let Some(exit) = probe("tetherbot.probe=hardfault") else { return };
+    assert_eq!(exit.status.code(), Some(1), "output: {}", exit.output.both());
+    let text = exit.output.both();
+    assert!(text.contains("board: HARDFAULT pc=0x"), "no hard-fault report in: {text}");
+    // An undefined instruction is a UsageFault (CFSR.UNDEFINSTR, bit 16) escalated to HardFault (HFSR.FORCED).
+    assert!(text.contains("cfsr=0x00010000") && text.contains("hfsr=0x40000000"), "wrong fault status: {text}");
+}
+
+#[test]
+fn stalled_loop_is_caught_by_the_watchdog_and_fails_the_run() {
+    let Some(exit) = probe("tetherbot.probe=watchdog") else { return };
+    assert_eq!(exit.status.code(), Some(1), "output: {}", exit.output.both());
+    assert!(exit.output.both().contains("board: WATCHDOG expired"), "output: {}", exit.output.both());
+}
+
+#[test]
+fn calibration_loop_instruction_count_matches_its_length() {
+    let Some(elf) = board("bench calibration") else { return };
+    let (results, text) = report::run_bench(&elf, Duration::from_secs(60)).unwrap_or_else(|e| panic!("{e}"));
+    let cal = results.iter().find(|r| r.name == "calibration").unwrap_or_else(|| panic!("no calibration in {text}"));
+    // The loop is `subs` + `bne` per iteration plus the final fall-through: 2N + 1 instructions, counted in
+    // SysTick ticks of 40 instructions, plus a handful for the clock reads around it.
+    let expected = 2 * cal.iterations + 1;
+    assert!(
+        cal.instructions + 40 >= expected && cal.instructions <= expected + 200,
+        "calibration counted {} instructions for a loop of {expected}",
+        cal.instructions
+    );
+}
+
+#[test]
+fn elf_places_code_in_flash_and_state_in_sram() {
+    let Some(elf) = board("elf layout") else { return };
+    let sections = report::elf_sections(&elf).unwrap_or_else(|e| panic!("{e}"));
+    let find = |n: &str| sections.iter().find(|s| s.name == n);
+    let text = find(".text").unwrap_or_else(|| panic!("no .text in {sections:?}"));
+    assert_eq!(text.region, report::Region::Flash);
+    assert_eq!(find(".vector_table").map(|s| s.addr), Some(0), "vector table must sit at the reset address");
+    for s in sections.iter().filter(|s| s.name == ".bss" || s.name == ".data") {
+        assert_eq!(s.region, report::Region::Sram, "{s:?}");
+    }
+    let (flash, _, _) = report::totals(&sections);
+    assert!(flash >= u64::from(text.size), "flash total {flash} below .text {}", text.size);
+}
