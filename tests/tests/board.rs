@@ -4,7 +4,7 @@
 //! These tests build the board binary on first use (about a minute cold, under a second when up to date) and
 //! skip with a plain message when `qemu-system-arm` is absent, unless `CI=true`.
 
-use std::time::Duration;
+use core::time::Duration;
 
 use host_sim::qemu::{self, report, QemuConfig};
 

@@ -28,7 +28,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
-use std::time::{Duration, Instant};
+use core::time::Duration;
+use std::time::Instant;
 
 /// The emulator executable.
 pub const QEMU_BINARY: &str = "qemu-system-arm";
@@ -63,8 +64,8 @@ pub enum QemuError {
     Io(io::Error),
 }
 
-impl std::fmt::Display for QemuError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+impl core::fmt::Display for QemuError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             Self::NotInstalled => write!(f, "`{QEMU_BINARY}` was not found on the PATH: {QEMU_INSTALL_HINT}"),
             Self::ElfMissing(p) => write!(
@@ -86,7 +87,7 @@ impl std::fmt::Display for QemuError {
     }
 }
 
-impl std::error::Error for QemuError {}
+impl core::error::Error for QemuError {}
 
 impl From<io::Error> for QemuError {
     fn from(e: io::Error) -> Self {
@@ -464,7 +465,7 @@ impl QemuBoard {
                 let _ = child.wait();
             }
         }
-        for h in std::mem::take(&mut self.readers) {
+        for h in core::mem::take(&mut self.readers) {
             let _ = h.join();
         }
         let output = snapshot(&self.captured);

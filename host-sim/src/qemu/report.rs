@@ -6,7 +6,7 @@
 //! with file contents that is loaded into RAM (`.data`) also occupies flash for its initial values.
 
 use std::path::Path;
-use std::time::Duration;
+use core::time::Duration;
 
 use super::{run_to_exit, QemuConfig, QemuError};
 

@@ -26,9 +26,9 @@ static RX_SCRATCH: Lent<[u8; 64]> = Lent::new([0; 64]);
 fn write_all(uart: &mut Uart, wdog: &mut CmsdkWatchdog, mut bytes: &[u8]) {
     while !bytes.is_empty() {
         let _ = wdog.kick();
-        match uart.write(bytes) {
-            Ok(n) => bytes = bytes.get(n..).unwrap_or(&[]),
-            Err(_) => {}
+        // An overrun error is counted by the UART and cleared; the bytes not accepted are retried.
+        if let Ok(n) = uart.write(bytes) {
+            bytes = bytes.get(n..).unwrap_or(&[]);
         }
     }
 }

@@ -24,6 +24,8 @@ impl<T> Lent<T> {
     }
 
     /// The one mutable borrow; `None` if it was already taken.
+    // `mut_from_ref` is the point of this type: the atomic flag makes the returned borrow unique.
+    #[allow(clippy::mut_from_ref)]
     pub fn take(&'static self) -> Option<&'static mut T> {
         if self.taken.swap(true, Ordering::AcqRel) {
             return None;
