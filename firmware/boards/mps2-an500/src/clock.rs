@@ -1,8 +1,9 @@
 //! SysTick-based [`hal::MonotonicClock`].
 //!
-//! SysTick counts down from 2^24 - 1 on the core clock (QEMU's mps2 boards: 25 MHz, `SYSCLK_FRQ` in
-//! `hw/arm/mps2.c`), so it wraps every 0.67 s. The SysTick exception counts wraps; `now` combines the wrap count
-//! with the current value (re-reading when a wrap raced the read). 64-bit ticks never wrap in a mission.
+//! SysTick counts down on the core clock (QEMU's mps2 boards: 25 MHz, `SYSCLK_FRQ` in `hw/arm/mps2.c`) and wraps
+//! every millisecond (reload 24 999): the SysTick exception counts wraps (and wakes the idle loop, so timers such
+//! as the telemetry period are served within 1 ms); `now` combines the wrap count with the current value
+//! (re-reading when a wrap raced the read). 64-bit ticks never wrap in a mission.
 //!
 //! Under `qemu-system-arm -icount shift=0` each instruction advances virtual time by exactly 1 ns, so one SysTick
 //! tick is [`INSTRUCTIONS_PER_TICK`] instructions and tick counts repeat exactly from run to run: this is how the
@@ -15,8 +16,9 @@ use cortex_m::peripheral::{syst::SystClkSource, SYST};
 pub const CORE_HZ: u64 = 25_000_000;
 /// Instructions per SysTick tick under `-icount shift=0` (1 ns per instruction, 40 ns per 25 MHz tick).
 pub const INSTRUCTIONS_PER_TICK: u64 = 1_000_000_000 / CORE_HZ;
-const RELOAD: u32 = 0x00FF_FFFF;
-/// Retries of the wrap-consistent read; a second wrap within two register reads is impossible (0.67 s apart).
+/// SysTick reload: one wrap per millisecond.
+const RELOAD: u32 = (CORE_HZ / 1000) as u32 - 1;
+/// Retries of the wrap-consistent read; a second wrap within two register reads is impossible (1 ms apart).
 const READ_RETRIES: u32 = 3;
 
 static WRAPS: AtomicU32 = AtomicU32::new(0);

@@ -12,7 +12,7 @@ use core::ptr::read_volatile;
 use cortex_m_rt::{exception, ExceptionFrame};
 use cortex_m_semihosting::{debug, heprintln};
 
-use crate::uart::{Uart, UART0_RX_IRQ, UART0_TX_IRQ};
+use crate::uart::{Uart, UART_IRQS};
 
 /// Ends the run with a failure status, after the caller printed its report.
 pub fn fail() -> ! {
@@ -69,9 +69,9 @@ fn SysTick() {
 
 #[exception]
 unsafe fn DefaultHandler(irqn: i16) {
-    if irqn == UART0_RX_IRQ || irqn == UART0_TX_IRQ {
+    if UART_IRQS.contains(&irqn) {
         // The UART interrupts only end a `wfi`; data moves in thread mode.
-        Uart::clear_uart0_interrupts();
+        Uart::clear_interrupts();
         return;
     }
     heprintln!("board: UNEXPECTED interrupt irqn={}", irqn);

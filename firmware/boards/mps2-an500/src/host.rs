@@ -6,7 +6,9 @@
 //! - `tetherbot.probe=panic` / `hardfault` / `watchdog`: force that fault at boot, to test that faults end the run
 //!   with a failure status and a report (used by the host's tests; harmless in flight: no semihosting host, no
 //!   command line).
-//! - nothing: the flight loop over UART0.
+//! - `tetherbot.clock=lockstep`: the flight loop with the executive stepped by the host over the control port
+//!   (UART1) on the host's simulated clock, exactly like the in-process link (see `flight.rs`);
+//! - nothing: the flight loop over UART0 on the board's own SysTick clock (free-running, as in flight).
 
 use cortex_m_semihosting::nr;
 
@@ -16,8 +18,11 @@ const CMDLINE_CAPACITY: usize = 512;
 /// What the board does after boot.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum BootMode {
-    /// The flight loop over UART0.
-    Flight,
+    /// The flight loop over UART0; `lockstep`: stepped by the host on its clock.
+    Flight {
+        /// Stepped by the host over UART1 instead of free-running on SysTick.
+        lockstep: bool,
+    },
     /// The benchmark workloads.
     Bench,
     /// Panic at boot.
@@ -36,7 +41,7 @@ pub fn boot_mode() -> BootMode {
     // block[1] to the length written. Both live on this stack frame for the duration of the call.
     let status = unsafe { cortex_m_semihosting::syscall1(nr::GET_CMDLINE, block.as_mut_ptr() as usize) };
     if status != 0 {
-        return BootMode::Flight;
+        return BootMode::Flight { lockstep: false };
     }
     let len = block[1].min(buf.len());
     let line = buf.get(..len).unwrap_or(&[]);
@@ -50,6 +55,6 @@ pub fn boot_mode() -> BootMode {
     } else if has(b"tetherbot.probe=watchdog") {
         BootMode::ProbeWatchdog
     } else {
-        BootMode::Flight
+        BootMode::Flight { lockstep: has(b"tetherbot.clock=lockstep") }
     }
 }

@@ -37,7 +37,7 @@ fn main() -> ! {
     };
     let mut clock = clock::SysTickClock::new(core.SYST);
     match host::boot_mode() {
-        BootMode::Flight => flight::run(clock),
+        BootMode::Flight { lockstep } => flight::run(clock, lockstep),
         BootMode::Bench => {
             bench::run(&mut clock);
             debug::exit(debug::EXIT_SUCCESS);

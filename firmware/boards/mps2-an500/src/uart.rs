@@ -20,12 +20,12 @@
 
 use core::ptr::{read_volatile, write_volatile};
 
-/// Base address of UART0 on the mps2-an500.
+/// Base address of UART0 on the mps2-an500 (the protocol link to the host).
 pub const UART0_BASE: usize = 0x4000_4000;
-/// NVIC interrupt numbers of UART0 (receive, transmit) on the mps2 boards.
-pub const UART0_RX_IRQ: i16 = 0;
-/// See [`UART0_RX_IRQ`].
-pub const UART0_TX_IRQ: i16 = 1;
+/// Base address of UART1 (the test-harness control port, see `flight.rs`).
+pub const UART1_BASE: usize = 0x4000_5000;
+/// NVIC interrupt numbers of UART0 and UART1 (RX, TX, RX, TX) on the mps2 boards.
+pub const UART_IRQS: [i16; 4] = [0, 1, 2, 3];
 
 const DATA: usize = 0x00;
 const STATE: usize = 0x04;
@@ -65,12 +65,13 @@ pub struct Uart {
 }
 
 impl Uart {
-    /// Takes UART0, enables TX and RX (and their wake-up interrupts) and discards any stale receive byte.
+    /// Takes the UART at `base` ([`UART0_BASE`] or [`UART1_BASE`]), enables TX and RX (and their wake-up
+    /// interrupts) and discards any stale receive byte.
     ///
     /// # Safety
-    /// Call once: the returned value owns the UART0 registers.
-    pub unsafe fn uart0() -> Self {
-        let uart = Self { base: UART0_BASE };
+    /// Call once per UART: the returned value owns its registers.
+    pub unsafe fn take(base: usize) -> Self {
+        let uart = Self { base };
         uart.wr(BAUDDIV, 16);
         uart.wr(CTRL, CTRL_TX_EN | CTRL_RX_EN | CTRL_TX_INT_EN | CTRL_RX_INT_EN);
         // The dummy read after enabling RX (EMBEDDED.md): unblocks QEMU's receive path immediately.
@@ -79,11 +80,14 @@ impl Uart {
         uart
     }
 
-    /// Clears UART0's interrupt status. Called from the interrupt handler, which only exists to end a `wfi`.
-    pub fn clear_uart0_interrupts() {
-        // SAFETY: INTSTATUS is write-1-to-clear; clearing both bits has no effect on data or on the thread-mode
-        // owner's view of STATE.
-        unsafe { write_volatile((UART0_BASE + INTSTATUS) as *mut u32, 0b11) }
+    /// Clears the interrupt status of UART0 and UART1. Called from the interrupt handler, which only exists to
+    /// end a `wfi`.
+    pub fn clear_interrupts() {
+        for base in [UART0_BASE, UART1_BASE] {
+            // SAFETY: INTSTATUS is write-1-to-clear; clearing both bits has no effect on data or on the
+            // thread-mode owner's view of STATE.
+            unsafe { write_volatile((base + INTSTATUS) as *mut u32, 0b11) }
+        }
     }
 
     fn rd(&self, offset: usize) -> u32 {

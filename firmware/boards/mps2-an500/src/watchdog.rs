@@ -25,7 +25,7 @@ const UNLOCK_KEY: u32 = 0x1ACC_E551;
 const CONTROL_INTEN: u32 = 1;
 /// WDOGCLK frequency in QEMU's mps2 boards, Hz.
 pub const WDOGCLK_HZ: u32 = 25_000_000;
-/// Default timeout: 2 s. The flight loop kicks every iteration and wakes at least every SysTick wrap (0.67 s),
+/// Default timeout: 2 s. The flight loop kicks every iteration and wakes at least every SysTick wrap (1 ms),
 /// so only a loop stuck for more than 2 s (a missing budget, a livelock) bites.
 pub const TIMEOUT_TICKS: u32 = 2 * WDOGCLK_HZ;
 
@@ -62,13 +62,19 @@ impl CmsdkWatchdog {
     }
 }
 
+/// Kicks the started watchdog. Also used by the board's own waits outside the executive (the lockstep control
+/// port), where the `CmsdkWatchdog` value is owned by the executive; a kick is an idempotent register write.
+pub fn kick() {
+    wr(LOCK, UNLOCK_KEY);
+    wr(INTCLR, 1);
+    wr(LOCK, 0);
+}
+
 impl hal::Watchdog for CmsdkWatchdog {
     type Error = core::convert::Infallible;
 
     fn kick(&mut self) -> Result<(), Self::Error> {
-        wr(LOCK, UNLOCK_KEY);
-        wr(INTCLR, 1);
-        wr(LOCK, 0);
+        kick();
         Ok(())
     }
 }
