@@ -5,13 +5,20 @@
 //!
 //! 1. bind `127.0.0.1:0` (the OS picks a free port);
 //! 2. spawn `qemu-system-arm -machine mps2-an500 -cpu cortex-m7 -nographic -monitor none
-//!    -semihosting-config enable=on,target=native -chardev socket,id=u0,host=127.0.0.1,port=PORT,nodelay=on
-//!    -serial chardev:u0 [-icount shift=0] -kernel ELF [-append BOOT_WORDS]`; QEMU connects to us as a client
-//!    (`nodelay=on` avoids ~44 ms of Nagle delay per reply, measured);
-//! 3. accept the connection (bounded by [`QemuConfig::connect_timeout`]);
-//! 4. wait for the firmware's ready frame (the handshake; bounded by [`QemuConfig::ready_timeout`]); the host
-//!    sends nothing before it, because bytes sent before the guest enables its receiver can stall ~1 s;
-//! 5. move bytes ([`QemuBoard::send`], [`QemuBoard::recv`]).
+//!    -semihosting-config enable=on,target=native -chardev socket,id=u0,host=127.0.0.1,port=PORT0,nodelay=on
+//!    -serial chardev:u0 -chardev socket,id=u1,host=127.0.0.1,port=PORT1,nodelay=on -serial chardev:u1
+//!    [-icount shift=0] -kernel ELF [-append BOOT_WORDS]`; QEMU connects to us as a client (`nodelay=on` avoids
+//!    ~44 ms of Nagle delay per reply, measured). UART0 carries the flight protocol; UART1 is the board's
+//!    test-harness control port (hello, lockstep run commands, quit; see the board's `flight.rs`);
+//! 3. accept both connections (bounded by [`QemuConfig::connect_timeout`]);
+//! 4. wait for the firmware's hello byte `H` on the control port (the handshake; bounded by
+//!    [`QemuConfig::ready_timeout`]); the host sends nothing before it, because bytes sent before the guest enables
+//!    its receiver can stall ~1 s. In free-running mode the board's boot `Telemetry` frame (the protocol's ready
+//!    frame) then arrives on UART0;
+//! 5. move bytes ([`QemuBoard::send`], [`QemuBoard::recv`]); [`QemuBoard::quit`] asks the board for its resource
+//!    report and waits for its exit.
+//!
+//! [`link::QemuLink`] puts this behind the simulator's link abstraction.
 //!
 //! QEMU is killed when the [`QemuBoard`] is dropped. The board's semihosting output (report lines
 //! `board: key=value ...`, fault reports) is captured and returned by [`QemuBoard::finish`].
@@ -20,6 +27,7 @@
 //! `cargo build --release` in `firmware/boards/mps2-an500` (the directory's `.cargo/config.toml` picks the target),
 //! or [`build_board_elf`]. [`board_elf_path`] finds the result; `TETHERBOT_BOARD_ELF` overrides the path.
 
+pub mod link;
 pub mod report;
 
 use std::io::{self, Read, Write};
@@ -172,14 +180,16 @@ impl QemuConfig {
         }
     }
 
-    fn command(&self, port: Option<u16>) -> Command {
+    fn command(&self, ports: Option<(u16, u16)>) -> Command {
         let mut cmd = Command::new(QEMU_BINARY);
         cmd.args(["-machine", "mps2-an500", "-cpu", "cortex-m7", "-nographic", "-monitor", "none"]);
         cmd.args(["-semihosting-config", "enable=on,target=native"]);
-        match port {
-            Some(port) => {
-                cmd.arg("-chardev").arg(format!("socket,id=u0,host=127.0.0.1,port={port},nodelay=on"));
+        match ports {
+            Some((data, control)) => {
+                cmd.arg("-chardev").arg(format!("socket,id=u0,host=127.0.0.1,port={data},nodelay=on"));
                 cmd.args(["-serial", "chardev:u0"]);
+                cmd.arg("-chardev").arg(format!("socket,id=u1,host=127.0.0.1,port={control},nodelay=on"));
+                cmd.args(["-serial", "chardev:u1"]);
             }
             None => {
                 cmd.args(["-serial", "null"]);
@@ -309,92 +319,127 @@ pub fn run_to_exit(cfg: &QemuConfig, timeout: Duration) -> Result<QemuExit, Qemu
     }
 }
 
-/// A running emulated board, connected and past its ready frame.
+/// A running emulated board, connected and past its hello.
 pub struct QemuBoard {
     child: Option<Child>,
     stream: TcpStream,
+    control: TcpStream,
     captured: Arc<Mutex<Captured>>,
     readers: Vec<JoinHandle<()>>,
-    ready_frame: Vec<u8>,
     pending: Vec<u8>,
+    control_pending: Vec<u8>,
     boot_to_ready: Duration,
 }
 
+fn accept_within(
+    listener: &TcpListener,
+    child: &mut Child,
+    captured: &Arc<Mutex<Captured>>,
+    t0: Instant,
+    timeout: Duration,
+) -> Result<TcpStream, QemuError> {
+    loop {
+        match listener.accept() {
+            Ok((s, _)) => {
+                s.set_nonblocking(false)?;
+                s.set_nodelay(true)?;
+                return Ok(s);
+            }
+            Err(e) if e.kind() == io::ErrorKind::WouldBlock => {}
+            Err(e) => return Err(e.into()),
+        }
+        if let Some(status) = child.try_wait()? {
+            std::thread::sleep(Duration::from_millis(20));
+            return Err(QemuError::Exited(status.code(), snapshot(captured).both()));
+        }
+        if t0.elapsed() > timeout {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err(QemuError::ConnectTimeout(timeout, snapshot(captured).both()));
+        }
+        std::thread::sleep(POLL);
+    }
+}
+
 impl QemuBoard {
-    /// Starts QEMU, accepts its UART connection and waits for the ready frame. `ready_len` is given the bytes
-    /// received so far and returns the length of the complete ready frame at their start once it is there
-    /// (bytes after it are kept for [`QemuBoard::recv`]).
-    pub fn start(
-        cfg: &QemuConfig,
-        mut ready_len: impl FnMut(&[u8]) -> Option<usize>,
-    ) -> Result<Self, QemuError> {
+    /// Starts QEMU, accepts its two UART connections and waits for the hello byte on the control port.
+    pub fn start(cfg: &QemuConfig) -> Result<Self, QemuError> {
         cfg.check()?;
-        let listener = TcpListener::bind("127.0.0.1:0")?;
-        let port = listener.local_addr()?.port();
-        listener.set_nonblocking(true)?;
+        let data_listener = TcpListener::bind("127.0.0.1:0")?;
+        let control_listener = TcpListener::bind("127.0.0.1:0")?;
+        data_listener.set_nonblocking(true)?;
+        control_listener.set_nonblocking(true)?;
+        let ports = (data_listener.local_addr()?.port(), control_listener.local_addr()?.port());
         let t0 = Instant::now();
-        let mut child = cfg.command(Some(port)).spawn()?;
+        let mut child = cfg.command(Some(ports)).spawn()?;
         let (captured, readers) = spawn_capture(&mut child);
-        let stream = loop {
-            match listener.accept() {
-                Ok((s, _)) => break s,
-                Err(e) if e.kind() == io::ErrorKind::WouldBlock => {}
-                Err(e) => return Err(e.into()),
-            }
-            if let Some(status) = child.try_wait()? {
-                std::thread::sleep(Duration::from_millis(20));
-                return Err(QemuError::Exited(status.code(), snapshot(&captured).both()));
-            }
-            if t0.elapsed() > cfg.connect_timeout {
-                let _ = child.kill();
-                let _ = child.wait();
-                return Err(QemuError::ConnectTimeout(cfg.connect_timeout, snapshot(&captured).both()));
-            }
-            std::thread::sleep(POLL);
-        };
-        stream.set_nonblocking(false)?;
-        stream.set_nodelay(true)?;
+        let stream = accept_within(&data_listener, &mut child, &captured, t0, cfg.connect_timeout)?;
+        let control = accept_within(&control_listener, &mut child, &captured, t0, cfg.connect_timeout)?;
         let mut board = Self {
             child: Some(child),
             stream,
+            control,
             captured,
             readers,
-            ready_frame: Vec::new(),
             pending: Vec::new(),
+            control_pending: Vec::new(),
             boot_to_ready: Duration::ZERO,
         };
-        let deadline = Instant::now() + cfg.ready_timeout;
-        let mut buf = [0u8; 1024];
-        loop {
-            if let Some(len) = ready_len(&board.pending) {
-                let len = len.min(board.pending.len());
-                board.ready_frame = board.pending.drain(..len).collect();
+        let mut hello = [0u8; 1];
+        match board.control_recv_exact(&mut hello, cfg.ready_timeout) {
+            Ok(()) if hello == *b"H" => {
                 board.boot_to_ready = t0.elapsed();
-                return Ok(board);
+                Ok(board)
             }
-            let left = deadline.saturating_duration_since(Instant::now());
-            if left.is_zero() {
-                return Err(QemuError::ReadyTimeout(cfg.ready_timeout, board.output().both()));
+            Ok(()) => Err(QemuError::Io(io::Error::new(
+                io::ErrorKind::InvalidData,
+                format!("unexpected hello byte 0x{:02x} from the board", hello[0]),
+            ))),
+            Err(e) if e.kind() == io::ErrorKind::TimedOut => {
+                Err(QemuError::ReadyTimeout(cfg.ready_timeout, board.output().both()))
             }
-            board.stream.set_read_timeout(Some(left.min(Duration::from_millis(50))))?;
-            match board.stream.read(&mut buf) {
-                Ok(0) => {
-                    let code = board.wait_child(Duration::from_secs(2)).and_then(|s| s.code());
-                    return Err(QemuError::Exited(code, board.output().both()));
-                }
-                Ok(n) => board.pending.extend_from_slice(&buf[..n]),
-                Err(e) if matches!(e.kind(), io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut) => {}
-                Err(e) => return Err(e.into()),
+            Err(_) => {
+                let code = board.wait_child(Duration::from_secs(2)).and_then(|s| s.code());
+                Err(QemuError::Exited(code, board.output().both()))
             }
         }
     }
 
-    /// The ready frame the board sent at boot.
-    pub fn ready_frame(&self) -> &[u8] {
-        &self.ready_frame
+    /// Sends `bytes` on the control port.
+    pub fn control_send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        self.control.write_all(bytes)
     }
 
-    /// Host wall-clock time from spawning QEMU to the complete ready frame.
+    /// Reads exactly `buf.len()` bytes from the control port within `timeout` (`TimedOut` otherwise, keeping
+    /// what arrived for the next call; `UnexpectedEof` if the board went away).
+    pub fn control_recv_exact(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<()> {
+        let deadline = Instant::now() + timeout;
+        let mut chunk = [0u8; 64];
+        while self.control_pending.len() < buf.len() {
+            let left = deadline.saturating_duration_since(Instant::now());
+            if left.is_zero() {
+                return Err(io::Error::new(io::ErrorKind::TimedOut, "control port: no reply in time"));
+            }
+            self.control.set_read_timeout(Some(left))?;
+            match self.control.read(&mut chunk) {
+                Ok(0) => return Err(io::Error::new(io::ErrorKind::UnexpectedEof, "the board closed its control port")),
+                Ok(n) => self.control_pending.extend_from_slice(&chunk[..n]),
+                Err(e) if matches!(e.kind(), io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut) => {}
+                Err(e) => return Err(e),
+            }
+        }
+        buf.copy_from_slice(&self.control_pending[..buf.len()]);
+        self.control_pending.drain(..buf.len());
+        Ok(())
+    }
+
+    /// Asks the board to print its resource report and exit (`Q` on the control port); waits at most `timeout`.
+    pub fn quit(mut self, timeout: Duration) -> Result<QemuExit, QemuError> {
+        self.control_send(b"Q")?;
+        self.finish(timeout)
+    }
+
+    /// Host wall-clock time from spawning QEMU to the hello byte.
     pub fn boot_to_ready(&self) -> Duration {
         self.boot_to_ready
     }
