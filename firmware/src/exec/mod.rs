@@ -251,6 +251,16 @@ where
         &mut self.link
     }
 
+    /// The link.
+    pub fn link(&self) -> &L {
+        &self.link
+    }
+
+    /// The clock.
+    pub fn clock(&self) -> &C {
+        &self.clock
+    }
+
     /// The clock (a simulated clock is advanced through it).
     pub fn clock_mut(&mut self) -> &mut C {
         &mut self.clock
