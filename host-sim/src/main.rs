@@ -27,6 +27,8 @@ enum Command {
     Export(cli::export::ExportArgs),
     /// Show a field log's header, frames and damage.
     Inspect(cli::inspect::InspectArgs),
+    /// The emulated flight computer (QEMU mps2-an500): resource report, on-target benchmarks, link performance.
+    Board(cli::board::BoardArgs),
 }
 
 fn main() -> ExitCode {
@@ -42,6 +44,7 @@ fn main() -> ExitCode {
         Command::Replay(a) => cli::replay::main(&a),
         Command::Export(a) => cli::export::main(&a),
         Command::Inspect(a) => cli::inspect::main(&a),
+        Command::Board(a) => cli::board::main(&a),
     }
 }
 

@@ -1,6 +1,7 @@
 //! Implementations of the `tetherbot` subcommands. `main.rs` only parses arguments and dispatches here; each
 //! subcommand returns its process exit code (0 success, 1 the check failed, 2 the command could not run).
 
+pub mod board;
 pub mod export;
 pub mod inspect;
 pub mod replay;

@@ -176,3 +176,32 @@ impl QemuLink {
         }
     }
 }
+
+fn link_error(link: &QemuLink, e: io::Error) -> crate::link::LinkError {
+    use crate::link::LinkError;
+    match e.kind() {
+        io::ErrorKind::UnexpectedEof | io::ErrorKind::NotConnected | io::ErrorKind::ConnectionReset | io::ErrorKind::BrokenPipe => {
+            let output = link.board.as_ref().map(|b| b.output().both()).unwrap_or_default();
+            LinkError::Disconnected(format!("emulated board: {e}; its output:\n{output}"))
+        }
+        _ => LinkError::Io(e),
+    }
+}
+
+impl crate::link::FlightLink for QemuLink {
+    fn name(&self) -> &str {
+        "qemu"
+    }
+    fn now_us(&self) -> u64 {
+        self.now_us
+    }
+    fn send(&mut self, bytes: &[u8]) -> Result<(), crate::link::LinkError> {
+        QemuLink::send(self, bytes).map_err(|e| link_error(self, e))
+    }
+    fn recv_until_quiet(&mut self, max_wait_us: u64) -> Result<Vec<u8>, crate::link::LinkError> {
+        QemuLink::recv_until_quiet(self, max_wait_us).map_err(|e| link_error(self, e))
+    }
+    fn advance_to(&mut self, t_us: u64) -> Result<Vec<u8>, crate::link::LinkError> {
+        QemuLink::advance_to(self, t_us).map_err(|e| link_error(self, e))
+    }
+}

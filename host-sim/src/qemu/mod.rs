@@ -28,6 +28,7 @@
 //! or [`build_board_elf`]. [`board_elf_path`] finds the result; `TETHERBOT_BOARD_ELF` overrides the path.
 
 pub mod link;
+pub mod perf;
 pub mod report;
 
 use std::io::{self, Read, Write};
