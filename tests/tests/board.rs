@@ -78,3 +78,30 @@ fn elf_places_code_in_flash_and_state_in_sram() {
     let (flash, _, _) = report::totals(&sections);
     assert!(flash >= u64::from(text.size), "flash total {flash} below .text {}", text.size);
 }
+
+#[test]
+fn missing_board_binary_is_a_clear_error_naming_the_build_command() {
+    let cfg = QemuConfig::new(std::path::PathBuf::from("/nonexistent/board-mps2-an500"));
+    let err = match qemu::QemuBoard::start(&cfg) {
+        Ok(_) => panic!("a board started from a missing ELF"),
+        Err(e) => e,
+    };
+    assert!(matches!(err, qemu::QemuError::ElfMissing(_)), "{err:?}");
+    let msg = err.to_string();
+    assert!(msg.contains("cargo build --release") && msg.contains(qemu::BOARD_DIR), "{msg}");
+}
+
+#[test]
+fn lockstep_board_reports_a_fault_instead_of_hanging() {
+    // A board that panics at boot never says hello: starting the link fails with its report, within the bound.
+    let Some(elf) = board("lockstep fault") else { return };
+    let mut cfg = QemuConfig::new(elf);
+    cfg.boot_words = Some("tetherbot.clock=lockstep tetherbot.probe=panic".into());
+    cfg.ready_timeout = Duration::from_secs(10);
+    let err = match qemu::link::QemuLink::with_config(&cfg, 1000) {
+        Ok(_) => panic!("a panicking board completed the handshake"),
+        Err(e) => e,
+    };
+    let msg = err.to_string();
+    assert!(msg.contains("board: PANIC"), "the failure does not carry the board's report: {msg}");
+}

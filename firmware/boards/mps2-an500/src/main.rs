@@ -35,6 +35,7 @@ fn main() -> ! {
         heprintln!("board: core peripherals taken twice");
         fault::fail()
     };
+    storage::zero_psram();
     let mut clock = clock::SysTickClock::new(core.SYST);
     match host::boot_mode() {
         BootMode::Flight { lockstep } => flight::run(clock, lockstep),

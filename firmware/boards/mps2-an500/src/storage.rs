@@ -35,3 +35,25 @@ impl<T> Lent<T> {
         Some(unsafe { &mut *self.value.get() })
     }
 }
+
+extern "C" {
+    static mut __spsram: u64;
+    static mut __epsram: u64;
+}
+
+/// Zeroes the `.psram` section (see `memory.x`): statics placed there with `#[link_section = ".psram"]` must have
+/// an all-zero initial value. Called once at boot, before anything in `.psram` is used. Empty today: the
+/// executive's storage (132 KiB) fits the 4 MiB SRAM; planner arenas of later issues may move here.
+pub fn zero_psram() {
+    let start = core::ptr::addr_of_mut!(__spsram);
+    let end = core::ptr::addr_of_mut!(__epsram);
+    let mut p = start;
+    while p < end {
+        // SAFETY: [__spsram, __epsram) is the 8-aligned `.psram` output section in PSRAM (memory.x), which no
+        // code has touched yet at boot; writing zeros there is what the section's contract promises.
+        unsafe {
+            core::ptr::write_volatile(p, 0);
+            p = p.add(1);
+        }
+    }
+}
