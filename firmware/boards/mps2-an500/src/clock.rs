@@ -44,6 +44,14 @@ impl SysTickClock {
         Self { syst }
     }
 
+    /// A handle that reads the already started SysTick without owning it (for a second executive in the
+    /// benchmark mode). Reading the counter has no side effect.
+    pub fn detached() -> Self {
+        // SAFETY: only `ticks` touches `syst`, and it only reads the current value (`SYST::get_current` is a
+        // static read); no configuration is changed through this second handle.
+        Self { syst: unsafe { cortex_m::Peripherals::steal() }.SYST }
+    }
+
     /// Core-clock ticks since `new`.
     pub fn ticks(&mut self) -> u64 {
         let mut result = 0;

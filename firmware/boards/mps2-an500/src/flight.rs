@@ -356,4 +356,83 @@ pub fn bench_workloads(clock: &mut SysTickClock) {
         crate::bench::measure(clock, &dec_name, BENCH_FRAMES, || decoded = deframe_decode(&frame, BENCH_FRAMES));
         hprintln!("bench: check name={} wire_bytes={} decoded={}", dec_name, frame.len, decoded);
     }
+    exec_dispatch_workload(clock, &tick);
+}
+
+/// In-memory link for the executive workload: reads from a fixed byte stream, counts and discards output.
+struct MemLink {
+    input: &'static [u8],
+    written: usize,
+}
+
+impl ByteLink for MemLink {
+    type Error = core::convert::Infallible;
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Self::Error> {
+        let n = buf.len().min(self.input.len());
+        if let (Some(dst), Some(src)) = (buf.get_mut(..n), self.input.get(..n)) {
+            dst.copy_from_slice(src);
+        }
+        self.input = self.input.get(n..).unwrap_or(&[]);
+        Ok(n)
+    }
+    fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
+        self.written += buf.len();
+        Ok(buf.len())
+    }
+    fn read_ready(&mut self) -> Result<bool, Self::Error> {
+        Ok(!self.input.is_empty())
+    }
+    fn write_ready(&mut self) -> Result<bool, Self::Error> {
+        Ok(true)
+    }
+}
+
+struct NoWatchdog;
+impl hal::Watchdog for NoWatchdog {
+    type Error = core::convert::Infallible;
+    fn kick(&mut self) -> Result<(), Self::Error> {
+        crate::watchdog::kick();
+        Ok(())
+    }
+}
+
+/// Wire bytes of the executive workload's input (BENCH_FRAMES time ticks of 16 bytes each, with margin).
+static EXEC_INPUT: Lent<[u8; 8192]> = Lent::new([0; 8192]);
+
+/// The whole receive path through the executive: deframe, decode, validate, dispatch, encode and send the Ack,
+/// for BENCH_FRAMES `TimeTick` frames, stepping until the input is consumed and the executive is quiet.
+fn exec_dispatch_workload(clock: &mut SysTickClock, tick: &firmware::protocol::Message) {
+    let (Some(input), Some(storage)) = (EXEC_INPUT.take(), EXEC_STORAGE.take()) else { return };
+    let mut len = 0;
+    for seq in 0..BENCH_FRAMES {
+        let frame = firmware::protocol::encode(seq, tick, input.get_mut(len..).unwrap_or(&mut [])).unwrap_or(0);
+        len += frame;
+    }
+    let input: &'static [u8] = input.get(..len).unwrap_or(&[]);
+    let link = MemLink { input, written: 0 };
+    let clock_for_exec = BoardClock {
+        systick: SysTickClock::detached(),
+        lockstep_now: Some(Instant::from_micros(0)),
+    };
+    let mut exec = Executive::new(link, clock_for_exec, NoWatchdog, NoAutonomy, storage);
+    // The boot Telemetry is sent by the first step: run it outside the measurement.
+    let _ = exec.step();
+    let mut steps = 0u32;
+    crate::bench::measure(clock, "exec_dispatch_time_tick", BENCH_FRAMES, || {
+        // Bound: FRAMES_PER_STEP frames per step, so BENCH_FRAMES steps always suffice.
+        for k in 1..=BENCH_FRAMES {
+            exec.clock_mut().lockstep_now = Some(Instant::from_micros(u64::from(k)));
+            steps += 1;
+            if !exec.step().busy {
+                break;
+            }
+        }
+    });
+    let t = exec.telemetry();
+    hprintln!(
+        "bench: check name=exec_dispatch_time_tick steps={} frames_accepted={} bytes_out={}",
+        steps,
+        t.frames_accepted,
+        exec.link_mut().written
+    );
 }
