@@ -1,7 +1,8 @@
 //! Fault reporting: panic, hard fault, watchdog bite (NMI) and unexpected interrupts all print a report over
-//! semihosting (to QEMU's standard error) and end QEMU with exit status 1. Nothing hangs silently: if no
-//! semihosting host is attached (real hardware without a debugger) the report is lost but the core resets
-//! (`SCB::sys_reset`), which a ground station sees as a reboot and a second ready frame.
+//! semihosting (to QEMU's standard error) and end QEMU with exit status 1. Nothing hangs silently under QEMU. If
+//! the exit call returns (a debugger that ignores it), the core resets (`SCB::sys_reset`), which a ground station
+//! sees as a reboot and a second ready frame. On hardware without any semihosting host the semihosting calls
+//! themselves would fault: this binary is built for the emulated board.
 //!
 //! Report format, one line each, so the host and tests can grep them:
 //! `board: PANIC <message> at <file>:<line>:<col>`, `board: HARDFAULT pc=0x... lr=0x... xpsr=0x... cfsr=0x...
