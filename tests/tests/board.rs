@@ -25,35 +25,78 @@ fn probe(words: &str) -> Option<qemu::QemuExit> {
 
 #[test]
 fn panic_on_target_is_reported_with_location_and_fails_the_run() {
-    let Some(exit) = probe("tetherbot.probe=panic") else { return };
-    assert_eq!(exit.status.code(), Some(1), "output: {}", exit.output.both());
+    let Some(exit) = probe("tetherbot.probe=panic") else {
+        return;
+    };
+    assert_eq!(
+        exit.status.code(),
+        Some(1),
+        "output: {}",
+        exit.output.both()
+    );
     let text = exit.output.both();
-    assert!(text.contains("board: PANIC fault probe"), "no panic report in: {text}");
-    assert!(text.contains("src/main.rs:"), "panic report lacks its location: {text}");
+    assert!(
+        text.contains("board: PANIC fault probe"),
+        "no panic report in: {text}"
+    );
+    assert!(
+        text.contains("src/main.rs:"),
+        "panic report lacks its location: {text}"
+    );
 }
 
 #[test]
 fn hard_fault_on_target_is_reported_with_registers_and_fails_the_run() {
-    let Some(exit) = probe("tetherbot.probe=hardfault") else { return };
-    assert_eq!(exit.status.code(), Some(1), "output: {}", exit.output.both());
+    let Some(exit) = probe("tetherbot.probe=hardfault") else {
+        return;
+    };
+    assert_eq!(
+        exit.status.code(),
+        Some(1),
+        "output: {}",
+        exit.output.both()
+    );
     let text = exit.output.both();
-    assert!(text.contains("board: HARDFAULT pc=0x"), "no hard-fault report in: {text}");
+    assert!(
+        text.contains("board: HARDFAULT pc=0x"),
+        "no hard-fault report in: {text}"
+    );
     // An undefined instruction is a UsageFault (CFSR.UNDEFINSTR, bit 16) escalated to HardFault (HFSR.FORCED).
-    assert!(text.contains("cfsr=0x00010000") && text.contains("hfsr=0x40000000"), "wrong fault status: {text}");
+    assert!(
+        text.contains("cfsr=0x00010000") && text.contains("hfsr=0x40000000"),
+        "wrong fault status: {text}"
+    );
 }
 
 #[test]
 fn stalled_loop_is_caught_by_the_watchdog_and_fails_the_run() {
-    let Some(exit) = probe("tetherbot.probe=watchdog") else { return };
-    assert_eq!(exit.status.code(), Some(1), "output: {}", exit.output.both());
-    assert!(exit.output.both().contains("board: WATCHDOG expired"), "output: {}", exit.output.both());
+    let Some(exit) = probe("tetherbot.probe=watchdog") else {
+        return;
+    };
+    assert_eq!(
+        exit.status.code(),
+        Some(1),
+        "output: {}",
+        exit.output.both()
+    );
+    assert!(
+        exit.output.both().contains("board: WATCHDOG expired"),
+        "output: {}",
+        exit.output.both()
+    );
 }
 
 #[test]
 fn calibration_loop_instruction_count_matches_its_length() {
-    let Some(elf) = board("bench calibration") else { return };
-    let (results, text) = report::run_bench(&elf, Duration::from_secs(60)).unwrap_or_else(|e| panic!("{e}"));
-    let cal = results.iter().find(|r| r.name == "calibration").unwrap_or_else(|| panic!("no calibration in {text}"));
+    let Some(elf) = board("bench calibration") else {
+        return;
+    };
+    let (results, text) =
+        report::run_bench(&elf, Duration::from_secs(60)).unwrap_or_else(|e| panic!("{e}"));
+    let cal = results
+        .iter()
+        .find(|r| r.name == "calibration")
+        .unwrap_or_else(|| panic!("no calibration in {text}"));
     // The loop is `subs` + `bne` per iteration plus the final fall-through: 2N + 1 instructions, counted in
     // SysTick ticks of 40 instructions, plus a handful for the clock reads around it.
     let expected = 2 * cal.iterations + 1;
@@ -66,17 +109,30 @@ fn calibration_loop_instruction_count_matches_its_length() {
 
 #[test]
 fn elf_places_code_in_flash_and_state_in_sram() {
-    let Some(elf) = board("elf layout") else { return };
+    let Some(elf) = board("elf layout") else {
+        return;
+    };
     let sections = report::elf_sections(&elf).unwrap_or_else(|e| panic!("{e}"));
     let find = |n: &str| sections.iter().find(|s| s.name == n);
     let text = find(".text").unwrap_or_else(|| panic!("no .text in {sections:?}"));
     assert_eq!(text.region, report::Region::Flash);
-    assert_eq!(find(".vector_table").map(|s| s.addr), Some(0), "vector table must sit at the reset address");
-    for s in sections.iter().filter(|s| s.name == ".bss" || s.name == ".data") {
+    assert_eq!(
+        find(".vector_table").map(|s| s.addr),
+        Some(0),
+        "vector table must sit at the reset address"
+    );
+    for s in sections
+        .iter()
+        .filter(|s| s.name == ".bss" || s.name == ".data")
+    {
         assert_eq!(s.region, report::Region::Sram, "{s:?}");
     }
     let (flash, _, _) = report::totals(&sections);
-    assert!(flash >= u64::from(text.size), "flash total {flash} below .text {}", text.size);
+    assert!(
+        flash >= u64::from(text.size),
+        "flash total {flash} below .text {}",
+        text.size
+    );
 }
 
 #[test]
@@ -88,13 +144,18 @@ fn missing_board_binary_is_a_clear_error_naming_the_build_command() {
     };
     assert!(matches!(err, qemu::QemuError::ElfMissing(_)), "{err:?}");
     let msg = err.to_string();
-    assert!(msg.contains("cargo build --release") && msg.contains(qemu::BOARD_DIR), "{msg}");
+    assert!(
+        msg.contains("cargo build --release") && msg.contains(qemu::BOARD_DIR),
+        "{msg}"
+    );
 }
 
 #[test]
 fn lockstep_board_reports_a_fault_instead_of_hanging() {
     // A board that panics at boot never says hello: starting the link fails with its report, within the bound.
-    let Some(elf) = board("lockstep fault") else { return };
+    let Some(elf) = board("lockstep fault") else {
+        return;
+    };
     let mut cfg = QemuConfig::new(elf);
     cfg.boot_words = Some("tetherbot.clock=lockstep tetherbot.probe=panic".into());
     cfg.ready_timeout = Duration::from_secs(10);
@@ -103,21 +164,45 @@ fn lockstep_board_reports_a_fault_instead_of_hanging() {
         Err(e) => e,
     };
     let msg = err.to_string();
-    assert!(msg.contains("board: PANIC"), "the failure does not carry the board's report: {msg}");
+    assert!(
+        msg.contains("board: PANIC"),
+        "the failure does not carry the board's report: {msg}"
+    );
 }
 
 #[test]
 fn on_target_workloads_do_their_work_and_count_identically_twice() {
-    let Some(elf) = board("bench determinism") else { return };
-    let (first, text) = report::run_bench(&elf, Duration::from_secs(60)).unwrap_or_else(|e| panic!("{e}"));
-    let (second, _) = report::run_bench(&elf, Duration::from_secs(60)).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(first, second, "instruction counts under -icount shift=0 must repeat exactly");
-    for name in ["deframe_decode_time_tick", "deframe_decode_tether_reading", "deframe_decode_sensor_chunk_128_points"] {
-        let line = text.lines().find(|l| l.starts_with(&format!("bench: check name={name} ")));
-        assert!(line.is_some_and(|l| l.ends_with(" decoded=200")), "{name}: {text}");
+    let Some(elf) = board("bench determinism") else {
+        return;
+    };
+    let (first, text) =
+        report::run_bench(&elf, Duration::from_secs(60)).unwrap_or_else(|e| panic!("{e}"));
+    let (second, _) =
+        report::run_bench(&elf, Duration::from_secs(60)).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        first, second,
+        "instruction counts under -icount shift=0 must repeat exactly"
+    );
+    for name in [
+        "deframe_decode_time_tick",
+        "deframe_decode_tether_reading",
+        "deframe_decode_sensor_chunk_128_points",
+    ] {
+        let line = text
+            .lines()
+            .find(|l| l.starts_with(&format!("bench: check name={name} ")));
+        assert!(
+            line.is_some_and(|l| l.ends_with(" decoded=200")),
+            "{name}: {text}"
+        );
     }
     // The executive acknowledged every frame of its workload (200 frames, 4 per step).
-    let line = text.lines().find(|l| l.starts_with("bench: check name=exec_dispatch_time_tick "));
-    assert!(line.is_some_and(|l| l.contains(" frames_accepted=200 ")), "{text}");
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("bench: check name=exec_dispatch_time_tick "));
+    assert!(
+        line.is_some_and(|l| l.contains(" frames_accepted=200 ")),
+        "{text}"
+    );
     assert!(first.iter().all(|r| r.instructions > 0), "{first:?}");
 }

@@ -41,7 +41,8 @@ fn record<L: FlightLink>(link: L, name: &str, seed: u64) -> (fieldlog::FieldLog,
     let writer = Writer::new(Vec::new(), &header(seed, link.name())).expect("in-memory log");
     let mut rec = RecordingLink::new(link, writer);
     assert_eq!(name, "protocol", "only the protocol scenario exists so far");
-    let report = scenario::run_protocol(&mut rec, seed).unwrap_or_else(|e| panic!("{name} seed {seed}: {e}"));
+    let report = scenario::run_protocol(&mut rec, seed)
+        .unwrap_or_else(|e| panic!("{name} seed {seed}: {e}"));
     let (link, bytes) = rec.finish().expect("flush in-memory log");
     let log = fieldlog::parse(&bytes).expect("own log parses");
     assert!(log.damage.is_none(), "fresh log damaged: {:?}", log.damage);
@@ -50,15 +51,27 @@ fn record<L: FlightLink>(link: L, name: &str, seed: u64) -> (fieldlog::FieldLog,
 
 #[test]
 fn scenarios_give_identical_flight_output_in_process_and_on_the_board() {
-    let Some(elf) = board("board equivalence") else { return };
+    let Some(elf) = board("board equivalence") else {
+        return;
+    };
     for &(name, seed) in SCENARIO_SEEDS {
         let (inproc_log, inproc_ok, _) = record(InProcLink::new(DEFAULT_STEP_US), name, seed);
         let board_link = QemuLink::start(&elf, DEFAULT_STEP_US).unwrap_or_else(|e| panic!("{e}"));
         let (board_log, board_ok, board_link) = record(board_link, name, seed);
-        let exit = board_link.quit(Duration::from_secs(10)).unwrap_or_else(|e| panic!("{e}"));
-        assert!(exit.status.success(), "board exit: {:?}\n{}", exit.status, exit.output.both());
+        let exit = board_link
+            .quit(Duration::from_secs(10))
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert!(
+            exit.status.success(),
+            "board exit: {:?}\n{}",
+            exit.status,
+            exit.output.both()
+        );
 
-        assert!(inproc_ok && board_ok, "{name}/{seed}: scenario expectations in-process {inproc_ok}, board {board_ok}");
+        assert!(
+            inproc_ok && board_ok,
+            "{name}/{seed}: scenario expectations in-process {inproc_ok}, board {board_ok}"
+        );
         let out = |log: &fieldlog::FieldLog| -> Vec<u8> {
             log.records
                 .iter()
@@ -69,36 +82,79 @@ fn scenarios_give_identical_flight_output_in_process_and_on_the_board() {
         let (a, b) = (out(&inproc_log), out(&board_log));
         assert!(!a.is_empty(), "{name}/{seed}: no flight output recorded");
         if let Some(i) = a.iter().zip(&b).position(|(x, y)| x != y) {
-            panic!("{name}/{seed}: flight->host streams differ at byte {i} of {} / {}", a.len(), b.len());
+            panic!(
+                "{name}/{seed}: flight->host streams differ at byte {i} of {} / {}",
+                a.len(),
+                b.len()
+            );
         }
-        assert_eq!(a.len(), b.len(), "{name}/{seed}: flight->host stream lengths differ");
+        assert_eq!(
+            a.len(),
+            b.len(),
+            "{name}/{seed}: flight->host stream lengths differ"
+        );
         // Same bytes at the same link times, both directions.
         let strip = |log: &fieldlog::FieldLog| -> Vec<(fieldlog::Direction, u64, Vec<u8>)> {
-            log.records.iter().map(|r| (r.direction, r.t_us, r.bytes.clone())).collect()
+            log.records
+                .iter()
+                .map(|r| (r.direction, r.t_us, r.bytes.clone()))
+                .collect()
         };
-        assert_eq!(strip(&inproc_log), strip(&board_log), "{name}/{seed}: records differ");
+        assert_eq!(
+            strip(&inproc_log),
+            strip(&board_log),
+            "{name}/{seed}: records differ"
+        );
         // The replay tool agrees: the board's log replays identically on a fresh in-process executive.
-        let outcome = replay(&board_log, &mut InProcLink::new(DEFAULT_STEP_US)).unwrap_or_else(|e| panic!("{e}"));
-        assert!(matches!(outcome, ReplayOutcome::Identical { .. }), "{name}/{seed}: replay {outcome}");
+        let outcome = replay(&board_log, &mut InProcLink::new(DEFAULT_STEP_US))
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert!(
+            matches!(outcome, ReplayOutcome::Identical { .. }),
+            "{name}/{seed}: replay {outcome}"
+        );
     }
 }
 
 #[test]
 fn bad_input_matrix_over_the_emulated_uart() {
-    let Some(elf) = board("bad-input matrix over QEMU") else { return };
+    let Some(elf) = board("bad-input matrix over QEMU") else {
+        return;
+    };
     let mut link = QemuLink::start(&elf, DEFAULT_STEP_US).unwrap_or_else(|e| panic!("{e}"));
     let report = host_sim::testkit::bad_input_matrix(&mut link).unwrap_or_else(|e| panic!("{e}"));
     // Same verdict, case by case, as the in-process executive ...
     let inproc = host_sim::testkit::bad_input_matrix(&mut InProcLink::new(DEFAULT_STEP_US))
         .unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(format!("{report}"), format!("{inproc}"), "board and in-process disagree on the bad-input matrix");
+    assert_eq!(
+        format!("{report}"),
+        format!("{inproc}"),
+        "board and in-process disagree on the bad-input matrix"
+    );
     // ... and every case handled as the protocol specifies.
     assert!(report.passed(), "bad-input matrix on the board:\n{report}");
-    let exit = link.quit(Duration::from_secs(10)).unwrap_or_else(|e| panic!("{e}"));
-    assert!(exit.status.success(), "board exit: {:?}\n{}", exit.status, exit.output.both());
+    let exit = link
+        .quit(Duration::from_secs(10))
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        exit.status.success(),
+        "board exit: {:?}\n{}",
+        exit.status,
+        exit.output.both()
+    );
     // The board survived every bad input and reports its resources at the end.
-    let hw: usize = exit.output.value("stack_high_water_bytes").and_then(|v| v.parse().ok()).unwrap_or(0);
-    let size: usize = exit.output.value("stack_size_bytes").and_then(|v| v.parse().ok()).unwrap_or(0);
-    assert!(hw > 0 && hw < size, "stack high-water {hw} of {size}: {}", exit.output.both());
+    let hw: usize = exit
+        .output
+        .value("stack_high_water_bytes")
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0);
+    let size: usize = exit
+        .output
+        .value("stack_size_bytes")
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0);
+    assert!(
+        hw > 0 && hw < size,
+        "stack high-water {hw} of {size}: {}",
+        exit.output.both()
+    );
 }
-

@@ -71,7 +71,10 @@ pub fn board_elf(explicit: Option<&PathBuf>, build: bool) -> Result<PathBuf, qem
         if std::env::var_os("TETHERBOT_BOARD_ELF").is_some() {
             return Ok(path);
         }
-        eprintln!("building the board binary (cargo build --release in {}) ...", qemu::BOARD_DIR);
+        eprintln!(
+            "building the board binary (cargo build --release in {}) ...",
+            qemu::BOARD_DIR
+        );
         return qemu::build_board_elf();
     }
     Ok(path)
@@ -89,14 +92,24 @@ pub fn finish_board_link(link: QemuLink) -> Result<qemu::QemuExit, Box<dyn core:
     let boot = link.boot_to_ready().unwrap_or_default();
     let exit = link.quit(Duration::from_secs(10))?;
     if !exit.status.success() {
-        return Err(format!("the board failed: {:?}\n{}", exit.status, exit.output.both()).into());
+        return Err(format!(
+            "the board failed: {:?}\n{}",
+            exit.status,
+            exit.output.both()
+        )
+        .into());
     }
     println!(
         "board: boot to ready {:.1} ms; {steps} executive steps in {round_trips} lockstep round trips, {:.1} ms",
         boot.as_secs_f64() * 1e3,
         wall.as_secs_f64() * 1e3
     );
-    for line in exit.output.stdout.lines().filter(|l| l.starts_with("board:")) {
+    for line in exit
+        .output
+        .stdout
+        .lines()
+        .filter(|l| l.starts_with("board:"))
+    {
         println!("{line}");
     }
     Ok(exit)
@@ -134,9 +147,14 @@ fn report_cmd(elf: &std::path::Path) -> Result<(), Box<dyn core::error::Error>> 
 
 fn bench_cmd(elf: &std::path::Path) -> Result<(), Box<dyn core::error::Error>> {
     let (results, text) = report::run_bench(elf, Duration::from_secs(120))?;
-    println!("on-target instruction counts (qemu-system-arm -icount shift=0, mps2-an500 Cortex-M7)");
+    println!(
+        "on-target instruction counts (qemu-system-arm -icount shift=0, mps2-an500 Cortex-M7)"
+    );
     print!("{}", report::format_bench(&results));
-    for line in text.lines().filter(|l| l.starts_with("bench: check") || l.contains("expected_instructions")) {
+    for line in text
+        .lines()
+        .filter(|l| l.starts_with("bench: check") || l.contains("expected_instructions"))
+    {
         println!("{line}");
     }
     Ok(())
@@ -154,7 +172,13 @@ pub fn main(args: &BoardArgs) -> ExitCode {
         BoardCommand::Perf { samples, burst } => perf::measure(&elf, *samples, (*burst).max(1))
             .map(|p| {
                 print!("{p}");
-                for line in p.exit.output.stdout.lines().filter(|l| l.starts_with("board:")) {
+                for line in p
+                    .exit
+                    .output
+                    .stdout
+                    .lines()
+                    .filter(|l| l.starts_with("board:"))
+                {
                     println!("{line}");
                 }
             })

@@ -33,7 +33,9 @@ pub fn main(args: &ReplayArgs) -> ExitCode {
             config.link
         ));
     }
-    let outcome = match super::board::with_link(args.link, config.step_us, |mut link| Ok(replay(&log, &mut link)?)) {
+    let outcome = match super::board::with_link(args.link, config.step_us, |mut link| {
+        Ok(replay(&log, &mut link)?)
+    }) {
         Ok(o) => o,
         Err(e) => return super::fail(e),
     };

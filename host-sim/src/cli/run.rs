@@ -3,11 +3,11 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use crate::fieldlog::{self, Writer};
 use super::board::LinkKind;
+use crate::fieldlog::{self, Writer};
 use crate::link::inproc::DEFAULT_STEP_US;
-use crate::link::FlightLink;
 use crate::link::recording::RecordingLink;
+use crate::link::FlightLink;
 use crate::replay::RunConfig;
 use crate::scenario::{self, ScenarioReport};
 
@@ -48,7 +48,10 @@ pub fn run_scenario(args: &RunArgs) -> Result<ScenarioReport, Box<dyn core::erro
 }
 
 /// Runs a scenario on `link`, optionally recording it.
-pub fn run_on(link: &mut dyn FlightLink, args: &RunArgs) -> Result<ScenarioReport, Box<dyn core::error::Error>> {
+pub fn run_on(
+    link: &mut dyn FlightLink,
+    args: &RunArgs,
+) -> Result<ScenarioReport, Box<dyn core::error::Error>> {
     let Some(path) = &args.log else {
         return Ok(scenario::run_protocol(link, args.seed)?);
     };

@@ -57,7 +57,9 @@ impl QemuLink {
     }
 
     fn board(&mut self) -> io::Result<&mut QemuBoard> {
-        self.board.as_mut().ok_or_else(|| io::Error::new(io::ErrorKind::NotConnected, "the board was shut down"))
+        self.board
+            .as_mut()
+            .ok_or_else(|| io::Error::new(io::ErrorKind::NotConnected, "the board was shut down"))
     }
 
     /// Host wall time from spawning QEMU to the board's hello.
@@ -116,16 +118,29 @@ impl QemuLink {
         Ok(out)
     }
 
-    fn run_once(&mut self, max_steps: u32, until_quiet: bool, out: &mut Vec<u8>) -> io::Result<(u32, bool)> {
+    fn run_once(
+        &mut self,
+        max_steps: u32,
+        until_quiet: bool,
+        out: &mut Vec<u8>,
+    ) -> io::Result<(u32, bool)> {
         let t0 = Instant::now();
         let base = out.len();
-        let announced = u32::try_from(self.unannounced)
-            .map_err(|_| io::Error::new(io::ErrorKind::InvalidInput, "more than 4 GiB sent between steps"))?;
+        let announced = u32::try_from(self.unannounced).map_err(|_| {
+            io::Error::new(
+                io::ErrorKind::InvalidInput,
+                "more than 4 GiB sent between steps",
+            )
+        })?;
         let mut cmd = Vec::with_capacity(22);
         cmd.push(b'R');
         cmd.extend_from_slice(&announced.to_le_bytes());
         cmd.extend_from_slice(&self.now_us.to_le_bytes());
-        cmd.extend_from_slice(&u32::try_from(self.step_us).unwrap_or(u32::MAX).to_le_bytes());
+        cmd.extend_from_slice(
+            &u32::try_from(self.step_us)
+                .unwrap_or(u32::MAX)
+                .to_le_bytes(),
+        );
         cmd.extend_from_slice(&max_steps.to_le_bytes());
         cmd.push(u8::from(until_quiet));
         let timeout = self.reply_timeout;
@@ -138,14 +153,20 @@ impl QemuLink {
         loop {
             let n = board.try_recv(&mut buf)?;
             out.extend_from_slice(&buf[..n]);
-            match board.control_recv_exact(&mut done, Duration::from_micros(if n > 0 { 100 } else { 1000 })) {
+            match board.control_recv_exact(
+                &mut done,
+                Duration::from_micros(if n > 0 { 100 } else { 1000 }),
+            ) {
                 Ok(()) => break,
                 Err(e) if e.kind() == io::ErrorKind::TimedOut && Instant::now() < deadline => {}
                 Err(e) => return Err(e),
             }
         }
         if done[0] != b'D' {
-            return Err(io::Error::new(io::ErrorKind::InvalidData, format!("bad reply tag 0x{:02x}", done[0])));
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidData,
+                format!("bad reply tag 0x{:02x}", done[0]),
+            ));
         }
         let ran = u32::from_le_bytes([done[1], done[2], done[3], done[4]]);
         let busy = done[5] != 0;
@@ -154,10 +175,16 @@ impl QemuLink {
         while out.len() - base < tx {
             let left = deadline.saturating_duration_since(Instant::now());
             if left.is_zero() {
-                return Err(io::Error::new(io::ErrorKind::TimedOut, "board output did not arrive in time"));
+                return Err(io::Error::new(
+                    io::ErrorKind::TimedOut,
+                    "board output did not arrive in time",
+                ));
             }
             let want = tx - (out.len() - base);
-            let n = self.board()?.recv(&mut buf[..want.min(64 * 1024)], left.min(Duration::from_millis(50)))?;
+            let n = self.board()?.recv(
+                &mut buf[..want.min(64 * 1024)],
+                left.min(Duration::from_millis(50)),
+            )?;
             out.extend_from_slice(&buf[..n]);
         }
         self.now_us += u64::from(ran) * self.step_us;
@@ -172,7 +199,10 @@ impl QemuLink {
     pub fn quit(mut self, timeout: Duration) -> Result<QemuExit, QemuError> {
         match self.board.take() {
             Some(b) => b.quit(timeout),
-            None => Err(QemuError::Io(io::Error::new(io::ErrorKind::NotConnected, "already shut down"))),
+            None => Err(QemuError::Io(io::Error::new(
+                io::ErrorKind::NotConnected,
+                "already shut down",
+            ))),
         }
     }
 }
@@ -180,8 +210,15 @@ impl QemuLink {
 fn link_error(link: &QemuLink, e: io::Error) -> crate::link::LinkError {
     use crate::link::LinkError;
     match e.kind() {
-        io::ErrorKind::UnexpectedEof | io::ErrorKind::NotConnected | io::ErrorKind::ConnectionReset | io::ErrorKind::BrokenPipe => {
-            let output = link.board.as_ref().map(|b| b.output().both()).unwrap_or_default();
+        io::ErrorKind::UnexpectedEof
+        | io::ErrorKind::NotConnected
+        | io::ErrorKind::ConnectionReset
+        | io::ErrorKind::BrokenPipe => {
+            let output = link
+                .board
+                .as_ref()
+                .map(|b| b.output().both())
+                .unwrap_or_default();
             LinkError::Disconnected(format!("emulated board: {e}; its output:\n{output}"))
         }
         _ => LinkError::Io(e),

@@ -31,19 +31,20 @@ pub mod link;
 pub mod perf;
 pub mod report;
 
+use core::time::Duration;
 use std::io::{self, Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
-use core::time::Duration;
 use std::time::Instant;
 
 /// The emulator executable.
 pub const QEMU_BINARY: &str = "qemu-system-arm";
 /// How to install it (Debian / Ubuntu).
-pub const QEMU_INSTALL_HINT: &str = "install it with `apt-get install -y --no-install-recommends qemu-system-arm` \
+pub const QEMU_INSTALL_HINT: &str =
+    "install it with `apt-get install -y --no-install-recommends qemu-system-arm` \
 (Debian/Ubuntu; use sudo when not root)";
 /// The board's crate directory, relative to the repository root.
 pub const BOARD_DIR: &str = "firmware/boards/mps2-an500";
@@ -76,7 +77,10 @@ pub enum QemuError {
 impl core::fmt::Display for QemuError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
-            Self::NotInstalled => write!(f, "`{QEMU_BINARY}` was not found on the PATH: {QEMU_INSTALL_HINT}"),
+            Self::NotInstalled => write!(
+                f,
+                "`{QEMU_BINARY}` was not found on the PATH: {QEMU_INSTALL_HINT}"
+            ),
             Self::ElfMissing(p) => write!(
                 f,
                 "board binary {} not found: build it with `cargo build --release` in {BOARD_DIR} \
@@ -85,12 +89,21 @@ impl core::fmt::Display for QemuError {
             ),
             Self::BuildFailed(e) => write!(f, "building the board binary failed:\n{e}"),
             Self::ConnectTimeout(t, out) => {
-                write!(f, "QEMU did not connect to the UART socket within {t:?}; its output:\n{out}")
+                write!(
+                    f,
+                    "QEMU did not connect to the UART socket within {t:?}; its output:\n{out}"
+                )
             }
             Self::ReadyTimeout(t, out) => {
-                write!(f, "the board sent no ready frame within {t:?}; its output:\n{out}")
+                write!(
+                    f,
+                    "the board sent no ready frame within {t:?}; its output:\n{out}"
+                )
             }
-            Self::Exited(code, out) => write!(f, "QEMU exited early with status {code:?}; its output:\n{out}"),
+            Self::Exited(code, out) => write!(
+                f,
+                "QEMU exited early with status {code:?}; its output:\n{out}"
+            ),
             Self::Io(e) => write!(f, "emulated board link: {e}"),
         }
     }
@@ -118,7 +131,10 @@ pub fn qemu_available() -> bool {
 
 /// The repository root (this crate's parent directory).
 pub fn repo_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."))
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| PathBuf::from("."))
 }
 
 /// Where the board ELF is: `$TETHERBOT_BOARD_ELF`, else the release build in the board directory.
@@ -126,7 +142,12 @@ pub fn board_elf_path() -> PathBuf {
     if let Some(p) = std::env::var_os("TETHERBOT_BOARD_ELF") {
         return PathBuf::from(p);
     }
-    repo_root().join(BOARD_DIR).join("target").join(BOARD_TARGET).join("release").join(BOARD_BIN)
+    repo_root()
+        .join(BOARD_DIR)
+        .join("target")
+        .join(BOARD_TARGET)
+        .join("release")
+        .join(BOARD_BIN)
 }
 
 /// Builds the board ELF (`cargo build --release --target thumbv7em-none-eabihf` in the board directory) and
@@ -143,9 +164,16 @@ pub fn build_board_elf() -> Result<PathBuf, QemuError> {
         .stdin(Stdio::null())
         .output()?;
     if !out.status.success() {
-        return Err(QemuError::BuildFailed(String::from_utf8_lossy(&out.stderr).into_owned()));
+        return Err(QemuError::BuildFailed(
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        ));
     }
-    let elf = repo_root().join(BOARD_DIR).join("target").join(BOARD_TARGET).join("release").join(BOARD_BIN);
+    let elf = repo_root()
+        .join(BOARD_DIR)
+        .join("target")
+        .join(BOARD_TARGET)
+        .join("release")
+        .join(BOARD_BIN);
     if elf.is_file() {
         Ok(elf)
     } else {
@@ -183,13 +211,25 @@ impl QemuConfig {
 
     fn command(&self, ports: Option<(u16, u16)>) -> Command {
         let mut cmd = Command::new(QEMU_BINARY);
-        cmd.args(["-machine", "mps2-an500", "-cpu", "cortex-m7", "-nographic", "-monitor", "none"]);
+        cmd.args([
+            "-machine",
+            "mps2-an500",
+            "-cpu",
+            "cortex-m7",
+            "-nographic",
+            "-monitor",
+            "none",
+        ]);
         cmd.args(["-semihosting-config", "enable=on,target=native"]);
         match ports {
             Some((data, control)) => {
-                cmd.arg("-chardev").arg(format!("socket,id=u0,host=127.0.0.1,port={data},nodelay=on"));
+                cmd.arg("-chardev").arg(format!(
+                    "socket,id=u0,host=127.0.0.1,port={data},nodelay=on"
+                ));
                 cmd.args(["-serial", "chardev:u0"]);
-                cmd.arg("-chardev").arg(format!("socket,id=u1,host=127.0.0.1,port={control},nodelay=on"));
+                cmd.arg("-chardev").arg(format!(
+                    "socket,id=u1,host=127.0.0.1,port={control},nodelay=on"
+                ));
                 cmd.args(["-serial", "chardev:u1"]);
             }
             None => {
@@ -203,7 +243,9 @@ impl QemuConfig {
         if let Some(words) = &self.boot_words {
             cmd.arg("-append").arg(words);
         }
-        cmd.stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped());
+        cmd.stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped());
         cmd
     }
 
@@ -306,14 +348,20 @@ pub fn run_to_exit(cfg: &QemuConfig, timeout: Duration) -> Result<QemuExit, Qemu
             for h in handles {
                 let _ = h.join();
             }
-            return Ok(QemuExit { status, output: snapshot(&captured) });
+            return Ok(QemuExit {
+                status,
+                output: snapshot(&captured),
+            });
         }
         if Instant::now() > deadline {
             let _ = child.kill();
             let _ = child.wait();
             return Err(QemuError::Io(io::Error::new(
                 io::ErrorKind::TimedOut,
-                format!("the board did not exit within {timeout:?}; output:\n{}", snapshot(&captured).both()),
+                format!(
+                    "the board did not exit within {timeout:?}; output:\n{}",
+                    snapshot(&captured).both()
+                ),
             )));
         }
         std::thread::sleep(POLL);
@@ -356,7 +404,10 @@ fn accept_within(
         if t0.elapsed() > timeout {
             let _ = child.kill();
             let _ = child.wait();
-            return Err(QemuError::ConnectTimeout(timeout, snapshot(captured).both()));
+            return Err(QemuError::ConnectTimeout(
+                timeout,
+                snapshot(captured).both(),
+            ));
         }
         std::thread::sleep(POLL);
     }
@@ -370,12 +421,27 @@ impl QemuBoard {
         let control_listener = TcpListener::bind("127.0.0.1:0")?;
         data_listener.set_nonblocking(true)?;
         control_listener.set_nonblocking(true)?;
-        let ports = (data_listener.local_addr()?.port(), control_listener.local_addr()?.port());
+        let ports = (
+            data_listener.local_addr()?.port(),
+            control_listener.local_addr()?.port(),
+        );
         let t0 = Instant::now();
         let mut child = cfg.command(Some(ports)).spawn()?;
         let (captured, readers) = spawn_capture(&mut child);
-        let stream = accept_within(&data_listener, &mut child, &captured, t0, cfg.connect_timeout)?;
-        let control = accept_within(&control_listener, &mut child, &captured, t0, cfg.connect_timeout)?;
+        let stream = accept_within(
+            &data_listener,
+            &mut child,
+            &captured,
+            t0,
+            cfg.connect_timeout,
+        )?;
+        let control = accept_within(
+            &control_listener,
+            &mut child,
+            &captured,
+            t0,
+            cfg.connect_timeout,
+        )?;
         let mut board = Self {
             child: Some(child),
             stream,
@@ -396,11 +462,14 @@ impl QemuBoard {
                 io::ErrorKind::InvalidData,
                 format!("unexpected hello byte 0x{:02x} from the board", hello[0]),
             ))),
-            Err(e) if e.kind() == io::ErrorKind::TimedOut => {
-                Err(QemuError::ReadyTimeout(cfg.ready_timeout, board.output().both()))
-            }
+            Err(e) if e.kind() == io::ErrorKind::TimedOut => Err(QemuError::ReadyTimeout(
+                cfg.ready_timeout,
+                board.output().both(),
+            )),
             Err(_) => {
-                let code = board.wait_child(Duration::from_secs(2)).and_then(|s| s.code());
+                let code = board
+                    .wait_child(Duration::from_secs(2))
+                    .and_then(|s| s.code());
                 Err(QemuError::Exited(code, board.output().both()))
             }
         }
@@ -419,13 +488,25 @@ impl QemuBoard {
         while self.control_pending.len() < buf.len() {
             let left = deadline.saturating_duration_since(Instant::now());
             if left.is_zero() {
-                return Err(io::Error::new(io::ErrorKind::TimedOut, "control port: no reply in time"));
+                return Err(io::Error::new(
+                    io::ErrorKind::TimedOut,
+                    "control port: no reply in time",
+                ));
             }
             self.control.set_read_timeout(Some(left))?;
             match self.control.read(&mut chunk) {
-                Ok(0) => return Err(io::Error::new(io::ErrorKind::UnexpectedEof, "the board closed its control port")),
+                Ok(0) => {
+                    return Err(io::Error::new(
+                        io::ErrorKind::UnexpectedEof,
+                        "the board closed its control port",
+                    ))
+                }
                 Ok(n) => self.control_pending.extend_from_slice(&chunk[..n]),
-                Err(e) if matches!(e.kind(), io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut) => {}
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
+                    ) => {}
                 Err(e) => return Err(e),
             }
         }
@@ -459,11 +540,22 @@ impl QemuBoard {
             self.pending.drain(..n);
             return Ok(n);
         }
-        self.stream.set_read_timeout(Some(timeout.max(Duration::from_micros(1))))?;
+        self.stream
+            .set_read_timeout(Some(timeout.max(Duration::from_micros(1))))?;
         match self.stream.read(buf) {
-            Ok(0) if !buf.is_empty() => Err(io::Error::new(io::ErrorKind::UnexpectedEof, "the board closed the UART")),
+            Ok(0) if !buf.is_empty() => Err(io::Error::new(
+                io::ErrorKind::UnexpectedEof,
+                "the board closed the UART",
+            )),
             Ok(n) => Ok(n),
-            Err(e) if matches!(e.kind(), io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut) => Ok(0),
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
+                ) =>
+            {
+                Ok(0)
+            }
             Err(e) => Err(e),
         }
     }
@@ -475,7 +567,10 @@ impl QemuBoard {
         }
         self.stream.set_nonblocking(true)?;
         let r = match self.stream.read(buf) {
-            Ok(0) if !buf.is_empty() => Err(io::Error::new(io::ErrorKind::UnexpectedEof, "the board closed the UART")),
+            Ok(0) if !buf.is_empty() => Err(io::Error::new(
+                io::ErrorKind::UnexpectedEof,
+                "the board closed the UART",
+            )),
             Ok(n) => Ok(n),
             Err(e) if e.kind() == io::ErrorKind::WouldBlock => Ok(0),
             Err(e) => Err(e),
@@ -519,7 +614,10 @@ impl QemuBoard {
             Some(status) => Ok(QemuExit { status, output }),
             None => Err(QemuError::Io(io::Error::new(
                 io::ErrorKind::TimedOut,
-                format!("the board did not exit within {timeout:?}; output:\n{}", output.both()),
+                format!(
+                    "the board did not exit within {timeout:?}; output:\n{}",
+                    output.both()
+                ),
             ))),
         }
     }
@@ -539,7 +637,9 @@ impl Drop for QemuBoard {
 /// failed build is an error (the caller's test fails).
 pub fn board_for_tests(test: &str) -> Result<Option<PathBuf>, QemuError> {
     static BUILT: std::sync::OnceLock<Result<PathBuf, String>> = std::sync::OnceLock::new();
-    let ci = std::env::var("CI").map(|v| v == "true" || v == "1").unwrap_or(false);
+    let ci = std::env::var("CI")
+        .map(|v| v == "true" || v == "1")
+        .unwrap_or(false);
     if !qemu_available() {
         if ci {
             return Err(QemuError::NotInstalled);

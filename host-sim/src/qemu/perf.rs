@@ -50,8 +50,16 @@ impl LinkPerf {
 impl core::fmt::Display for LinkPerf {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         let secs = self.burst_time.as_secs_f64().max(1e-9);
-        writeln!(f, "boot to hello (control port):      {:>9.1} ms", self.boot_to_hello.as_secs_f64() * 1e3)?;
-        writeln!(f, "boot to ready (boot Telemetry):    {:>9.1} ms", self.boot_to_telemetry.as_secs_f64() * 1e3)?;
+        writeln!(
+            f,
+            "boot to hello (control port):      {:>9.1} ms",
+            self.boot_to_hello.as_secs_f64() * 1e3
+        )?;
+        writeln!(
+            f,
+            "boot to ready (boot Telemetry):    {:>9.1} ms",
+            self.boot_to_telemetry.as_secs_f64() * 1e3
+        )?;
         writeln!(
             f,
             "round trip TimeTick -> Ack (n={}): min {:.3} ms, median {:.3} ms, p90 {:.3} ms, max {:.3} ms",
@@ -75,7 +83,10 @@ impl core::fmt::Display for LinkPerf {
 }
 
 fn io_err(msg: impl Into<String>) -> QemuError {
-    QemuError::Io(std::io::Error::new(std::io::ErrorKind::TimedOut, msg.into()))
+    QemuError::Io(std::io::Error::new(
+        std::io::ErrorKind::TimedOut,
+        msg.into(),
+    ))
 }
 
 /// Receives and decodes flight -> host frames until `done` says stop or `timeout` passes.
@@ -112,22 +123,35 @@ fn recv_until(
 
 fn tick(seq: u32, t: u64) -> Vec<u8> {
     let mut out = vec![0u8; firmware::config::protocol::MAX_ENCODED_FRAME_LEN];
-    let n = protocol::encode(seq, &Message::TimeTick(TimeTick { host_time_us: t }), &mut out).unwrap_or(0);
+    let n = protocol::encode(
+        seq,
+        &Message::TimeTick(TimeTick { host_time_us: t }),
+        &mut out,
+    )
+    .unwrap_or(0);
     out.truncate(n);
     out
 }
 
 /// Boots the board free-running and measures the link; `rtt_samples` round trips, a burst of `burst` frames.
-pub fn measure(elf: &std::path::Path, rtt_samples: usize, burst: usize) -> Result<LinkPerf, QemuError> {
+pub fn measure(
+    elf: &std::path::Path,
+    rtt_samples: usize,
+    burst: usize,
+) -> Result<LinkPerf, QemuError> {
     let cfg = QemuConfig::new(elf.to_path_buf());
     let t0 = Instant::now();
     let mut board = QemuBoard::start(&cfg)?;
     let boot_to_hello = board.boot_to_ready();
     let mut deframer = Deframer::new();
     let mut bytes_in = 0;
-    recv_until(&mut board, &mut deframer, Duration::from_secs(10), &mut bytes_in, |m| {
-        matches!(m, Message::Telemetry(_))
-    })?;
+    recv_until(
+        &mut board,
+        &mut deframer,
+        Duration::from_secs(10),
+        &mut bytes_in,
+        |m| matches!(m, Message::Telemetry(_)),
+    )?;
     let boot_to_telemetry = t0.elapsed();
 
     let mut seq = 1u32;
@@ -137,7 +161,13 @@ pub fn measure(elf: &std::path::Path, rtt_samples: usize, burst: usize) -> Resul
         let start = Instant::now();
         board.send(&frame)?;
         let want = Message::Ack(Ack { seq });
-        recv_until(&mut board, &mut deframer, Duration::from_secs(5), &mut bytes_in, |m| *m == want)?;
+        recv_until(
+            &mut board,
+            &mut deframer,
+            Duration::from_secs(5),
+            &mut bytes_in,
+            |m| *m == want,
+        )?;
         round_trips.push(start.elapsed());
         seq += 1;
     }
@@ -153,14 +183,20 @@ pub fn measure(elf: &std::path::Path, rtt_samples: usize, burst: usize) -> Resul
     let start = Instant::now();
     board.send(&wire)?;
     let mut acked = 0usize;
-    recv_until(&mut board, &mut deframer, Duration::from_secs(60), &mut burst_in, |m| {
-        if let Message::Ack(Ack { seq }) = m {
-            if (first..=last).contains(seq) {
-                acked += 1;
+    recv_until(
+        &mut board,
+        &mut deframer,
+        Duration::from_secs(60),
+        &mut burst_in,
+        |m| {
+            if let Message::Ack(Ack { seq }) = m {
+                if (first..=last).contains(seq) {
+                    acked += 1;
+                }
             }
-        }
-        acked == burst
-    })?;
+            acked == burst
+        },
+    )?;
     let burst_time = start.elapsed();
     let exit = board.quit(Duration::from_secs(10))?;
     Ok(LinkPerf {

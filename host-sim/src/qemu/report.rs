@@ -5,8 +5,8 @@
 //! 0x2000_0000: `.data`, `.bss`, the 256 KiB stack), PSRAM (16 MiB at 0x6000_0000: `.psram` arenas). A section
 //! with file contents that is loaded into RAM (`.data`) also occupies flash for its initial values.
 
-use std::path::Path;
 use core::time::Duration;
+use std::path::Path;
 
 use super::{run_to_exit, QemuConfig, QemuError};
 
@@ -53,7 +53,9 @@ pub struct Section {
 }
 
 fn u16_at(b: &[u8], at: usize) -> Result<u16, String> {
-    b.get(at..at + 2).map(|s| u16::from_le_bytes([s[0], s[1]])).ok_or_else(|| format!("ELF truncated at {at}"))
+    b.get(at..at + 2)
+        .map(|s| u16::from_le_bytes([s[0], s[1]]))
+        .ok_or_else(|| format!("ELF truncated at {at}"))
 }
 fn u32_at(b: &[u8], at: usize) -> Result<u32, String> {
     b.get(at..at + 4)
@@ -65,7 +67,10 @@ fn u32_at(b: &[u8], at: usize) -> Result<u32, String> {
 pub fn elf_sections(path: &Path) -> Result<Vec<Section>, String> {
     let b = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
     if b.get(..4) != Some(b"\x7fELF".as_slice()) || b.get(4) != Some(&1) || b.get(5) != Some(&1) {
-        return Err(format!("{}: not a 32-bit little-endian ELF", path.display()));
+        return Err(format!(
+            "{}: not a 32-bit little-endian ELF",
+            path.display()
+        ));
     }
     let shoff = u32_at(&b, 0x20)? as usize;
     let shentsize = u16_at(&b, 0x2E)? as usize;
@@ -76,13 +81,20 @@ pub fn elf_sections(path: &Path) -> Result<Vec<Section>, String> {
     let mut out = Vec::new();
     for i in 0..shnum {
         let h = header(i);
-        let (name_off, kind, flags) = (u32_at(&b, h)? as usize, u32_at(&b, h + 4)?, u32_at(&b, h + 8)?);
+        let (name_off, kind, flags) = (
+            u32_at(&b, h)? as usize,
+            u32_at(&b, h + 4)?,
+            u32_at(&b, h + 8)?,
+        );
         let (addr, size) = (u32_at(&b, h + 0x0C)?, u32_at(&b, h + 0x14)?);
         if flags & SHF_ALLOC == 0 || size == 0 {
             continue;
         }
         let name_bytes = b.get(strtab + name_off..).unwrap_or(&[]);
-        let end = name_bytes.iter().position(|&c| c == 0).unwrap_or(name_bytes.len());
+        let end = name_bytes
+            .iter()
+            .position(|&c| c == 0)
+            .unwrap_or(name_bytes.len());
         out.push(Section {
             name: String::from_utf8_lossy(&name_bytes[..end]).into_owned(),
             addr,
@@ -116,7 +128,10 @@ pub fn totals(sections: &[Section]) -> (u64, u64, u64) {
 
 /// The section table as text.
 pub fn format_sections(sections: &[Section]) -> String {
-    let mut s = format!("{:<16} {:>10} {:>10}  {}\n", "section", "address", "bytes", "region");
+    let mut s = format!(
+        "{:<16} {:>10} {:>10}  {}\n",
+        "section", "address", "bytes", "region"
+    );
     for sec in sections {
         let region = match (sec.region, sec.has_contents) {
             (Region::Flash, _) => "flash",
@@ -125,10 +140,15 @@ pub fn format_sections(sections: &[Section]) -> String {
             (Region::Psram, _) => "psram",
             (Region::Other, _) => "other",
         };
-        s.push_str(&format!("{:<16} 0x{:08x} {:>10}  {}\n", sec.name, sec.addr, sec.size, region));
+        s.push_str(&format!(
+            "{:<16} 0x{:08x} {:>10}  {}\n",
+            sec.name, sec.addr, sec.size, region
+        ));
     }
     let (flash, sram, psram) = totals(sections);
-    s.push_str(&format!("total: flash {flash} B, sram {sram} B (+ stack), psram {psram} B\n"));
+    s.push_str(&format!(
+        "total: flash {flash} B, sram {sram} B (+ stack), psram {psram} B\n"
+    ));
     s
 }
 
@@ -156,9 +176,15 @@ pub fn run_bench(elf: &Path, timeout: Duration) -> Result<(Vec<BenchResult>, Str
     let mut results = Vec::new();
     for line in text.lines().filter(|l| l.starts_with("bench: name=")) {
         let field = |k: &str| {
-            line.split_whitespace().find_map(|w| w.strip_prefix(k).and_then(|v| v.strip_prefix('=')).map(str::to_owned))
+            line.split_whitespace().find_map(|w| {
+                w.strip_prefix(k)
+                    .and_then(|v| v.strip_prefix('='))
+                    .map(str::to_owned)
+            })
         };
-        let (Some(name), Some(it), Some(ins)) = (field("name"), field("iterations"), field("instructions")) else {
+        let (Some(name), Some(it), Some(ins)) =
+            (field("name"), field("iterations"), field("instructions"))
+        else {
             continue;
         };
         results.push(BenchResult {
@@ -172,7 +198,10 @@ pub fn run_bench(elf: &Path, timeout: Duration) -> Result<(Vec<BenchResult>, Str
 
 /// The bench results as a table.
 pub fn format_bench(results: &[BenchResult]) -> String {
-    let mut s = format!("{:<28} {:>10} {:>14} {:>14}\n", "workload", "iterations", "instructions", "per iteration");
+    let mut s = format!(
+        "{:<28} {:>10} {:>14} {:>14}\n",
+        "workload", "iterations", "instructions", "per iteration"
+    );
     for r in results {
         s.push_str(&format!(
             "{:<28} {:>10} {:>14} {:>14}\n",

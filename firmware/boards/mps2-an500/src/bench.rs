@@ -46,7 +46,12 @@ fn calibration_loop(n: u32) {
 
 /// Runs every workload.
 pub fn run(clock: &mut SysTickClock) {
-    hprintln!("bench: calibration expected_instructions={}", 2 * u64::from(CALIBRATION_LOOPS) + 1);
-    measure(clock, "calibration", CALIBRATION_LOOPS, || calibration_loop(CALIBRATION_LOOPS));
+    hprintln!(
+        "bench: calibration expected_instructions={}",
+        2 * u64::from(CALIBRATION_LOOPS) + 1
+    );
+    measure(clock, "calibration", CALIBRATION_LOOPS, || {
+        calibration_loop(CALIBRATION_LOOPS)
+    });
     crate::flight::bench_workloads(clock);
 }

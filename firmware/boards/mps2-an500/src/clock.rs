@@ -49,7 +49,9 @@ impl SysTickClock {
     pub fn detached() -> Self {
         // SAFETY: only `ticks` touches `syst`, and it only reads the current value (`SYST::get_current` is a
         // static read); no configuration is changed through this second handle.
-        Self { syst: unsafe { cortex_m::Peripherals::steal() }.SYST }
+        Self {
+            syst: unsafe { cortex_m::Peripherals::steal() }.SYST,
+        }
     }
 
     /// Core-clock ticks since `new`.

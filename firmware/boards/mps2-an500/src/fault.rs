@@ -25,7 +25,13 @@ pub fn fail() -> ! {
 #[panic_handler]
 fn panic(info: &PanicInfo) -> ! {
     match info.location() {
-        Some(loc) => heprintln!("board: PANIC {} at {}:{}:{}", info.message(), loc.file(), loc.line(), loc.column()),
+        Some(loc) => heprintln!(
+            "board: PANIC {} at {}:{}:{}",
+            info.message(),
+            loc.file(),
+            loc.line(),
+            loc.column()
+        ),
         None => heprintln!("board: PANIC {} at <unknown location>", info.message()),
     }
     fail()
@@ -59,7 +65,10 @@ unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
 /// data with other contexts (it only prints and exits).
 #[exception]
 unsafe fn NonMaskableInt() {
-    heprintln!("board: WATCHDOG expired: the flight loop did not kick for {} ms", crate::watchdog::active_timeout_ms());
+    heprintln!(
+        "board: WATCHDOG expired: the flight loop did not kick for {} ms",
+        crate::watchdog::active_timeout_ms()
+    );
     fail()
 }
 

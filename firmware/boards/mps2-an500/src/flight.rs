@@ -77,8 +77,12 @@ impl ByteLink for BoardLink {
     type Error = crate::uart::UartError;
 
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, Self::Error> {
-        let Some(available) = self.gate else { return self.uart.read(buf) };
-        let want = buf.len().min(usize::try_from(available).unwrap_or(usize::MAX));
+        let Some(available) = self.gate else {
+            return self.uart.read(buf);
+        };
+        let want = buf
+            .len()
+            .min(usize::try_from(available).unwrap_or(usize::MAX));
         let mut got = 0;
         // The announced bytes were written by the host before its `R`; they are crossing the emulated UART. The
         // watchdog bounds this wait: a byte that never comes is a harness fault and bites.
@@ -118,7 +122,8 @@ impl ByteLink for BoardLink {
     }
 }
 
-type BoardExecutive = Executive<BoardLink, BoardClock, CmsdkWatchdog, NoAutonomy, &'static mut ExecStorage>;
+type BoardExecutive =
+    Executive<BoardLink, BoardClock, CmsdkWatchdog, NoAutonomy, &'static mut ExecStorage>;
 
 /// Reads exactly `buf.len()` control bytes, kicking the watchdog and sleeping between bytes. The host sends each
 /// command in one write, so this waits only while it crosses the UART.
@@ -195,8 +200,13 @@ fn quit(exec: &BoardExecutive) -> ! {
 /// The flight loop. Never returns: the run ends with `Q` (success) or a fault (failure).
 pub fn run(systick: SysTickClock, lockstep: bool) -> ! {
     // SAFETY: called once from `main`; from here on these values own UART0, UART1 and the watchdog.
-    let (uart0, mut ctl, wdog) =
-        unsafe { (Uart::take(UART0_BASE), Uart::take(UART1_BASE), CmsdkWatchdog::start(TIMEOUT_TICKS)) };
+    let (uart0, mut ctl, wdog) = unsafe {
+        (
+            Uart::take(UART0_BASE),
+            Uart::take(UART1_BASE),
+            CmsdkWatchdog::start(TIMEOUT_TICKS),
+        )
+    };
     for irq in UART_IRQS {
         // SAFETY: the UART interrupts' handler (DefaultHandler in fault.rs) only clears UART interrupt status and
         // shares no data with thread mode.
@@ -206,8 +216,15 @@ pub fn run(systick: SysTickClock, lockstep: bool) -> ! {
         heprintln!("board: executive storage lent twice");
         crate::fault::fail()
     };
-    let link = BoardLink { uart: uart0, gate: lockstep.then_some(0), written: 0 };
-    let clock = BoardClock { systick, lockstep_now: lockstep.then_some(Instant::from_micros(0)) };
+    let link = BoardLink {
+        uart: uart0,
+        gate: lockstep.then_some(0),
+        written: 0,
+    };
+    let clock = BoardClock {
+        systick,
+        lockstep_now: lockstep.then_some(Instant::from_micros(0)),
+    };
     let mut exec: BoardExecutive = Executive::new(link, clock, wdog, NoAutonomy, storage);
     // The harness handshake; in free-running mode the executive's first step also sends the boot Telemetry.
     write_control(&mut ctl, b"H");
@@ -222,7 +239,10 @@ pub fn run(systick: SysTickClock, lockstep: bool) -> ! {
             if tag == *b"Q" {
                 quit(&exec);
             }
-            heprintln!("board: bad control byte 0x{:02x} in free-running mode", tag[0]);
+            heprintln!(
+                "board: bad control byte 0x{:02x} in free-running mode",
+                tag[0]
+            );
             crate::fault::fail()
         }
         if !report.busy {
@@ -290,7 +310,10 @@ struct WireFrame {
 }
 
 fn wire(msg: &firmware::protocol::Message) -> WireFrame {
-    let mut f = WireFrame { bytes: [0; firmware::config::protocol::MAX_ENCODED_FRAME_LEN], len: 0 };
+    let mut f = WireFrame {
+        bytes: [0; firmware::config::protocol::MAX_ENCODED_FRAME_LEN],
+        len: 0,
+    };
     f.len = firmware::protocol::encode(7, msg, &mut f.bytes).unwrap_or(0);
     f
 }
@@ -326,8 +349,15 @@ const BENCH_FRAMES: u32 = 200;
 /// steps over a queue of frames.
 pub fn bench_workloads(clock: &mut SysTickClock) {
     use firmware::protocol::{Message, Point3, Pose, SensorChunk, TetherReading, TimeTick};
-    let tick = Message::TimeTick(TimeTick { host_time_us: 123_456_789 });
-    let tether = Message::TetherReading(TetherReading { time_us: 1_000_000, payout_m: 12.5, tension_n: 80.0, boom_angle_rad: 0.3 });
+    let tick = Message::TimeTick(TimeTick {
+        host_time_us: 123_456_789,
+    });
+    let tether = Message::TetherReading(TetherReading {
+        time_us: 1_000_000,
+        payout_m: 12.5,
+        tension_n: 80.0,
+        boom_angle_rad: 0.3,
+    });
     let mut points = heapless::Vec::new();
     for i in 0..firmware::config::protocol::MAX_POINTS_PER_CHUNK {
         let f = i as f32;
@@ -340,21 +370,34 @@ pub fn bench_workloads(clock: &mut SysTickClock) {
         sensor_pose: Pose::IDENTITY,
         points,
     });
-    for (name, msg) in [("time_tick", &tick), ("tether_reading", &tether), ("sensor_chunk_128_points", &chunk)] {
+    for (name, msg) in [
+        ("time_tick", &tick),
+        ("tether_reading", &tether),
+        ("sensor_chunk_128_points", &chunk),
+    ] {
         let frame = wire(msg);
         let mut enc_name: heapless::String<48> = heapless::String::new();
         let _ = core::fmt::Write::write_fmt(&mut enc_name, format_args!("encode_{name}"));
         crate::bench::measure(clock, &enc_name, BENCH_FRAMES, || {
             let mut out = [0u8; firmware::config::protocol::MAX_ENCODED_FRAME_LEN];
             for i in 0..BENCH_FRAMES {
-                core::hint::black_box(firmware::protocol::encode(i, core::hint::black_box(msg), &mut out).ok());
+                core::hint::black_box(
+                    firmware::protocol::encode(i, core::hint::black_box(msg), &mut out).ok(),
+                );
             }
         });
         let mut dec_name: heapless::String<48> = heapless::String::new();
         let _ = core::fmt::Write::write_fmt(&mut dec_name, format_args!("deframe_decode_{name}"));
         let mut decoded = 0;
-        crate::bench::measure(clock, &dec_name, BENCH_FRAMES, || decoded = deframe_decode(&frame, BENCH_FRAMES));
-        hprintln!("bench: check name={} wire_bytes={} decoded={}", dec_name, frame.len, decoded);
+        crate::bench::measure(clock, &dec_name, BENCH_FRAMES, || {
+            decoded = deframe_decode(&frame, BENCH_FRAMES)
+        });
+        hprintln!(
+            "bench: check name={} wire_bytes={} decoded={}",
+            dec_name,
+            frame.len,
+            decoded
+        );
     }
     exec_dispatch_workload(clock, &tick);
 }
@@ -402,10 +445,13 @@ static EXEC_INPUT: Lent<[u8; 8192]> = Lent::new([0; 8192]);
 /// The whole receive path through the executive: deframe, decode, validate, dispatch, encode and send the Ack,
 /// for BENCH_FRAMES `TimeTick` frames, stepping until the input is consumed and the executive is quiet.
 fn exec_dispatch_workload(clock: &mut SysTickClock, tick: &firmware::protocol::Message) {
-    let (Some(input), Some(storage)) = (EXEC_INPUT.take(), EXEC_STORAGE.take()) else { return };
+    let (Some(input), Some(storage)) = (EXEC_INPUT.take(), EXEC_STORAGE.take()) else {
+        return;
+    };
     let mut len = 0;
     for seq in 0..BENCH_FRAMES {
-        let frame = firmware::protocol::encode(seq, tick, input.get_mut(len..).unwrap_or(&mut [])).unwrap_or(0);
+        let frame = firmware::protocol::encode(seq, tick, input.get_mut(len..).unwrap_or(&mut []))
+            .unwrap_or(0);
         len += frame;
     }
     let input: &'static [u8] = input.get(..len).unwrap_or(&[]);

@@ -39,7 +39,8 @@ pub fn boot_mode() -> BootMode {
     let mut block = [buf.as_mut_ptr() as usize, buf.len()];
     // SAFETY: SYS_GET_CMDLINE writes at most block[1] bytes into the buffer block[0] points to, and updates
     // block[1] to the length written. Both live on this stack frame for the duration of the call.
-    let status = unsafe { cortex_m_semihosting::syscall1(nr::GET_CMDLINE, block.as_mut_ptr() as usize) };
+    let status =
+        unsafe { cortex_m_semihosting::syscall1(nr::GET_CMDLINE, block.as_mut_ptr() as usize) };
     if status != 0 {
         return BootMode::Flight { lockstep: false };
     }
@@ -55,6 +56,8 @@ pub fn boot_mode() -> BootMode {
     } else if has(b"tetherbot.probe=watchdog") {
         BootMode::ProbeWatchdog
     } else {
-        BootMode::Flight { lockstep: has(b"tetherbot.clock=lockstep") }
+        BootMode::Flight {
+            lockstep: has(b"tetherbot.clock=lockstep"),
+        }
     }
 }

@@ -26,7 +26,10 @@ pub struct StackUsage {
 /// Scans the painted region from its low end (a bounded loop: `size_bytes / 4` words).
 pub fn usage() -> StackUsage {
     // Only the addresses of the linker symbols are taken; their contents are never read through them.
-    let (low, high) = (addr_of!(_stack_end) as usize, addr_of!(_stack_start) as usize);
+    let (low, high) = (
+        addr_of!(_stack_end) as usize,
+        addr_of!(_stack_start) as usize,
+    );
     let size_bytes = high.saturating_sub(low);
     let mut untouched_words = 0usize;
     let mut addr = low;
@@ -41,5 +44,8 @@ pub fn usage() -> StackUsage {
         untouched_words += 1;
         addr += 4;
     }
-    StackUsage { high_water_bytes: size_bytes.saturating_sub(untouched_words * 4), size_bytes }
+    StackUsage {
+        high_water_bytes: size_bytes.saturating_sub(untouched_words * 4),
+        size_bytes,
+    }
 }

@@ -20,7 +20,10 @@ unsafe impl<T: Send> Sync for Lent<T> {}
 impl<T> Lent<T> {
     /// Wraps the initial value (a `const` initialiser, so the value lives in `.bss` / `.data`, never on the stack).
     pub const fn new(value: T) -> Self {
-        Self { taken: AtomicBool::new(false), value: UnsafeCell::new(value) }
+        Self {
+            taken: AtomicBool::new(false),
+            value: UnsafeCell::new(value),
+        }
     }
 
     /// The one mutable borrow; `None` if it was already taken.

@@ -73,7 +73,10 @@ impl Uart {
     pub unsafe fn take(base: usize) -> Self {
         let uart = Self { base };
         uart.wr(BAUDDIV, 16);
-        uart.wr(CTRL, CTRL_TX_EN | CTRL_RX_EN | CTRL_TX_INT_EN | CTRL_RX_INT_EN);
+        uart.wr(
+            CTRL,
+            CTRL_TX_EN | CTRL_RX_EN | CTRL_TX_INT_EN | CTRL_RX_INT_EN,
+        );
         // The dummy read after enabling RX (EMBEDDED.md): unblocks QEMU's receive path immediately.
         let _ = uart.rd(DATA);
         uart.wr(STATE, STATE_TX_OVERRUN | STATE_RX_OVERRUN);
