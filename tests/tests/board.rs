@@ -206,3 +206,30 @@ fn on_target_workloads_do_their_work_and_count_identically_twice() {
     );
     assert!(first.iter().all(|r| r.instructions > 0), "{first:?}");
 }
+
+#[test]
+fn absent_qemu_skips_with_install_hint_outside_ci_and_fails_under_ci() {
+    use qemu::{absent_qemu_policy, AbsentQemu};
+    assert_eq!(absent_qemu_policy(true, Some("true"), "t"), AbsentQemu::Run);
+    assert_eq!(absent_qemu_policy(true, None, "t"), AbsentQemu::Run);
+    assert_eq!(
+        absent_qemu_policy(false, Some("true"), "t"),
+        AbsentQemu::Fail
+    );
+    assert_eq!(absent_qemu_policy(false, Some("1"), "t"), AbsentQemu::Fail);
+    for ci in [None, Some("false"), Some("")] {
+        match absent_qemu_policy(false, ci, "equivalence") {
+            AbsentQemu::Skip(note) => {
+                assert!(
+                    note.contains("did NOT run") && note.contains("equivalence"),
+                    "{note}"
+                );
+                assert!(
+                    note.contains("apt-get install -y --no-install-recommends qemu-system-arm"),
+                    "{note}"
+                );
+            }
+            other => panic!("CI={ci:?}: {other:?}"),
+        }
+    }
+}

@@ -632,20 +632,43 @@ impl Drop for QemuBoard {
     }
 }
 
+/// What an on-target test does about QEMU.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum AbsentQemu {
+    /// QEMU is there: run.
+    Run,
+    /// QEMU is absent outside CI: skip, printing this note.
+    Skip(String),
+    /// QEMU is absent under `CI=true` (or `CI=1`): fail.
+    Fail,
+}
+
+/// The policy of [`board_for_tests`], apart from the environment: `ci` is the value of `CI`.
+pub fn absent_qemu_policy(qemu_available: bool, ci: Option<&str>, test: &str) -> AbsentQemu {
+    if qemu_available {
+        AbsentQemu::Run
+    } else if matches!(ci, Some("true" | "1")) {
+        AbsentQemu::Fail
+    } else {
+        AbsentQemu::Skip(format!(
+            "NOTE: on-target test `{test}` did NOT run: `{QEMU_BINARY}` is not installed; {QEMU_INSTALL_HINT}"
+        ))
+    }
+}
+
 /// For tests and CI: the board ELF, built if needed, or `None` when QEMU is absent outside CI (after printing
 /// plainly that the on-target test did not run and how to install QEMU). Under `CI=true`, an absent QEMU or a
 /// failed build is an error (the caller's test fails).
 pub fn board_for_tests(test: &str) -> Result<Option<PathBuf>, QemuError> {
     static BUILT: std::sync::OnceLock<Result<PathBuf, String>> = std::sync::OnceLock::new();
-    let ci = std::env::var("CI")
-        .map(|v| v == "true" || v == "1")
-        .unwrap_or(false);
-    if !qemu_available() {
-        if ci {
-            return Err(QemuError::NotInstalled);
+    let ci = std::env::var("CI").ok();
+    match absent_qemu_policy(qemu_available(), ci.as_deref(), test) {
+        AbsentQemu::Run => {}
+        AbsentQemu::Skip(note) => {
+            eprintln!("{note}");
+            return Ok(None);
         }
-        eprintln!("NOTE: on-target test `{test}` did NOT run: `{QEMU_BINARY}` is not installed; {QEMU_INSTALL_HINT}");
-        return Ok(None);
+        AbsentQemu::Fail => return Err(QemuError::NotInstalled),
     }
     let built = BUILT.get_or_init(|| {
         if std::env::var_os("TETHERBOT_BOARD_ELF").is_some() {

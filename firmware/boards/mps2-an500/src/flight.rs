@@ -193,6 +193,14 @@ fn quit(exec: &BoardExecutive) -> ! {
         t.frames_accepted,
         t.frames_sent
     );
+    if stack.high_water_bytes >= stack.size_bytes {
+        // The paint is gone down to the bottom of the region: the stack reached (and may have passed) its limit.
+        heprintln!(
+            "board: STACK region of {} bytes exhausted (overflow not trapped on ARMv7-M)",
+            stack.size_bytes
+        );
+        crate::fault::fail()
+    }
     debug::exit(debug::EXIT_SUCCESS);
     crate::fault::fail()
 }
