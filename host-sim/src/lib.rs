@@ -27,3 +27,4 @@ pub mod terrain;
 pub mod testkit;
 pub mod truth;
 pub mod world;
+pub mod qemu;

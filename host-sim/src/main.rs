@@ -41,6 +41,8 @@ enum Command {
     AbitBench(cli::abit_bench::Args),
     /// Homotopy planning on a tether-demand plane (scenarios B, C; closed loop with a range sensor).
     Homotopy(cli::homotopy::HomotopyArgs),
+    /// The emulated flight computer (QEMU mps2-an500): resource report, on-target benchmarks, link performance.
+    Board(cli::board::BoardArgs),
 }
 
 fn main() -> ExitCode {
@@ -63,6 +65,7 @@ fn main() -> ExitCode {
         Command::EdtBench(a) => cli::done(cli::map::edt_bench(&a)),
         Command::AbitBench(a) => cli::printed(cli::abit_bench::run(&a)),
         Command::Homotopy(a) => cli::homotopy::main(&a),
+        Command::Board(a) => cli::board::main(&a),
     }
 }
 

@@ -4,7 +4,6 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use crate::fieldlog;
-use crate::link::inproc::InProcLink;
 use crate::replay::{replay, ReplayOutcome, RunConfig};
 
 /// Arguments of `replay`.
@@ -12,6 +11,10 @@ use crate::replay::{replay, ReplayOutcome, RunConfig};
 pub struct ReplayArgs {
     /// The field log.
     pub log: PathBuf,
+    /// Flight software to replay against (default: in-process; logs recorded on either link replay on either,
+    /// because the board runs in lockstep on the same simulated clock).
+    #[arg(long, value_enum, default_value_t = super::board::LinkKind::Inproc)]
+    pub link: super::board::LinkKind,
 }
 
 /// `replay` entry point: exit 0 when identical, 1 on a mismatch or a damaged log, 2 if it cannot run.
@@ -24,14 +27,15 @@ pub fn main(args: &ReplayArgs) -> ExitCode {
         Ok(c) => c,
         Err(e) => return super::fail(format!("log configuration is not a run configuration: {e}")),
     };
-    if config.link != "inproc" {
+    if config.link != "inproc" && config.link != "qemu" {
         return super::fail(format!(
-            "replay of '{}' links is not supported; only inproc",
+            "replay of '{}' links is not supported; only inproc and qemu",
             config.link
         ));
     }
-    let mut link = InProcLink::new(config.step_us);
-    let outcome = match replay(&log, &mut link) {
+    let outcome = match super::board::with_link(args.link, config.step_us, |mut link| {
+        Ok(replay(&log, &mut link)?)
+    }) {
         Ok(o) => o,
         Err(e) => return super::fail(e),
     };

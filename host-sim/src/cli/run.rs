@@ -3,9 +3,11 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use super::board::LinkKind;
 use crate::fieldlog::{self, Writer};
-use crate::link::inproc::{InProcLink, DEFAULT_STEP_US};
+use crate::link::inproc::DEFAULT_STEP_US;
 use crate::link::recording::RecordingLink;
+use crate::link::FlightLink;
 use crate::replay::RunConfig;
 use crate::scripted::{self, ScenarioReport};
 
@@ -27,6 +29,9 @@ pub struct RunArgs {
     /// Creation time written into the log header, Unix milliseconds (default: now). Fix it for byte-identical logs.
     #[arg(long)]
     pub created_at_ms: Option<u64>,
+    /// Flight software to run against: the in-process executive, or the board binary in QEMU (lockstep).
+    #[arg(long, value_enum, default_value_t = LinkKind::Inproc)]
+    pub link: LinkKind,
 }
 
 /// Runs a scenario on the in-process link, optionally recording it.
@@ -39,13 +44,20 @@ pub fn run_scenario(args: &RunArgs) -> Result<ScenarioReport, Box<dyn core::erro
         )
         .into());
     }
-    let link = InProcLink::new(args.step_us);
+    super::board::with_link(args.link, args.step_us, |link| run_on(link, args))
+}
+
+/// Runs a scenario on `link`, optionally recording it.
+pub fn run_on(
+    link: &mut dyn FlightLink,
+    args: &RunArgs,
+) -> Result<ScenarioReport, Box<dyn core::error::Error>> {
     let Some(path) = &args.log else {
         return Ok(scripted::run_protocol(link, args.seed)?);
     };
     let config = RunConfig {
         scenario: args.scenario.clone(),
-        link: "inproc".into(),
+        link: link.name().into(),
         step_us: args.step_us,
     };
     let created = args.created_at_ms.unwrap_or_else(|| {
@@ -73,8 +85,13 @@ pub fn main(args: &RunArgs) -> ExitCode {
     match run_scenario(args) {
         Ok(report) => {
             println!(
-                "scenario {} (seed {}) on the in-process link",
-                args.scenario, args.seed
+                "scenario {} (seed {}) on the {} link",
+                args.scenario,
+                args.seed,
+                match args.link {
+                    LinkKind::Inproc => "in-process",
+                    LinkKind::Qemu => "emulated board (QEMU)",
+                }
             );
             println!("{report}");
             if let Some(p) = &args.log {

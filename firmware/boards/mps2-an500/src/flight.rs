@@ -1,0 +1,492 @@
+//! The flight loop on the board: UART0 bytes in, the flight executive (`firmware::exec`), UART0 bytes out.
+//!
+//! ## Two clocks
+//! - **Free-running** (default, as in flight): the executive reads the SysTick clock and is stepped continuously;
+//!   when a step reports no work the core sleeps (`wfi`) until a UART byte or the 1 ms SysTick wakes it. Its first
+//!   step sends the boot `Telemetry` frame, the protocol's ready frame (`firmware/PROTOCOL.md`).
+//! - **Lockstep** (boot word `tetherbot.clock=lockstep`): the host steps the executive over the control port on
+//!   the host's simulated clock, the way the in-process link does (one `step` per period, bytes delivered at step
+//!   boundaries). Output bytes then depend only on input bytes and step times, so the same run gives the same
+//!   bytes in-process and on the board: the equivalence test.
+//!
+//! ## Control port (UART1; test harness only, never the flight protocol). All integers little-endian.
+//! - board -> host at boot: `H` (hello, 1 byte): the handshake; the host sends nothing before it.
+//! - host -> board `R` (run, 22 bytes): `R`, `announced: u32` (protocol bytes the host wrote to UART0 since the
+//!   last `R`), `t_start_us: u64`, `step_us: u32`, `max_steps: u32`, `until_quiet: u8`. The board runs at most
+//!   `max_steps` steps at `t_start_us + k * step_us`, stopping early after a step that reports no work when
+//!   `until_quiet` is 1, and answers
+//! - board -> host `D` (done, 10 bytes): `D`, `steps: u32`, `busy: u8` (of the last step), `tx: u32` (protocol
+//!   bytes written to UART0 during the run, which the host then reads).
+//! - host -> board `Q` (quit, 1 byte, both clocks): the board prints its resource report over semihosting
+//!   (`board: stack_high_water_bytes=... ...`) and exits QEMU with status 0.
+//!
+//! In lockstep the executive's link behaves like the in-process byte queue: `read` returns exactly the announced
+//! bytes not yet consumed (waiting for them to cross the emulated UART, they are already sent) and `write` takes
+//! everything. Any control byte other than `R` / `Q` is a harness bug: reported, failure exit.
+
+use cortex_m::peripheral::NVIC;
+use cortex_m_semihosting::{debug, heprintln, hprintln};
+use firmware::exec::{ExecStorage, Executive, NoAutonomy};
+use hal::{ByteLink, Instant, MonotonicClock};
+
+use crate::clock::SysTickClock;
+use crate::storage::Lent;
+use crate::uart::{Uart, UART0_BASE, UART1_BASE, UART_IRQS};
+use crate::watchdog::{CmsdkWatchdog, TIMEOUT_TICKS};
+
+/// The executive's large buffers (scan reassembly, plan), lent once. ~130 KiB of `.bss` in SRAM.
+static EXEC_STORAGE: Lent<ExecStorage> = Lent::new(ExecStorage::new());
+
+/// Bytes of an `R` command after its tag.
+const RUN_LEN: usize = 21;
+
+#[derive(Clone, Copy)]
+struct Irq(u16);
+// SAFETY: the numbers are the mps2-an500's UART0/UART1 RX/TX lines, valid NVIC interrupt numbers (< 240).
+unsafe impl cortex_m::interrupt::InterruptNumber for Irq {
+    fn number(self) -> u16 {
+        self.0
+    }
+}
+
+/// The executive's clock: SysTick when free-running, the host's step time in lockstep.
+pub struct BoardClock {
+    systick: SysTickClock,
+    lockstep_now: Option<Instant>,
+}
+
+impl MonotonicClock for BoardClock {
+    fn now(&mut self) -> Instant {
+        match self.lockstep_now {
+            Some(t) => t,
+            None => self.systick.now(),
+        }
+    }
+}
+
+/// The executive's link: UART0, gated in lockstep (see the module docs).
+pub struct BoardLink {
+    uart: Uart,
+    /// Lockstep only: announced protocol bytes not yet read by the executive.
+    gate: Option<u64>,
+    /// Bytes written since the last `R` (lockstep accounting).
+    written: u64,
+}
+
+impl ByteLink for BoardLink {
+    type Error = crate::uart::UartError;
+
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Self::Error> {
+        let Some(available) = self.gate else {
+            return self.uart.read(buf);
+        };
+        let want = buf
+            .len()
+            .min(usize::try_from(available).unwrap_or(usize::MAX));
+        let mut got = 0;
+        // The announced bytes were written by the host before its `R`; they are crossing the emulated UART. The
+        // watchdog bounds this wait: a byte that never comes is a harness fault and bites.
+        while got < want {
+            got += self.uart.read(buf.get_mut(got..want).unwrap_or(&mut []))?;
+        }
+        self.gate = Some(available - got as u64);
+        Ok(got)
+    }
+
+    fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
+        if self.gate.is_none() {
+            let n = self.uart.write(buf)?;
+            self.written += n as u64;
+            return Ok(n);
+        }
+        let mut sent = 0;
+        while sent < buf.len() {
+            sent += self.uart.write(buf.get(sent..).unwrap_or(&[]))?;
+        }
+        self.written += sent as u64;
+        Ok(sent)
+    }
+
+    fn read_ready(&mut self) -> Result<bool, Self::Error> {
+        match self.gate {
+            Some(available) => Ok(available > 0),
+            None => self.uart.read_ready(),
+        }
+    }
+
+    fn write_ready(&mut self) -> Result<bool, Self::Error> {
+        match self.gate {
+            Some(_) => Ok(true),
+            None => self.uart.write_ready(),
+        }
+    }
+}
+
+type BoardExecutive =
+    Executive<BoardLink, BoardClock, CmsdkWatchdog, NoAutonomy, &'static mut ExecStorage>;
+
+/// Reads exactly `buf.len()` control bytes, kicking the watchdog and sleeping between bytes. The host sends each
+/// command in one write, so this waits only while it crosses the UART.
+fn read_control(ctl: &mut Uart, buf: &mut [u8]) {
+    let mut got = 0;
+    while got < buf.len() {
+        crate::watchdog::kick();
+        got += ctl.read(buf.get_mut(got..).unwrap_or(&mut [])).unwrap_or(0);
+        if got < buf.len() {
+            idle(ctl);
+        }
+    }
+}
+
+fn write_control(ctl: &mut Uart, bytes: &[u8]) {
+    let mut sent = 0;
+    while sent < bytes.len() {
+        sent += ctl.write(bytes.get(sent..).unwrap_or(&[])).unwrap_or(0);
+    }
+}
+
+/// Sleeps until an interrupt (UART byte, transmitter free, SysTick) unless a byte is already waiting on `uart`.
+fn idle(uart: &mut Uart) {
+    cortex_m::interrupt::free(|_| {
+        if !uart.read_ready().unwrap_or(true) {
+            cortex_m::asm::wfi();
+        }
+    });
+}
+
+fn le_u32(b: &[u8], at: usize) -> u32 {
+    let mut w = [0u8; 4];
+    if let Some(s) = b.get(at..at + 4) {
+        w.copy_from_slice(s);
+    }
+    u32::from_le_bytes(w)
+}
+
+fn le_u64(b: &[u8], at: usize) -> u64 {
+    let mut w = [0u8; 8];
+    if let Some(s) = b.get(at..at + 8) {
+        w.copy_from_slice(s);
+    }
+    u64::from_le_bytes(w)
+}
+
+/// Prints the resource report and ends the run successfully.
+fn quit(exec: &BoardExecutive) -> ! {
+    let stack = crate::stack::usage();
+    let t = exec.telemetry();
+    let hw = t.high_water;
+    hprintln!(
+        "board: stack_high_water_bytes={} stack_size_bytes={} exec_storage_bytes={} scan_points_peak={} \
+         scan_points_capacity={} tx_queue_peak={} tx_queue_capacity={} rx_staging_peak={} frame_len_peak={} \
+         log_queue_peak={} steps={} frames_accepted={} frames_sent={}",
+        stack.high_water_bytes,
+        stack.size_bytes,
+        core::mem::size_of::<ExecStorage>(),
+        hw.scan_points,
+        firmware::config::protocol::SCAN_POINTS_CAPACITY,
+        hw.tx_queue,
+        firmware::config::exec::TX_QUEUE_LEN,
+        hw.rx_staging,
+        hw.frame_len,
+        hw.log_queue,
+        t.steps,
+        t.frames_accepted,
+        t.frames_sent
+    );
+    if stack.high_water_bytes >= stack.size_bytes {
+        // The paint is gone down to the bottom of the region: the stack reached (and may have passed) its limit.
+        heprintln!(
+            "board: STACK region of {} bytes exhausted (overflow not trapped on ARMv7-M)",
+            stack.size_bytes
+        );
+        crate::fault::fail()
+    }
+    debug::exit(debug::EXIT_SUCCESS);
+    crate::fault::fail()
+}
+
+/// The flight loop. Never returns: the run ends with `Q` (success) or a fault (failure).
+pub fn run(systick: SysTickClock, lockstep: bool) -> ! {
+    // SAFETY: called once from `main`; from here on these values own UART0, UART1 and the watchdog.
+    let (uart0, mut ctl, wdog) = unsafe {
+        (
+            Uart::take(UART0_BASE),
+            Uart::take(UART1_BASE),
+            CmsdkWatchdog::start(TIMEOUT_TICKS),
+        )
+    };
+    for irq in UART_IRQS {
+        // SAFETY: the UART interrupts' handler (DefaultHandler in fault.rs) only clears UART interrupt status and
+        // shares no data with thread mode.
+        unsafe { NVIC::unmask(Irq(irq as u16)) };
+    }
+    let Some(storage) = EXEC_STORAGE.take() else {
+        heprintln!("board: executive storage lent twice");
+        crate::fault::fail()
+    };
+    let link = BoardLink {
+        uart: uart0,
+        gate: lockstep.then_some(0),
+        written: 0,
+    };
+    let clock = BoardClock {
+        systick,
+        lockstep_now: lockstep.then_some(Instant::from_micros(0)),
+    };
+    let mut exec: BoardExecutive = Executive::new(link, clock, wdog, NoAutonomy, storage);
+    // The harness handshake; in free-running mode the executive's first step also sends the boot Telemetry.
+    write_control(&mut ctl, b"H");
+    if lockstep {
+        run_lockstep(&mut exec, &mut ctl)
+    }
+    loop {
+        let report = exec.step();
+        if ctl.read_ready().unwrap_or(false) {
+            let mut tag = [0u8; 1];
+            let _ = ctl.read(&mut tag);
+            if tag == *b"Q" {
+                quit(&exec);
+            }
+            heprintln!(
+                "board: bad control byte 0x{:02x} in free-running mode",
+                tag[0]
+            );
+            crate::fault::fail()
+        }
+        if !report.busy {
+            let link = &mut exec.link_mut().uart;
+            cortex_m::interrupt::free(|_| {
+                if !link.read_ready().unwrap_or(true) && !ctl.read_ready().unwrap_or(true) {
+                    cortex_m::asm::wfi();
+                }
+            });
+        }
+    }
+}
+
+fn run_lockstep(exec: &mut BoardExecutive, ctl: &mut Uart) -> ! {
+    loop {
+        let mut tag = [0u8; 1];
+        read_control(ctl, &mut tag);
+        match &tag {
+            b"Q" => quit(exec),
+            b"R" => {}
+            _ => {
+                heprintln!("board: bad control byte 0x{:02x} in lockstep mode", tag[0]);
+                crate::fault::fail()
+            }
+        }
+        let mut cmd = [0u8; RUN_LEN];
+        read_control(ctl, &mut cmd);
+        let announced = u64::from(le_u32(&cmd, 0));
+        let t_start = le_u64(&cmd, 4);
+        let step_us = u64::from(le_u32(&cmd, 12));
+        let max_steps = le_u32(&cmd, 16);
+        let until_quiet = cmd.get(20).copied().unwrap_or(0) != 0;
+        {
+            let link = exec.link_mut();
+            link.gate = Some(link.gate.unwrap_or(0) + announced);
+            link.written = 0;
+        }
+        let mut steps = 0u32;
+        let mut busy = false;
+        let mut t = t_start;
+        for _ in 0..max_steps {
+            exec.clock_mut().lockstep_now = Some(Instant::from_micros(t));
+            let report = exec.step();
+            steps += 1;
+            busy = report.busy;
+            t += step_us;
+            if until_quiet && !busy {
+                break;
+            }
+        }
+        let mut done = [0u8; 10];
+        done[0] = b'D';
+        done[1..5].copy_from_slice(&steps.to_le_bytes());
+        done[5] = u8::from(busy);
+        let written = u32::try_from(exec.link_mut().written).unwrap_or(u32::MAX);
+        done[6..10].copy_from_slice(&written.to_le_bytes());
+        write_control(ctl, &done);
+    }
+}
+
+/// One frame's wire bytes for the benchmarks.
+struct WireFrame {
+    bytes: [u8; firmware::config::protocol::MAX_ENCODED_FRAME_LEN],
+    len: usize,
+}
+
+fn wire(msg: &firmware::protocol::Message) -> WireFrame {
+    let mut f = WireFrame {
+        bytes: [0; firmware::config::protocol::MAX_ENCODED_FRAME_LEN],
+        len: 0,
+    };
+    f.len = firmware::protocol::encode(7, msg, &mut f.bytes).unwrap_or(0);
+    f
+}
+
+/// Deframes and decodes `frame` `iterations` times; returns the number of frames decoded (for a sanity line).
+fn deframe_decode(frame: &WireFrame, iterations: u32) -> u32 {
+    let mut deframer = firmware::protocol::Deframer::new();
+    let mut decoded = 0;
+    let bytes = frame.bytes.get(..frame.len).unwrap_or(&[]);
+    for _ in 0..iterations {
+        let mut rest = bytes;
+        // A frame completes within one pass; the bound is the frame length (each pass consumes >= 1 byte).
+        for _ in 0..bytes.len() {
+            let (used, event) = deframer.push(rest);
+            rest = rest.get(used.max(1)..).unwrap_or(&[]);
+            if let Some(Ok(raw)) = event {
+                if firmware::protocol::decode_frame(raw).is_ok() {
+                    decoded += 1;
+                }
+            }
+            if rest.is_empty() {
+                break;
+            }
+        }
+    }
+    core::hint::black_box(decoded)
+}
+
+/// Frames per workload.
+const BENCH_FRAMES: u32 = 200;
+
+/// Workloads of the flight code for `bench.rs`: protocol encode / deframe+decode of fixed frames, and executive
+/// steps over a queue of frames.
+pub fn bench_workloads(clock: &mut SysTickClock) {
+    use firmware::protocol::{Message, Point3, Pose, SensorChunk, TetherReading, TimeTick};
+    let tick = Message::TimeTick(TimeTick {
+        host_time_us: 123_456_789,
+    });
+    let tether = Message::TetherReading(TetherReading {
+        time_us: 1_000_000,
+        payout_m: 12.5,
+        tension_n: 80.0,
+        boom_angle_rad: 0.3,
+    });
+    let mut points = heapless::Vec::new();
+    for i in 0..firmware::config::protocol::MAX_POINTS_PER_CHUNK {
+        let f = i as f32;
+        let _ = points.push(Point3::new(1.0 + 0.01 * f, -0.5 + 0.02 * f, 0.25));
+    }
+    let chunk = Message::SensorChunk(SensorChunk {
+        scan_id: 1,
+        chunk_index: 0,
+        chunk_count: 1,
+        sensor_pose: Pose::IDENTITY,
+        points,
+    });
+    for (name, msg) in [
+        ("time_tick", &tick),
+        ("tether_reading", &tether),
+        ("sensor_chunk_128_points", &chunk),
+    ] {
+        let frame = wire(msg);
+        let mut enc_name: heapless::String<48> = heapless::String::new();
+        let _ = core::fmt::Write::write_fmt(&mut enc_name, format_args!("encode_{name}"));
+        crate::bench::measure(clock, &enc_name, BENCH_FRAMES, || {
+            let mut out = [0u8; firmware::config::protocol::MAX_ENCODED_FRAME_LEN];
+            for i in 0..BENCH_FRAMES {
+                core::hint::black_box(
+                    firmware::protocol::encode(i, core::hint::black_box(msg), &mut out).ok(),
+                );
+            }
+        });
+        let mut dec_name: heapless::String<48> = heapless::String::new();
+        let _ = core::fmt::Write::write_fmt(&mut dec_name, format_args!("deframe_decode_{name}"));
+        let mut decoded = 0;
+        crate::bench::measure(clock, &dec_name, BENCH_FRAMES, || {
+            decoded = deframe_decode(&frame, BENCH_FRAMES)
+        });
+        hprintln!(
+            "bench: check name={} wire_bytes={} decoded={}",
+            dec_name,
+            frame.len,
+            decoded
+        );
+    }
+    exec_dispatch_workload(clock, &tick);
+}
+
+/// In-memory link for the executive workload: reads from a fixed byte stream, counts and discards output.
+struct MemLink {
+    input: &'static [u8],
+    written: usize,
+}
+
+impl ByteLink for MemLink {
+    type Error = core::convert::Infallible;
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Self::Error> {
+        let n = buf.len().min(self.input.len());
+        if let (Some(dst), Some(src)) = (buf.get_mut(..n), self.input.get(..n)) {
+            dst.copy_from_slice(src);
+        }
+        self.input = self.input.get(n..).unwrap_or(&[]);
+        Ok(n)
+    }
+    fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
+        self.written += buf.len();
+        Ok(buf.len())
+    }
+    fn read_ready(&mut self) -> Result<bool, Self::Error> {
+        Ok(!self.input.is_empty())
+    }
+    fn write_ready(&mut self) -> Result<bool, Self::Error> {
+        Ok(true)
+    }
+}
+
+struct NoWatchdog;
+impl hal::Watchdog for NoWatchdog {
+    type Error = core::convert::Infallible;
+    fn kick(&mut self) -> Result<(), Self::Error> {
+        crate::watchdog::kick();
+        Ok(())
+    }
+}
+
+/// Wire bytes of the executive workload's input (BENCH_FRAMES time ticks of 16 bytes each, with margin).
+static EXEC_INPUT: Lent<[u8; 8192]> = Lent::new([0; 8192]);
+
+/// The whole receive path through the executive: deframe, decode, validate, dispatch, encode and send the Ack,
+/// for BENCH_FRAMES `TimeTick` frames, stepping until the input is consumed and the executive is quiet.
+fn exec_dispatch_workload(clock: &mut SysTickClock, tick: &firmware::protocol::Message) {
+    let (Some(input), Some(storage)) = (EXEC_INPUT.take(), EXEC_STORAGE.take()) else {
+        return;
+    };
+    let mut len = 0;
+    for seq in 0..BENCH_FRAMES {
+        let frame = firmware::protocol::encode(seq, tick, input.get_mut(len..).unwrap_or(&mut []))
+            .unwrap_or(0);
+        len += frame;
+    }
+    let input: &'static [u8] = input.get(..len).unwrap_or(&[]);
+    let link = MemLink { input, written: 0 };
+    let clock_for_exec = BoardClock {
+        systick: SysTickClock::detached(),
+        lockstep_now: Some(Instant::from_micros(0)),
+    };
+    let mut exec = Executive::new(link, clock_for_exec, NoWatchdog, NoAutonomy, storage);
+    // The boot Telemetry is sent by the first step: run it outside the measurement.
+    let _ = exec.step();
+    let mut steps = 0u32;
+    crate::bench::measure(clock, "exec_dispatch_time_tick", BENCH_FRAMES, || {
+        // Bound: FRAMES_PER_STEP frames per step, so BENCH_FRAMES steps always suffice.
+        for k in 1..=BENCH_FRAMES {
+            exec.clock_mut().lockstep_now = Some(Instant::from_micros(u64::from(k)));
+            steps += 1;
+            if !exec.step().busy {
+                break;
+            }
+        }
+    });
+    let t = exec.telemetry();
+    hprintln!(
+        "bench: check name=exec_dispatch_time_tick steps={} frames_accepted={} bytes_out={}",
+        steps,
+        t.frames_accepted,
+        exec.link_mut().written
+    );
+}

@@ -1,0 +1,62 @@
+//! Static storage lent to the flight core.
+//!
+//! The core never allocates: every arena is owned by its caller and lent as `&mut`. On the board the owner is a
+//! `static`, handed out exactly once as `&'static mut` by [`Lent::take`]. This is the only place the board
+//! creates a mutable reference to a static, and the `taken` flag makes a second one impossible.
+
+use core::cell::UnsafeCell;
+use core::sync::atomic::{AtomicBool, Ordering};
+
+/// A static value that can be borrowed mutably once, for the rest of the program.
+pub struct Lent<T> {
+    taken: AtomicBool,
+    value: UnsafeCell<T>,
+}
+
+// SAFETY: the value is reachable only through the single `&'static mut` that `take` hands out (guarded by the
+// atomic flag), so sharing the `Lent` itself between contexts cannot create aliasing access to `T`.
+unsafe impl<T: Send> Sync for Lent<T> {}
+
+impl<T> Lent<T> {
+    /// Wraps the initial value (a `const` initialiser, so the value lives in `.bss` / `.data`, never on the stack).
+    pub const fn new(value: T) -> Self {
+        Self {
+            taken: AtomicBool::new(false),
+            value: UnsafeCell::new(value),
+        }
+    }
+
+    /// The one mutable borrow; `None` if it was already taken.
+    // `mut_from_ref` is the point of this type: the atomic flag makes the returned borrow unique.
+    #[allow(clippy::mut_from_ref)]
+    pub fn take(&'static self) -> Option<&'static mut T> {
+        if self.taken.swap(true, Ordering::AcqRel) {
+            return None;
+        }
+        // SAFETY: the flag was false, so no other reference to the value exists, and it is now true forever, so
+        // none will be created later. The static lives for the whole program.
+        Some(unsafe { &mut *self.value.get() })
+    }
+}
+
+extern "C" {
+    static mut __spsram: u64;
+    static mut __epsram: u64;
+}
+
+/// Zeroes the `.psram` section (see `memory.x`): statics placed there with `#[link_section = ".psram"]` must have
+/// an all-zero initial value. Called once at boot, before anything in `.psram` is used. Empty today: the
+/// executive's storage (132 KiB) fits the 4 MiB SRAM; planner arenas of later issues may move here.
+pub fn zero_psram() {
+    let start = core::ptr::addr_of_mut!(__spsram);
+    let end = core::ptr::addr_of_mut!(__epsram);
+    let mut p = start;
+    while p < end {
+        // SAFETY: [__spsram, __epsram) is the 8-aligned `.psram` output section in PSRAM (memory.x), which no
+        // code has touched yet at boot; writing zeros there is what the section's contract promises.
+        unsafe {
+            core::ptr::write_volatile(p, 0);
+            p = p.add(1);
+        }
+    }
+}
