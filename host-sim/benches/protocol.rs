@@ -3,21 +3,30 @@
 //!
 //!     cargo bench -p host-sim --bench protocol
 
+use core::hint::black_box;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use firmware::config::protocol::{MAX_ENCODED_FRAME_LEN, MAX_POINTS_PER_CHUNK};
 use firmware::protocol::*;
-use core::hint::black_box;
 
 fn full_chunk() -> Message {
     let mut points = heapless::Vec::new();
     for i in 0..MAX_POINTS_PER_CHUNK {
         let _ = points.push(Point3::new(1.0 + i as f32 * 0.01, -0.5 * i as f32, 0.25));
     }
-    Message::SensorChunk(SensorChunk { scan_id: 1, chunk_index: 0, chunk_count: 8, sensor_pose: Pose::IDENTITY, points })
+    Message::SensorChunk(SensorChunk {
+        scan_id: 1,
+        chunk_index: 0,
+        chunk_count: 8,
+        sensor_pose: Pose::IDENTITY,
+        points,
+    })
 }
 
 fn bench(c: &mut Criterion) {
-    let cases = [("ack", Message::Ack(Ack { seq: 123_456 })), ("sensor_chunk_128", full_chunk())];
+    let cases = [
+        ("ack", Message::Ack(Ack { seq: 123_456 })),
+        ("sensor_chunk_128", full_chunk()),
+    ];
     let mut g = c.benchmark_group("protocol");
     for (name, msg) in &cases {
         let mut buf = vec![0u8; MAX_ENCODED_FRAME_LEN];

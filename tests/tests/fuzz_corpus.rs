@@ -11,7 +11,12 @@ fn seeds() -> Vec<(String, Vec<u8>)> {
     let msgs = vec![
         Message::TimeTick(TimeTick { host_time_us: 1000 }),
         Message::SensorChunk(scan[0].clone()),
-        Message::TetherReading(TetherReading { time_us: 5, payout_m: 1.0, tension_n: 2.0, boom_angle_rad: 0.1 }),
+        Message::TetherReading(TetherReading {
+            time_us: 5,
+            payout_m: 1.0,
+            tension_n: 2.0,
+            boom_angle_rad: 0.1,
+        }),
         Message::GoalRequest(GoalRequest {
             goal_id: 1,
             position: Point3::new(1.0, 2.0, 3.0),
@@ -24,11 +29,30 @@ fn seeds() -> Vec<(String, Vec<u8>)> {
         Message::Shutdown(Shutdown),
         Message::TelemetryRequest(TelemetryRequest),
         Message::Ack(Ack { seq: 1 }),
-        Message::Nack(Nack { seq: 2, reason: NackReason::BadCrc }),
-        Message::PlanStatus(PlanStatus { goal_id: 1, state: PlanState::Searching, iterations: 3, best_cost: Some(1.5) }),
-        Message::Plan(Plan { goal_id: 1, part: 0, parts: 1, waypoints: heapless::Vec::new() }),
-        Message::DriveCommand(DriveCommand { command_id: 1, motion: Motion::Straight { distance_m: 0.5 } }),
-        Message::Log(Log { level: LogLevel::Info, text: heapless::String::try_from("hello").unwrap() }),
+        Message::Nack(Nack {
+            seq: 2,
+            reason: NackReason::BadCrc,
+        }),
+        Message::PlanStatus(PlanStatus {
+            goal_id: 1,
+            state: PlanState::Searching,
+            iterations: 3,
+            best_cost: Some(1.5),
+        }),
+        Message::Plan(Plan {
+            goal_id: 1,
+            part: 0,
+            parts: 1,
+            waypoints: heapless::Vec::new(),
+        }),
+        Message::DriveCommand(DriveCommand {
+            command_id: 1,
+            motion: Motion::Straight { distance_m: 0.5 },
+        }),
+        Message::Log(Log {
+            level: LogLevel::Info,
+            text: heapless::String::try_from("hello").unwrap(),
+        }),
     ];
     let mut out = Vec::new();
     for (i, m) in msgs.iter().enumerate() {
