@@ -290,11 +290,12 @@ pub fn boom_inline_angle(settled: &SettledPose, anchor: &Vec3) -> Real {
 
 /// Tip (tether exit) of the boom at angle `beta`, world frame.
 pub fn boom_tip(settled: &SettledPose, beta: Real, params: &RoverParams) -> Vec3 {
-    settled.pose * nalgebra::Point3::new(
-        params.boom_length_m * libm::cosf(beta),
-        0.0,
-        params.boom_length_m * libm::sinf(beta),
-    )
+    (settled.pose
+        * nalgebra::Point3::new(
+            params.boom_length_m * libm::cosf(beta),
+            0.0,
+            params.boom_length_m * libm::sinf(beta),
+        ))
     .coords
 }
 
