@@ -1,5 +1,51 @@
 //! `tetherbot`: the operator's CLI (run a scenario, campaign, record, replay, export, render).
+//!
+//! Subcommand logic lives in `host_sim::cli::<name>`; this file only parses and dispatches.
 
-fn main() {
-    println!("tetherbot: not yet implemented");
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use host_sim::cli;
+
+/// Onboard navigation for tethered extreme-terrain rovers: simulator and operator's tool.
+#[derive(Parser)]
+#[command(name = "tetherbot", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a scenario against the flight software on the in-process link (the main job).
+    Run(cli::run::RunArgs),
+    /// Run a scenario and record every byte into a field log (same as `run --log LOG`).
+    Record(cli::run::RunArgs),
+    /// Replay a field log against a fresh flight software and compare every output byte.
+    Replay(cli::replay::ReplayArgs),
+    /// Export a field log to MCAP.
+    Export(cli::export::ExportArgs),
+    /// Show a field log's header, frames and damage.
+    Inspect(cli::inspect::InspectArgs),
+}
+
+fn main() -> ExitCode {
+    env_logger_lite();
+    match Cli::parse().command {
+        Command::Run(a) => cli::run::main(&a),
+        Command::Record(a) => {
+            if a.log.is_none() {
+                return cli::fail("record needs --log LOG (or -o LOG)");
+            }
+            cli::run::main(&a)
+        }
+        Command::Replay(a) => cli::replay::main(&a),
+        Command::Export(a) => cli::export::main(&a),
+        Command::Inspect(a) => cli::inspect::main(&a),
+    }
+}
+
+/// Prints `log` records from the flight software to stderr when `TETHERBOT_LOG` is set (error/warn/info/debug).
+fn env_logger_lite() {
+    host_sim::cli::install_stderr_logger();
 }
