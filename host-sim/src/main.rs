@@ -27,6 +27,8 @@ enum Command {
     Export(cli::export::ExportArgs),
     /// Show a field log's header, frames and damage.
     Inspect(cli::inspect::InspectArgs),
+    /// Render the stability region of the 55-degree ledge for a root anchor (SVG).
+    StabilityMap(cli::stability_map::StabilityMapArgs),
 }
 
 fn main() -> ExitCode {
@@ -42,6 +44,7 @@ fn main() -> ExitCode {
         Command::Replay(a) => cli::replay::main(&a),
         Command::Export(a) => cli::export::main(&a),
         Command::Inspect(a) => cli::inspect::main(&a),
+        Command::StabilityMap(a) => cli::stability_map::main(&a),
     }
 }
 

@@ -5,6 +5,7 @@ pub mod export;
 pub mod inspect;
 pub mod replay;
 pub mod run;
+pub mod stability_map;
 
 use std::process::ExitCode;
 
