@@ -397,6 +397,26 @@ mod tests {
         assert_eq!(a2.len(), 1, "{a2:?}");
     }
 
+    /// The cliff, but nobody has observed the space above x > 2.
+    struct HalfKnown;
+    impl DistanceField for HalfKnown {
+        fn query(&self, p: &Vec3) -> DistanceQuery {
+            if p.x > 2.0 {
+                DistanceQuery::Unknown
+            } else {
+                Cliff.query(p)
+            }
+        }
+    }
+
+    #[test]
+    fn unknown_space_in_the_sweep_is_an_error() {
+        let a0 = AnchorHistory::new(Anchor::root(Vec3::new(-5.0, 0.0, 6.0)));
+        let mut out = AnchorHistory::default();
+        let r = predict_anchors(&HalfKnown, &a0, &Vec3::new(1.0, 0.0, 4.5), &Vec3::new(3.0, 0.0, 4.5), &mut out);
+        assert_eq!(r, Err(TetherError::UnknownSpace));
+    }
+
     #[test]
     fn full_history_is_a_typed_error() {
         let mut h = AnchorHistory::new(Anchor::root(Vec3::zeros()));
