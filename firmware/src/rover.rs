@@ -290,11 +290,12 @@ pub fn boom_inline_angle(settled: &SettledPose, anchor: &Vec3) -> Real {
 
 /// Tip (tether exit) of the boom at angle `beta`, world frame.
 pub fn boom_tip(settled: &SettledPose, beta: Real, params: &RoverParams) -> Vec3 {
-    settled.pose * nalgebra::Point3::new(
-        params.boom_length_m * libm::cosf(beta),
-        0.0,
-        params.boom_length_m * libm::sinf(beta),
-    )
+    (settled.pose
+        * nalgebra::Point3::new(
+            params.boom_length_m * libm::cosf(beta),
+            0.0,
+            params.boom_length_m * libm::sinf(beta),
+        ))
     .coords
 }
 
@@ -490,6 +491,34 @@ mod tests {
         let plane = Plane::new(0.0);
         assert_eq!(settle(&plane, &Vec3::new(0.0, 0.0, 3.0), 0.0, &params), SettleOutcome::NoGround);
         assert_eq!(settle(&plane, &Vec3::new(Real::NAN, 0.0, 0.0), 0.0, &params), SettleOutcome::InvalidInput);
+    }
+
+    /// Flat ground plus a thin vertical fin (|x| <= 0.05, |y| <= 0.05, 0 <= z <= 0.6) between the wheels.
+    struct Fin;
+    impl DistanceField for Fin {
+        fn query(&self, p: &Vec3) -> DistanceQuery {
+            // exact box SDF, centre (0, 0, 0.3), half extents (0.05, 0.05, 0.3)
+            let q = Vec3::new(libm::fabsf(p.x) - 0.05, libm::fabsf(p.y) - 0.05, libm::fabsf(p.z - 0.3) - 0.3);
+            let outside = Vec3::new(q.x.max(0.0), q.y.max(0.0), q.z.max(0.0));
+            let dbox = crate::geom::norm3(&outside) + q.x.max(q.y).max(q.z).min(0.0);
+            let (d, g) = if dbox < p.z { (dbox, Vec3::z()) } else { (p.z, Vec3::z()) };
+            DistanceQuery::Known { distance: d, gradient: g }
+        }
+    }
+
+    #[test]
+    fn body_collision_with_a_fin_between_the_wheels() {
+        let params = RoverParams::AXEL;
+        // wheels either side of the fin (axle along y crosses it): the body at axle height 0.35 hits the 0.6 m fin
+        match settle(&Fin, &Vec3::new(0.0, 0.0, 0.0), 0.0, &params) {
+            // the reported body point lies within body radius + clearance of the fin's face at |y| = 0.05
+            SettleOutcome::Collision { point, .. } => {
+                assert!(libm::fabsf(point.y) - 0.05 < params.body_radius_m + params.body_clearance_m, "{point:?}")
+            }
+            other => panic!("expected a collision, got {other:?}"),
+        }
+        // 2 m away the ground is clear
+        assert!(matches!(settle(&Fin, &Vec3::new(2.0, 0.0, 0.0), 0.0, &params), SettleOutcome::Settled(_)));
     }
 
     #[test]

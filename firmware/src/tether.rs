@@ -17,7 +17,10 @@
 //! closest-to-terrain sample, projected onto the surface, becomes the new anchor (with its gradient). The tether
 //! is then inline with the new anchor at `x(t*)`, and the search repeats with the new anchor as pivot over the
 //! triangle `(a_new, x(t*), x_1)` until no obstacle is found (at most `MAX_ATTACH_PER_SWEEP` times).
-//! Samples within `PIVOT_EXCLUSION_M` of the pivot are skipped (the pivot is on the surface).
+//! Samples within `PIVOT_EXCLUSION_M` of the pivot are skipped (the pivot is on the surface); `NEAR_PIVOT_SAMPLES`
+//! extra samples cover `[PIVOT_EXCLUSION_M, NEAR_PIVOT_RANGE_M]` from the pivot, so a tether wrapping a curved
+//! surface (a pole) is caught as soon as it cuts in beyond the exclusion: successive anchors on a cylinder of radius
+//! `r` are then about `2 asin(PIVOT_EXCLUSION_M / 2r)` apart (0.4 rad on the 0.25 m test pole... see the tests).
 //!
 //! # Detachment (IV-B b, Fig. 5)
 //! Frame `F_d` at anchor `a_N`: `b` = unit(`a_N - a_{N-1}`) (the incoming tether), `z` = the anchor's gradient made
@@ -28,10 +31,11 @@
 //! # Parameters (`config::tether`)
 //! `ANCHOR_HISTORY_CAPACITY = 16`, `SWEEP_SAMPLES_ALONG = 48`, `SWEEP_SAMPLES_ACROSS = 24`, `SWEEP_REFINE_STEPS =
 //! 14`, `MAX_ATTACH_PER_SWEEP = 8`, `MAX_DETACH_ITERATIONS = 16`, `TETHER_CONTACT_DISTANCE_M = 0.005`,
-//! `PIVOT_EXCLUSION_M = 0.05`.
+//! `PIVOT_EXCLUSION_M = 0.1`, `NEAR_PIVOT_SAMPLES = 16`, `NEAR_PIVOT_RANGE_M = 1.0`.
 
 use crate::config::tether::{
-    ANCHOR_HISTORY_CAPACITY, MAX_ATTACH_PER_SWEEP, MAX_DETACH_ITERATIONS, PIVOT_EXCLUSION_M, SWEEP_REFINE_STEPS,
+    ANCHOR_HISTORY_CAPACITY, MAX_ATTACH_PER_SWEEP, MAX_DETACH_ITERATIONS, NEAR_PIVOT_RANGE_M, NEAR_PIVOT_SAMPLES,
+    PIVOT_EXCLUSION_M, SWEEP_REFINE_STEPS,
     SWEEP_SAMPLES_ACROSS, SWEEP_SAMPLES_ALONG, TETHER_CONTACT_DISTANCE_M,
 };
 use crate::geom::{normalize3, Real, Vec3};
@@ -147,9 +151,17 @@ fn blocked_line(
 ) -> Result<Option<(Real, Vec3, Real)>, TetherError> {
     let len = crate::geom::norm3(&(end - pivot));
     let mut best: Option<(Real, Vec3, Real)> = None;
-    for k in 1..=SWEEP_SAMPLES_ALONG {
-        let s = k as Real / SWEEP_SAMPLES_ALONG as Real;
-        if s * len < PIVOT_EXCLUSION_M {
+    let near = NEAR_PIVOT_SAMPLES;
+    for k in 1..=(SWEEP_SAMPLES_ALONG + near) {
+        // the first `near` samples cover [PIVOT_EXCLUSION_M, NEAR_PIVOT_RANGE_M] from the pivot finely (a tether
+        // wrapping a curved surface next to its pivot); the rest are uniform along the whole line
+        let s = if k <= near {
+            let dist = PIVOT_EXCLUSION_M + (NEAR_PIVOT_RANGE_M - PIVOT_EXCLUSION_M) * (k - 1) as Real / near as Real;
+            if len > 0.0 { dist / len } else { 1.0 }
+        } else {
+            (k - near) as Real / SWEEP_SAMPLES_ALONG as Real
+        };
+        if s * len < PIVOT_EXCLUSION_M || s > 1.0 {
             continue;
         }
         let p = lerp(pivot, end, s);
@@ -383,6 +395,26 @@ mod tests {
         let mut a2 = AnchorHistory::default();
         predict_anchors(&Cliff, &a1, &x1, &x0, &mut a2).unwrap_or_else(|e| panic!("{e:?}"));
         assert_eq!(a2.len(), 1, "{a2:?}");
+    }
+
+    /// The cliff, but nobody has observed the space above x > 2.
+    struct HalfKnown;
+    impl DistanceField for HalfKnown {
+        fn query(&self, p: &Vec3) -> DistanceQuery {
+            if p.x > 2.0 {
+                DistanceQuery::Unknown
+            } else {
+                Cliff.query(p)
+            }
+        }
+    }
+
+    #[test]
+    fn unknown_space_in_the_sweep_is_an_error() {
+        let a0 = AnchorHistory::new(Anchor::root(Vec3::new(-5.0, 0.0, 6.0)));
+        let mut out = AnchorHistory::default();
+        let r = predict_anchors(&HalfKnown, &a0, &Vec3::new(1.0, 0.0, 4.5), &Vec3::new(3.0, 0.0, 4.5), &mut out);
+        assert_eq!(r, Err(TetherError::UnknownSpace));
     }
 
     #[test]

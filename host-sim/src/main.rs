@@ -43,6 +43,8 @@ enum Command {
     Homotopy(cli::homotopy::HomotopyArgs),
     /// The emulated flight computer (QEMU mps2-an500): resource report, on-target benchmarks, link performance.
     Board(cli::board::BoardArgs),
+    /// Render the stability region of the 55-degree ledge for a root anchor (SVG).
+    StabilityMap(cli::stability_map::StabilityMapArgs),
 }
 
 fn main() -> ExitCode {
@@ -66,6 +68,7 @@ fn main() -> ExitCode {
         Command::AbitBench(a) => cli::printed(cli::abit_bench::run(&a)),
         Command::Homotopy(a) => cli::homotopy::main(&a),
         Command::Board(a) => cli::board::main(&a),
+        Command::StabilityMap(a) => cli::stability_map::main(&a),
     }
 }
 

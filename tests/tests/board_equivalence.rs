@@ -18,7 +18,7 @@ use host_sim::link::recording::RecordingLink;
 use host_sim::link::FlightLink;
 use host_sim::qemu::{self, link::QemuLink};
 use host_sim::replay::{replay, ReplayOutcome};
-use host_sim::scenario;
+use host_sim::scripted as scenario;
 
 /// (scenario, seed) pairs run on both links.
 const SCENARIO_SEEDS: &[(&str, u64)] = &[("protocol", 1), ("protocol", 7)];

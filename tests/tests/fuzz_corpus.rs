@@ -3,7 +3,7 @@
 
 use firmware::config::protocol::MAX_ENCODED_FRAME_LEN;
 use firmware::protocol::*;
-use host_sim::scenario::{default_configure, synthetic_scan};
+use host_sim::scripted::{default_configure, synthetic_scan};
 
 fn seeds() -> Vec<(String, Vec<u8>)> {
     let mut rng = rand_pcg::Pcg64Mcg::new(1);

@@ -214,3 +214,55 @@ fn lp_solver_agrees_with_clarabel_on_10000_random_instances() {
 }
 
 
+
+fn margin_of(prob: &StabilityProblem) -> Option<f64> {
+    check_stability(prob).ok().and_then(|o| o.margin())
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig { cases: 64, max_global_rejects: 100_000, ..Default::default() })]
+
+    /// Law: a rigid motion of the whole problem (contacts, masses, gravity, tether) does not change the margin.
+    #[test]
+    fn margin_is_invariant_under_rigid_motion(seed in 0u64..1_000_000, ax in -3.0f32..3.0, ay in -3.0f32..3.0,
+                                              az in -3.0f32..3.0, tx in -5.0f32..5.0, tz in -5.0f32..5.0) {
+        let mut r = Pcg64::new(u128::from(seed), 7);
+        let prob = random_problem(&mut r);
+        let rot = firmware::geom::Rot3::from_euler_angles(ax, ay, az);
+        let t = Vec3::new(tx, 1.0, tz);
+        let mut moved = prob.clone();
+        for c in moved.contacts.iter_mut() {
+            c.position = rot * c.position + t;
+            c.normal = rot * c.normal;
+            c.tangent = rot * c.tangent;
+        }
+        for m in moved.masses.iter_mut() {
+            m.com = rot * m.com + t;
+        }
+        moved.gravity = rot * moved.gravity;
+        if let TetherForce::Taut { exit, direction, max_tension_n } = moved.tether {
+            moved.tether = TetherForce::Taut { exit: rot * exit + t, direction: rot * direction, max_tension_n };
+        }
+        if let (Some(a), Some(b)) = (margin_of(&prob), margin_of(&moved)) {
+            // f32 geometry: the rotated inputs differ from the originals by ~1e-7 relative
+            proptest::prop_assert!((a - b).abs() <= 1e-4 * (1.0 + a.abs()), "margin {a} vs moved {b}");
+        }
+    }
+
+    /// Law: more friction (every mu scaled by k >= 1) never lowers a non-negative margin, so a stable pose stays
+    /// stable. (For negative margins the law does not hold: moment headroom is measured with `l = mu_m / mu`, which
+    /// shrinks as mu grows.)
+    #[test]
+    fn margin_does_not_decrease_with_friction(seed in 0u64..1_000_000, k in 1.0f32..3.0) {
+        let mut r = Pcg64::new(u128::from(seed), 11);
+        let prob = random_problem(&mut r);
+        let mut more = prob.clone();
+        for c in more.contacts.iter_mut() {
+            c.mu *= k;
+        }
+        if let (Some(a), Some(b)) = (margin_of(&prob), margin_of(&more)) {
+            proptest::prop_assume!(a >= 0.0);
+            proptest::prop_assert!(b >= a - 1e-6 * (1.0 + a.abs()), "margin {a} -> {b} with mu x {k}");
+        }
+    }
+}

@@ -16,5 +16,9 @@ pub const MAX_DETACH_ITERATIONS: u32 = 16;
 /// A sample closer than this to the terrain is an obstacle for the tether, metres. Default 0.005 m.
 pub const TETHER_CONTACT_DISTANCE_M: f32 = 0.005;
 /// Samples within this distance of the pivot anchor are ignored (the anchor itself lies on the surface),
-/// metres. Default 0.05 m.
-pub const PIVOT_EXCLUSION_M: f32 = 0.05;
+/// metres. Default 0.1 m (also the spacing of successive anchors on a curved surface such as a pole).
+pub const PIVOT_EXCLUSION_M: f32 = 0.1;
+/// Extra samples near the pivot of each sweep line. Default 16.
+pub const NEAR_PIVOT_SAMPLES: u32 = 16;
+/// Range from the pivot covered by the near-pivot samples, metres. Default 1.0 m.
+pub const NEAR_PIVOT_RANGE_M: f32 = 1.0;

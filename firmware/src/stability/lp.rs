@@ -120,11 +120,28 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
     }
 
     fn factor(&self, w: &SVector<f64, M>) -> Option<Kkt<N, P>> {
-        let mut gw = self.g;
-        for (mut row, wi) in gw.row_iter_mut().zip(w.iter()) {
-            row *= *wi;
+        // H = G' W G assembled row by row from the nonzeros of G (the stability LP has at most a few per row)
+        let mut hm = SMatrix::<f64, N, N>::zeros();
+        for (row, wi) in self.g.row_iter().zip(w.iter()) {
+            let mut nz = [(0usize, 0.0f64); N];
+            let mut k = 0;
+            for (j, v) in row.iter().enumerate() {
+                if *v != 0.0 {
+                    if let Some(e) = nz.get_mut(k) {
+                        *e = (j, *v);
+                    }
+                    k += 1;
+                }
+            }
+            let nz = nz.get(..k).unwrap_or(&[]);
+            for (a, va) in nz {
+                for (b, vb) in nz {
+                    if let Some(e) = hm.get_mut((*a, *b)) {
+                        *e += wi * va * vb;
+                    }
+                }
+            }
         }
-        let mut hm = self.g.transpose() * gw;
         let scale = hm.diagonal().iter().fold(1.0f64, |m, x| m.max(x.abs()));
         let mut used = [false; N];
         for (j, u) in used.iter_mut().enumerate() {
@@ -179,7 +196,7 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
         r_c: &SVector<f64, M>,
     ) -> Step<N, P, M> {
         let t = w.component_mul(r_g) - r_c.component_div(s);
-        let q = -r_d - self.g.transpose() * t;
+        let q = -r_d - self.g.tr_mul(&t);
         let u = kkt.h.solve(&q);
         let dy = kkt.schur.solve(&(self.a * u + r_p));
         let dx = u - kkt.v * dy;
@@ -204,7 +221,7 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
     ) -> Step<N, P, M> {
         let (dx, dy, dz, ds) = self.direction_once(kkt, w, s, z, r_d, r_p, r_g, r_c);
         // residuals of: A'dy + G'dz = -r_d; A dx = -r_p; G dx + ds = -r_g; Z ds + S dz = -r_c
-        let e1 = r_d + self.a.transpose() * dy + self.g.transpose() * dz;
+        let e1 = r_d + self.a.tr_mul(&dy) + self.g.tr_mul(&dz);
         let e2 = r_p + self.a * dx;
         let e3 = r_g + self.g * dx + ds;
         let e4 = r_c + z.component_mul(&ds) + s.component_mul(&dz);
@@ -229,7 +246,7 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
             LpSolution { status, objective: self.c.dot(&x), x, iterations: it }
         };
         loop {
-            let r_d = self.c + self.a.transpose() * y + self.g.transpose() * z;
+            let r_d = self.c + self.a.tr_mul(&y) + self.g.tr_mul(&z);
             let r_p = self.a * x - self.b;
             let r_g = self.g * x + s - self.h;
             let mu = s.dot(&z) / (M.max(1) as f64);

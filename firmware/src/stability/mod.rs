@@ -31,6 +31,9 @@
 //! `s* W` newtons keeps it stable. The LP is always feasible when the equilibrium equations can be met (take `s`
 //! very negative), and bounded (`s <= 1`), so "no optimum" can only mean bad numerics or a problem with no
 //! equilibrium at all; both end as [`StabilityOutcome::Unknown`], which callers must treat as unstable.
+//! Because moment headroom is scaled by `l = mu_m / mu`, a larger `mu` never lowers a non-negative margin (a stable
+//! pose stays stable with more friction), but negative margins are not monotone in `mu`; compare margins only among
+//! poses with the same friction parameters.
 //! The report also gives the cone utilisation of the solution, `max |lambda_t| / (mu lambda_z)` over loaded
 //! contacts (the quantity (9) tries to keep small).
 //!

@@ -121,7 +121,7 @@ fn report_cmd(elf: &std::path::Path) -> Result<(), Box<dyn core::error::Error>> 
     print!("{}", report::format_sections(&sections));
     println!("\non-target run: protocol scenario, seed 1, lockstep");
     let mut link = QemuLink::start(elf, crate::link::inproc::DEFAULT_STEP_US)?;
-    let rep = crate::scenario::run_protocol(&mut link, 1)?;
+    let rep = crate::scripted::run_protocol(&mut link, 1)?;
     if !rep.passed() {
         println!("{rep}");
     }

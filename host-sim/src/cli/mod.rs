@@ -10,6 +10,7 @@ pub mod map;
 pub mod replay;
 pub mod run;
 pub mod team;
+pub mod stability_map;
 
 use std::process::ExitCode;
 
