@@ -615,3 +615,38 @@ fn closed_loop_random_fields_reach_goal_or_prove_no_path() {
     }
     assert!(reached >= 8, "reached {reached}/12");
 }
+
+// ---------------------------------------------------------------- bad input: typed errors, never a panic
+
+#[test]
+fn bad_input_is_refused_with_a_reason() {
+    use firmware::plan::homotopy::astar::SearchError;
+    use firmware::plan::homotopy::btm::{BtmError, ObstacleReject};
+    let s = scenario_c();
+    let mut btm = build(&s);
+    let n = btm.triangle_count();
+    let rej = |r| Err(BtmError::InvalidObstacle(r));
+    assert_eq!(btm.add_obstacle(&[pt(1.0, 1.0), pt(2.0, 1.0)]).map(|x| x.0), rej(ObstacleReject::TooFewCorners));
+    assert_eq!(btm.add_obstacle(&[pt(f64::NAN, 1.0), pt(2.0, 1.0), pt(2.0, 2.0)]).map(|x| x.0), rej(ObstacleReject::NotFinite));
+    assert_eq!(btm.add_obstacle(&[pt(19.0, 1.0), pt(21.0, 1.0), pt(20.0, 2.0)]).map(|x| x.0), rej(ObstacleReject::OutsidePlane));
+    assert_eq!(
+        btm.add_obstacle(&[pt(1.0, 1.0), pt(3.0, 3.0), pt(3.0, 1.0), pt(1.0, 3.0)]).map(|x| x.0),
+        rej(ObstacleReject::NotSimple)
+    );
+    assert_eq!(btm.add_obstacle(&[pt(7.0, 13.0), pt(9.0, 13.0), pt(8.0, 16.0)]).map(|x| x.0), rej(ObstacleReject::OverlapsObstacle(0)));
+    let many: Vec<Pt> = (0..9).map(|i| { let a = i as f64 * 0.69; pt(4.0 + a.cos(), 4.0 + a.sin()) }).collect();
+    assert_eq!(btm.add_obstacle(&many).map(|x| x.0), rej(ObstacleReject::TooManyCorners));
+    assert_eq!(btm.remove_obstacle(9), Err(BtmError::UnknownObstacle(9)));
+    // Refused changes leave the BTM untouched.
+    assert_eq!(btm.triangle_count(), n);
+    btm.check_invariants().unwrap();
+    let mut b2 = Btm::new();
+    assert!(matches!(b2.build(&[pt(0.0, 0.0), pt(1.0, 1.0)], &[]), Err(BtmError::InvalidPlane(_))));
+    let mut arena = Box::new(SearchArena::new());
+    let mut out = Classes::new();
+    let inside_rock = pt(8.5, 13.5);
+    let st = SearchStart { point: inside_rock, l0: LValue::default(), prefix: &[] };
+    assert_eq!(enumerate_classes(&btm, &mut arena, &st, s.g, &[], 4, &mut out), Err(SearchError::StartNotInFreeSpace));
+    let st = SearchStart { point: s.a0, l0: LValue::default(), prefix: &[] };
+    assert_eq!(enumerate_classes(&btm, &mut arena, &st, pt(30.0, 1.0), &[], 4, &mut out), Err(SearchError::GoalNotInFreeSpace));
+}
