@@ -650,3 +650,25 @@ fn bad_input_is_refused_with_a_reason() {
     let st = SearchStart { point: s.a0, l0: LValue::default(), prefix: &[] };
     assert_eq!(enumerate_classes(&btm, &mut arena, &st, pt(30.0, 1.0), &[], 4, &mut out), Err(SearchError::GoalNotInFreeSpace));
 }
+
+#[test]
+fn three_plane_crater_model_classifies_and_frames() {
+    use firmware::plan::homotopy::terrain::{plane_intersection, TerrainPlane};
+    let a = 45f64.to_radians();
+    let rim = TerrainPlane { origin: [0.0, 0.0, 10.0], normal: [0.0, 0.0, 1.0], traction_mu: 0.5 };
+    let wall = TerrainPlane { origin: [0.0, 0.0, 0.0], normal: [0.0, -a.sin(), a.cos()], traction_mu: 0.5 };
+    let floor = TerrainPlane { origin: [0.0, 0.0, 0.0], normal: [0.0, 0.0, 1.0], traction_mu: 0.5 };
+    assert_eq!(rim.classify(), PlaneClass::TetherFree);
+    assert_eq!(floor.classify(), PlaneClass::TetherFree);
+    assert_eq!(wall.classify(), PlaneClass::TetherDemand);
+    assert!((wall.slope_rad() - a).abs() < 1e-12);
+    // The rim/wall edge is horizontal along x, at z = 10 on the wall (y = 10 / tan(alpha)).
+    let (p, d) = plane_intersection(&rim, &wall).unwrap();
+    assert!(d[0].abs() > 0.999 && d[2].abs() < 1e-12);
+    assert!((p[2] - 10.0).abs() < 1e-9 && (p[1] - 10.0 / a.tan()).abs() < 1e-9);
+    // Plane frame: y is distance up the slope, x across.
+    let q = wall.to_plane_frame([3.0, 4.0, 4.0]);
+    assert!((q.y - 4.0 * 2f64.sqrt()).abs() < 1e-9, "{q:?}");
+    assert!((q.x.abs() - 3.0).abs() < 1e-9);
+    assert!(plane_intersection(&rim, &floor).is_none());
+}

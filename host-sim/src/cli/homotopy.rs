@@ -71,6 +71,22 @@ fn offline(s: &Scenario, out: &PathBuf) -> Result<bool, String> {
         let f = feasibility_check(&btm, &s.model, &shp, &an, &mut ws.grid);
         println!("  class {i}: SHP {:.2} m, {} anchors, {:?}", shp.length(), an.len(), f);
         sv.polyline(&shp.pts, "#bbbbbb", 1.0, "");
+        // One picture per class: its sleeve and SHP (Fig. 8).
+        let mut cs = Svg::for_plane(&btm, 20.0);
+        svg::draw_btm(&mut cs, &btm);
+        svg::draw_sleeve(&mut cs, &btm, &c.sleeve, "#9e9e9e");
+        cs.polyline(&shp.pts, "#1a9a2a", 2.0, "");
+        for a in an.iter() {
+            cs.circle(a.p, 5.0, "none", "#1a9a2a");
+        }
+        svg::draw_ends(&mut cs, s.a0, s.g);
+        let verdict = match &f {
+            firmware::plan::homotopy::plan::Feasibility::Feasible { .. } => "feasible".to_string(),
+            firmware::plan::homotopy::plan::Feasibility::Infeasible { anchor_index, reason } => {
+                format!("infeasible at a{anchor_index}: {reason:?}")
+            }
+        };
+        write(out, &format!("{}_class{i}.svg", s.name.to_lowercase()), &cs, &format!("class {i}: SHP {:.2} m, {} anchors, {verdict}", shp.length(), an.len()))?;
     }
     let mut lc = heapless::Vec::new();
     let mut rep = PlanReport::default();
