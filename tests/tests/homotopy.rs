@@ -672,3 +672,59 @@ fn three_plane_crater_model_classifies_and_frames() {
     assert!((q.x.abs() - 3.0).abs() < 1e-9);
     assert!(plane_intersection(&rim, &floor).is_none());
 }
+
+/// Loose soil (theta_max = 25 deg): some fields have no safe path, one (seed 107) needs a backtrack to a junction.
+fn loose_field(seed: u64) -> Scenario {
+    let mut rng = Pcg64::seed_from_u64(seed);
+    let mut s = random_field(&mut rng, 18, 20.0);
+    let keep = s.truth.len().saturating_sub(10);
+    s.known.truncate(keep);
+    s.model.soil = firmware::plan::homotopy::terrain::SoilMap::uniform(0.55);
+    s
+}
+
+#[test]
+fn closed_loop_backtracks_to_a_junction_then_reaches_goal() {
+    use host_sim::homotopy::sim::{run, SimConfig, SimOutcome};
+    let s = loose_field(107);
+    let r = run(&s, &SimConfig { seed: 107, ..SimConfig::default() });
+    let junction = r.events.iter().find_map(|e| match e.action {
+        OnlineAction::Backtrack { junction } => Some((e.step, junction)),
+        _ => None,
+    });
+    let (step, junction) = junction.expect("a backtrack event (regression: seed 107)");
+    // The rover really drove back up to the junction (a point of its own earlier path) before going on.
+    let earlier = &r.path[..=step];
+    assert!(earlier.iter().any(|p| p.dist(junction) < 1e-9));
+    assert!(r.path[step..].iter().any(|p| p.dist(junction) < 1e-9));
+    assert_eq!(r.outcome, SimOutcome::ReachedGoal);
+    assert_eq!(r.collisions, 0);
+    assert!(r.tether_in_plan_class);
+}
+
+#[test]
+fn closed_loop_loose_soil_gives_up_only_when_the_true_map_has_no_plan() {
+    use host_sim::homotopy::sim::{run, SimConfig, SimOutcome};
+    let mut gave_up = 0;
+    for seed in 100..114u64 {
+        let s = loose_field(seed);
+        let r = run(&s, &SimConfig { seed, ..SimConfig::default() });
+        assert_eq!(r.collisions, 0);
+        match r.outcome {
+            SimOutcome::ReachedGoal => assert!(r.tether_in_plan_class),
+            SimOutcome::NoSafePath => {
+                gave_up += 1;
+                let mut t = s.clone();
+                t.known = s.truth.clone();
+                let btm = build(&t);
+                let mut ws = Box::new(Workspace::default());
+                let plan = preplan(&btm, &s.model, &PlannerParams::default(), &mut ws, s.a0, s.g, &mut heapless::Vec::new(), &mut PlanReport::default()).unwrap();
+                assert!(plan.is_none(), "seed {seed}: gave up but Alg. 1 on the true map finds a plan");
+                assert_eq!(*r.path.last().unwrap(), s.a0, "seed {seed}: retreated to a0");
+            }
+            SimOutcome::NoInitialPlan => {}
+            SimOutcome::StepLimit => panic!("seed {seed}: step limit"),
+        }
+    }
+    assert!(gave_up >= 1);
+}

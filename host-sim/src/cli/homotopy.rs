@@ -37,6 +37,9 @@ pub struct HomotopyArgs {
     /// Obstacles of the random field missing from the rover's map.
     #[arg(long, default_value_t = 3)]
     pub hidden: usize,
+    /// Soil friction coefficient of the random field (default 0.91: theta_max = 50 deg at alpha = 50 deg).
+    #[arg(long)]
+    pub mu: Option<f64>,
 }
 
 fn build(s: &Scenario) -> Result<Box<Btm>, String> {
@@ -164,6 +167,9 @@ pub fn main(a: &HomotopyArgs) -> ExitCode {
             let mut s = scenarios::random_field(&mut rng, a.obstacles, 20.0);
             let keep = s.truth.len().saturating_sub(a.hidden);
             s.known.truncate(keep);
+            if let Some(mu) = a.mu {
+                s.model.soil = firmware::plan::homotopy::terrain::SoilMap::uniform(mu);
+            }
             closed_loop(&s, &a.out, a.seed)
         }
         other => return super::fail(format!("unknown scenario {other:?}: use b, c, c-online or random")),
