@@ -728,3 +728,13 @@ fn closed_loop_loose_soil_gives_up_only_when_the_true_map_has_no_plan() {
     }
     assert!(gave_up >= 1);
 }
+
+#[test]
+fn arenas_fit_the_flight_computer_sram() {
+    // The mps2-an500 board has 4 MiB SRAM; the homotopy planner's two caller-owned arenas must leave most of it.
+    let btm = core::mem::size_of::<Btm>();
+    let ws = core::mem::size_of::<Workspace>();
+    let online = core::mem::size_of::<OnlinePlanner>();
+    eprintln!("Btm {btm} B, Workspace {ws} B, OnlinePlanner {online} B");
+    assert!(btm + ws + online < 1024 * 1024, "{btm} + {ws} + {online}");
+}
