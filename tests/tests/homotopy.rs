@@ -615,3 +615,126 @@ fn closed_loop_random_fields_reach_goal_or_prove_no_path() {
     }
     assert!(reached >= 8, "reached {reached}/12");
 }
+
+// ---------------------------------------------------------------- bad input: typed errors, never a panic
+
+#[test]
+fn bad_input_is_refused_with_a_reason() {
+    use firmware::plan::homotopy::astar::SearchError;
+    use firmware::plan::homotopy::btm::{BtmError, ObstacleReject};
+    let s = scenario_c();
+    let mut btm = build(&s);
+    let n = btm.triangle_count();
+    let rej = |r| Err(BtmError::InvalidObstacle(r));
+    assert_eq!(btm.add_obstacle(&[pt(1.0, 1.0), pt(2.0, 1.0)]).map(|x| x.0), rej(ObstacleReject::TooFewCorners));
+    assert_eq!(btm.add_obstacle(&[pt(f64::NAN, 1.0), pt(2.0, 1.0), pt(2.0, 2.0)]).map(|x| x.0), rej(ObstacleReject::NotFinite));
+    assert_eq!(btm.add_obstacle(&[pt(19.0, 1.0), pt(21.0, 1.0), pt(20.0, 2.0)]).map(|x| x.0), rej(ObstacleReject::OutsidePlane));
+    assert_eq!(
+        btm.add_obstacle(&[pt(1.0, 1.0), pt(3.0, 3.0), pt(3.0, 1.0), pt(1.0, 3.0)]).map(|x| x.0),
+        rej(ObstacleReject::NotSimple)
+    );
+    assert_eq!(btm.add_obstacle(&[pt(7.0, 13.0), pt(9.0, 13.0), pt(8.0, 16.0)]).map(|x| x.0), rej(ObstacleReject::OverlapsObstacle(0)));
+    let many: Vec<Pt> = (0..9).map(|i| { let a = i as f64 * 0.69; pt(4.0 + a.cos(), 4.0 + a.sin()) }).collect();
+    assert_eq!(btm.add_obstacle(&many).map(|x| x.0), rej(ObstacleReject::TooManyCorners));
+    assert_eq!(btm.remove_obstacle(9), Err(BtmError::UnknownObstacle(9)));
+    // Refused changes leave the BTM untouched.
+    assert_eq!(btm.triangle_count(), n);
+    btm.check_invariants().unwrap();
+    let mut b2 = Btm::new();
+    assert!(matches!(b2.build(&[pt(0.0, 0.0), pt(1.0, 1.0)], &[]), Err(BtmError::InvalidPlane(_))));
+    let mut arena = Box::new(SearchArena::new());
+    let mut out = Classes::new();
+    let inside_rock = pt(8.5, 13.5);
+    let st = SearchStart { point: inside_rock, l0: LValue::default(), prefix: &[] };
+    assert_eq!(enumerate_classes(&btm, &mut arena, &st, s.g, &[], 4, &mut out), Err(SearchError::StartNotInFreeSpace));
+    let st = SearchStart { point: s.a0, l0: LValue::default(), prefix: &[] };
+    assert_eq!(enumerate_classes(&btm, &mut arena, &st, pt(30.0, 1.0), &[], 4, &mut out), Err(SearchError::GoalNotInFreeSpace));
+}
+
+#[test]
+fn three_plane_crater_model_classifies_and_frames() {
+    use firmware::plan::homotopy::terrain::{plane_intersection, TerrainPlane};
+    let a = 45f64.to_radians();
+    let rim = TerrainPlane { origin: [0.0, 0.0, 10.0], normal: [0.0, 0.0, 1.0], traction_mu: 0.5 };
+    let wall = TerrainPlane { origin: [0.0, 0.0, 0.0], normal: [0.0, -a.sin(), a.cos()], traction_mu: 0.5 };
+    let floor = TerrainPlane { origin: [0.0, 0.0, 0.0], normal: [0.0, 0.0, 1.0], traction_mu: 0.5 };
+    assert_eq!(rim.classify(), PlaneClass::TetherFree);
+    assert_eq!(floor.classify(), PlaneClass::TetherFree);
+    assert_eq!(wall.classify(), PlaneClass::TetherDemand);
+    assert!((wall.slope_rad() - a).abs() < 1e-12);
+    // The rim/wall edge is horizontal along x, at z = 10 on the wall (y = 10 / tan(alpha)).
+    let (p, d) = plane_intersection(&rim, &wall).unwrap();
+    assert!(d[0].abs() > 0.999 && d[2].abs() < 1e-12);
+    assert!((p[2] - 10.0).abs() < 1e-9 && (p[1] - 10.0 / a.tan()).abs() < 1e-9);
+    // Plane frame: y is distance up the slope, x across.
+    let q = wall.to_plane_frame([3.0, 4.0, 4.0]);
+    assert!((q.y - 4.0 * 2f64.sqrt()).abs() < 1e-9, "{q:?}");
+    assert!((q.x.abs() - 3.0).abs() < 1e-9);
+    assert!(plane_intersection(&rim, &floor).is_none());
+}
+
+/// Loose soil (theta_max = 25 deg): some fields have no safe path, one (seed 107) needs a backtrack to a junction.
+fn loose_field(seed: u64) -> Scenario {
+    let mut rng = Pcg64::seed_from_u64(seed);
+    let mut s = random_field(&mut rng, 18, 20.0);
+    let keep = s.truth.len().saturating_sub(10);
+    s.known.truncate(keep);
+    s.model.soil = firmware::plan::homotopy::terrain::SoilMap::uniform(0.55);
+    s
+}
+
+#[test]
+fn closed_loop_backtracks_to_a_junction_then_reaches_goal() {
+    use host_sim::homotopy::sim::{run, SimConfig, SimOutcome};
+    let s = loose_field(107);
+    let r = run(&s, &SimConfig { seed: 107, ..SimConfig::default() });
+    let junction = r.events.iter().find_map(|e| match e.action {
+        OnlineAction::Backtrack { junction } => Some((e.step, junction)),
+        _ => None,
+    });
+    let (step, junction) = junction.expect("a backtrack event (regression: seed 107)");
+    // The rover really drove back up to the junction (a point of its own earlier path) before going on.
+    let earlier = &r.path[..=step];
+    assert!(earlier.iter().any(|p| p.dist(junction) < 1e-9));
+    assert!(r.path[step..].iter().any(|p| p.dist(junction) < 1e-9));
+    assert_eq!(r.outcome, SimOutcome::ReachedGoal);
+    assert_eq!(r.collisions, 0);
+    assert!(r.tether_in_plan_class);
+}
+
+#[test]
+fn closed_loop_loose_soil_gives_up_only_when_the_true_map_has_no_plan() {
+    use host_sim::homotopy::sim::{run, SimConfig, SimOutcome};
+    let mut gave_up = 0;
+    for seed in 100..114u64 {
+        let s = loose_field(seed);
+        let r = run(&s, &SimConfig { seed, ..SimConfig::default() });
+        assert_eq!(r.collisions, 0);
+        match r.outcome {
+            SimOutcome::ReachedGoal => assert!(r.tether_in_plan_class),
+            SimOutcome::NoSafePath => {
+                gave_up += 1;
+                let mut t = s.clone();
+                t.known = s.truth.clone();
+                let btm = build(&t);
+                let mut ws = Box::new(Workspace::default());
+                let plan = preplan(&btm, &s.model, &PlannerParams::default(), &mut ws, s.a0, s.g, &mut heapless::Vec::new(), &mut PlanReport::default()).unwrap();
+                assert!(plan.is_none(), "seed {seed}: gave up but Alg. 1 on the true map finds a plan");
+                assert_eq!(*r.path.last().unwrap(), s.a0, "seed {seed}: retreated to a0");
+            }
+            SimOutcome::NoInitialPlan => {}
+            SimOutcome::StepLimit => panic!("seed {seed}: step limit"),
+        }
+    }
+    assert!(gave_up >= 1);
+}
+
+#[test]
+fn arenas_fit_the_flight_computer_sram() {
+    // The mps2-an500 board has 4 MiB SRAM; the homotopy planner's two caller-owned arenas must leave most of it.
+    let btm = core::mem::size_of::<Btm>();
+    let ws = core::mem::size_of::<Workspace>();
+    let online = core::mem::size_of::<OnlinePlanner>();
+    eprintln!("Btm {btm} B, Workspace {ws} B, OnlinePlanner {online} B");
+    assert!(btm + ws + online < 1024 * 1024, "{btm} + {ws} + {online}");
+}

@@ -37,6 +37,9 @@ pub struct HomotopyArgs {
     /// Obstacles of the random field missing from the rover's map.
     #[arg(long, default_value_t = 3)]
     pub hidden: usize,
+    /// Soil friction coefficient of the random field (default 0.91: theta_max = 50 deg at alpha = 50 deg).
+    #[arg(long)]
+    pub mu: Option<f64>,
 }
 
 fn build(s: &Scenario) -> Result<Box<Btm>, String> {
@@ -71,6 +74,22 @@ fn offline(s: &Scenario, out: &PathBuf) -> Result<bool, String> {
         let f = feasibility_check(&btm, &s.model, &shp, &an, &mut ws.grid);
         println!("  class {i}: SHP {:.2} m, {} anchors, {:?}", shp.length(), an.len(), f);
         sv.polyline(&shp.pts, "#bbbbbb", 1.0, "");
+        // One picture per class: its sleeve and SHP (Fig. 8).
+        let mut cs = Svg::for_plane(&btm, 20.0);
+        svg::draw_btm(&mut cs, &btm);
+        svg::draw_sleeve(&mut cs, &btm, &c.sleeve, "#9e9e9e");
+        cs.polyline(&shp.pts, "#1a9a2a", 2.0, "");
+        for a in an.iter() {
+            cs.circle(a.p, 5.0, "none", "#1a9a2a");
+        }
+        svg::draw_ends(&mut cs, s.a0, s.g);
+        let verdict = match &f {
+            firmware::plan::homotopy::plan::Feasibility::Feasible { .. } => "feasible".to_string(),
+            firmware::plan::homotopy::plan::Feasibility::Infeasible { anchor_index, reason } => {
+                format!("infeasible at a{anchor_index}: {reason:?}")
+            }
+        };
+        write(out, &format!("{}_class{i}.svg", s.name.to_lowercase()), &cs, &format!("class {i}: SHP {:.2} m, {} anchors, {verdict}", shp.length(), an.len()))?;
     }
     let mut lc = heapless::Vec::new();
     let mut rep = PlanReport::default();
@@ -148,6 +167,9 @@ pub fn main(a: &HomotopyArgs) -> ExitCode {
             let mut s = scenarios::random_field(&mut rng, a.obstacles, 20.0);
             let keep = s.truth.len().saturating_sub(a.hidden);
             s.known.truncate(keep);
+            if let Some(mu) = a.mu {
+                s.model.soil = firmware::plan::homotopy::terrain::SoilMap::uniform(mu);
+            }
             closed_loop(&s, &a.out, a.seed)
         }
         other => return super::fail(format!("unknown scenario {other:?}: use b, c, c-online or random")),
