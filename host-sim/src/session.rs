@@ -158,12 +158,16 @@ impl<L: FlightLink> HostSession<L> {
         self.recv()
     }
 
-    /// Requests telemetry and returns it (the last `Telemetry` among the replies).
+    /// Requests telemetry and returns the `Telemetry` that answers the request (the first one after its `Ack`).
     pub fn telemetry(&mut self) -> Result<Telemetry, SessionError> {
+        let seq = self.next_seq();
         let replies = self.exchange(&Message::TelemetryRequest(TelemetryRequest))?;
-        replies
+        let acked = replies
             .iter()
-            .rev()
+            .position(|m| *m == Message::Ack(firmware::protocol::Ack { seq }))
+            .ok_or(SessionError::NoReply("ack of the telemetry request"))?;
+        replies[acked..]
+            .iter()
             .find_map(|m| {
                 if let Message::Telemetry(t) = m {
                     Some(*t)
