@@ -158,3 +158,27 @@ fn bad_input_matrix_over_the_emulated_uart() {
         exit.output.both()
     );
 }
+
+#[test]
+fn free_running_board_sends_ready_telemetry_and_acks_every_frame() {
+    // The board as it flies: its own SysTick clock, stepping continuously, sleeping when idle.
+    let Some(elf) = board("free-running board") else {
+        return;
+    };
+    let perf = qemu::perf::measure(&elf, 5, 50).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(perf.round_trips.len(), 5);
+    assert!(perf.boot_to_telemetry >= perf.boot_to_hello);
+    assert!(perf.exit.status.success(), "{}", perf.exit.output.both());
+    let accepted: u32 = perf
+        .exit
+        .output
+        .value("frames_accepted")
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0);
+    assert_eq!(
+        accepted,
+        5 + 50,
+        "frames accepted by the board: {}",
+        perf.exit.output.both()
+    );
+}
