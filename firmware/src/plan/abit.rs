@@ -199,6 +199,7 @@ pub struct Node<St, A> {
     h_go: Cost,
     generation: u32,
     expanded_search: u32,
+    first_out: u32,
     flags: u8,
 }
 
@@ -228,6 +229,9 @@ struct QueueEdge {
     child: u32,
     parent_generation: u32,
     child_generation: u32,
+    heap_pos: u32,
+    next_out: u32,
+    prev_out: u32,
 }
 
 impl QueueEdge {
@@ -257,14 +261,17 @@ struct MemoEntry<A> {
 /// [`AbitStar::new`]. Capacities: `NV` nodes, `NQ` queued edges, `NM` memo entries (see `config::abit`).
 pub struct AbitArena<St, A, const NV: usize, const NQ: usize, const NM: usize> {
     nodes: Vec<Node<St, A>, NV>,
-    queue: Vec<QueueEdge, NQ>,
+    /// Queued edges (a slab with a free list; slots are stable while queued).
+    edges: Vec<QueueEdge, NQ>,
+    /// The binary heap of slab indices, ordered by the edges' keys.
+    heap: Vec<u32, NQ>,
     memo: Vec<Option<MemoEntry<A>>, NM>,
 }
 
 impl<St, A, const NV: usize, const NQ: usize, const NM: usize> AbitArena<St, A, NV, NQ, NM> {
     /// An empty arena (const, so it can be a `static`).
     pub const fn new() -> Self {
-        Self { nodes: Vec::new(), queue: Vec::new(), memo: Vec::new() }
+        Self { nodes: Vec::new(), edges: Vec::new(), heap: Vec::new(), memo: Vec::new() }
     }
     /// Nodes currently used (including freed slots awaiting reuse).
     pub fn nodes_used(&self) -> usize {
@@ -272,7 +279,7 @@ impl<St, A, const NV: usize, const NQ: usize, const NM: usize> AbitArena<St, A, 
     }
     /// Edges currently queued.
     pub fn queue_len(&self) -> usize {
-        self.queue.len()
+        self.heap.len()
     }
 }
 
@@ -317,6 +324,7 @@ where
     goal_state: Option<S::State>,
     goals: Vec<u32, { cfg::GOAL_CAPACITY }>,
     free_head: u32,
+    free_edge: u32,
     live_nodes: usize,
     best_goal: u32,
     best_cost: Cost,
@@ -359,7 +367,8 @@ where
         params: AbitParams,
     ) -> Self {
         arena.nodes.clear();
-        arena.queue.clear();
+        arena.edges.clear();
+        arena.heap.clear();
         arena.memo.clear();
         // Bounded by NM.
         for _ in 0..NM {
@@ -378,6 +387,7 @@ where
             goal_state: None,
             goals: Vec::new(),
             free_head: NONE,
+            free_edge: NONE,
             live_nodes: 0,
             best_goal: NONE,
             best_cost: f64::INFINITY,
@@ -477,6 +487,7 @@ where
             h_go,
             generation,
             expanded_search: 0,
+            first_out: NONE,
             flags,
         };
         let index = if self.free_head != NONE {
@@ -521,30 +532,58 @@ where
         Some(i)
     }
 
-    // ---------------------------------------------------------------- edge queue (binary heap in the arena)
+    // ---------------------------------------------------------------- edge queue
+    //
+    // An indexed binary heap over a slab of edges (OMPL's `BinaryHeap` with element handles): every queued edge
+    // knows its heap position and sits in its parent's list of queued outgoing edges, so the keys of a vertex's
+    // edges are updated as soon as its cost-to-come changes (OMPL's `Vertex::updateCostAndDepth`), and an edge
+    // already queued is updated instead of duplicated (OMPL's `enqueueEdge`).
+
+    fn edge(&self, slot: u32) -> Option<&QueueEdge> {
+        self.arena.edges.get(slot as usize)
+    }
 
     fn heap_before(&self, a: usize, b: usize) -> bool {
-        match (self.arena.queue.get(a), self.arena.queue.get(b)) {
+        let (Some(&x), Some(&y)) = (self.arena.heap.get(a), self.arena.heap.get(b)) else {
+            return false;
+        };
+        match (self.edge(x), self.edge(y)) {
             (Some(x), Some(y)) => x.before(y),
             _ => false,
         }
     }
 
-    fn sift_up(&mut self, mut i: usize) {
+    fn heap_swap(&mut self, a: usize, b: usize) {
+        let len = self.arena.heap.len();
+        if a >= len || b >= len {
+            return;
+        }
+        self.arena.heap.swap(a, b);
+        for i in [a, b] {
+            if let Some(&slot) = self.arena.heap.get(i) {
+                if let Some(e) = self.arena.edges.get_mut(slot as usize) {
+                    e.heap_pos = i as u32;
+                }
+            }
+        }
+    }
+
+    fn sift_up(&mut self, mut i: usize) -> usize {
         // Bounded: i halves every round.
         while i > 0 {
             let p = (i - 1) / 2;
             if self.heap_before(i, p) {
-                self.arena.queue.swap(i, p);
+                self.heap_swap(i, p);
                 i = p;
             } else {
                 break;
             }
         }
+        i
     }
 
     fn sift_down(&mut self, mut i: usize) {
-        let len = self.arena.queue.len();
+        let len = self.arena.heap.len();
         // Bounded: i at least doubles every round.
         loop {
             let l = 2 * i + 1;
@@ -554,7 +593,7 @@ where
             let r = l + 1;
             let c = if r < len && self.heap_before(r, l) { r } else { l };
             if self.heap_before(c, i) {
-                self.arena.queue.swap(c, i);
+                self.heap_swap(c, i);
                 i = c;
             } else {
                 break;
@@ -562,30 +601,139 @@ where
         }
     }
 
-    fn heap_push(&mut self, e: QueueEdge) {
-        if self.arena.queue.push(e).is_err() {
+    fn heap_fix(&mut self, pos: usize) {
+        let up = self.sift_up(pos);
+        if up == pos {
+            self.sift_down(pos);
+        }
+    }
+
+    /// Queue a new edge (the caller checked it is not queued yet).
+    fn queue_insert(&mut self, mut e: QueueEdge) {
+        let pos = self.arena.heap.len();
+        e.heap_pos = pos as u32;
+        e.prev_out = NONE;
+        e.next_out = self.node(e.parent).map_or(NONE, |n| n.first_out);
+        let slot = if self.free_edge != NONE {
+            let slot = self.free_edge;
+            let Some(entry) = self.arena.edges.get_mut(slot as usize) else { return };
+            self.free_edge = entry.next_out;
+            *entry = e;
+            slot
+        } else {
+            let slot = self.arena.edges.len() as u32;
+            if self.arena.edges.push(e).is_err() {
+                self.pending_full = Some(Arena::EdgeQueue);
+                return;
+            }
+            slot
+        };
+        if self.arena.heap.push(slot).is_err() {
+            // Cannot happen (heap and slab have the same capacity); keep the slab consistent anyway.
             self.pending_full = Some(Arena::EdgeQueue);
+            self.release_edge(slot);
             return;
         }
-        let len = self.arena.queue.len();
-        self.high_water.queue = self.high_water.queue.max(len);
-        self.sift_up(len - 1);
+        if let Some(next) = self.arena.edges.get_mut(e.next_out as usize) {
+            next.prev_out = slot;
+        }
+        if let Some(p) = self.node_mut(e.parent) {
+            p.first_out = slot;
+        }
+        self.high_water.queue = self.high_water.queue.max(self.arena.heap.len());
+        self.sift_up(pos);
+    }
+
+    /// Unlink a slab slot from its parent's list and put it on the free list.
+    fn release_edge(&mut self, slot: u32) {
+        let Some(e) = self.edge(slot).copied() else { return };
+        if e.prev_out == NONE {
+            if let Some(p) = self.node_mut(e.parent) {
+                if p.first_out == slot {
+                    p.first_out = e.next_out;
+                }
+            }
+        } else if let Some(prev) = self.arena.edges.get_mut(e.prev_out as usize) {
+            prev.next_out = e.next_out;
+        }
+        if let Some(next) = self.arena.edges.get_mut(e.next_out as usize) {
+            next.prev_out = e.prev_out;
+        }
+        let free = self.free_edge;
+        if let Some(entry) = self.arena.edges.get_mut(slot as usize) {
+            entry.next_out = free;
+            entry.prev_out = NONE;
+            entry.heap_pos = NONE;
+        }
+        self.free_edge = slot;
     }
 
     fn heap_pop(&mut self) -> Option<QueueEdge> {
-        if self.arena.queue.is_empty() {
-            return None;
-        }
-        let top = self.arena.queue.swap_remove(0);
+        let last = self.arena.heap.len().checked_sub(1)?;
+        self.heap_swap(0, last);
+        let slot = self.arena.heap.pop()?;
         self.sift_down(0);
-        Some(top)
+        let e = self.edge(slot).copied();
+        self.release_edge(slot);
+        e
     }
 
-    fn heap_rebuild(&mut self) {
-        let len = self.arena.queue.len();
+    fn queue_clear(&mut self) {
+        self.arena.heap.clear();
+        self.arena.edges.clear();
+        self.free_edge = NONE;
+        for n in self.arena.nodes.iter_mut() {
+            n.first_out = NONE;
+        }
+    }
+
+    /// Re-key every queued edge (new inflation factor) and restore the heap.
+    fn queue_rebuild(&mut self) {
+        let len = self.arena.heap.len();
+        for i in 0..len {
+            let Some(&slot) = self.arena.heap.get(i) else { continue };
+            let Some(e) = self.edge(slot).copied() else { continue };
+            let key = self.sort_key(e.parent, e.child, e.c_hat);
+            if let Some(entry) = self.arena.edges.get_mut(slot as usize) {
+                entry.key = key;
+            }
+        }
         for i in (0..len / 2).rev() {
             self.sift_down(i);
         }
+    }
+
+    /// Re-key the queued outgoing edges of `v` after its cost-to-come changed. Bounded by the slab size.
+    fn update_out_edges(&mut self, v: u32) {
+        let mut slot = self.node(v).map_or(NONE, |n| n.first_out);
+        for _ in 0..NQ {
+            if slot == NONE {
+                break;
+            }
+            let Some(e) = self.edge(slot).copied() else { break };
+            let key = self.sort_key(e.parent, e.child, e.c_hat);
+            if let Some(entry) = self.arena.edges.get_mut(slot as usize) {
+                entry.key = key;
+            }
+            self.heap_fix(e.heap_pos as usize);
+            slot = e.next_out;
+        }
+    }
+
+    /// The slab slot of the queued edge `parent -> child`, if queued. Bounded by the slab size.
+    fn find_queued(&self, parent: u32, child: u32) -> Option<u32> {
+        let mut slot = self.node(parent).map_or(NONE, |n| n.first_out);
+        for _ in 0..NQ {
+            if slot == NONE {
+                return None;
+            }
+            let e = self.edge(slot)?;
+            if e.child == child {
+                return Some(slot);
+            }
+            slot = e.next_out;
+        }
+        None
     }
 
     fn sort_key(&self, parent: u32, child: u32, c_hat: Cost) -> [f64; 3] {
@@ -594,12 +742,12 @@ where
         [g + c_hat + self.inflation * h, g + c_hat, g]
     }
 
-    /// Drop stale entries at the front and re-key entries whose parent got cheaper (lazy key update).
-    /// Bounded by the queue length (each entry is dropped or re-keyed at most once here).
+    /// Drop entries at the front whose nodes left the tree or were freed (only possible across prunings, which
+    /// clear the queue; kept as a guard). Bounded by the queue length.
     fn clean_front(&mut self) {
-        let budget = self.arena.queue.len() + 1;
+        let budget = self.arena.heap.len() + 1;
         for _ in 0..budget {
-            let Some(front) = self.arena.queue.first().copied() else {
+            let Some(front) = self.arena.heap.first().and_then(|&s| self.edge(s)).copied() else {
                 return;
             };
             let valid = match (self.node(front.parent), self.node(front.child)) {
@@ -611,18 +759,10 @@ where
                 }
                 _ => false,
             };
-            if !valid {
-                let _ = self.heap_pop();
-                continue;
+            if valid {
+                return;
             }
-            let g = self.g(front.parent);
-            if g < front.key[2] {
-                let _ = self.heap_pop();
-                let key = self.sort_key(front.parent, front.child, front.c_hat);
-                self.heap_push(QueueEdge { key, ..front });
-                continue;
-            }
-            return;
+            let _ = self.heap_pop();
         }
     }
 
@@ -792,7 +932,25 @@ where
         }
         let (pg, cg) = (p.generation, c.generation);
         let key = self.sort_key(parent, child, c_hat);
-        self.heap_push(QueueEdge { key, c_hat, parent, child, parent_generation: pg, child_generation: cg });
+        if let Some(slot) = self.find_queued(parent, child) {
+            let pos = self.edge(slot).map_or(0, |e| e.heap_pos as usize);
+            if let Some(e) = self.arena.edges.get_mut(slot as usize) {
+                e.key = key;
+            }
+            self.heap_fix(pos);
+            return;
+        }
+        self.queue_insert(QueueEdge {
+            key,
+            c_hat,
+            parent,
+            child,
+            parent_generation: pg,
+            child_generation: cg,
+            heap_pos: 0,
+            next_out: NONE,
+            prev_out: NONE,
+        });
     }
 
     /// Queue the outgoing edges of a vertex (to its children, to its unconnected neighbours, and — cascading
@@ -803,10 +961,8 @@ where
             return;
         }
         let (own_parent, first_child) = (n.parent, n.first_child);
-        let search = self.search_id;
-        if let Some(n) = self.node_mut(v) {
-            n.expanded_search = search;
-            if reexpansion {
+        if reexpansion {
+            if let Some(n) = self.node_mut(v) {
                 n.flags &= !F_INCONSISTENT;
             }
         }
@@ -830,6 +986,15 @@ where
             if !wn.in_tree() || (!wn.has(F_START) && wn.parent != v && own_parent != w) {
                 self.enqueue_conditionally(v, w);
             }
+        }
+    }
+
+    /// A vertex is expanded on the current search once one of its outgoing edges has been processed (OMPL's
+    /// `registerExpansion`); a vertex improved after that is inconsistent and re-expanded in the final search.
+    fn register_expansion(&mut self, u: u32) {
+        let search = self.search_id;
+        if let Some(n) = self.node_mut(u) {
+            n.expanded_search = search;
         }
     }
 
@@ -883,6 +1048,7 @@ where
                     n.flags |= F_INCONSISTENT;
                 }
             }
+            self.update_out_edges(cur);
             if first_child != NONE {
                 cur = first_child;
                 continue;
@@ -925,6 +1091,7 @@ where
         if let Some(p) = self.node_mut(parent) {
             p.first_child = child;
         }
+        self.update_out_edges(child);
         self.propagate_costs(child);
         if self.params.track_approximate {
             let h = self.node(child).map_or(f64::INFINITY, |n| n.h_go);
@@ -1108,22 +1275,25 @@ where
         if !self.has_solution() {
             return self.space.sample_uniform(self.rng);
         }
-        let (start, goal) = (&self.pdef.start, self.goal_state.as_ref()?);
-        match self.pdef.objective.sample_informed(self.space, self.rng, start, goal, self.best_cost) {
-            InformedSample::Sampled(x) => Some(x),
-            InformedSample::Rejected => None,
-            InformedSample::Unsupported => {
-                // Rejection sampling on the heuristic (OMPL RejectionInfSampler), bounded.
-                for _ in 0..self.params.informed_rejection_attempts {
-                    let x = self.space.sample_uniform(self.rng)?;
-                    let (hc, hg) = self.heuristics(&x);
-                    if hc + hg < self.best_cost {
-                        return Some(x);
-                    }
-                }
-                None
+        let pdef = self.pdef;
+        let goal = self.goal_state.as_ref()?;
+        // Like OMPL's direct informed sampler, retry draws rejected by the bounds (bounded).
+        for _ in 0..self.params.informed_rejection_attempts {
+            match pdef.objective.sample_informed(self.space, self.rng, &pdef.start, goal, self.best_cost) {
+                InformedSample::Sampled(x) => return Some(x),
+                InformedSample::Rejected => continue,
+                InformedSample::Unsupported => break,
             }
         }
+        // No direct sampler: rejection sampling on the heuristic (OMPL RejectionInfSampler), bounded.
+        for _ in 0..self.params.informed_rejection_attempts {
+            let x = self.space.sample_uniform(self.rng)?;
+            let (hc, hg) = self.heuristics(&x);
+            if hc + hg < self.best_cost {
+                return Some(x);
+            }
+        }
+        None
     }
 
     fn new_batch(&mut self) {
@@ -1262,14 +1432,14 @@ where
     fn iterate(&mut self) -> StepOutcome {
         self.counters.iterations += 1;
         self.clean_front();
-        if self.search_done || self.arena.queue.is_empty() {
+        if self.search_done || self.arena.heap.is_empty() {
             if self.final_search || !self.has_solution() {
                 if self.params.pruning {
                     self.prune();
                 }
                 self.new_batch();
                 self.inflation = self.params.initial_inflation_factor;
-                self.arena.queue.clear();
+                self.queue_clear();
                 self.search_id = self.search_id.wrapping_add(1);
                 self.insert_outgoing_edges(self.start_index(), false);
                 self.final_search = false;
@@ -1282,15 +1452,7 @@ where
             }
             // Final search of this batch: less inflation, re-key, re-expand the inconsistent vertices.
             self.inflation = 1.0 + self.params.inflation_scaling_parameter / f64::from(self.generated.max(1));
-            let len = self.arena.queue.len();
-            for i in 0..len {
-                let Some(e) = self.arena.queue.get(i).copied() else { continue };
-                let key = self.sort_key(e.parent, e.child, e.c_hat);
-                if let Some(slot) = self.arena.queue.get_mut(i) {
-                    slot.key = key;
-                }
-            }
-            self.heap_rebuild();
+            self.queue_rebuild();
             for i in 0..self.arena.nodes.len() as u32 {
                 let inconsistent = self.node(i).is_some_and(|n| n.has(F_INCONSISTENT) && n.in_tree());
                 if inconsistent {
@@ -1322,9 +1484,10 @@ where
         };
         // Already in the tree: a freebie, expand the child.
         if vn.parent == u && vn.in_tree() {
-            if vn.expanded_search != self.search_id {
-                self.insert_outgoing_edges(v, false);
+            if un.expanded_search != self.search_id {
+                self.register_expansion(u);
             }
+            self.insert_outgoing_edges(v, false);
             return StepOutcome::ProcessedEdge;
         }
         let (g_u, h_come_u, g_v, h_go_v) = (un.cost, un.h_come, vn.cost, vn.h_go);
@@ -1361,6 +1524,7 @@ where
         }
         if g_u + c < g_v {
             self.add_edge(u, v, c, att);
+            self.register_expansion(u);
             if self.update_goal() {
                 return StepOutcome::ImprovedSolution;
             }
