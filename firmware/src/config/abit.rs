@@ -61,3 +61,9 @@ pub const ATTACHMENT_COPY_FRACTION: f64 = 0.25;
 
 /// Default iteration budget of one `solve` call: 750, the budget of Paton et al. Table I.
 pub const DEFAULT_ITERATION_BUDGET: u32 = 750;
+
+/// Most copies of one state with different attachments ("twins", the state itself included): an edge from a
+/// vertex into a tree vertex of an incompatible history goes to a twin of that state with undetermined history
+/// (non-Markovian spaces). The ledge needs two or three histories (root only, anchored on the lip, anchored on
+/// the pole); 4 bounds the arena growth.
+pub const MAX_HISTORY_TWINS: usize = 4;

@@ -358,6 +358,8 @@ pub struct Counters {
     pub prunings: u32,
     /// Edges rejected because the end state's attachment was incompatible (Paton et al. V-A).
     pub incompatible_attachments: u32,
+    /// Twins with undetermined history created for edges into vertices of another history.
+    pub history_twins: u32,
     /// Neighbour lists truncated at `NEIGHBOUR_CAPACITY`.
     pub neighbour_lists_truncated: u32,
     /// Iteration at which the first solution was found (0 = none yet).
