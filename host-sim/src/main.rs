@@ -1,9 +1,15 @@
 //! `tetherbot`: the operator's CLI (run a scenario, campaign, record, replay, export, render).
+//!
+//! Subcommand logic lives in `host_sim::cli::<name>`; this file only parses and dispatches.
+
+use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use host_sim::cli;
 
+/// Onboard navigation for tethered extreme-terrain rovers: simulator and operator's tool.
 #[derive(Parser)]
-#[command(name = "tetherbot", about = "Tethered extreme-terrain rover navigation: simulator and operator's tool")]
+#[command(name = "tetherbot", version, about)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -11,26 +17,38 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Run a scenario against the flight software on the in-process link (the main job).
+    Run(cli::run::RunArgs),
+    /// Run a scenario and record every byte into a field log (same as `run --log LOG`).
+    Record(cli::run::RunArgs),
+    /// Replay a field log against a fresh flight software and compare every output byte.
+    Replay(cli::replay::ReplayArgs),
+    /// Export a field log to MCAP.
+    Export(cli::export::ExportArgs),
+    /// Show a field log's header, frames and damage.
+    Inspect(cli::inspect::InspectArgs),
     /// ABIT* side by side with OMPL 1.5.2's ABIT* on the shared geometric problems.
-    AbitBench(host_sim::cli::abit_bench::Args),
+    AbitBench(cli::abit_bench::Args),
 }
 
-fn main() {
-    let code = match Cli::parse().command {
-        Command::AbitBench(a) => report(host_sim::cli::abit_bench::run(&a)),
-    };
-    std::process::exit(code);
-}
-
-fn report(r: Result<String, String>) -> i32 {
-    match r {
-        Ok(text) => {
-            print!("{text}");
-            0
+fn main() -> ExitCode {
+    env_logger_lite();
+    match Cli::parse().command {
+        Command::Run(a) => cli::run::main(&a),
+        Command::Record(a) => {
+            if a.log.is_none() {
+                return cli::fail("record needs --log LOG (or -o LOG)");
+            }
+            cli::run::main(&a)
         }
-        Err(e) => {
-            eprintln!("error: {e}");
-            1
-        }
+        Command::Replay(a) => cli::replay::main(&a),
+        Command::Export(a) => cli::export::main(&a),
+        Command::Inspect(a) => cli::inspect::main(&a),
+        Command::AbitBench(a) => cli::abit_bench::main(&a),
     }
+}
+
+/// Prints `log` records from the flight software to stderr when `TETHERBOT_LOG` is set (error/warn/info/debug).
+fn env_logger_lite() {
+    host_sim::cli::install_stderr_logger();
 }

@@ -208,6 +208,17 @@ fn ratio(a: f64, b: f64) -> String {
     }
 }
 
+/// `tetherbot abit-bench`: run, print the table, exit 0 (or 2 if the benchmark could not run).
+pub fn main(args: &Args) -> std::process::ExitCode {
+    match run(args) {
+        Ok(table) => {
+            print!("{table}");
+            std::process::ExitCode::SUCCESS
+        }
+        Err(e) => super::fail(e),
+    }
+}
+
 /// Run the benchmark and print the table. Returns the table text.
 pub fn run(args: &Args) -> Result<String, String> {
     std::fs::create_dir_all(&args.out_dir).map_err(|e| format!("cannot create {}: {e}", args.out_dir.display()))?;
