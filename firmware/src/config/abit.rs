@@ -54,9 +54,10 @@ pub const TRUNCATION_SCALING_PARAMETER: f64 = 5.0;
 /// `prune_threshold_as_fractional_cost_change`, 0.05).
 pub const PRUNE_FRACTION: f64 = 0.05;
 
-/// Fraction of new samples that copy the attachment (anchor history) of their nearest tree vertex instead of
-/// receiving it when first connected (Paton et al. V-A, "a user-defined percentage"; the paper does not state its
-/// value). 0.25 keeps most samples undetermined so the tree can still grow into every region.
+/// Fraction of new samples that copy an attachment (anchor history) from a neighbour — one of the distinct
+/// attachments among their k nearest tree vertices — instead of receiving it when first connected (Paton et al.
+/// V-A, "a user-defined percentage"; the paper does not state its value). 0.25 keeps most samples undetermined
+/// so the tree can still grow into every region.
 pub const ATTACHMENT_COPY_FRACTION: f64 = 0.25;
 
 /// Default iteration budget of one `solve` call: 750, the budget of Paton et al. Table I.

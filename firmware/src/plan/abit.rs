@@ -299,6 +299,10 @@ impl<St, A, const NV: usize, const NQ: usize, const NM: usize> AbitArena<St, A, 
     }
 }
 
+/// An arena with the default capacities of `config::abit` (what the board uses).
+pub type DefaultAbitArena<St, A> =
+    AbitArena<St, A, { cfg::NODE_CAPACITY }, { cfg::EDGE_QUEUE_CAPACITY }, { cfg::EDGE_MEMO_CAPACITY }>;
+
 impl<St, A, const NV: usize, const NQ: usize, const NM: usize> Default for AbitArena<St, A, NV, NQ, NM> {
     fn default() -> Self {
         Self::new()
@@ -1999,6 +2003,28 @@ mod tests {
             }
         }
         found
+    }
+
+    #[test]
+    fn non_markovian_direct_edge_is_still_the_first_iteration() {
+        // Goal off the slope: the direct edge is valid from the root history and must be evaluated first.
+        let mut space = Anchored { inner: RealVectorSpace::cube(-1.0, 1.0) };
+        let pd = ProblemDefinition {
+            start: [-0.8, -0.5],
+            start_attachment: false,
+            goal: GoalState { state: [0.3, -0.5], tolerance: 0.0 },
+            objective: PathLength::new(),
+        };
+        let mut arena: Box<DefaultAbitArena<[f64; 2], bool>> = Box::default();
+        let (mut v, mut m) = (AnchoredRules, AnchoredRules);
+        let mut rng = Pcg64::seed_from_u64(1);
+        let mut planner =
+            AbitStar::new(&mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, AbitParams::ompl_defaults());
+        let report = planner.solve(&Budget::iterations(750));
+        assert_eq!(report.counters.first_solution_iteration, 1);
+        assert_eq!(report.counters.edges_evaluated, 1);
+        assert_eq!(report.status, PlannerStatus::ExactSolution { cost: 1.1 });
+        assert_eq!(report.termination, Termination::Converged);
     }
 
     #[test]
