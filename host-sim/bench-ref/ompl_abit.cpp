@@ -7,7 +7,7 @@
 // Validity and motion checks are exact and identical to the Rust side: a state is valid inside the bounds and
 // outside every (closed) box; a motion is valid when the closed segment touches no box (slab test).
 // One line per seed on stdout:
-//   seed solved first_time_s first_iteration final_cost iterations total_time_s edges_checked
+//   seed solved first_time_s first_iteration final_cost iterations total_time_s edges_checked batches
 // OMPL seeds its global RNG once per process (RNG::setSeed before any planner exists), so the seeds of one
 // run are consecutive runs of one random stream starting at FIRST_SEED.
 #include <ompl/base/MotionValidator.h>
@@ -267,9 +267,9 @@ int main(int argc, char **argv)
         double total = std::chrono::duration<double>(Clock::now() - t0).count();
         double cost = planner->bestCost().value();
         bool solved = std::isfinite(cost);
-        std::printf("%lu %d %.9f %ld %.12f %u %.9f %u\n", firstSeed + s, solved ? 1 : 0, firstTime, firstIteration,
-                    solved ? cost : -1.0, planner->numIterations(), total, motion->getValidMotionCount() +
-                    motion->getInvalidMotionCount());
+        std::printf("%lu %d %.9f %ld %.12f %u %.9f %u %u\n", firstSeed + s, solved ? 1 : 0, firstTime,
+                    firstIteration, solved ? cost : -1.0, planner->numIterations(), total,
+                    motion->getValidMotionCount() + motion->getInvalidMotionCount(), planner->numBatches());
         std::fflush(stdout);
     }
     return 0;

@@ -4,26 +4,33 @@
 //! (in-process, or the emulated board in QEMU), field logs (record, replay, MCAP export), campaigns and pictures.
 //! The `tetherbot` binary is the CLI over this library.
 //!
-//! Foundation modules: [`link`] (the host-side [`link::FlightLink`] trait, the in-process link, the recording
-//! wrapper), [`session`] (host side of the protocol), [`fieldlog`] (the log format), [`replay`], [`mcap_export`],
-//! [`scripted`] (built-in scripted scenarios), [`scenario`] (scenario files, TOML), [`testkit`] (the bad-input matrix, reusable over any link),
-//! [`cli`] (subcommand implementations).
+//! Foundation: [`link`] (the host-side [`link::FlightLink`] trait, the in-process link, the recording wrapper),
+//! [`qemu`] (the emulated flight computer as a `FlightLink`), [`session`] (host side of the protocol),
+//! [`fieldlog`] (the log format), [`replay`], [`mcap_export`], [`scripted`] (built-in scripted scenarios),
+//! [`testkit`] (the bad-input matrix, reusable over any link), [`cli`] (subcommand implementations).
+//!
+//! Worlds and sensing: [`world`] (ground truth: ledge, crater wall, height maps), [`terrain`] (GeoTIFF, Esri ASCII,
+//! NumPy, OBJ import), [`scenario`] (scenario files, TOML), [`sensor`] (range sensor), [`truth`] (the true
+//! tether), [`mapcheck`] (onboard map against ground truth).
+//!
+//! Planning: [`harness`] (every planner on every shared problem), [`homotopy`] (tether-demand planes, closed
+//! loop), [`team`] and [`movingai`] (tethered climbing teams, grid benchmarks).
 
 pub mod cli;
 pub mod fieldlog;
+pub mod harness;
 pub mod homotopy;
 pub mod link;
+pub mod mapcheck;
 pub mod mcap_export;
+pub mod movingai;
 pub mod qemu;
 pub mod replay;
 pub mod scenario;
 pub mod scripted;
-pub mod session;
-pub mod movingai;
-pub mod team;
-pub mod mapcheck;
 pub mod sensor;
-pub mod harness;
+pub mod session;
+pub mod team;
 pub mod terrain;
 pub mod testkit;
 pub mod truth;

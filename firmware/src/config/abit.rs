@@ -54,10 +54,17 @@ pub const TRUNCATION_SCALING_PARAMETER: f64 = 5.0;
 /// `prune_threshold_as_fractional_cost_change`, 0.05).
 pub const PRUNE_FRACTION: f64 = 0.05;
 
-/// Fraction of new samples that copy the attachment (anchor history) of their nearest tree vertex instead of
-/// receiving it when first connected (Paton et al. V-A, "a user-defined percentage"; the paper does not state its
-/// value). 0.25 keeps most samples undetermined so the tree can still grow into every region.
+/// Fraction of new samples that copy an attachment (anchor history) from a neighbour — one of the distinct
+/// attachments among their k nearest tree vertices — instead of receiving it when first connected (Paton et al.
+/// V-A, "a user-defined percentage"; the paper does not state its value). 0.25 keeps most samples undetermined
+/// so the tree can still grow into every region.
 pub const ATTACHMENT_COPY_FRACTION: f64 = 0.25;
 
 /// Default iteration budget of one `solve` call: 750, the budget of Paton et al. Table I.
 pub const DEFAULT_ITERATION_BUDGET: u32 = 750;
+
+/// Most copies of one state with different attachments ("twins", the state itself included): an edge from a
+/// vertex into a tree vertex of an incompatible history goes to a twin of that state with undetermined history
+/// (non-Markovian spaces). The ledge needs two or three histories (root only, anchored on the lip, anchored on
+/// the pole); 4 bounds the arena growth.
+pub const MAX_HISTORY_TWINS: usize = 4;

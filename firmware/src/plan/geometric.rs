@@ -405,4 +405,43 @@ mod tests {
         let len = space.distance(&p.start, &c1) + space.distance(&c1, &c2) + space.distance(&c2, &p.goal);
         assert!((len - wall_gap_optimal_cost()).abs() < 1e-6);
     }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        #[test]
+        fn informed_samples_respect_bound_and_bounds(
+            s in proptest::array::uniform3(-1.0f64..1.0),
+            g in proptest::array::uniform3(-1.0f64..1.0),
+            slack in 1.0001f64..3.0,
+            seed in 0u64..1000,
+        ) {
+            let mut space = RealVectorSpace::<3>::cube(-1.0, 1.0);
+            let c_min = space.distance(&s, &g);
+            proptest::prop_assume!(c_min > 1e-3);
+            let c_max = slack * c_min;
+            let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+            for _ in 0..50 {
+                if let InformedSample::Sampled(x) = space.sample_informed_path_length(&mut rng, &s, &g, c_max) {
+                    proptest::prop_assert!(space.contains(&x));
+                    proptest::prop_assert!(space.distance(&s, &x) + space.distance(&x, &g) <= c_max * (1.0 + 1e-9));
+                }
+            }
+        }
+
+        #[test]
+        fn metric_laws(
+            a in proptest::array::uniform4(-5.0f64..5.0),
+            b in proptest::array::uniform4(-5.0f64..5.0),
+            c in proptest::array::uniform4(-5.0f64..5.0),
+            t in 0.0f64..1.0,
+        ) {
+            let space = RealVectorSpace::<4>::cube(-5.0, 5.0);
+            proptest::prop_assert_eq!(space.distance(&a, &b), space.distance(&b, &a));
+            proptest::prop_assert!(space.distance(&a, &c) <= space.distance(&a, &b) + space.distance(&b, &c) + 1e-12);
+            let m = space.interpolate(&a, &b, t);
+            let d = space.distance(&a, &m) + space.distance(&m, &b) - space.distance(&a, &b);
+            proptest::prop_assert!(d.abs() < 1e-9);
+            proptest::prop_assert_eq!(space.interpolate(&a, &b, 0.0), a);
+        }
+    }
 }

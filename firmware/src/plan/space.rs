@@ -21,6 +21,25 @@
 //! off attachment copying and fresh goals in the planner.
 //!
 //! Costs are `f64` ([`Cost`]), as in OMPL; states are whatever the space chooses.
+//!
+//! ## Wiring the tether-aware space (Paton et al. IV-V) into `plan::abit`
+//! - `StateSpace`: `State` = a settled SE(3) pose (plus whatever settling produced that the checks reuse);
+//!   `Attachment` = the tether's `AnchorHistory`; `NON_MARKOVIAN = true`; `sample_uniform` = sample a surface
+//!   point, perturb, random yaw about the normal, settle (`None` when settling fails); `distance` = a metric on
+//!   positions (+ weighted yaw); `attachments_compatible` = same anchors within tolerance.
+//! - `StateValidityChecker::is_valid`: settled, no body collision (attachment-independent). An off-map goal
+//!   (Paton et al. VI-B) is a state this checker accepts.
+//! - `MotionValidator::check_motion(space, from, history, to)`: turn in place + straight drive, interpolated,
+//!   every interpolated state settled, collision-checked, `predict_anchors` (Alg. 1) from `history`, QP
+//!   stability with the last anchor; returns `Valid { attachment: history_after }` or `Invalid`. For an off-map
+//!   goal: valid when `from` is near the map edge.
+//! - `OptimizationObjective`: `motion_cost` = weighted yaw change + roll + length; `motion_cost_heuristic` =
+//!   `w_length * euclidean distance` (admissible); `sample_informed` may stay unsupported (the planner then
+//!   rejection-samples on the heuristic, drawing up to `informed_rejection_attempts` settled samples per sample —
+//!   a cheap ellipse pre-test before settling is worth implementing there).
+//! - `ProblemDefinition { start, start_attachment: root AnchorHistory, goal: GoalState { .. }, objective }`, then
+//!   `AbitStar::new(&mut arena, &mut space, &mut validity, &mut motion, &pdef, &mut rng, params)` and
+//!   `solve(&Budget::iterations(750))`; `write_path` gives the states with their anchor histories.
 
 use rand_core::Rng;
 
@@ -358,6 +377,8 @@ pub struct Counters {
     pub prunings: u32,
     /// Edges rejected because the end state's attachment was incompatible (Paton et al. V-A).
     pub incompatible_attachments: u32,
+    /// Twins with undetermined history created for edges into vertices of another history.
+    pub history_twins: u32,
     /// Neighbour lists truncated at `NEIGHBOUR_CAPACITY`.
     pub neighbour_lists_truncated: u32,
     /// Iteration at which the first solution was found (0 = none yet).

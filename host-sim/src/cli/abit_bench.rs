@@ -158,7 +158,7 @@ pub fn run_ompl(
     let mut runs = Vec::new();
     for line in text.lines() {
         let f: Vec<&str> = line.split_whitespace().collect();
-        if f.len() != 8 {
+        if f.len() != 9 {
             return Err(format!("unexpected OMPL driver line: {line}"));
         }
         let num = |i: usize| f[i].parse::<f64>().map_err(|e| format!("bad field {i} in `{line}`: {e}"));
@@ -174,7 +174,7 @@ pub fn run_ompl(
             first_solution_iteration: (first_iter >= 0.0).then_some(first_iter as u32),
             final_cost: solved.then_some(num(4)?),
             iterations: num(5)? as u32,
-            batches: 0,
+            batches: num(8)? as u32,
             edges_evaluated: num(7)? as u32,
             states_checked: 0,
             total_time: Duration::from_secs_f64(num(6)?),
@@ -208,6 +208,17 @@ fn ratio(a: f64, b: f64) -> String {
     }
 }
 
+/// `tetherbot abit-bench`: run, print the table, exit 0 (or 2 if the benchmark could not run).
+pub fn main(args: &Args) -> std::process::ExitCode {
+    match run(args) {
+        Ok(table) => {
+            print!("{table}");
+            std::process::ExitCode::SUCCESS
+        }
+        Err(e) => super::fail(e),
+    }
+}
+
 /// Run the benchmark and print the table. Returns the table text.
 pub fn run(args: &Args) -> Result<String, String> {
     std::fs::create_dir_all(&args.out_dir).map_err(|e| format!("cannot create {}: {e}", args.out_dir.display()))?;
@@ -228,7 +239,7 @@ pub fn run(args: &Args) -> Result<String, String> {
     let limit = Some(Duration::from_secs_f64(args.seconds));
     let mut table = String::new();
     let mut csv = String::from(
-        "planner,problem,seed,solved,first_time_s,first_iteration,final_cost,iterations,total_time_s,edges_evaluated,path_verified\n",
+        "planner,problem,seed,solved,first_time_s,first_iteration,final_cost,iterations,total_time_s,edges_evaluated,batches,path_verified\n",
     );
     let _ = writeln!(
         table,
@@ -291,7 +302,7 @@ pub fn run(args: &Args) -> Result<String, String> {
         for r in &all {
             let _ = writeln!(
                 csv,
-                "{},{},{},{},{},{},{},{},{:.9},{},{}",
+                "{},{},{},{},{},{},{},{},{:.9},{},{},{}",
                 r.planner,
                 r.problem,
                 r.seed,
@@ -302,6 +313,7 @@ pub fn run(args: &Args) -> Result<String, String> {
                 r.iterations,
                 r.total_time.as_secs_f64(),
                 r.edges_evaluated,
+                r.batches,
                 r.path_verified.map_or(String::new(), |v| v.to_string())
             );
         }
