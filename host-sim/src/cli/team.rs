@@ -158,7 +158,7 @@ pub fn team(args: &TeamArgs) -> Result<bool, String> {
         }
     };
     let (surf, start, cfg, view, bg) = team_scenario(&args.world, &args.data, fail, args.seed)?;
-    let mut rng = rand_pcg::Pcg64::new(args.seed as u128, 0xa02b_dbf7_bb3c_0a7a_c28f_a16a_64ab_f96);
+    let mut rng = rand_pcg::Pcg64::new(args.seed as u128, 0x0a02_bdbf_7bb3_c0a7_ac28_fa16_a64a_bf96);
     let t = Instant::now();
     let rep = crate::team::simulate(surf.as_ref(), &start, &cfg, &mut rng);
     let secs = t.elapsed().as_secs_f64();

@@ -4,7 +4,7 @@
 
 use super::terrain::{cross, dot, sub, unit, P3};
 use super::SimReport;
-use std::fmt::Write as _;
+use core::fmt::Write as _;
 
 const COLOURS: [&str; 4] = ["#1f4fff", "#000000", "#8b4513", "#800080"];
 

@@ -34,6 +34,7 @@
 
 use crate::config::team::{TeamParams, KNN_BUCKETS_PER_AXIS, KNN_K, SURFACE_CELLS_PER_AXIS, SURFACE_MAX_VERTICES};
 use crate::geom::{is_finite3, norm3, normalize3, Real, Vec3};
+use nalgebra::Matrix3;
 
 /// Maximum Jacobi sweeps of the 3 x 3 symmetric eigen-solver (converges in < 10 for 3 x 3).
 pub const EIGEN_MAX_SWEEPS: usize = 32;
@@ -121,25 +122,26 @@ pub struct Scene<const P: usize> {
 /// 3 x 3 symmetric eigen-decomposition by cyclic Jacobi rotations, bounded by [`EIGEN_MAX_SWEEPS`]; returns the
 /// eigenvector of the smallest eigenvalue and the eigenvalues (ascending), or `None` on non-convergence.
 pub fn smallest_eigenvector(m: [[Real; 3]; 3]) -> Option<(Vec3, [Real; 3])> {
-    let mut a = m;
-    let mut v = [[1.0 as Real, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    let scale = a.iter().flatten().fold(0.0 as Real, |s, x| s + x * x);
+    let mut a = Matrix3::from_fn(|i, j| m.get(i).and_then(|r| r.get(j)).copied().unwrap_or(0.0));
+    let mut v = Matrix3::<Real>::identity();
+    let scale = a.iter().fold(0.0 as Real, |s, x| s + x * x);
     if !scale.is_finite() {
         return None;
     }
     let mut converged = false;
     for _ in 0..EIGEN_MAX_SWEEPS {
-        let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+        let off = a.m12 * a.m12 + a.m13 * a.m13 + a.m23 * a.m23;
         if off <= 1e-12 * scale || off == 0.0 {
             converged = true;
             break;
         }
         for (p, q) in [(0usize, 1usize), (0, 2), (1, 2)] {
-            let apq = a[p][q];
+            let at = |m: &Matrix3<Real>, i: usize, k: usize| m.get((i, k)).copied().unwrap_or(0.0);
+            let apq = at(&a, p, q);
             if apq == 0.0 {
                 continue;
             }
-            let theta = (a[q][q] - a[p][p]) / (2.0 * apq);
+            let theta = (at(&a, q, q) - at(&a, p, p)) / (2.0 * apq);
             let t = if theta >= 0.0 {
                 1.0 / (theta + libm::sqrtf(1.0 + theta * theta))
             } else {
@@ -147,38 +149,24 @@ pub fn smallest_eigenvector(m: [[Real; 3]; 3]) -> Option<(Vec3, [Real; 3])> {
             };
             let c = 1.0 / libm::sqrtf(1.0 + t * t);
             let s = t * c;
-            // A' = J^T A J
-            for k in 0..3 {
-                let akp = a[k][p];
-                let akq = a[k][q];
-                a[k][p] = c * akp - s * akq;
-                a[k][q] = s * akp + c * akq;
+            // Givens rotation J in the (p, q) plane; A' = J^T A J, V' = V J
+            let mut j = Matrix3::<Real>::identity();
+            for (i, k, x) in [(p, p, c), (q, q, c), (p, q, s), (q, p, -s)] {
+                if let Some(e) = j.get_mut((i, k)) {
+                    *e = x;
+                }
             }
-            for k in 0..3 {
-                let apk = a[p][k];
-                let aqk = a[q][k];
-                a[p][k] = c * apk - s * aqk;
-                a[q][k] = s * apk + c * aqk;
-            }
-            for row in v.iter_mut() {
-                let vp = row[p];
-                let vq = row[q];
-                row[p] = c * vp - s * vq;
-                row[q] = s * vp + c * vq;
-            }
+            a = j.transpose() * a * j;
+            v *= j;
         }
     }
     if !converged {
         return None;
     }
-    let ev = [a[0][0], a[1][1], a[2][2]];
-    let mut k = 0;
-    for i in 1..3 {
-        if ev[i] < ev[k] {
-            k = i;
-        }
-    }
-    let vec = Vec3::new(v[0][k], v[1][k], v[2][k]);
+    let ev = [a.m11, a.m22, a.m33];
+    let (k, _) = ev.iter().enumerate().fold((0usize, Real::INFINITY), |(bk, bv), (i, &x)| if x < bv { (i, x) } else { (bk, bv) });
+    let col = v.column(k);
+    let vec = Vec3::new(col.x, col.y, col.z);
     let mut sorted = ev;
     sorted.sort_unstable_by(|x, y| x.total_cmp(y));
     Some((vec, sorted))
@@ -196,17 +184,12 @@ fn fit_normal<'a>(pts: impl Iterator<Item = &'a Vec3> + Clone) -> Option<(Vec3, 
         return None;
     }
     c /= n;
-    let mut m = [[0.0 as Real; 3]; 3];
+    let mut m = Matrix3::<Real>::zeros();
     for p in pts {
         let d = p - c;
-        let d = [d.x, d.y, d.z];
-        for i in 0..3 {
-            for j in 0..3 {
-                m[i][j] += d[i] * d[j] / n;
-            }
-        }
+        m += d * d.transpose() / n;
     }
-    smallest_eigenvector(m)
+    smallest_eigenvector([[m.m11, m.m12, m.m13], [m.m21, m.m22, m.m23], [m.m31, m.m32, m.m33]])
 }
 
 fn any_perpendicular(n: &Vec3) -> Vec3 {
@@ -373,7 +356,7 @@ impl<const P: usize> Scene<P> {
         let (bx, by) = ((b % KNN_BUCKETS_PER_AXIS) as i64, (b / KNN_BUCKETS_PER_AXIS) as i64);
         for ring in 0..KNN_BUCKETS_PER_AXIS as i64 {
             let inner = (ring - 1).max(0) as Real * self.bucket_size;
-            if best[KNN_K - 1].1 != NONE && best[KNN_K - 1].0 <= inner * inner {
+            if best.last().is_some_and(|w| w.1 != NONE && w.0 <= inner * inner) {
                 break;
             }
             for dy in -ring..=ring {
@@ -394,12 +377,16 @@ impl<const P: usize> Scene<P> {
                         if j as usize != i {
                             if let Some(q) = self.local.get(j as usize) {
                                 let d2 = (q - p).norm_squared();
-                                if d2 < best[KNN_K - 1].0 {
-                                    let mut k = KNN_K - 1;
-                                    best[k] = (d2, j);
-                                    while k > 0 && best[k].0 < best[k - 1].0 {
-                                        best.swap(k, k - 1);
-                                        k -= 1;
+                                if best.last().is_some_and(|w| d2 < w.0) {
+                                    if let Some(w) = best.last_mut() {
+                                        *w = (d2, j);
+                                    }
+                                    // insertion: bubble the new entry towards the front (at most K steps)
+                                    for k in (1..KNN_K).rev() {
+                                        match (best.get(k), best.get(k - 1)) {
+                                            (Some(x), Some(y)) if x.0 < y.0 => best.swap(k, k - 1),
+                                            _ => break,
+                                        }
                                     }
                                 }
                             }
@@ -550,8 +537,10 @@ impl<const P: usize> Default for Scene<P> {
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
     use super::*;
     use crate::config::team::SCENE_MAX_POINTS;
+    use std::boxed::Box;
 
     #[test]
     fn jacobi_finds_smallest_eigenvector() {
