@@ -207,3 +207,97 @@ proptest! {
         }
     }
 }
+
+use firmware::config::team::TeamParams;
+use firmware::geom::{Real, Vec3};
+use firmware::plan::team::astar::AStarStatus;
+use firmware::plan::team::DefaultLocalPlanner;
+
+/// Section V, Fig. 12, end to end: a grid of 30 m scenes; D* Lite routes (1,1) -> (1,2) -> (1,3) ("south" =
+/// +y); the local planner (the real scene pipeline and bounded-leg A* on range points) hops through the scenes;
+/// between (1,2) and (1,3) a 16 m crevasse (h_max = 10 m) stops it; the failure becomes a wall and D* Lite
+/// replans incrementally to (1,2), (2,2), (2,3), (1,3), which the robot then climbs.
+#[test]
+fn crevasse_reroute_with_the_local_planner_in_the_loop() {
+    const CELL: f64 = 30.0;
+    // gently undulating ground; the crevasse spans y in (82, 98) for x < 68 (beyond what the robot sees from (1,2))
+    let ground = |x: f64, y: f64| -> f64 {
+        if y > 82.0 && y < 98.0 && x < 68.0 {
+            -40.0
+        } else {
+            0.4 * (x / 3.0).sin() * (y / 4.0).cos()
+        }
+    };
+    let range = 22.0;
+    let scan = |at: [f64; 2]| -> Vec<Vec3> {
+        let mut pts = Vec::new();
+        let n = (range as i64) + 1;
+        for j in -n..=n {
+            for i in -n..=n {
+                let (x, y) = (at[0] + i as f64, at[1] + j as f64);
+                if (x - at[0]).hypot(y - at[1]) <= range && x >= 0.0 && y >= 0.0 {
+                    pts.push(Vec3::new(x as Real, y as Real, ground(x, y) as Real));
+                }
+            }
+        }
+        pts
+    };
+    let centre = |c: (i64, i64)| [(c.0 as f64 + 0.5) * CELL, (c.1 as f64 + 0.5) * CELL];
+    let cell_of = |p: [f64; 2]| ((p[0] / CELL).floor() as i64, (p[1] / CELL).floor() as i64);
+
+    let mut st = OwnedDStarStorage::new(5 * 5);
+    let mut d = DStarLite::new(5, 5, st.storage()).unwrap();
+    for y in 0..5 {
+        d.set_blocked(0, y, true).unwrap(); // the map edge, as in the figure
+    }
+    let goal = (1, 3);
+    assert!(matches!(d.plan((1, 1), goal, 10_000).unwrap(), DStarOutcome::Found { cost, .. } if cost == 2.0));
+    let params = TeamParams::DEFAULT;
+    let mut planner: Box<DefaultLocalPlanner> = Box::default();
+    let mut pos = centre((1, 1));
+    let mut visited = vec![(1i64, 1i64)];
+    let mut walls = Vec::new();
+    let mut stuck = 0;
+    for _ in 0..200 {
+        let here = *visited.last().unwrap();
+        if here == goal {
+            break;
+        }
+        let next = d.next_cell(here).expect("D* Lite has a path");
+        let target = centre(next);
+        let pts = scan(pos);
+        let z = ground(pos[0], pos[1]);
+        let robot = Vec3::new(pos[0] as Real, pos[1] as Real, z as Real);
+        let tgt = Vec3::new(target[0] as Real, target[1] as Real, ground(target[0], target[1]) as Real);
+        // a single robot: the leg c_m = 0 (the hub is on it), so only h_max binds
+        let plan = planner.plan(&pts, &Vec3::z(), &robot, &Vec3::zeros(), &tgt, 3.0, &params).unwrap();
+        let before = (pos[0] - target[0]).hypot(pos[1] - target[1]);
+        let hop = plan.hops.get(1).map(|h| [h.x as f64, h.y as f64]);
+        let progress = hop.map(|h| before - (h[0] - target[0]).hypot(h[1] - target[1])).unwrap_or(0.0);
+        if plan.status == AStarStatus::NoSolution || progress < 0.5 {
+            stuck += 1;
+            if stuck >= 2 {
+                // bounded-leg A* cannot cross: the edge between the two scenes becomes a wall
+                d.add_wall(here, next).unwrap();
+                walls.push((here, next));
+                assert!(matches!(d.replan(10_000).unwrap(), DStarOutcome::Found { .. }));
+                stuck = 0;
+            }
+            continue;
+        }
+        stuck = 0;
+        let h = hop.unwrap();
+        let len = ((h[0] - pos[0]).powi(2) + (h[1] - pos[1]).powi(2) + (ground(h[0], h[1]) - z).powi(2)).sqrt();
+        assert!(len <= params.h_max as f64 + 1e-3, "hop {len:.2} m");
+        assert!(ground(h[0], h[1]) > -1.0, "landed in the crevasse at {h:?}");
+        pos = h;
+        let c = cell_of(pos);
+        if c != here && (pos[0] - target[0]).hypot(pos[1] - target[1]) < 8.0 && c == next {
+            visited.push(c);
+            d.move_start(c).unwrap();
+            assert!(matches!(d.replan(10_000).unwrap(), DStarOutcome::Found { .. }));
+        }
+    }
+    assert_eq!(walls, vec![((1, 2), (1, 3))]);
+    assert_eq!(visited, vec![(1, 1), (1, 2), (2, 2), (2, 3), (1, 3)]);
+}

@@ -114,7 +114,7 @@ pub fn team_scenario(world: &str, data: &std::path::Path, fail: Option<(usize, u
                 sensor: RangeSensor { rays: 3000, range: 25.0, noise: 0.03, height: 0.3 },
                 goal,
                 goal_tol: 8.0,
-                max_rounds: 60,
+                max_rounds: 100,
                 fail,
                 seed,
             };

@@ -1,16 +1,16 @@
 //! Scene pipeline, stages 1-3 of Morad et al. section V-A (Fig. 7): range points -> normals from k nearest
 //! neighbours -> a continuous surface.
 //!
-//! **Scene frame.** A plane is fitted to the whole scan (centroid + smallest-eigenvalue eigenvector of the
-//! covariance, oriented along the robot's `up`: its outward direction from its attitude — gravity on a cliff, away
-//! from the body's centre on an asteroid; orienting towards the sensor fails in concave scenes such as a pit). Everything below is expressed in this frame: plane coordinates
-//! (a, b) and height z along the plane normal. On a cliff the plane is the wall, on an asteroid the local
-//! tangent plane; "height" is therefore protrusion from the mean surface, not altitude (regolith collects in
-//! depressions of the surface whatever the direction of gravity).
+//! **Scene frame.** Origin at the centroid of the scan; normal = the mean of the point normals (below), oriented
+//! along the robot's `up` (its outward direction from its attitude while gripping: gravity on a cliff, away from
+//! the body's centre on an asteroid). Everything is expressed in this frame: plane coordinates (a, b) and height
+//! z along the normal. On a cliff the plane is the wall, on an asteroid the local tangent plane; "height" is
+//! protrusion from the mean surface, not altitude. (A plane fitted to the points themselves was tried first and
+//! rejected: a deep crevasse or a far wall in the scan tilts it by tens of degrees.)
 //!
 //! **Normals (V-A.2).** For every point, a plane is fitted to the point and its [`KNN_K`] nearest neighbours; its
-//! normal (oriented like the scene normal) is the point's normal. The neighbours come from a fixed 2-D bucket
-//! index over the scene plane ([`KNN_BUCKETS_PER_AXIS`]^2 buckets); the search visits rings of buckets outwards
+//! normal (oriented to `up`) is the point's normal. The neighbours come from a fixed 2-D bucket
+//! index over the plane perpendicular to `up` ([`KNN_BUCKETS_PER_AXIS`]^2 buckets); the search visits rings of buckets outwards
 //! and stops when the k-th best distance is below the ring's inner radius (exact kNN, bounded by the ring count).
 //!
 //! **Surface (V-A.3): what we chose and why.** The paper reconstructs a closed surface by screened Poisson
@@ -116,6 +116,9 @@ pub struct Scene<const P: usize> {
     pub cell_normal: [Vec3; SURFACE_MAX_VERTICES],
     /// Cell states.
     pub state: [CellState; SURFACE_MAX_VERTICES],
+    /// Mean plane coordinates of an observed cell's points (the vertex sits where the data is, not at the cell
+    /// centre, so a vertex on a rim is on the rim).
+    pub cell_ab: [(Real, Real); SURFACE_MAX_VERTICES],
     count: [u16; SURFACE_MAX_VERTICES],
 }
 
@@ -222,6 +225,7 @@ impl<const P: usize> Scene<P> {
             height: [0.0; SURFACE_MAX_VERTICES],
             cell_normal: [z; SURFACE_MAX_VERTICES],
             state: [CellState::Empty; SURFACE_MAX_VERTICES],
+            cell_ab: [(0.0, 0.0); SURFACE_MAX_VERTICES],
             count: [0; SURFACE_MAX_VERTICES],
         }
     }
@@ -237,8 +241,8 @@ impl<const P: usize> Scene<P> {
         if count > P {
             return Err(SceneError::TooManyPoints);
         }
-        // frame
-        let (n, ev) = fit_normal(finite()).ok_or(SceneError::Degenerate)?;
+        // degenerate scans (collinear or coincident points) have no surface
+        let (_, ev) = fit_normal(finite()).ok_or(SceneError::Degenerate)?;
         if ev[1] <= 1e-9 {
             return Err(SceneError::Degenerate);
         }
@@ -247,26 +251,13 @@ impl<const P: usize> Scene<P> {
             c += p;
         }
         c /= count as Real;
-        let mut n = normalize3(&n, 1e-9).ok_or(SceneError::Degenerate)?;
-        if n.dot(up) < 0.0 {
-            n = -n;
-        }
-        let u = any_perpendicular(&n);
-        let v = n.cross(&u);
-        self.frame = SceneFrame { origin: c, u, v, n };
         self.n_points = count;
-        let (mut amin, mut amax, mut bmin, mut bmax) = (Real::MAX, Real::MIN, Real::MAX, Real::MIN);
-        for (slot, p) in self.local.iter_mut().zip(finite()) {
-            let l = self.frame.to_local(p);
-            *slot = l;
-            amin = amin.min(l.x);
-            amax = amax.max(l.x);
-            bmin = bmin.min(l.y);
-            bmax = bmax.max(l.y);
-        }
-        let extent = (amax - amin).max(bmax - bmin).max(1e-3);
-        // bucket index
-        self.bucket_min = (amin, bmin);
+        // provisional frame on the robot's `up`, for the kNN bucket index
+        let n0 = normalize3(up, 1e-9).unwrap_or(Vec3::z());
+        let u0 = any_perpendicular(&n0);
+        self.frame = SceneFrame { origin: c, u: u0, v: n0.cross(&u0), n: n0 };
+        let extent = self.project(points);
+        self.bucket_min = self.min_ab;
         self.bucket_size = extent / KNN_BUCKETS_PER_AXIS as Real * 1.0001;
         for h in self.head.iter_mut() {
             *h = NONE;
@@ -278,7 +269,8 @@ impl<const P: usize> Scene<P> {
                 *h = i as u32;
             }
         }
-        // normals
+        // normals from the k nearest neighbours, oriented to `up`
+        let mut mean_n = Vec3::zeros();
         for i in 0..count {
             let mut nb = [(Real::MAX, NONE); KNN_K];
             self.knn(i, &mut nb);
@@ -291,15 +283,28 @@ impl<const P: usize> Scene<P> {
                 None => Vec3::z(),
             };
             let nl = if nl.z < 0.0 { -nl } else { nl };
-            let nw = u * nl.x + v * nl.y + n * nl.z;
+            let f = self.frame;
+            let nw = f.u * nl.x + f.v * nl.y + f.n * nl.z;
+            mean_n += nw;
             if let Some(slot) = self.normals.get_mut(i) {
                 *slot = nw;
             }
         }
+        // the scene plane: the mean surface orientation (robust to a deep crevasse or a far wall in the scan,
+        // which would tilt a plane fitted to the points themselves)
+        let n = normalize3(&mean_n, 1e-6).unwrap_or(n0);
+        let u = any_perpendicular(&n);
+        let v = n.cross(&u);
+        self.frame = SceneFrame { origin: c, u, v, n };
+        let extent = self.project(points);
+        let (amin, bmin) = self.min_ab;
         // surface grid
         self.cell = (extent / N as Real) * 1.0001;
         self.min_ab = (amin, bmin);
         for k in 0..SURFACE_MAX_VERTICES {
+            if let Some(ab) = self.cell_ab.get_mut(k) {
+                *ab = (0.0, 0.0);
+            }
             if let (Some(h), Some(cn), Some(st), Some(ct)) =
                 (self.height.get_mut(k), self.cell_normal.get_mut(k), self.state.get_mut(k), self.count.get_mut(k))
             {
@@ -315,6 +320,10 @@ impl<const P: usize> Scene<P> {
                 _ => continue,
             };
             if let Some(k) = self.cell_of(l.x, l.y) {
+                if let Some(ab) = self.cell_ab.get_mut(k) {
+                    ab.0 += l.x;
+                    ab.1 += l.y;
+                }
                 if let (Some(h), Some(cn), Some(ct)) =
                     (self.height.get_mut(k), self.cell_normal.get_mut(k), self.count.get_mut(k))
                 {
@@ -330,6 +339,10 @@ impl<const P: usize> Scene<P> {
             {
                 if *ct > 0 {
                     *h /= *ct as Real;
+                    if let Some(ab) = self.cell_ab.get_mut(k) {
+                        ab.0 /= *ct as Real;
+                        ab.1 /= *ct as Real;
+                    }
                     *cn = normalize3(cn, 1e-9).unwrap_or(n);
                     *st = CellState::Observed;
                 }
@@ -337,6 +350,22 @@ impl<const P: usize> Scene<P> {
         }
         self.fill(params);
         Ok(())
+    }
+
+    /// Local coordinates of the finite points in the current frame; sets `min_ab` and returns the extent.
+    fn project(&mut self, points: &[Vec3]) -> Real {
+        let (mut amin, mut amax, mut bmin, mut bmax) = (Real::MAX, Real::MIN, Real::MAX, Real::MIN);
+        let frame = self.frame;
+        for (slot, p) in self.local.iter_mut().zip(points.iter().filter(|p| is_finite3(p))) {
+            let l = frame.to_local(p);
+            *slot = l;
+            amin = amin.min(l.x);
+            amax = amax.max(l.x);
+            bmin = bmin.min(l.y);
+            bmax = bmax.max(l.y);
+        }
+        self.min_ab = (amin, bmin);
+        (amax - amin).max(bmax - bmin).max(1e-3)
     }
 
     fn bucket_of(&self, i: usize) -> usize {
@@ -409,11 +438,13 @@ impl<const P: usize> Scene<P> {
         }
     }
 
-    /// World position of a surface cell's vertex.
+    /// World position of a surface cell's vertex (observed: at the mean of its points; filled: at the centre).
     pub fn vertex(&self, k: usize) -> Vec3 {
         let (i, j) = (k % N, k / N);
-        let a = self.min_ab.0 + (i as Real + 0.5) * self.cell;
-        let b = self.min_ab.1 + (j as Real + 0.5) * self.cell;
+        let (a, b) = match (self.state.get(k), self.cell_ab.get(k)) {
+            (Some(CellState::Observed), Some(&ab)) => ab,
+            _ => (self.min_ab.0 + (i as Real + 0.5) * self.cell, self.min_ab.1 + (j as Real + 0.5) * self.cell),
+        };
         let z = self.height.get(k).copied().unwrap_or(0.0);
         self.frame.to_world(&Vec3::new(a, b, z))
     }
