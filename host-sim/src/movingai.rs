@@ -228,6 +228,7 @@ pub struct OwnedDStarStorage {
     heap: Vec<HeapEntry>,
     blocked: Vec<bool>,
     walls: Vec<u8>,
+    moves: Vec<u8>,
 }
 
 impl OwnedDStarStorage {
@@ -241,6 +242,7 @@ impl OwnedDStarStorage {
             heap: vec![HeapEntry::default(); cells],
             blocked: vec![false; cells],
             walls: vec![0; cells],
+            moves: vec![0; cells],
         }
     }
 
@@ -254,6 +256,7 @@ impl OwnedDStarStorage {
             heap: &mut self.heap,
             blocked: &mut self.blocked,
             walls: &mut self.walls,
+            moves: &mut self.moves,
         }
     }
 }

@@ -13,7 +13,7 @@
 //! `compute_shortest_path` repairs the search incrementally.
 //!
 //! Storage is lent by the caller ([`DStarStorage`]): per cell `g`, `rhs`, an epoch stamp, a heap slot, the
-//! occupancy and wall bits, plus a binary heap of one entry per cell. Planning from scratch starts a new epoch
+//! occupancy, wall and allowed-move bits, plus a binary heap of one entry per cell. Planning from scratch starts a new epoch
 //! instead of clearing the arrays, so a host can run thousands of Moving AI scenarios on a 512 x 512 map without
 //! touching every cell each time. A board uses [`DStarArena`] (capacity [`GLOBAL_GRID_MAX_CELLS`] by default).
 //!
@@ -54,6 +54,8 @@ pub struct DStarStorage<'a> {
     pub blocked: &'a mut [bool],
     /// Wall bits per cell: bit d set = the edge in direction `DIRS[d]` is walled.
     pub walls: &'a mut [u8],
+    /// Allowed-move bits per cell (derived from `blocked` and `walls`, kept up to date by the planner).
+    pub moves: &'a mut [u8],
 }
 
 /// Fixed arena for a board: `N` cells.
@@ -65,6 +67,7 @@ pub struct DStarArena<const N: usize> {
     heap: [HeapEntry; N],
     blocked: [bool; N],
     walls: [u8; N],
+    moves: [u8; N],
 }
 
 impl<const N: usize> DStarArena<N> {
@@ -78,6 +81,7 @@ impl<const N: usize> DStarArena<N> {
             heap: [HeapEntry { k1: 0.0, k2: 0.0, cell: 0 }; N],
             blocked: [false; N],
             walls: [0; N],
+            moves: [0; N],
         }
     }
 
@@ -91,6 +95,7 @@ impl<const N: usize> DStarArena<N> {
             heap: &mut self.heap,
             blocked: &mut self.blocked,
             walls: &mut self.walls,
+            moves: &mut self.moves,
         }
     }
 }
@@ -197,6 +202,7 @@ impl<'a> DStarLite<'a> {
             storage.heap.len(),
             storage.blocked.len(),
             storage.walls.len(),
+            storage.moves.len(),
         ]
         .into_iter()
         .min()
@@ -232,6 +238,11 @@ impl<'a> DStarLite<'a> {
         }
         for w in self.s.walls.iter_mut().take(n) {
             *w = 0;
+        }
+        for y in 0..self.height as i64 {
+            for x in 0..self.width as i64 {
+                self.update_mask(x, y);
+            }
         }
         self.planned = false;
     }
@@ -278,8 +289,46 @@ impl<'a> DStarLite<'a> {
         self.s.walls.get(c as usize).map(|w| w & (1u8 << d) != 0).unwrap_or(true)
     }
 
-    /// Cost of the move from cell (x, y) in direction `d`, `INF` when not allowed.
+    /// Cost of the move from cell (x, y) in direction `d`, `INF` when not allowed (from the cached move bits).
+    #[inline]
     fn move_cost(&self, x: i64, y: i64, d: usize) -> f64 {
+        let bits = match self.index(x, y) {
+            Some(c) => self.s.moves.get(c as usize).copied().unwrap_or(0),
+            None => 0,
+        };
+        if bits & (1u8 << (d & 7)) == 0 {
+            INF
+        } else if d < 4 {
+            1.0
+        } else {
+            SQRT_2
+        }
+    }
+
+    fn update_mask(&mut self, x: i64, y: i64) {
+        if let Some(c) = self.index(x, y) {
+            let mut bits = 0u8;
+            for d in 0..8 {
+                if self.rule_cost(x, y, d) < INF {
+                    bits |= 1u8 << d;
+                }
+            }
+            if let Some(m) = self.s.moves.get_mut(c as usize) {
+                *m = bits;
+            }
+        }
+    }
+
+    fn update_masks_around(&mut self, x: i64, y: i64) {
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                self.update_mask(x + dx, y + dy);
+            }
+        }
+    }
+
+    /// The movement rules: cost of the move from (x, y) in direction `d`, `INF` when not allowed.
+    fn rule_cost(&self, x: i64, y: i64, d: usize) -> f64 {
         let (dx, dy) = match DIRS.get(d) {
             Some(&(dx, dy)) => (dx as i64, dy as i64),
             None => return INF,
@@ -678,6 +727,7 @@ impl<'a> DStarLite<'a> {
             }
             *b = blocked;
         }
+        self.update_masks_around(x, y);
         self.refresh_around(x, y);
         Ok(())
     }
@@ -695,6 +745,8 @@ impl<'a> DStarLite<'a> {
         if let Some(w) = self.s.walls.get_mut(cb as usize) {
             *w |= 1u8 << d_ba;
         }
+        self.update_masks_around(a.0, a.1);
+        self.update_masks_around(b.0, b.1);
         self.refresh_around(a.0, a.1);
         self.refresh_around(b.0, b.1);
         Ok(())
@@ -776,6 +828,7 @@ mod tests {
         heap: [HeapEntry; 64],
         blocked: [bool; 64],
         walls: [u8; 64],
+        moves: [u8; 64],
     }
 
     #[test]
@@ -788,6 +841,7 @@ mod tests {
             heap: [HeapEntry::default(); 64],
             blocked: [false; 64],
             walls: [0; 64],
+            moves: [0; 64],
         };
         let st = DStarStorage {
             g: &mut o.g,
@@ -797,6 +851,7 @@ mod tests {
             heap: &mut o.heap[..10],
             blocked: &mut o.blocked,
             walls: &mut o.walls,
+            moves: &mut o.moves,
         };
         assert_eq!(DStarLite::new(8, 8, st).err(), Some(DStarError::StorageTooSmall { needed: 64, have: 10 }));
     }
