@@ -361,6 +361,31 @@ mod tests {
     }
 
     #[test]
+    fn damaged_files_never_panic() {
+        let map = "type octile\nheight 3\nwidth 3\nmap\n.@.\n...\nT..\n";
+        let scen = "version 1\n0\tm.map\t3\t3\t0\t0\t2\t2\t2.82842712\n";
+        for text in [map, scen] {
+            let b = text.as_bytes();
+            for n in 0..b.len() {
+                let t = String::from_utf8_lossy(&b[..n]);
+                let _ = parse_map(&t);
+                let _ = parse_scen(&t);
+            }
+            for i in 0..b.len() {
+                let mut c = b.to_vec();
+                c[i] = b"x9 \n\t.@-"[i % 8];
+                let t = String::from_utf8_lossy(&c);
+                let _ = parse_map(&t);
+                let _ = parse_scen(&t);
+            }
+        }
+        // a scenario outside the map is a typed error from the planner, not a panic
+        let m = parse_map(map).unwrap();
+        let s = parse_scen("version 1\n0 m 3 3 0 0 9 9 1.0\n").unwrap();
+        assert!(run_scenarios(&m, &s, |_, _| true).is_err());
+    }
+
+    #[test]
     fn corner_cutting_is_forbidden() {
         // . @      diagonal (0,1)->(1,0) would cut the corner of the wall at (1,1)... here both side cells matter
         // . .
