@@ -1,11 +1,15 @@
 //! `tetherbot`: the operator's CLI (run a scenario, campaign, record, replay, export, render).
+//!
+//! Subcommand logic lives in `host_sim::cli::<name>`; this file only parses and dispatches.
+
+use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use host_sim::cli;
-use std::process::ExitCode;
 
+/// Onboard navigation for tethered extreme-terrain rovers: simulator and operator's tool.
 #[derive(Parser)]
-#[command(name = "tetherbot", about = "Simulator and operator's tool for tethered extreme-terrain rovers")]
+#[command(name = "tetherbot", version, about)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -13,6 +17,16 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Run a scenario against the flight software on the in-process link (the main job).
+    Run(cli::run::RunArgs),
+    /// Run a scenario and record every byte into a field log (same as `run --log LOG`).
+    Record(cli::run::RunArgs),
+    /// Replay a field log against a fresh flight software and compare every output byte.
+    Replay(cli::replay::ReplayArgs),
+    /// Export a field log to MCAP.
+    Export(cli::export::ExportArgs),
+    /// Show a field log's header, frames and damage.
+    Inspect(cli::inspect::InspectArgs),
     /// Run every Moving AI scenario of a .map/.scen pair through the team's global planner (D* Lite).
     Movingai(cli::team::MovingaiArgs),
     /// Simulate the four-robot climbing team on real terrain (HiRISE cliff, Itokawa) and draw it.
@@ -20,16 +34,24 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let result = match Cli::parse().command {
-        Command::Movingai(a) => cli::team::movingai(&a),
-        Command::Team(a) => cli::team::team(&a),
-    };
-    match result {
-        Ok(true) => ExitCode::SUCCESS,
-        Ok(false) => ExitCode::FAILURE,
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::from(2)
+    env_logger_lite();
+    match Cli::parse().command {
+        Command::Run(a) => cli::run::main(&a),
+        Command::Record(a) => {
+            if a.log.is_none() {
+                return cli::fail("record needs --log LOG (or -o LOG)");
+            }
+            cli::run::main(&a)
         }
+        Command::Replay(a) => cli::replay::main(&a),
+        Command::Export(a) => cli::export::main(&a),
+        Command::Inspect(a) => cli::inspect::main(&a),
+        Command::Movingai(a) => cli::team::movingai_main(&a),
+        Command::Team(a) => cli::team::team_main(&a),
     }
+}
+
+/// Prints `log` records from the flight software to stderr when `TETHERBOT_LOG` is set (error/warn/info/debug).
+fn env_logger_lite() {
+    host_sim::cli::install_stderr_logger();
 }

@@ -1,1 +1,49 @@
-//! Capacities and budgets for `exec` (filled in by the module that uses them).
+//! Capacities and per-cycle budgets of the flight executive (`crate::exec`).
+//!
+//! | const | default | reason |
+//! |---|---|---|
+//! | [`RX_BYTES_PER_STEP`] | 1024 | bytes read from the link per `step`: at 115200 baud a 10 ms cycle brings ~115 bytes, so this drains a burst in a few cycles while bounding the cycle's work |
+//! | [`FRAMES_PER_STEP`] | 4 | frames dispatched per `step`; one full sensor chunk costs most |
+//! | [`RX_STAGING_LEN`] | 256 | bytes read from the link at once into the staging buffer |
+//! | [`TX_QUEUE_LEN`] | 8192 | outgoing bytes buffered when the link is slower than the replies |
+//! | [`TX_RESERVE`] | 2 x `MAX_ENCODED_FRAME_LEN` | input is only read while this much transmit room is free, so replies are never dropped |
+//! | [`TX_BYTES_PER_STEP`] | 4096 | bytes handed to the link per `step` |
+//! | [`LOG_QUEUE_LEN`] | 8 | forwarded log records waiting for their turn; a full queue drops and counts |
+//! | [`LOG_FRAMES_PER_SECOND`] | 10 | token-bucket rate of `Log` frames |
+//! | [`LOG_BURST`] | 4 | token-bucket depth of `Log` frames |
+//! | [`DEFAULT_TELEMETRY_PERIOD_US`] | 1_000_000 | periodic telemetry until `Configure` says otherwise (0 = only on request) |
+//! | [`PLAN_WAYPOINTS_CAPACITY`] | 256 | waypoints of one plan kept for transmission (22 `Plan` frames of 12) |
+//! | [`PLANNER_ITERATIONS_PER_STEP`] | 8 | planner iterations granted per `step` in planning mode |
+//! | [`PLAN_FRAMES_PER_STEP`] | 1 | `Plan` / `DriveCommand` frames emitted per `step` |
+
+use super::protocol::MAX_ENCODED_FRAME_LEN;
+
+/// Bytes read from the link per executive step.
+pub const RX_BYTES_PER_STEP: usize = 1024;
+/// Frames dispatched per executive step.
+pub const FRAMES_PER_STEP: usize = 4;
+/// Size of the receive staging buffer.
+pub const RX_STAGING_LEN: usize = 256;
+/// Capacity of the transmit queue in bytes.
+pub const TX_QUEUE_LEN: usize = 8192;
+/// Free transmit room required before more input is read.
+pub const TX_RESERVE: usize = 2 * MAX_ENCODED_FRAME_LEN;
+/// Bytes handed to the link per step.
+pub const TX_BYTES_PER_STEP: usize = 4096;
+/// Forwarded log records waiting to be sent.
+pub const LOG_QUEUE_LEN: usize = 8;
+/// Sustained rate of `Log` frames.
+pub const LOG_FRAMES_PER_SECOND: u32 = 10;
+/// Burst of `Log` frames.
+pub const LOG_BURST: u32 = 4;
+/// Default telemetry period in microseconds (0 = only on request).
+pub const DEFAULT_TELEMETRY_PERIOD_US: u64 = 1_000_000;
+/// Waypoints of one plan kept for transmission.
+pub const PLAN_WAYPOINTS_CAPACITY: usize = 256;
+/// Planner iterations granted per step.
+pub const PLANNER_ITERATIONS_PER_STEP: u32 = 8;
+/// `Plan` / `DriveCommand` frames emitted per step.
+pub const PLAN_FRAMES_PER_STEP: usize = 1;
+
+const _: () = assert!(TX_QUEUE_LEN > TX_RESERVE);
+const _: () = assert!(RX_STAGING_LEN <= RX_BYTES_PER_STEP);

@@ -1,1 +1,55 @@
-//! Capacities and budgets for `protocol` (filled in by the module that uses them).
+//! Capacities and limits of the wire protocol (`crate::protocol`). See `firmware/PROTOCOL.md` for the byte layout.
+//!
+//! | const | default | reason |
+//! |---|---|---|
+//! | [`PROTOCOL_VERSION`] | 1 | first byte of every frame; a receiver rejects any other value |
+//! | [`HEADER_LEN`] | 6 | version u8, kind u8, sequence u32 little-endian |
+//! | [`CRC_LEN`] | 4 | CRC-32 (ISO-HDLC, the Ethernet/zlib CRC) over header and body, little-endian |
+//! | [`MAX_FRAME_LEN`] | 2048 | largest decoded frame (header + body + CRC): a full sensor chunk plus margin; small enough for a UART DMA buffer |
+//! | [`MAX_BODY_LEN`] | 2038 | `MAX_FRAME_LEN - HEADER_LEN - CRC_LEN` |
+//! | [`MAX_ENCODED_FRAME_LEN`] | 2058 | COBS adds at most one byte per 254 plus one; plus the `0x00` delimiter |
+//! | [`MAX_POINTS_PER_CHUNK`] | 128 | 128 x 12 bytes = 1536 bytes of points per frame, with room for the pose and header |
+//! | [`MAX_CHUNKS_PER_SCAN`] | 64 | a scan of up to 8192 points; bounds the reassembly bookkeeping |
+//! | [`SCAN_POINTS_CAPACITY`] | 8192 | reassembly buffer (points), lent by the caller: 96 KiB |
+//! | [`MAX_ANCHORS_PER_WAYPOINT`] | 8 | anchor history carried with each plan waypoint (Paton et al. IV-B: a bounded stack) |
+//! | [`MAX_WAYPOINTS_PER_PLAN_FRAME`] | 12 | waypoints per `Plan` frame (12 x 129 bytes at most fits a frame); longer plans go in parts |
+//! | [`MAX_LOG_TEXT`] | 120 | bytes of text in one forwarded `Log` record; longer text is cut |
+//! | [`QUATERNION_NORM_TOLERANCE`] | 1e-3 | a pose's quaternion must have norm within this of 1 |
+
+/// The protocol version this build speaks (first byte of every frame).
+pub const PROTOCOL_VERSION: u8 = 1;
+/// Header length in bytes: version (u8), kind (u8), sequence number (u32 LE).
+pub const HEADER_LEN: usize = 6;
+/// Trailer length in bytes: CRC-32 (ISO-HDLC) little-endian.
+pub const CRC_LEN: usize = 4;
+/// Largest decoded frame, header + body + CRC, in bytes.
+pub const MAX_FRAME_LEN: usize = 2048;
+/// Smallest decoded frame (empty body).
+pub const MIN_FRAME_LEN: usize = HEADER_LEN + CRC_LEN;
+/// Largest postcard body in bytes.
+pub const MAX_BODY_LEN: usize = MAX_FRAME_LEN - HEADER_LEN - CRC_LEN;
+/// Largest frame on the wire: COBS overhead (one byte per 254, plus one) and the `0x00` delimiter.
+pub const MAX_ENCODED_FRAME_LEN: usize = MAX_FRAME_LEN + MAX_FRAME_LEN / 254 + 2;
+/// Most points in one `SensorChunk`.
+pub const MAX_POINTS_PER_CHUNK: usize = 128;
+/// Most chunks in one scan (`chunk_count` above this is rejected).
+pub const MAX_CHUNKS_PER_SCAN: u16 = 64;
+/// Points the scan reassembly buffer holds (lent by the caller).
+pub const SCAN_POINTS_CAPACITY: usize = MAX_POINTS_PER_CHUNK * MAX_CHUNKS_PER_SCAN as usize;
+/// Anchor points carried with each plan waypoint.
+pub const MAX_ANCHORS_PER_WAYPOINT: usize = 8;
+/// Waypoints in one `Plan` frame.
+pub const MAX_WAYPOINTS_PER_PLAN_FRAME: usize = 12;
+/// Bytes of text in one `Log` record.
+pub const MAX_LOG_TEXT: usize = 120;
+/// Allowed deviation of a pose quaternion's norm from 1.
+pub const QUATERNION_NORM_TOLERANCE: f32 = 1e-3;
+
+const _: () = assert!(MAX_FRAME_LEN > MIN_FRAME_LEN);
+// A full sensor chunk (pose 28 bytes, ids <= 13 bytes, points 12 each, length prefix <= 2) must fit one body.
+const _: () = assert!(MAX_POINTS_PER_CHUNK * 12 + 28 + 13 + 2 <= MAX_BODY_LEN);
+// A full plan frame: per waypoint pose 28 + anchors (1 + 12 each) + margin 4.
+const _: () = assert!(
+    MAX_WAYPOINTS_PER_PLAN_FRAME * (28 + 1 + 12 * MAX_ANCHORS_PER_WAYPOINT + 4) + 16
+        <= MAX_BODY_LEN
+);

@@ -188,3 +188,21 @@ pub fn team(args: &TeamArgs) -> Result<bool, String> {
     }
     Ok(rep.violations.is_empty())
 }
+
+/// `movingai` as a process exit code: 0 all matched, 1 a mismatch, 2 the files could not be read.
+pub fn movingai_main(args: &MovingaiArgs) -> std::process::ExitCode {
+    match movingai(args) {
+        Ok(true) => std::process::ExitCode::SUCCESS,
+        Ok(false) => std::process::ExitCode::from(super::EXIT_FAILED),
+        Err(e) => super::fail(e),
+    }
+}
+
+/// `team` as a process exit code: 0 no violation, 1 a violation, 2 the world could not be built.
+pub fn team_main(args: &TeamArgs) -> std::process::ExitCode {
+    match team(args) {
+        Ok(true) => std::process::ExitCode::SUCCESS,
+        Ok(false) => std::process::ExitCode::from(super::EXIT_FAILED),
+        Err(e) => super::fail(e),
+    }
+}

@@ -1,1 +1,0 @@
-//! `protocol`: not yet implemented (see the issue tracker).

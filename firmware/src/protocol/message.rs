@@ -1,0 +1,851 @@
+//! Message set v1: the bodies of frames, as serde types encoded with postcard.
+//!
+//! Every float is validated on decode ([`Validate`]): NaN and infinities are an error everywhere, pose quaternions
+//! must be unit within [`QUATERNION_NORM_TOLERANCE`], lengths and counts must be inside their `config::protocol`
+//! limits. Variable-length fields are `heapless` containers, so a length prefix that claims more than the capacity
+//! is a decode error, never an allocation.
+
+use heapless::{String, Vec};
+use serde::{Deserialize, Serialize};
+
+use crate::config::protocol::{
+    MAX_ANCHORS_PER_WAYPOINT, MAX_LOG_TEXT, MAX_POINTS_PER_CHUNK, MAX_WAYPOINTS_PER_PLAN_FRAME,
+    QUATERNION_NORM_TOLERANCE,
+};
+
+/// Who sends a message kind.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Direction {
+    /// Simulator / ground station to flight software.
+    HostToFlight,
+    /// Flight software to simulator / ground station.
+    FlightToHost,
+}
+
+/// The message kind byte of the header. All other values are an error ([`MessageKind::from_u8`] returns `None`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+#[repr(u8)]
+pub enum MessageKind {
+    /// [`TimeTick`] (host -> flight).
+    TimeTick = 0x01,
+    /// [`SensorChunk`] (host -> flight).
+    SensorChunk = 0x02,
+    /// [`TetherReading`] (host -> flight).
+    TetherReading = 0x03,
+    /// [`GoalRequest`] (host -> flight).
+    GoalRequest = 0x04,
+    /// [`Configure`] (host -> flight).
+    Configure = 0x05,
+    /// [`Shutdown`] (host -> flight).
+    Shutdown = 0x06,
+    /// [`TelemetryRequest`] (host -> flight).
+    TelemetryRequest = 0x07,
+    /// [`Ack`] (flight -> host).
+    Ack = 0x81,
+    /// [`Nack`] (flight -> host).
+    Nack = 0x82,
+    /// [`PlanStatus`] (flight -> host).
+    PlanStatus = 0x83,
+    /// [`Plan`] (flight -> host).
+    Plan = 0x84,
+    /// [`DriveCommand`] (flight -> host).
+    DriveCommand = 0x85,
+    /// [`Telemetry`] (flight -> host).
+    Telemetry = 0x86,
+    /// [`Log`] (flight -> host).
+    Log = 0x87,
+}
+
+impl MessageKind {
+    /// Every kind, in code order.
+    pub const ALL: [MessageKind; 14] = [
+        Self::TimeTick,
+        Self::SensorChunk,
+        Self::TetherReading,
+        Self::GoalRequest,
+        Self::Configure,
+        Self::Shutdown,
+        Self::TelemetryRequest,
+        Self::Ack,
+        Self::Nack,
+        Self::PlanStatus,
+        Self::Plan,
+        Self::DriveCommand,
+        Self::Telemetry,
+        Self::Log,
+    ];
+
+    /// The kind for a header byte; `None` for every value not listed in the spec.
+    pub fn from_u8(b: u8) -> Option<Self> {
+        Self::ALL.iter().copied().find(|k| *k as u8 == b)
+    }
+
+    /// Who sends this kind: codes below 0x80 go host -> flight, the others flight -> host.
+    pub fn direction(self) -> Direction {
+        if (self as u8) < 0x80 {
+            Direction::HostToFlight
+        } else {
+            Direction::FlightToHost
+        }
+    }
+}
+
+/// A point or vector, metres, `f32` little-endian on the wire (postcard encodes `f32` as 4 raw bytes).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Point3 {
+    /// x, metres.
+    pub x: f32,
+    /// y, metres.
+    pub y: f32,
+    /// z, metres.
+    pub z: f32,
+}
+
+impl Point3 {
+    /// A point from its coordinates.
+    pub const fn new(x: f32, y: f32, z: f32) -> Self {
+        Self { x, y, z }
+    }
+}
+
+/// A unit quaternion `(x, y, z, w)` (Hamilton convention, `w` the scalar part).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Quat {
+    /// i component.
+    pub x: f32,
+    /// j component.
+    pub y: f32,
+    /// k component.
+    pub z: f32,
+    /// Scalar component.
+    pub w: f32,
+}
+
+impl Quat {
+    /// The identity rotation.
+    pub const IDENTITY: Quat = Quat {
+        x: 0.0,
+        y: 0.0,
+        z: 0.0,
+        w: 1.0,
+    };
+}
+
+/// A rigid transform, SE(3): position plus unit-quaternion orientation.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Pose {
+    /// Position, metres (world frame).
+    pub position: Point3,
+    /// Orientation (body/sensor frame to world frame).
+    pub orientation: Quat,
+}
+
+impl Pose {
+    /// The identity pose at the origin.
+    pub const IDENTITY: Pose = Pose {
+        position: Point3::new(0.0, 0.0, 0.0),
+        orientation: Quat::IDENTITY,
+    };
+
+    /// As an `nalgebra` isometry (the quaternion is renormalised; it was checked to be unit within tolerance).
+    pub fn to_isometry(&self) -> crate::geom::Pose3 {
+        let q = nalgebra::Quaternion::new(
+            self.orientation.w,
+            self.orientation.x,
+            self.orientation.y,
+            self.orientation.z,
+        );
+        crate::geom::Pose3::from_parts(
+            nalgebra::Translation3::new(self.position.x, self.position.y, self.position.z),
+            nalgebra::UnitQuaternion::new_normalize(q),
+        )
+    }
+}
+
+/// Host -> flight: the host's time, for time sync. The flight side never takes it as its own clock.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TimeTick {
+    /// Host (simulation) time, microseconds.
+    pub host_time_us: u64,
+}
+
+/// Host -> flight: one chunk of a range scan. Chunks of a scan share `scan_id`, `chunk_count` and `sensor_pose` and
+/// must arrive in order `0..chunk_count`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SensorChunk {
+    /// Identifies the scan.
+    pub scan_id: u32,
+    /// Index of this chunk, `0..chunk_count`.
+    pub chunk_index: u16,
+    /// Number of chunks in the scan, `1..=MAX_CHUNKS_PER_SCAN`.
+    pub chunk_count: u16,
+    /// Pose estimate of the sensor (sensor frame to world frame) when the scan was taken.
+    pub sensor_pose: Pose,
+    /// Returns in the sensor frame, metres.
+    pub points: Vec<Point3, MAX_POINTS_PER_CHUNK>,
+}
+
+/// Host -> flight: one tether-encoder reading.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TetherReading {
+    /// Time of the sample (host clock), microseconds.
+    pub time_us: u64,
+    /// Tether paid out from the root anchor, metres (>= 0).
+    pub payout_m: f32,
+    /// Tether tension, newtons (>= 0).
+    pub tension_n: f32,
+    /// Boom angle relative to the body, radians.
+    pub boom_angle_rad: f32,
+}
+
+/// Which planner a goal request asks for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum PlannerChoice {
+    /// ABIT* over settled SE(3) states with anchor histories (Paton et al. V).
+    Abit,
+    /// Homotopy planning on tether-demand planes (Abad-Manterola et al.; Tanner et al.).
+    Homotopy,
+    /// Tethered climbing team (Morad et al.).
+    Team,
+}
+
+/// Host -> flight: plan to a goal region.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GoalRequest {
+    /// Identifies the goal in later `PlanStatus` / `Plan` messages.
+    pub goal_id: u32,
+    /// Goal position, metres (world frame).
+    pub position: Point3,
+    /// Radius of the goal region, metres (> 0).
+    pub tolerance_m: f32,
+    /// The planner to run.
+    pub planner: PlannerChoice,
+    /// Planner iteration budget (> 0).
+    pub max_iterations: u32,
+    /// Wall-time budget, milliseconds of flight time (0 = none).
+    pub time_budget_ms: u32,
+}
+
+/// Rover parameters (the Axel model).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RoverParams {
+    /// Mass, kg (> 0).
+    pub mass_kg: f32,
+    /// Wheel radius, metres (> 0).
+    pub wheel_radius_m: f32,
+    /// Distance between the wheels along the axle, metres (> 0).
+    pub axle_length_m: f32,
+    /// Caster boom length, metres (> 0).
+    pub boom_length_m: f32,
+    /// Coulomb friction coefficient of the wheels on the terrain (> 0).
+    pub friction_coefficient: f32,
+}
+
+/// Tether parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TetherParams {
+    /// Root anchor, metres (world frame).
+    pub root_anchor: Point3,
+    /// Tether length on the spool, metres (> 0).
+    pub max_payout_m: f32,
+    /// Largest allowed tension, newtons (> 0).
+    pub max_tension_n: f32,
+}
+
+/// Planner parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PlannerParams {
+    /// Seed of the planner's random generator (deterministic runs).
+    pub rng_seed: u64,
+    /// Default iteration budget (> 0).
+    pub max_iterations: u32,
+    /// Samples per batch (ABIT*) (> 0).
+    pub batch_size: u32,
+    /// Probability of sampling the goal, `0..=1`.
+    pub goal_bias: f32,
+}
+
+/// Severity of a log record (also the forwarding threshold in [`TelemetryParams`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+pub enum LogLevel {
+    /// Nothing (as a threshold: forward no records).
+    Off,
+    /// Errors.
+    Error,
+    /// Warnings.
+    Warn,
+    /// Information.
+    Info,
+    /// Debugging detail.
+    Debug,
+    /// Tracing detail.
+    Trace,
+}
+
+/// Telemetry and log-forwarding parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TelemetryParams {
+    /// Period of unsolicited telemetry, milliseconds (0 = only on request).
+    pub period_ms: u32,
+    /// Records at this level or more severe are forwarded as `Log` frames (`Off` = none).
+    pub forward_log_level: LogLevel,
+}
+
+/// Host -> flight: configuration. Accepted in `Idle` and `Mapping` modes only.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Configure {
+    /// The rover.
+    pub rover: RoverParams,
+    /// The tether.
+    pub tether: TetherParams,
+    /// The planners.
+    pub planner: PlannerParams,
+    /// Telemetry and log forwarding.
+    pub telemetry: TelemetryParams,
+}
+
+/// Host -> flight: stop everything and enter `Safe` mode (the rover holds position).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Shutdown;
+
+/// Host -> flight: send one `Telemetry` frame now.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct TelemetryRequest;
+
+/// Flight -> host: the frame with sequence number `seq` was accepted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Ack {
+    /// Sequence number of the accepted frame.
+    pub seq: u32,
+}
+
+/// Why a frame was rejected. Wire value: postcard enum index (the order below, starting at 0).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+pub enum NackReason {
+    /// The frame was cut short: COBS block runs past the delimiter, or fewer than header + CRC bytes.
+    Truncated,
+    /// More than `MAX_FRAME_LEN` bytes before the delimiter; bytes were discarded up to the next delimiter.
+    Oversize,
+    /// CRC mismatch (damaged frame).
+    BadCrc,
+    /// Protocol version byte is not this build's version.
+    WrongVersion,
+    /// Message kind byte is not in the spec.
+    UnknownKind,
+    /// A flight -> host kind was sent to the flight software (or the reverse).
+    WrongDirection,
+    /// The body ended before the message did (a length prefix claimed more than was sent).
+    BodyTooShort,
+    /// Bytes were left over after the message (a length prefix claimed less than was sent).
+    BodyTooLong,
+    /// A length prefix exceeds the field's capacity.
+    LengthOverLimit,
+    /// Malformed body: bad varint, enum tag, bool or UTF-8.
+    MalformedBody,
+    /// A float is NaN or infinite.
+    NonFinite,
+    /// A pose quaternion is not unit.
+    NotUnitQuaternion,
+    /// A value is outside its documented range (negative length, zero budget, ...).
+    OutOfRange,
+    /// `chunk_index >= chunk_count`.
+    ChunkIndexOutOfRange,
+    /// `chunk_count` is 0 or above `MAX_CHUNKS_PER_SCAN`.
+    TooManyChunks,
+    /// A chunk that was already received.
+    DuplicateChunk,
+    /// A chunk ahead of the next expected one (a chunk is missing), or a scan not starting at chunk 0.
+    OutOfOrderChunk,
+    /// A chunk of another scan (or another chunk count) while a scan is in progress, not at chunk 0.
+    MixedScan,
+    /// The scan does not fit the reassembly buffer.
+    ScanOverflow,
+    /// A chunk's sensor pose differs from the scan's first chunk.
+    PoseMismatch,
+    /// The message is not accepted in the current mode (e.g. `Configure` while planning, anything but ticks and
+    /// telemetry requests in `Safe`).
+    NotAllowedInMode,
+    /// A sensor chunk or goal before the first `Configure`.
+    NotConfigured,
+    /// The planning hooks refused the message (see the flight log).
+    Refused,
+}
+
+/// Number of [`NackReason`] values (the length of the rejection counters).
+pub const NACK_REASON_COUNT: usize = 23;
+
+impl NackReason {
+    /// Every reason, in wire order.
+    pub const ALL: [NackReason; NACK_REASON_COUNT] = [
+        Self::Truncated,
+        Self::Oversize,
+        Self::BadCrc,
+        Self::WrongVersion,
+        Self::UnknownKind,
+        Self::WrongDirection,
+        Self::BodyTooShort,
+        Self::BodyTooLong,
+        Self::LengthOverLimit,
+        Self::MalformedBody,
+        Self::NonFinite,
+        Self::NotUnitQuaternion,
+        Self::OutOfRange,
+        Self::ChunkIndexOutOfRange,
+        Self::TooManyChunks,
+        Self::DuplicateChunk,
+        Self::OutOfOrderChunk,
+        Self::MixedScan,
+        Self::ScanOverflow,
+        Self::PoseMismatch,
+        Self::NotAllowedInMode,
+        Self::NotConfigured,
+        Self::Refused,
+    ];
+
+    /// Index into rejection counters (equals the wire value).
+    pub fn index(self) -> usize {
+        self as usize
+    }
+}
+
+/// Flight -> host: the frame with sequence number `seq` was rejected. For frames whose header could not be trusted
+/// (truncated, oversize, bad CRC) `seq` is the value read from the header bytes if there were at least six, else 0.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Nack {
+    /// Sequence number of the rejected frame (see above).
+    pub seq: u32,
+    /// Why.
+    pub reason: NackReason,
+}
+
+/// State of planning toward a goal (OMPL's status split).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum PlanState {
+    /// No goal yet.
+    NoGoal,
+    /// The goal was accepted; planning starts.
+    Accepted,
+    /// Planning is running.
+    Searching,
+    /// A path reaching the goal region was found (a `Plan` follows).
+    ExactSolution,
+    /// A path ending closest to the goal was found within budget (a `Plan` follows).
+    ApproximateSolution,
+    /// The budget ran out without a solution.
+    NoSolutionWithinBudget,
+    /// The goal or the start is invalid (outside the map, in collision, unstable).
+    InvalidInput,
+    /// No planner of the requested kind is available on board.
+    PlannerUnavailable,
+    /// Planning was stopped (shutdown).
+    Aborted,
+}
+
+/// Flight -> host: progress or outcome of planning for a goal.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PlanStatus {
+    /// The goal this refers to.
+    pub goal_id: u32,
+    /// Its state.
+    pub state: PlanState,
+    /// Planner iterations spent so far.
+    pub iterations: u32,
+    /// Cost of the best path so far, if any.
+    pub best_cost: Option<f32>,
+}
+
+/// One plan waypoint: a settled SE(3) state with its anchor history and stability margin (Paton et al. IV).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Waypoint {
+    /// Settled rover pose.
+    pub pose: Pose,
+    /// Anchor history, root anchor first.
+    pub anchors: Vec<Point3, MAX_ANCHORS_PER_WAYPOINT>,
+    /// Static stability margin at this state (>= 0 is stable), newtons.
+    pub stability_margin: f32,
+}
+
+/// Flight -> host: a plan (or one part of a long plan).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Plan {
+    /// The goal this plan reaches.
+    pub goal_id: u32,
+    /// Part index, `0..parts`.
+    pub part: u16,
+    /// Number of parts (>= 1).
+    pub parts: u16,
+    /// Waypoints of this part, in order.
+    pub waypoints: Vec<Waypoint, MAX_WAYPOINTS_PER_PLAN_FRAME>,
+}
+
+/// A rover motion primitive (Axel: in-place turn, straight drive).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum Motion {
+    /// Stop the wheels and hold the tether.
+    Stop,
+    /// Turn in place, radians (positive counter-clockwise).
+    Turn {
+        /// Yaw change, radians.
+        yaw_rad: f32,
+    },
+    /// Drive straight, metres (negative = reverse).
+    Straight {
+        /// Distance, metres.
+        distance_m: f32,
+    },
+}
+
+impl From<Motion> for hal::DriveCommand {
+    fn from(m: Motion) -> Self {
+        match m {
+            Motion::Stop => hal::DriveCommand::Stop,
+            Motion::Turn { yaw_rad } => hal::DriveCommand::Turn { yaw_rad },
+            Motion::Straight { distance_m } => hal::DriveCommand::Straight { distance_m },
+        }
+    }
+}
+
+/// Flight -> host: a drive command for the rover (the simulator executes it).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct DriveCommand {
+    /// Increases with every command.
+    pub command_id: u32,
+    /// The motion.
+    pub motion: Motion,
+}
+
+/// Flight executive mode.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Mode {
+    /// Booted, waiting for configuration and data.
+    Idle,
+    /// Integrating sensor scans into the map.
+    Mapping,
+    /// Planning toward a goal.
+    Planning,
+    /// Issuing drive commands along a plan.
+    Driving,
+    /// Holding position after a shutdown or fault; only ticks and telemetry requests are accepted.
+    Safe,
+}
+
+/// Largest use of each bounded resource since boot.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct HighWater {
+    /// Transmit queue, bytes.
+    pub tx_queue: u32,
+    /// Receive staging buffer, bytes.
+    pub rx_staging: u32,
+    /// Largest decoded frame, bytes.
+    pub frame_len: u32,
+    /// Reassembly buffer, points.
+    pub scan_points: u32,
+    /// Log queue, records.
+    pub log_queue: u32,
+    /// Frames dispatched in one step.
+    pub frames_per_step: u32,
+    /// Bytes read in one step.
+    pub rx_bytes_per_step: u32,
+}
+
+/// Flight -> host: counters and state of the executive.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Telemetry {
+    /// Flight time, microseconds.
+    pub time_us: u64,
+    /// Current mode.
+    pub mode: Mode,
+    /// A `Configure` has been accepted.
+    pub configured: bool,
+    /// Frames accepted (this request included).
+    pub frames_accepted: u32,
+    /// Frames rejected, indexed by [`NackReason`] wire value.
+    pub frames_rejected: [u32; NACK_REASON_COUNT],
+    /// Frames sent by the flight software (this one excluded).
+    pub frames_sent: u32,
+    /// Bytes received.
+    pub bytes_received: u32,
+    /// Bytes queued for sending.
+    pub bytes_sent: u32,
+    /// Executive steps run.
+    pub steps: u32,
+    /// Steps that stopped reading because the byte budget ran out.
+    pub steps_rx_budget_exhausted: u32,
+    /// Steps that stopped dispatching because the frame budget ran out.
+    pub steps_frame_budget_exhausted: u32,
+    /// Scans completely reassembled and handed to the map.
+    pub scans_completed: u32,
+    /// Scans abandoned incomplete (a new scan started before all chunks arrived).
+    pub scans_abandoned: u32,
+    /// Scan being reassembled (0 if none).
+    pub scan_in_progress: u32,
+    /// Next expected chunk of that scan.
+    pub scan_next_chunk: u16,
+    /// Tether readings accepted.
+    pub tether_readings: u32,
+    /// Goal requests accepted.
+    pub goals_received: u32,
+    /// State of the latest goal.
+    pub plan_state: PlanState,
+    /// Log records dropped (queue full or rate limit).
+    pub log_dropped: u32,
+    /// Outgoing frames dropped because the transmit queue was full.
+    pub tx_dropped: u32,
+    /// Errors reported by the link or the watchdog.
+    pub device_errors: u32,
+    /// Mode changes refused because the transition table does not allow them (a bug if ever non-zero).
+    pub illegal_transitions: u32,
+    /// High-water marks.
+    pub high_water: HighWater,
+}
+
+/// Flight -> host: a forwarded log record (bounded text).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Log {
+    /// Severity.
+    pub level: LogLevel,
+    /// Text, cut to `MAX_LOG_TEXT` bytes at a character boundary.
+    pub text: String<MAX_LOG_TEXT>,
+}
+
+/// Any message of set v1.
+#[derive(Debug, Clone, PartialEq)]
+#[allow(missing_docs)]
+pub enum Message {
+    TimeTick(TimeTick),
+    SensorChunk(SensorChunk),
+    TetherReading(TetherReading),
+    GoalRequest(GoalRequest),
+    Configure(Configure),
+    Shutdown(Shutdown),
+    TelemetryRequest(TelemetryRequest),
+    Ack(Ack),
+    Nack(Nack),
+    PlanStatus(PlanStatus),
+    Plan(Plan),
+    DriveCommand(DriveCommand),
+    Telemetry(Telemetry),
+    Log(Log),
+}
+
+/// Why a decoded body is not a valid message (narrow: only what validation can find).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Invalid {
+    /// A float is NaN or infinite.
+    NonFinite,
+    /// A quaternion is not unit.
+    NotUnitQuaternion,
+    /// A value is outside its range.
+    OutOfRange,
+}
+
+impl From<Invalid> for NackReason {
+    fn from(e: Invalid) -> Self {
+        match e {
+            Invalid::NonFinite => NackReason::NonFinite,
+            Invalid::NotUnitQuaternion => NackReason::NotUnitQuaternion,
+            Invalid::OutOfRange => NackReason::OutOfRange,
+        }
+    }
+}
+
+/// Semantic validation after decoding.
+pub trait Validate {
+    /// `Ok` when every float is finite and every value in its documented range.
+    fn validate(&self) -> Result<(), Invalid>;
+}
+
+fn finite(v: f32) -> Result<(), Invalid> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(Invalid::NonFinite)
+    }
+}
+
+fn positive(v: f32) -> Result<(), Invalid> {
+    finite(v)?;
+    if v > 0.0 {
+        Ok(())
+    } else {
+        Err(Invalid::OutOfRange)
+    }
+}
+
+fn non_negative(v: f32) -> Result<(), Invalid> {
+    finite(v)?;
+    if v >= 0.0 {
+        Ok(())
+    } else {
+        Err(Invalid::OutOfRange)
+    }
+}
+
+impl Validate for Point3 {
+    fn validate(&self) -> Result<(), Invalid> {
+        finite(self.x)?;
+        finite(self.y)?;
+        finite(self.z)
+    }
+}
+
+impl Validate for Pose {
+    fn validate(&self) -> Result<(), Invalid> {
+        self.position.validate()?;
+        let q = &self.orientation;
+        finite(q.x)?;
+        finite(q.y)?;
+        finite(q.z)?;
+        finite(q.w)?;
+        let n2 = q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w;
+        if libm::fabsf(libm::sqrtf(n2) - 1.0) <= QUATERNION_NORM_TOLERANCE {
+            Ok(())
+        } else {
+            Err(Invalid::NotUnitQuaternion)
+        }
+    }
+}
+
+impl Validate for SensorChunk {
+    /// Checks the pose and points. Chunk indices and counts are checked by the reassembler (they have their own
+    /// reasons), so a chunk with `chunk_index >= chunk_count` passes here.
+    fn validate(&self) -> Result<(), Invalid> {
+        self.sensor_pose.validate()?;
+        self.points.iter().try_for_each(Validate::validate)
+    }
+}
+
+impl Validate for TetherReading {
+    fn validate(&self) -> Result<(), Invalid> {
+        non_negative(self.payout_m)?;
+        non_negative(self.tension_n)?;
+        finite(self.boom_angle_rad)
+    }
+}
+
+impl Validate for GoalRequest {
+    fn validate(&self) -> Result<(), Invalid> {
+        self.position.validate()?;
+        positive(self.tolerance_m)?;
+        if self.max_iterations == 0 {
+            return Err(Invalid::OutOfRange);
+        }
+        Ok(())
+    }
+}
+
+impl Validate for Configure {
+    fn validate(&self) -> Result<(), Invalid> {
+        let r = &self.rover;
+        positive(r.mass_kg)?;
+        positive(r.wheel_radius_m)?;
+        positive(r.axle_length_m)?;
+        positive(r.boom_length_m)?;
+        positive(r.friction_coefficient)?;
+        self.tether.root_anchor.validate()?;
+        positive(self.tether.max_payout_m)?;
+        positive(self.tether.max_tension_n)?;
+        let p = &self.planner;
+        if p.max_iterations == 0 || p.batch_size == 0 {
+            return Err(Invalid::OutOfRange);
+        }
+        finite(p.goal_bias)?;
+        if !(0.0..=1.0).contains(&p.goal_bias) {
+            return Err(Invalid::OutOfRange);
+        }
+        Ok(())
+    }
+}
+
+impl Validate for PlanStatus {
+    fn validate(&self) -> Result<(), Invalid> {
+        self.best_cost.map_or(Ok(()), finite)
+    }
+}
+
+impl Validate for Plan {
+    fn validate(&self) -> Result<(), Invalid> {
+        if self.parts == 0 || self.part >= self.parts {
+            return Err(Invalid::OutOfRange);
+        }
+        self.waypoints.iter().try_for_each(|w| {
+            w.pose.validate()?;
+            w.anchors.iter().try_for_each(Validate::validate)?;
+            finite(w.stability_margin)
+        })
+    }
+}
+
+impl Validate for DriveCommand {
+    fn validate(&self) -> Result<(), Invalid> {
+        match self.motion {
+            Motion::Stop => Ok(()),
+            Motion::Turn { yaw_rad } => finite(yaw_rad),
+            Motion::Straight { distance_m } => finite(distance_m),
+        }
+    }
+}
+
+impl Validate for Message {
+    fn validate(&self) -> Result<(), Invalid> {
+        match self {
+            Message::SensorChunk(m) => m.validate(),
+            Message::TetherReading(m) => m.validate(),
+            Message::GoalRequest(m) => m.validate(),
+            Message::Configure(m) => m.validate(),
+            Message::PlanStatus(m) => m.validate(),
+            Message::Plan(m) => m.validate(),
+            Message::DriveCommand(m) => m.validate(),
+            Message::TimeTick(_)
+            | Message::Shutdown(_)
+            | Message::TelemetryRequest(_)
+            | Message::Ack(_)
+            | Message::Nack(_)
+            | Message::Telemetry(_)
+            | Message::Log(_) => Ok(()),
+        }
+    }
+}
+
+impl Message {
+    /// The kind byte of this message.
+    pub fn kind(&self) -> MessageKind {
+        match self {
+            Message::TimeTick(_) => MessageKind::TimeTick,
+            Message::SensorChunk(_) => MessageKind::SensorChunk,
+            Message::TetherReading(_) => MessageKind::TetherReading,
+            Message::GoalRequest(_) => MessageKind::GoalRequest,
+            Message::Configure(_) => MessageKind::Configure,
+            Message::Shutdown(_) => MessageKind::Shutdown,
+            Message::TelemetryRequest(_) => MessageKind::TelemetryRequest,
+            Message::Ack(_) => MessageKind::Ack,
+            Message::Nack(_) => MessageKind::Nack,
+            Message::PlanStatus(_) => MessageKind::PlanStatus,
+            Message::Plan(_) => MessageKind::Plan,
+            Message::DriveCommand(_) => MessageKind::DriveCommand,
+            Message::Telemetry(_) => MessageKind::Telemetry,
+            Message::Log(_) => MessageKind::Log,
+        }
+    }
+
+    /// Serialises the body (without the enum tag: the kind is in the header) into `buf`; returns its length.
+    pub fn encode_body(&self, buf: &mut [u8]) -> Result<usize, postcard::Error> {
+        let out = match self {
+            Message::TimeTick(m) => postcard::to_slice(m, buf),
+            Message::SensorChunk(m) => postcard::to_slice(m, buf),
+            Message::TetherReading(m) => postcard::to_slice(m, buf),
+            Message::GoalRequest(m) => postcard::to_slice(m, buf),
+            Message::Configure(m) => postcard::to_slice(m, buf),
+            Message::Shutdown(m) => postcard::to_slice(m, buf),
+            Message::TelemetryRequest(m) => postcard::to_slice(m, buf),
+            Message::Ack(m) => postcard::to_slice(m, buf),
+            Message::Nack(m) => postcard::to_slice(m, buf),
+            Message::PlanStatus(m) => postcard::to_slice(m, buf),
+            Message::Plan(m) => postcard::to_slice(m, buf),
+            Message::DriveCommand(m) => postcard::to_slice(m, buf),
+            Message::Telemetry(m) => postcard::to_slice(m, buf),
+            Message::Log(m) => postcard::to_slice(m, buf),
+        }?;
+        Ok(out.len())
+    }
+}

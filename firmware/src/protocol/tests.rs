@@ -1,0 +1,217 @@
+//! Byte fixtures: the examples written in `firmware/PROTOCOL.md` (derived there by hand: CRC from zlib's crc32,
+//! COBS blocks counted by hand) must equal the encoder's output, and decode back.
+
+use super::*;
+use crate::config::protocol::MAX_POINTS_PER_CHUNK;
+
+const SPEC: &str = include_str!("../../PROTOCOL.md");
+
+/// The hex bytes on the spec line starting with `` `name`: ``.
+fn spec_bytes(name: &str) -> std::vec::Vec<u8> {
+    let tag = std::format!("`{name}`:");
+    let line = SPEC
+        .lines()
+        .find(|l| l.trim_start().starts_with(&tag))
+        .unwrap_or_else(|| panic!("{name} not in spec"));
+    let hex = &line.trim_start()[tag.len()..];
+    hex.split_whitespace()
+        .map(|h| u8::from_str_radix(h.trim_matches('`'), 16).unwrap())
+        .collect()
+}
+
+fn wire(seq: u32, m: &Message) -> std::vec::Vec<u8> {
+    let mut out = [0u8; 2100];
+    let n = encode(seq, m, &mut out).unwrap();
+    out[..n].to_vec()
+}
+
+#[test]
+fn spec_example_time_tick() {
+    let m = Message::TimeTick(TimeTick { host_time_us: 1000 });
+    assert_eq!(wire(1, &m), spec_bytes("example-time-tick-wire"));
+    let mut raw = [0u8; 64];
+    let n = build_raw(
+        Header {
+            version: 1,
+            kind: 1,
+            seq: 1,
+        },
+        &[0xE8, 0x07],
+        &mut raw,
+    )
+    .unwrap();
+    assert_eq!(&raw[..n], &spec_bytes("example-time-tick-frame")[..]);
+    let (h, back) = decode_frame(&raw[..n]).unwrap();
+    assert_eq!((h.seq, back), (1, m));
+}
+
+#[test]
+fn spec_example_ack() {
+    let m = Message::Ack(Ack { seq: 1 });
+    assert_eq!(wire(0, &m), spec_bytes("example-ack-wire"));
+}
+
+#[test]
+fn frame_view_accessors_never_panic_on_short_buffers() {
+    for len in 0..12 {
+        let b = std::vec![0xA5u8; len];
+        let f = Frame::new_unchecked(&b[..]);
+        let _ = (
+            f.version(),
+            f.kind(),
+            f.seq(),
+            f.body(),
+            f.crc(),
+            f.header(),
+        );
+        assert!(Frame::new_checked(&b[..]).is_err());
+    }
+}
+
+fn frame_with_body(kind: MessageKind, body: &[u8]) -> std::vec::Vec<u8> {
+    let mut raw = [0u8; 2100];
+    let n = build_raw(
+        Header {
+            version: 1,
+            kind: kind as u8,
+            seq: 3,
+        },
+        body,
+        &mut raw,
+    )
+    .unwrap();
+    raw[..n].to_vec()
+}
+
+#[test]
+fn lying_lengths_have_their_own_reasons() {
+    // SensorChunk body: scan_id 1, index 0, count 1, identity pose, then a point count.
+    let mut body = std::vec![1u8, 0, 1];
+    for v in [0.0f32, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0] {
+        body.extend_from_slice(&v.to_le_bytes());
+    }
+    let mut claims_two_has_one = body.clone();
+    claims_two_has_one.push(2);
+    claims_two_has_one.extend_from_slice(&[0u8; 12]);
+    assert_eq!(
+        decode_frame(&frame_with_body(
+            MessageKind::SensorChunk,
+            &claims_two_has_one
+        ))
+        .map(|_| ()),
+        Err(NackReason::BodyTooShort)
+    );
+    let mut claims_one_has_two = body.clone();
+    claims_one_has_two.push(1);
+    claims_one_has_two.extend_from_slice(&[0u8; 24]);
+    assert_eq!(
+        decode_frame(&frame_with_body(
+            MessageKind::SensorChunk,
+            &claims_one_has_two
+        ))
+        .map(|_| ()),
+        Err(NackReason::BodyTooLong)
+    );
+    // A count one above the capacity, with that many points present.
+    let mut over = body.clone();
+    over.extend_from_slice(&[0x81, 0x01]); // varint 129
+    over.extend(core::iter::repeat_n(0u8, 12 * (MAX_POINTS_PER_CHUNK + 1)));
+    assert_eq!(
+        decode_frame(&frame_with_body(MessageKind::SensorChunk, &over)).map(|_| ()),
+        Err(NackReason::LengthOverLimit)
+    );
+    // A huge varint count with no points is cut short quickly (no allocation, no loop over the claim).
+    let mut huge = body.clone();
+    huge.extend_from_slice(&[0xFF, 0xFF, 0xFF, 0xFF, 0x0F]);
+    assert_eq!(
+        decode_frame(&frame_with_body(MessageKind::SensorChunk, &huge)).map(|_| ()),
+        Err(NackReason::BodyTooShort)
+    );
+}
+
+#[test]
+fn header_errors_and_nonfinite_values() {
+    let good = frame_with_body(MessageKind::TimeTick, &[0xE8, 0x07]);
+    assert!(decode_frame(&good).is_ok());
+    let mut flipped = good.clone();
+    flipped[7] ^= 0x10;
+    assert_eq!(decode_frame(&flipped).map(|_| ()), Err(NackReason::BadCrc));
+    assert_eq!(
+        decode_frame(&good[..9]).map(|_| ()),
+        Err(NackReason::Truncated)
+    );
+    let mut raw = [0u8; 64];
+    let n = build_raw(
+        Header {
+            version: 2,
+            kind: 1,
+            seq: 0,
+        },
+        &[0],
+        &mut raw,
+    )
+    .unwrap();
+    assert_eq!(
+        decode_frame(&raw[..n]).map(|_| ()),
+        Err(NackReason::WrongVersion)
+    );
+    let n = build_raw(
+        Header {
+            version: 1,
+            kind: 0x42,
+            seq: 0,
+        },
+        &[0],
+        &mut raw,
+    )
+    .unwrap();
+    assert_eq!(
+        decode_frame(&raw[..n]).map(|_| ()),
+        Err(NackReason::UnknownKind)
+    );
+    let mut tr = std::vec::Vec::new();
+    tr.push(5u8); // time varint
+    for v in [1.0f32, f32::NAN, 0.0] {
+        tr.extend_from_slice(&v.to_le_bytes());
+    }
+    assert_eq!(
+        decode_frame(&frame_with_body(MessageKind::TetherReading, &tr)).map(|_| ()),
+        Err(NackReason::NonFinite)
+    );
+    let mut neg = std::vec![5u8];
+    for v in [-1.0f32, 1.0, 0.0] {
+        neg.extend_from_slice(&v.to_le_bytes());
+    }
+    assert_eq!(
+        decode_frame(&frame_with_body(MessageKind::TetherReading, &neg)).map(|_| ()),
+        Err(NackReason::OutOfRange)
+    );
+}
+
+#[test]
+fn bad_enum_index_is_malformed_not_a_length_problem() {
+    // GoalRequest: goal_id varint | position 12 | tolerance 4 | planner enum index | ...
+    let g = Message::GoalRequest(GoalRequest {
+        goal_id: 1,
+        position: Point3::new(1.0, 2.0, 3.0),
+        tolerance_m: 0.5,
+        planner: PlannerChoice::Team,
+        max_iterations: 3,
+        time_budget_ms: 0,
+    });
+    let mut b = [0u8; 64];
+    let n = g.encode_body(&mut b).unwrap();
+    assert_eq!(b[17], 2, "Team is variant 2");
+    b[17] = 3;
+    assert_eq!(
+        decode_frame(&frame_with_body(MessageKind::GoalRequest, &b[..n])).map(|_| ()),
+        Err(NackReason::MalformedBody)
+    );
+    // Log text longer than its capacity
+    let mut log = std::vec![3u8, 121];
+    log.extend(core::iter::repeat_n(b'a', 121));
+    assert_eq!(
+        decode_frame(&frame_with_body(MessageKind::Log, &log)).map(|_| ()),
+        Err(NackReason::LengthOverLimit)
+    );
+}
