@@ -301,3 +301,33 @@ fn crevasse_reroute_with_the_local_planner_in_the_loop() {
     assert_eq!(walls, vec![((1, 2), (1, 3))]);
     assert_eq!(visited, vec![(1, 1), (1, 2), (2, 2), (2, 3), (1, 3)]);
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+    /// As above on a 40 x 40 grid with long crevasses (runs of walls) crossing the path after the robot has
+    /// moved up to 12 cells: the case where rounding-broken key ties once hid a wall (see `COST_EPS`).
+    #[test]
+    fn incremental_replanning_with_long_crevasses(
+        runs in proptest::collection::vec((0i64..40, 1i64..39, 5i64..30, proptest::bool::ANY), 1..5),
+        moves in 0usize..12,
+    ) {
+        let (w, h) = (40i64, 40i64);
+        let (s, g) = ((1i64, 1i64), (38i64, 38i64));
+        let blocked = vec![false; (w * h) as usize];
+        let mut st = OwnedDStarStorage::new((w * h) as usize);
+        let mut d = DStarLite::new(w as u32, h as u32, st.storage()).unwrap();
+        cost(d.plan(s, g, 1_000_000).unwrap());
+        let mut cur = s;
+        for _ in 0..moves { if let Some(n) = d.next_cell(cur) { cur = n; d.move_start(cur).unwrap(); } }
+        let mut walls = Vec::new();
+        for &(x0, y, len, horizontal) in &runs {
+            for k in 0..len {
+                let (a, b) = if horizontal { ((x0 + k, y), (x0 + k, y + 1)) } else { ((y, x0 + k), (y + 1, x0 + k)) };
+                if a.0 < w && a.1 < h && b.0 < w && b.1 < h { d.add_wall(a, b).unwrap(); walls.push((a, b)); }
+            }
+        }
+        let inc = cost(d.replan(1_000_000).unwrap());
+        let oracle = dijkstra(w, h, &blocked, &walls, cur, g);
+        prop_assert!((inc - oracle).abs() < 1e-9 || (inc.is_infinite() && oracle.is_infinite()), "inc {inc} oracle {oracle}");
+    }
+}

@@ -178,9 +178,27 @@ pub struct DStarLite<'a> {
     planned: bool,
 }
 
+/// Tolerance of cost comparisons. Octile costs are a + b*sqrt(2) with integers a, b; two different such values
+/// with |a|, |b| <= 10^4 differ by more than 1e-5, while f64 rounding of sums of that size stays below 1e-9. So
+/// values within `COST_EPS` are the same true cost. Without it a tie in the first key component that rounding
+/// breaks the wrong way ends the search early and an incremental replan misses a new wall (regression test
+/// `km_tie_rounding_hid_a_wall` in `workload`).
+pub const COST_EPS: f64 = 1e-7;
+
+#[inline]
+fn close(a: f64, b: f64) -> bool {
+    a == b || (a - b).abs() <= COST_EPS
+}
+
 #[inline]
 fn key_less(a: (f64, f64), b: (f64, f64)) -> bool {
-    a.0 < b.0 || (a.0 == b.0 && a.1 < b.1)
+    if a.0 < b.0 - COST_EPS {
+        true
+    } else if a.0 > b.0 + COST_EPS {
+        false
+    } else {
+        a.1 < b.1 - COST_EPS
+    }
 }
 
 impl<'a> DStarLite<'a> {
@@ -559,7 +577,7 @@ impl<'a> DStarLite<'a> {
     fn update_vertex(&mut self, u: u32) {
         let (g, r) = (self.g(u), self.rhs(u));
         let in_heap = self.heap_pos_of(u).is_some();
-        if g != r {
+        if !close(g, r) {
             let k = self.calc_key(u);
             self.heap_insert_or_update(u, k);
         } else if in_heap {
@@ -601,7 +619,7 @@ impl<'a> DStarLite<'a> {
                 Some(t) => t,
                 None => break,
             };
-            if !(key_less(k_old, start_key) || self.rhs(self.start) > self.g(self.start)) {
+            if !(key_less(k_old, start_key) || self.rhs(self.start) > self.g(self.start) + COST_EPS) {
                 break;
             }
             if expansions >= budget {
@@ -612,7 +630,7 @@ impl<'a> DStarLite<'a> {
             let (gu, ru) = (self.g(u), self.rhs(u));
             if key_less(k_old, k_new) {
                 self.heap_insert_or_update(u, k_new);
-            } else if gu > ru {
+            } else if gu > ru + COST_EPS {
                 self.set_g(u, ru);
                 self.heap_remove(u);
                 let (x, y) = self.coords(u);
@@ -639,7 +657,7 @@ impl<'a> DStarLite<'a> {
                     let c = self.move_cost(x, y, d);
                     if c < INF {
                         if let Some(s) = self.index(x + dx as i64, y + dy as i64) {
-                            if self.rhs(s) == c + g_old && s != self.goal {
+                            if close(self.rhs(s), c + g_old) && s != self.goal {
                                 let b = self.best_succ(s);
                                 self.set_rhs(s, b);
                             }
@@ -647,7 +665,7 @@ impl<'a> DStarLite<'a> {
                         }
                     }
                 }
-                if self.rhs(u) == g_old && u != self.goal {
+                if close(self.rhs(u), g_old) && u != self.goal {
                     let b = self.best_succ(u);
                     self.set_rhs(u, b);
                 }
