@@ -8,7 +8,7 @@
 //! (straight 1, diagonal sqrt 2) with no corner cutting.
 
 use core::fmt;
-use firmware::plan::team::dstar_lite::{DStarLite, DStarOutcome, DStarStorage, HeapEntry};
+use firmware::plan::team::dstar_lite::{Cost, DStarLite, DStarOutcome, DStarStorage, HeapEntry};
 use std::path::Path;
 
 /// A parsed `.map`.
@@ -221,8 +221,8 @@ pub fn load_scen(path: &Path) -> Result<Vec<Scenario>, MovingAiError> {
 
 /// Heap-owned storage for [`DStarLite`] on the host.
 pub struct OwnedDStarStorage {
-    g: Vec<f64>,
-    rhs: Vec<f64>,
+    g: Vec<Cost>,
+    rhs: Vec<Cost>,
     stamp: Vec<u32>,
     heap_pos: Vec<u32>,
     heap: Vec<HeapEntry>,
@@ -235,8 +235,8 @@ impl OwnedDStarStorage {
     /// Storage for `cells` cells.
     pub fn new(cells: usize) -> Self {
         Self {
-            g: vec![0.0; cells],
-            rhs: vec![0.0; cells],
+            g: vec![Cost::INF; cells],
+            rhs: vec![Cost::INF; cells],
             stamp: vec![0; cells],
             heap_pos: vec![0; cells],
             heap: vec![HeapEntry::default(); cells],

@@ -305,7 +305,7 @@ fn crevasse_reroute_with_the_local_planner_in_the_loop() {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
     /// As above on a 40 x 40 grid with long crevasses (runs of walls) crossing the path after the robot has
-    /// moved up to 12 cells: the case where rounding-broken key ties once hid a wall (see `COST_EPS`).
+    /// moved up to 12 cells: the case where rounding-broken f64 key ties once hid a wall (now exact: `dstar_lite::Cost`).
     #[test]
     fn incremental_replanning_with_long_crevasses(
         runs in proptest::collection::vec((0i64..40, 1i64..39, 5i64..30, proptest::bool::ANY), 1..5),

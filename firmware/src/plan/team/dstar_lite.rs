@@ -22,28 +22,115 @@
 //!
 //! [`GLOBAL_GRID_MAX_CELLS`]: crate::config::team::GLOBAL_GRID_MAX_CELLS
 
+use core::cmp::Ordering;
 use core::f64::consts::SQRT_2;
 
 /// Octile direction offsets (dx, dy); index = direction id. Straight first, then diagonals.
 pub const DIRS: [(i32, i32); 8] = [(1, 0), (0, 1), (-1, 0), (0, -1), (1, 1), (-1, 1), (-1, -1), (1, -1)];
 
 const NOT_IN_HEAP: u32 = u32::MAX;
-const INF: f64 = f64::INFINITY;
+const INF: Cost = Cost::INF;
+
+/// An octile path cost a + b * sqrt(2) (a straight moves' worth, b diagonals' worth), held exactly in integers.
+///
+/// Every cost D* Lite handles on an octile grid — g, rhs, the heuristic, km, the keys — is such a sum, so
+/// comparing them exactly (integer arithmetic, [`Cost::cmp`]) removes the floating-point ties that can end a
+/// D* Lite search too early (an incremental replan once missed a new wall that way: regression test
+/// `km_tie_rounding_hid_a_wall` in `workload`). It is also cheaper than soft-float f64 on the Cortex-M7.
+/// Infinity is `a == i32::MAX`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Cost {
+    /// Straight part.
+    pub a: i32,
+    /// Diagonal part (times sqrt 2).
+    pub b: i32,
+}
+
+impl Cost {
+    /// Unreachable.
+    pub const INF: Cost = Cost { a: i32::MAX, b: 0 };
+    /// Zero.
+    pub const ZERO: Cost = Cost { a: 0, b: 0 };
+    /// One straight move.
+    pub const STRAIGHT: Cost = Cost { a: 1, b: 0 };
+    /// One diagonal move.
+    pub const DIAGONAL: Cost = Cost { a: 0, b: 1 };
+
+    /// Is this infinity.
+    pub fn is_inf(self) -> bool {
+        self.a == i32::MAX
+    }
+
+    /// Sum (infinity absorbs; saturates to infinity on overflow).
+    pub fn plus(self, o: Cost) -> Cost {
+        if self.is_inf() || o.is_inf() {
+            return Cost::INF;
+        }
+        match (self.a.checked_add(o.a), self.b.checked_add(o.b)) {
+            (Some(a), Some(b)) if a != i32::MAX => Cost { a, b },
+            _ => Cost::INF,
+        }
+    }
+
+    /// The value as f64.
+    pub fn to_f64(self) -> f64 {
+        if self.is_inf() {
+            f64::INFINITY
+        } else {
+            self.a as f64 + self.b as f64 * SQRT_2
+        }
+    }
+}
+
+impl PartialOrd for Cost {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+
+impl Ord for Cost {
+    /// Exact order of a + b sqrt 2: sign of da + db sqrt 2 from da^2 vs 2 db^2 (i128, no overflow).
+    fn cmp(&self, o: &Self) -> Ordering {
+        match (self.is_inf(), o.is_inf()) {
+            (true, true) => return Ordering::Equal,
+            (true, false) => return Ordering::Greater,
+            (false, true) => return Ordering::Less,
+            _ => {}
+        }
+        let da = self.a as i128 - o.a as i128;
+        let db = self.b as i128 - o.b as i128;
+        if da >= 0 && db >= 0 {
+            if da == 0 && db == 0 {
+                Ordering::Equal
+            } else {
+                Ordering::Greater
+            }
+        } else if da <= 0 && db <= 0 {
+            Ordering::Less
+        } else if da > 0 {
+            // da > 0 > db: compare da with |db| sqrt 2
+            (da * da).cmp(&(2 * db * db))
+        } else {
+            // da < 0 < db
+            (2 * db * db).cmp(&(da * da))
+        }
+    }
+}
 
 /// One entry of the priority queue.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct HeapEntry {
-    k1: f64,
-    k2: f64,
+    k1: Cost,
+    k2: Cost,
     cell: u32,
 }
 
 /// Storage lent to the planner; every slice must hold at least `width * height` entries.
 pub struct DStarStorage<'a> {
     /// Cost-to-goal estimates g.
-    pub g: &'a mut [f64],
+    pub g: &'a mut [Cost],
     /// One-step lookahead values rhs.
-    pub rhs: &'a mut [f64],
+    pub rhs: &'a mut [Cost],
     /// Epoch stamp per cell (lazy reset).
     pub stamp: &'a mut [u32],
     /// Heap slot per cell.
@@ -60,8 +147,8 @@ pub struct DStarStorage<'a> {
 
 /// Fixed arena for a board: `N` cells.
 pub struct DStarArena<const N: usize> {
-    g: [f64; N],
-    rhs: [f64; N],
+    g: [Cost; N],
+    rhs: [Cost; N],
     stamp: [u32; N],
     heap_pos: [u32; N],
     heap: [HeapEntry; N],
@@ -78,7 +165,7 @@ impl<const N: usize> DStarArena<N> {
             rhs: [INF; N],
             stamp: [0; N],
             heap_pos: [NOT_IN_HEAP; N],
-            heap: [HeapEntry { k1: 0.0, k2: 0.0, cell: 0 }; N],
+            heap: [HeapEntry { k1: Cost::ZERO, k2: Cost::ZERO, cell: 0 }; N],
             blocked: [false; N],
             walls: [0; N],
             moves: [0; N],
@@ -171,34 +258,16 @@ pub struct DStarLite<'a> {
     s: DStarStorage<'a>,
     epoch: u32,
     heap_len: usize,
-    km: f64,
+    km: Cost,
     start: u32,
     last: u32,
     goal: u32,
     planned: bool,
 }
 
-/// Tolerance of cost comparisons. Octile costs are a + b*sqrt(2) with integers a, b; two different such values
-/// with |a|, |b| <= 10^4 differ by more than 1e-5, while f64 rounding of sums of that size stays below 1e-9. So
-/// values within `COST_EPS` are the same true cost. Without it a tie in the first key component that rounding
-/// breaks the wrong way ends the search early and an incremental replan misses a new wall (regression test
-/// `km_tie_rounding_hid_a_wall` in `workload`).
-pub const COST_EPS: f64 = 1e-7;
-
 #[inline]
-fn close(a: f64, b: f64) -> bool {
-    a == b || (a - b).abs() <= COST_EPS
-}
-
-#[inline]
-fn key_less(a: (f64, f64), b: (f64, f64)) -> bool {
-    if a.0 < b.0 - COST_EPS {
-        true
-    } else if a.0 > b.0 + COST_EPS {
-        false
-    } else {
-        a.1 < b.1 - COST_EPS
-    }
+fn key_less(a: (Cost, Cost), b: (Cost, Cost)) -> bool {
+    a < b
 }
 
 impl<'a> DStarLite<'a> {
@@ -228,7 +297,7 @@ impl<'a> DStarLite<'a> {
         if have < cells {
             return Err(DStarError::StorageTooSmall { needed: cells, have });
         }
-        let mut me = Self { width, height, s: storage, epoch: 0, heap_len: 0, km: 0.0, start: 0, last: 0, goal: 0, planned: false };
+        let mut me = Self { width, height, s: storage, epoch: 0, heap_len: 0, km: Cost::ZERO, start: 0, last: 0, goal: 0, planned: false };
         me.clear_map();
         me.new_epoch();
         Ok(me)
@@ -309,7 +378,7 @@ impl<'a> DStarLite<'a> {
 
     /// Cost of the move from cell (x, y) in direction `d`, `INF` when not allowed (from the cached move bits).
     #[inline]
-    fn move_cost(&self, x: i64, y: i64, d: usize) -> f64 {
+    fn move_cost(&self, x: i64, y: i64, d: usize) -> Cost {
         let bits = match self.index(x, y) {
             Some(c) => self.s.moves.get(c as usize).copied().unwrap_or(0),
             None => 0,
@@ -317,9 +386,9 @@ impl<'a> DStarLite<'a> {
         if bits & (1u8 << (d & 7)) == 0 {
             INF
         } else if d < 4 {
-            1.0
+            Cost::STRAIGHT
         } else {
-            SQRT_2
+            Cost::DIAGONAL
         }
     }
 
@@ -346,7 +415,7 @@ impl<'a> DStarLite<'a> {
     }
 
     /// The movement rules: cost of the move from (x, y) in direction `d`, `INF` when not allowed.
-    fn rule_cost(&self, x: i64, y: i64, d: usize) -> f64 {
+    fn rule_cost(&self, x: i64, y: i64, d: usize) -> Cost {
         let (dx, dy) = match DIRS.get(d) {
             Some(&(dx, dy)) => (dx as i64, dy as i64),
             None => return INF,
@@ -359,7 +428,7 @@ impl<'a> DStarLite<'a> {
             return INF;
         }
         if dx == 0 || dy == 0 {
-            return 1.0;
+            return Cost::STRAIGHT;
         }
         // diagonal: both side cells free and the four straight edges of the two detours unwalled
         if self.is_blocked(x + dx, y) || self.is_blocked(x, y + dy) {
@@ -375,24 +444,29 @@ impl<'a> DStarLite<'a> {
         if self.wall_bit(a, dir_x) || self.wall_bit(sx, dir_y) || self.wall_bit(a, dir_y) || self.wall_bit(sy, dir_x) {
             return INF;
         }
-        SQRT_2
+        Cost::DIAGONAL
     }
 
-    fn h(&self, a: u32, b: u32) -> f64 {
+    /// Octile distance: (max - min) straight + min diagonal.
+    fn h(&self, a: u32, b: u32) -> Cost {
         let (ax, ay) = self.coords(a);
         let (bx, by) = self.coords(b);
-        let dx = (ax - bx).unsigned_abs() as f64;
-        let dy = (ay - by).unsigned_abs() as f64;
+        let dx = (ax - bx).unsigned_abs() as i32;
+        let dy = (ay - by).unsigned_abs() as i32;
         let (mx, mn) = if dx > dy { (dx, dy) } else { (dy, dx) };
-        mx + (SQRT_2 - 1.0) * mn
+        Cost { a: mx - mn, b: mn }
     }
 
     fn fresh(&self, c: u32) -> bool {
         self.s.stamp.get(c as usize).copied() == Some(self.epoch)
     }
 
-    /// g of a cell in the current search.
+    /// g of a cell in the current search (cost to the goal), as f64.
     pub fn g(&self, c: u32) -> f64 {
+        self.gc(c).to_f64()
+    }
+
+    fn gc(&self, c: u32) -> Cost {
         if self.fresh(c) {
             self.s.g.get(c as usize).copied().unwrap_or(INF)
         } else {
@@ -400,7 +474,7 @@ impl<'a> DStarLite<'a> {
         }
     }
 
-    fn rhs(&self, c: u32) -> f64 {
+    fn rhs(&self, c: u32) -> Cost {
         if self.fresh(c) {
             self.s.rhs.get(c as usize).copied().unwrap_or(INF)
         } else {
@@ -426,34 +500,27 @@ impl<'a> DStarLite<'a> {
         }
     }
 
-    fn set_g(&mut self, c: u32, v: f64) {
+    fn set_g(&mut self, c: u32, v: Cost) {
         self.touch(c);
         if let Some(x) = self.s.g.get_mut(c as usize) {
             *x = v;
         }
     }
 
-    fn set_rhs(&mut self, c: u32, v: f64) {
+    fn set_rhs(&mut self, c: u32, v: Cost) {
         self.touch(c);
         if let Some(x) = self.s.rhs.get_mut(c as usize) {
             *x = v;
         }
     }
 
-    fn calc_key(&self, c: u32) -> (f64, f64) {
-        let m = {
-            let (g, r) = (self.g(c), self.rhs(c));
-            if g < r {
-                g
-            } else {
-                r
-            }
-        };
-        (m + self.h(self.start, c) + self.km, m)
+    fn calc_key(&self, c: u32) -> (Cost, Cost) {
+        let m = self.gc(c).min(self.rhs(c));
+        (m.plus(self.h(self.start, c)).plus(self.km), m)
     }
 
     // ---- indexed binary heap ----
-    fn heap_key(&self, i: usize) -> (f64, f64) {
+    fn heap_key(&self, i: usize) -> (Cost, Cost) {
         self.s.heap.get(i).map(|e| (e.k1, e.k2)).unwrap_or((INF, INF))
     }
 
@@ -516,7 +583,7 @@ impl<'a> DStarLite<'a> {
         }
     }
 
-    fn heap_insert_or_update(&mut self, c: u32, k: (f64, f64)) {
+    fn heap_insert_or_update(&mut self, c: u32, k: (Cost, Cost)) {
         self.touch(c);
         match self.heap_pos_of(c) {
             Some(p) => {
@@ -565,7 +632,7 @@ impl<'a> DStarLite<'a> {
         }
     }
 
-    fn top(&self) -> Option<(u32, (f64, f64))> {
+    fn top(&self) -> Option<(u32, (Cost, Cost))> {
         if self.heap_len == 0 {
             None
         } else {
@@ -575,9 +642,9 @@ impl<'a> DStarLite<'a> {
 
     // ---- D* Lite proper ----
     fn update_vertex(&mut self, u: u32) {
-        let (g, r) = (self.g(u), self.rhs(u));
+        let (g, r) = (self.gc(u), self.rhs(u));
         let in_heap = self.heap_pos_of(u).is_some();
-        if !close(g, r) {
+        if g != r {
             let k = self.calc_key(u);
             self.heap_insert_or_update(u, k);
         } else if in_heap {
@@ -586,14 +653,14 @@ impl<'a> DStarLite<'a> {
     }
 
     /// min over successors s' of c(u, s') + g(s').
-    fn best_succ(&self, u: u32) -> f64 {
+    fn best_succ(&self, u: u32) -> Cost {
         let (x, y) = self.coords(u);
         let mut best = INF;
         for (d, &(dx, dy)) in DIRS.iter().enumerate() {
             let c = self.move_cost(x, y, d);
             if c < INF {
                 if let Some(v) = self.index(x + dx as i64, y + dy as i64) {
-                    let t = c + self.g(v);
+                    let t = c.plus(self.gc(v));
                     if t < best {
                         best = t;
                     }
@@ -619,7 +686,7 @@ impl<'a> DStarLite<'a> {
                 Some(t) => t,
                 None => break,
             };
-            if !(key_less(k_old, start_key) || self.rhs(self.start) > self.g(self.start) + COST_EPS) {
+            if !(key_less(k_old, start_key) || self.rhs(self.start) > self.gc(self.start)) {
                 break;
             }
             if expansions >= budget {
@@ -627,10 +694,10 @@ impl<'a> DStarLite<'a> {
             }
             expansions += 1;
             let k_new = self.calc_key(u);
-            let (gu, ru) = (self.g(u), self.rhs(u));
+            let (gu, ru) = (self.gc(u), self.rhs(u));
             if key_less(k_old, k_new) {
                 self.heap_insert_or_update(u, k_new);
-            } else if gu > ru + COST_EPS {
+            } else if gu > ru {
                 self.set_g(u, ru);
                 self.heap_remove(u);
                 let (x, y) = self.coords(u);
@@ -640,7 +707,7 @@ impl<'a> DStarLite<'a> {
                     if c < INF {
                         if let Some(s) = self.index(x + dx as i64, y + dy as i64) {
                             if s != self.goal {
-                                let cand = c + ru;
+                                let cand = c.plus(ru);
                                 if cand < self.rhs(s) {
                                     self.set_rhs(s, cand);
                                 }
@@ -657,7 +724,7 @@ impl<'a> DStarLite<'a> {
                     let c = self.move_cost(x, y, d);
                     if c < INF {
                         if let Some(s) = self.index(x + dx as i64, y + dy as i64) {
-                            if close(self.rhs(s), c + g_old) && s != self.goal {
+                            if self.rhs(s) == c.plus(g_old) && s != self.goal {
                                 let b = self.best_succ(s);
                                 self.set_rhs(s, b);
                             }
@@ -665,7 +732,7 @@ impl<'a> DStarLite<'a> {
                         }
                     }
                 }
-                if close(self.rhs(u), g_old) && u != self.goal {
+                if self.rhs(u) == g_old && u != self.goal {
                     let b = self.best_succ(u);
                     self.set_rhs(u, b);
                 }
@@ -674,7 +741,7 @@ impl<'a> DStarLite<'a> {
         }
         let cost = self.rhs(self.start);
         if cost < INF {
-            DStarOutcome::Found { cost, expansions }
+            DStarOutcome::Found { cost: cost.to_f64(), expansions }
         } else {
             DStarOutcome::NoPath { expansions }
         }
@@ -688,13 +755,13 @@ impl<'a> DStarLite<'a> {
         self.start = s;
         self.last = s;
         self.goal = g;
-        self.km = 0.0;
+        self.km = Cost::ZERO;
         self.planned = true;
         if self.is_blocked(goal.0, goal.1) || self.is_blocked(start.0, start.1) {
             return Ok(DStarOutcome::NoPath { expansions: 0 });
         }
-        self.set_rhs(g, 0.0);
-        let k = (self.h(s, g), 0.0);
+        self.set_rhs(g, Cost::ZERO);
+        let k = (self.h(s, g), Cost::ZERO);
         self.heap_insert_or_update(g, k);
         Ok(self.compute_shortest_path(budget))
     }
@@ -717,7 +784,7 @@ impl<'a> DStarLite<'a> {
             return Err(DStarError::NotPlanned);
         }
         let s = self.idx_or_err(start.0, start.1)?;
-        self.km += self.h(self.last, s);
+        self.km = self.km.plus(self.h(self.last, s));
         self.last = s;
         self.start = s;
         Ok(())
@@ -772,7 +839,7 @@ impl<'a> DStarLite<'a> {
 
     /// Cost of the current shortest path from the start (`INF` when none).
     pub fn cost(&self) -> f64 {
-        self.rhs(self.start)
+        self.rhs(self.start).to_f64()
     }
 
     /// Current start cell.
@@ -793,7 +860,7 @@ impl<'a> DStarLite<'a> {
             if c < INF {
                 let (nx, ny) = (from.0 + dx as i64, from.1 + dy as i64);
                 if let Some(v) = self.index(nx, ny) {
-                    let t = c + self.g(v);
+                    let t = c.plus(self.gc(v));
                     if t < best {
                         best = t;
                         arg = Some((nx, ny));
@@ -809,7 +876,7 @@ impl<'a> DStarLite<'a> {
         if !self.planned {
             return Err(DStarError::NotPlanned);
         }
-        if self.cost() == INF {
+        if self.rhs(self.start).is_inf() {
             return Ok(PathOutcome::NoPath);
         }
         let mut cur = self.coords(self.start);
@@ -839,8 +906,8 @@ mod tests {
     use super::*;
 
     struct Owned {
-        g: [f64; 64],
-        rhs: [f64; 64],
+        g: [Cost; 64],
+        rhs: [Cost; 64],
         stamp: [u32; 64],
         pos: [u32; 64],
         heap: [HeapEntry; 64],
@@ -850,10 +917,31 @@ mod tests {
     }
 
     #[test]
+    fn exact_cost_order_matches_real_numbers() {
+        // 99 - 70 sqrt 2 = 0.00505..., 70 sqrt 2 - 99 < 0; and the Pell pair 577 vs 408 sqrt 2
+        let c = |a, b| Cost { a, b };
+        assert!(c(99, 0) > c(0, 70));
+        assert!(c(0, 408) < c(577, 0));
+        assert!(c(3, 1) > c(1, 2)); // 4.414 > 3.828
+        assert!(c(1, 2) < c(3, 1));
+        assert_eq!(c(2, 2).cmp(&c(2, 2)), Ordering::Equal);
+        assert!(Cost::INF > c(1_000_000, 1_000_000));
+        assert_eq!(c(i32::MAX - 1, 0).plus(c(5, 0)), Cost::INF);
+        for a in -30..30 {
+            for b in -30..30 {
+                let x = c(a, b);
+                let y = c(7, -3);
+                let (fx, fy) = (a as f64 + b as f64 * SQRT_2, 7.0 - 3.0 * SQRT_2);
+                assert_eq!(x.cmp(&y), fx.partial_cmp(&fy).unwrap(), "{a} {b}");
+            }
+        }
+    }
+
+    #[test]
     fn storage_too_small_is_typed() {
         let mut o = Owned {
-            g: [0.0; 64],
-            rhs: [0.0; 64],
+            g: [Cost::ZERO; 64],
+            rhs: [Cost::ZERO; 64],
             stamp: [0; 64],
             pos: [0; 64],
             heap: [HeapEntry::default(); 64],
