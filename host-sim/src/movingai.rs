@@ -8,7 +8,7 @@
 //! (straight 1, diagonal sqrt 2) with no corner cutting.
 
 use core::fmt;
-use firmware::plan::team::dstar_lite::{DStarLite, DStarOutcome, DStarStorage, HeapEntry};
+use firmware::plan::team::dstar_lite::{Cost, DStarLite, DStarOutcome, DStarStorage, HeapEntry};
 use std::path::Path;
 
 /// A parsed `.map`.
@@ -221,26 +221,28 @@ pub fn load_scen(path: &Path) -> Result<Vec<Scenario>, MovingAiError> {
 
 /// Heap-owned storage for [`DStarLite`] on the host.
 pub struct OwnedDStarStorage {
-    g: Vec<f64>,
-    rhs: Vec<f64>,
+    g: Vec<Cost>,
+    rhs: Vec<Cost>,
     stamp: Vec<u32>,
     heap_pos: Vec<u32>,
     heap: Vec<HeapEntry>,
     blocked: Vec<bool>,
     walls: Vec<u8>,
+    moves: Vec<u8>,
 }
 
 impl OwnedDStarStorage {
     /// Storage for `cells` cells.
     pub fn new(cells: usize) -> Self {
         Self {
-            g: vec![0.0; cells],
-            rhs: vec![0.0; cells],
+            g: vec![Cost::INF; cells],
+            rhs: vec![Cost::INF; cells],
             stamp: vec![0; cells],
             heap_pos: vec![0; cells],
             heap: vec![HeapEntry::default(); cells],
             blocked: vec![false; cells],
             walls: vec![0; cells],
+            moves: vec![0; cells],
         }
     }
 
@@ -254,6 +256,7 @@ impl OwnedDStarStorage {
             heap: &mut self.heap,
             blocked: &mut self.blocked,
             walls: &mut self.walls,
+            moves: &mut self.moves,
         }
     }
 }
@@ -355,6 +358,31 @@ mod tests {
         assert!(matches!(parse_scen("version 1\n0 m 3 2 0 0 2\n"), Err(MovingAiError::BadScenario { line: 2, .. })));
         assert!(matches!(parse_scen("version 1\n0 m 3 2 0 -1 2 1 2.0\n"), Err(MovingAiError::BadScenario { .. })));
         assert!(matches!(parse_scen("version 1\n0 m 3 2 0 0 2 1 nan\n"), Err(MovingAiError::BadScenario { .. })));
+    }
+
+    #[test]
+    fn damaged_files_never_panic() {
+        let map = "type octile\nheight 3\nwidth 3\nmap\n.@.\n...\nT..\n";
+        let scen = "version 1\n0\tm.map\t3\t3\t0\t0\t2\t2\t2.82842712\n";
+        for text in [map, scen] {
+            let b = text.as_bytes();
+            for n in 0..b.len() {
+                let t = String::from_utf8_lossy(&b[..n]);
+                let _ = parse_map(&t);
+                let _ = parse_scen(&t);
+            }
+            for i in 0..b.len() {
+                let mut c = b.to_vec();
+                c[i] = b"x9 \n\t.@-"[i % 8];
+                let t = String::from_utf8_lossy(&c);
+                let _ = parse_map(&t);
+                let _ = parse_scen(&t);
+            }
+        }
+        // a scenario outside the map is a typed error from the planner, not a panic
+        let m = parse_map(map).unwrap();
+        let s = parse_scen("version 1\n0 m 3 3 0 0 9 9 1.0\n").unwrap();
+        assert!(run_scenarios(&m, &s, |_, _| true).is_err());
     }
 
     #[test]

@@ -48,12 +48,6 @@ fn dstar_lite_matches_movingai_8room_all_scenarios() {
 use host_sim::cli::team::team_scenario;
 use host_sim::team::{simulate, SimReport};
 
-fn run_team(world: &str, fail: Option<(usize, usize)>) -> SimReport {
-    let (surf, start, cfg, _, _) = team_scenario(world, &data(""), fail, 7).unwrap();
-    let mut rng = rand_pcg::Pcg64::new(7, 0xa02b_dbf7_bb3c_0a7a_c28f_a16a_64ab_f96);
-    simulate(surf.as_ref(), &start, &cfg, &mut rng)
-}
-
 /// The referee's checks again, from the report alone (independent of both the planner and the simulator's own
 /// checks): every hop <= h_max, every landing within r_max of the hub held during the hop, every leg after a hub
 /// motion... (hub positions are in `hub_path`).
@@ -70,7 +64,7 @@ fn short(world: &str, fail: Option<(usize, usize)>, rounds: usize) -> (SimReport
     let (surf, start, mut cfg, _, _) = team_scenario(world, &data(""), fail, 7).unwrap();
     cfg.max_rounds = rounds;
     cfg.sensor.rays = 1500;
-    let mut rng = rand_pcg::Pcg64::new(7, 0xa02b_dbf7_bb3c_0a7a_c28f_a16a_64ab_f96);
+    let mut rng = rand_pcg::Pcg64::new(7, 0x0a02_bdbf_7bb3_c0a7_ac28_fa16_a64a_bf96);
     let r = simulate(surf.as_ref(), &start, &cfg, &mut rng);
     (r, cfg.goal, cfg.params.h_max as f64, cfg.params.r_max as f64, start)
 }
@@ -116,7 +110,9 @@ use proptest::prelude::*;
 
 /// Independent oracle: Dijkstra on the same octile rules (no corner cutting, walls close an edge and any diagonal
 /// whose detours use it), written from the rules, not from the planner.
-fn dijkstra(w: i64, h: i64, blocked: &[bool], walls: &[((i64, i64), (i64, i64))], s: (i64, i64), g: (i64, i64)) -> f64 {
+type Cell = (i64, i64);
+
+fn dijkstra(w: i64, h: i64, blocked: &[bool], walls: &[(Cell, Cell)], s: Cell, g: Cell) -> f64 {
     let free = |x: i64, y: i64| x >= 0 && y >= 0 && x < w && y < h && !blocked[(y * w + x) as usize];
     let walled = |a: (i64, i64), b: (i64, i64)| walls.iter().any(|&(p, q)| (p == a && q == b) || (p == b && q == a));
     let step = |a: (i64, i64), b: (i64, i64)| -> Option<f64> {
@@ -131,7 +127,7 @@ fn dijkstra(w: i64, h: i64, blocked: &[bool], walls: &[((i64, i64), (i64, i64))]
         if !free(c1.0, c1.1) || !free(c2.0, c2.1) || walled(a, c1) || walled(c1, b) || walled(a, c2) || walled(c2, b) {
             return None;
         }
-        Some(std::f64::consts::SQRT_2)
+        Some(core::f64::consts::SQRT_2)
     };
     let n = (w * h) as usize;
     let mut dist = vec![f64::INFINITY; n];
@@ -140,8 +136,7 @@ fn dijkstra(w: i64, h: i64, blocked: &[bool], walls: &[((i64, i64), (i64, i64))]
         return f64::INFINITY;
     }
     dist[(s.1 * w + s.0) as usize] = 0.0;
-    loop {
-        let Some(u) = (0..n).filter(|&i| !done[i] && dist[i].is_finite()).min_by(|&a, &b| dist[a].total_cmp(&dist[b])) else { break };
+    while let Some(u) = (0..n).filter(|&i| !done[i] && dist[i].is_finite()).min_by(|&a, &b| dist[a].total_cmp(&dist[b])) {
         done[u] = true;
         let a = (u as i64 % w, u as i64 / w);
         for &(dx, dy) in &DIRS {
@@ -210,5 +205,129 @@ proptest! {
             prop_assert!((inc - scratch).abs() < 1e-9, "inc {inc} scratch {scratch}");
             prop_assert!((inc - oracle).abs() < 1e-9, "inc {inc} oracle {oracle}");
         }
+    }
+}
+
+use firmware::config::team::TeamParams;
+use firmware::geom::{Real, Vec3};
+use firmware::plan::team::astar::AStarStatus;
+use firmware::plan::team::DefaultLocalPlanner;
+
+/// Section V, Fig. 12, end to end: a grid of 30 m scenes; D* Lite routes (1,1) -> (1,2) -> (1,3) ("south" =
+/// +y); the local planner (the real scene pipeline and bounded-leg A* on range points) hops through the scenes;
+/// between (1,2) and (1,3) a 16 m crevasse (h_max = 10 m) stops it; the failure becomes a wall and D* Lite
+/// replans incrementally to (1,2), (2,2), (2,3), (1,3), which the robot then climbs.
+#[test]
+fn crevasse_reroute_with_the_local_planner_in_the_loop() {
+    const CELL: f64 = 30.0;
+    // gently undulating ground; the crevasse spans y in (82, 98) for x < 68 (beyond what the robot sees from (1,2))
+    let ground = |x: f64, y: f64| -> f64 {
+        if y > 82.0 && y < 98.0 && x < 68.0 {
+            -40.0
+        } else {
+            0.4 * (x / 3.0).sin() * (y / 4.0).cos()
+        }
+    };
+    let range = 22.0;
+    let scan = |at: [f64; 2]| -> Vec<Vec3> {
+        let mut pts = Vec::new();
+        let n = (range as i64) + 1;
+        for j in -n..=n {
+            for i in -n..=n {
+                let (x, y) = (at[0] + i as f64, at[1] + j as f64);
+                if (x - at[0]).hypot(y - at[1]) <= range && x >= 0.0 && y >= 0.0 {
+                    pts.push(Vec3::new(x as Real, y as Real, ground(x, y) as Real));
+                }
+            }
+        }
+        pts
+    };
+    let centre = |c: (i64, i64)| [(c.0 as f64 + 0.5) * CELL, (c.1 as f64 + 0.5) * CELL];
+    let cell_of = |p: [f64; 2]| ((p[0] / CELL).floor() as i64, (p[1] / CELL).floor() as i64);
+
+    let mut st = OwnedDStarStorage::new(5 * 5);
+    let mut d = DStarLite::new(5, 5, st.storage()).unwrap();
+    for y in 0..5 {
+        d.set_blocked(0, y, true).unwrap(); // the map edge, as in the figure
+    }
+    let goal = (1, 3);
+    assert!(matches!(d.plan((1, 1), goal, 10_000).unwrap(), DStarOutcome::Found { cost, .. } if cost == 2.0));
+    let params = TeamParams::DEFAULT;
+    let mut planner: Box<DefaultLocalPlanner> = Box::default();
+    let mut pos = centre((1, 1));
+    let mut visited = vec![(1i64, 1i64)];
+    let mut walls = Vec::new();
+    let mut stuck = 0;
+    for _ in 0..200 {
+        let here = *visited.last().unwrap();
+        if here == goal {
+            break;
+        }
+        let next = d.next_cell(here).expect("D* Lite has a path");
+        let target = centre(next);
+        let pts = scan(pos);
+        let z = ground(pos[0], pos[1]);
+        let robot = Vec3::new(pos[0] as Real, pos[1] as Real, z as Real);
+        let tgt = Vec3::new(target[0] as Real, target[1] as Real, ground(target[0], target[1]) as Real);
+        // a single robot: the leg c_m = 0 (the hub is on it), so only h_max binds
+        let plan = planner.plan(&pts, &Vec3::z(), &robot, &Vec3::zeros(), &tgt, 3.0, &params).unwrap();
+        let before = (pos[0] - target[0]).hypot(pos[1] - target[1]);
+        let hop = plan.hops.get(1).map(|h| [h.x as f64, h.y as f64]);
+        let progress = hop.map(|h| before - (h[0] - target[0]).hypot(h[1] - target[1])).unwrap_or(0.0);
+        if plan.status == AStarStatus::NoSolution || progress < 0.5 {
+            stuck += 1;
+            if stuck >= 2 {
+                // bounded-leg A* cannot cross: the edge between the two scenes becomes a wall
+                d.add_wall(here, next).unwrap();
+                walls.push((here, next));
+                assert!(matches!(d.replan(10_000).unwrap(), DStarOutcome::Found { .. }));
+                stuck = 0;
+            }
+            continue;
+        }
+        stuck = 0;
+        let h = hop.unwrap();
+        let len = ((h[0] - pos[0]).powi(2) + (h[1] - pos[1]).powi(2) + (ground(h[0], h[1]) - z).powi(2)).sqrt();
+        assert!(len <= params.h_max as f64 + 1e-3, "hop {len:.2} m");
+        assert!(ground(h[0], h[1]) > -1.0, "landed in the crevasse at {h:?}");
+        pos = h;
+        let c = cell_of(pos);
+        if c != here && (pos[0] - target[0]).hypot(pos[1] - target[1]) < 8.0 && c == next {
+            visited.push(c);
+            d.move_start(c).unwrap();
+            assert!(matches!(d.replan(10_000).unwrap(), DStarOutcome::Found { .. }));
+        }
+    }
+    assert_eq!(walls, vec![((1, 2), (1, 3))]);
+    assert_eq!(visited, vec![(1, 1), (1, 2), (2, 2), (2, 3), (1, 3)]);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+    /// As above on a 40 x 40 grid with long crevasses (runs of walls) crossing the path after the robot has
+    /// moved up to 12 cells: the case where rounding-broken f64 key ties once hid a wall (now exact: `dstar_lite::Cost`).
+    #[test]
+    fn incremental_replanning_with_long_crevasses(
+        runs in proptest::collection::vec((0i64..40, 1i64..39, 5i64..30, proptest::bool::ANY), 1..5),
+        moves in 0usize..12,
+    ) {
+        let (w, h) = (40i64, 40i64);
+        let (s, g) = ((1i64, 1i64), (38i64, 38i64));
+        let blocked = vec![false; (w * h) as usize];
+        let mut st = OwnedDStarStorage::new((w * h) as usize);
+        let mut d = DStarLite::new(w as u32, h as u32, st.storage()).unwrap();
+        cost(d.plan(s, g, 1_000_000).unwrap());
+        let mut cur = s;
+        for _ in 0..moves { if let Some(n) = d.next_cell(cur) { cur = n; d.move_start(cur).unwrap(); } }
+        let mut walls = Vec::new();
+        for &(x0, y, len, horizontal) in &runs {
+            for k in 0..len {
+                let (a, b) = if horizontal { ((x0 + k, y), (x0 + k, y + 1)) } else { ((y, x0 + k), (y + 1, x0 + k)) };
+                if a.0 < w && a.1 < h && b.0 < w && b.1 < h { d.add_wall(a, b).unwrap(); walls.push((a, b)); }
+            }
+        }
+        let inc = cost(d.replan(1_000_000).unwrap());
+        let oracle = dijkstra(w, h, &blocked, &walls, cur, g);
+        prop_assert!((inc - oracle).abs() < 1e-9 || (inc.is_infinite() && oracle.is_infinite()), "inc {inc} oracle {oracle}");
     }
 }

@@ -39,7 +39,7 @@ pub const GRAPH_MAX_EDGES: usize = 32768;
 pub const PATH_MAX_HOPS: usize = 64;
 
 /// Cells of the global grid of scenes that the board keeps in static memory (the host lends larger storage for
-/// Moving AI maps). Default 64 x 64 = 4096 cells (~190 KiB of D* Lite state).
+/// Moving AI maps). Default 64 x 64 = 4096 cells (51 bytes per cell: ~210 KiB of D* Lite state).
 pub const GLOBAL_GRID_MAX_CELLS: usize = 64 * 64;
 
 /// Tunable parameters of the team planner (all lengths metres).
@@ -59,6 +59,8 @@ pub struct TeamParams {
     pub w_relative_height: Real,
     /// Weight of flatness (local plane-fit residual) in the anchor score. Default 1.0.
     pub w_flatness: Real,
+    /// Depth below the local plane (metres) at which the relative-height term reaches 1. Default 1 m.
+    pub relief_scale: Real,
     /// Residual (metres RMS) at which the flatness term reaches 1. Default 0.5 m.
     pub flatness_scale: Real,
     /// Radius (metres) of the neighbourhood for relative height and flatness. Default 3 m.
@@ -84,6 +86,7 @@ impl TeamParams {
         keep_permille: 150,
         w_relative_height: 1.0,
         w_flatness: 1.0,
+        relief_scale: 1.0,
         flatness_scale: 0.5,
         score_radius: 3.0,
         unobserved_penalty: 0.5,

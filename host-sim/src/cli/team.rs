@@ -114,7 +114,7 @@ pub fn team_scenario(world: &str, data: &std::path::Path, fail: Option<(usize, u
                 sensor: RangeSensor { rays: 3000, range: 25.0, noise: 0.03, height: 0.3 },
                 goal,
                 goal_tol: 8.0,
-                max_rounds: 60,
+                max_rounds: 100,
                 fail,
                 seed,
             };
@@ -158,7 +158,7 @@ pub fn team(args: &TeamArgs) -> Result<bool, String> {
         }
     };
     let (surf, start, cfg, view, bg) = team_scenario(&args.world, &args.data, fail, args.seed)?;
-    let mut rng = rand_pcg::Pcg64::new(args.seed as u128, 0xa02b_dbf7_bb3c_0a7a_c28f_a16a_64ab_f96);
+    let mut rng = rand_pcg::Pcg64::new(args.seed as u128, 0x0a02_bdbf_7bb3_c0a7_ac28_fa16_a64a_bf96);
     let t = Instant::now();
     let rep = crate::team::simulate(surf.as_ref(), &start, &cfg, &mut rng);
     let secs = t.elapsed().as_secs_f64();
@@ -187,4 +187,22 @@ pub fn team(args: &TeamArgs) -> Result<bool, String> {
         println!("picture: {}", p.display());
     }
     Ok(rep.violations.is_empty())
+}
+
+/// `movingai` as a process exit code: 0 all matched, 1 a mismatch, 2 the files could not be read.
+pub fn movingai_main(args: &MovingaiArgs) -> std::process::ExitCode {
+    match movingai(args) {
+        Ok(true) => std::process::ExitCode::SUCCESS,
+        Ok(false) => std::process::ExitCode::from(super::EXIT_FAILED),
+        Err(e) => super::fail(e),
+    }
+}
+
+/// `team` as a process exit code: 0 no violation, 1 a violation, 2 the world could not be built.
+pub fn team_main(args: &TeamArgs) -> std::process::ExitCode {
+    match team(args) {
+        Ok(true) => std::process::ExitCode::SUCCESS,
+        Ok(false) => std::process::ExitCode::from(super::EXIT_FAILED),
+        Err(e) => super::fail(e),
+    }
 }

@@ -39,7 +39,7 @@ impl RangeSensor {
     /// Ray directions.
     pub fn directions(&self) -> Vec<P3> {
         let n = self.rays.max(1);
-        let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+        let golden = core::f64::consts::PI * (3.0 - 5f64.sqrt());
         (0..n)
             .map(|i| {
                 let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;

@@ -4,7 +4,7 @@
 
 use super::terrain::{cross, dot, sub, unit, P3};
 use super::SimReport;
-use std::fmt::Write as _;
+use core::fmt::Write as _;
 
 const COLOURS: [&str; 4] = ["#1f4fff", "#000000", "#8b4513", "#800080"];
 
@@ -27,8 +27,10 @@ pub fn render(rep: &SimReport, view: P3, background: &[P3]) -> String {
         y0 = y0.min(*y);
         y1 = y1.max(*y);
     }
-    let pad = 0.15 * (x1 - x0).max(y1 - y0).max(10.0);
-    let (x0, x1, y0, y1) = (x0 - pad, x1 + pad, y0 - pad, y1 + pad);
+    // a square window centred on the content
+    let half = 0.5 * (x1 - x0).max(y1 - y0).max(10.0) * 1.15;
+    let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+    let (x0, x1, y0, y1) = (cx - half, cx + half, cy - half, cy + half);
     let size = 800.0;
     let s = size / (x1 - x0).max(y1 - y0);
     let sx = |x: f64| (x - x0) * s;
@@ -36,7 +38,13 @@ pub fn render(rep: &SimReport, view: P3, background: &[P3]) -> String {
     let mut out = String::new();
     let _ = writeln!(out, r#"<svg xmlns="http://www.w3.org/2000/svg" width="{size}" height="{size}" viewBox="0 0 {size} {size}">"#);
     let _ = writeln!(out, r##"<rect width="100%" height="100%" fill="#222"/>"##);
-    let bg: Vec<(f64, f64, f64)> = background.iter().map(|&p| proj(p)).filter(|(x, y, _)| *x >= x0 && *x <= x1 && *y >= y0 && *y <= y1).collect();
+    // background: inside the window and on the viewer's side (a closed mesh also has a far side)
+    let depth_lo = rep.paths.iter().flatten().map(|&p| proj(p).2).fold(f64::MAX, f64::min) - half;
+    let bg: Vec<(f64, f64, f64)> = background
+        .iter()
+        .map(|&p| proj(p))
+        .filter(|(x, y, z)| *x >= x0 && *x <= x1 && *y >= y0 && *y <= y1 && *z >= depth_lo)
+        .collect();
     let (zmin, zmax) = bg.iter().fold((f64::MAX, f64::MIN), |(lo, hi), p| (lo.min(p.2), hi.max(p.2)));
     let dot_r = (2.0f64).max(size / 120.0);
     for (x, y, z) in &bg {

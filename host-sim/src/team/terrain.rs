@@ -7,25 +7,32 @@ use crate::terrain::Heightmap;
 /// A 3-vector in f64 (the simulator's truth works in f64).
 pub type P3 = [f64; 3];
 
-pub(crate) fn sub(a: P3, b: P3) -> P3 {
+/// a - b
+pub fn sub(a: P3, b: P3) -> P3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
-pub(crate) fn add(a: P3, b: P3) -> P3 {
+/// a + b
+pub fn add(a: P3, b: P3) -> P3 {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
-pub(crate) fn scale(a: P3, s: f64) -> P3 {
+/// a * s
+pub fn scale(a: P3, s: f64) -> P3 {
     [a[0] * s, a[1] * s, a[2] * s]
 }
-pub(crate) fn dot(a: P3, b: P3) -> f64 {
+/// a . b
+pub fn dot(a: P3, b: P3) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
-pub(crate) fn cross(a: P3, b: P3) -> P3 {
+/// a x b
+pub fn cross(a: P3, b: P3) -> P3 {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
-pub(crate) fn norm(a: P3) -> f64 {
+/// |a|
+pub fn norm(a: P3) -> f64 {
     dot(a, a).sqrt()
 }
-pub(crate) fn unit(a: P3) -> P3 {
+/// a / |a| (z when zero)
+pub fn unit(a: P3) -> P3 {
     let n = norm(a);
     if n > 0.0 {
         scale(a, 1.0 / n)
@@ -33,7 +40,8 @@ pub(crate) fn unit(a: P3) -> P3 {
         [0.0, 0.0, 1.0]
     }
 }
-pub(crate) fn dist(a: P3, b: P3) -> f64 {
+/// |a - b|
+pub fn dist(a: P3, b: P3) -> f64 {
     norm(sub(a, b))
 }
 

@@ -196,3 +196,97 @@ pub fn bounded_leg_astar<const V: usize, const E: usize, const H: usize>(
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::super::graph::AnchorVertex;
+    use super::*;
+    use std::boxed::Box;
+    use std::vec::Vec;
+
+    /// Oracle: Bellman-Ford over the same graph with the same bounded-leg filter, to a fixed goal vertex.
+    fn oracle<const V: usize, const E: usize>(g: &HopGraph<V, E>, start: usize, goal: usize, c_m: &Vec3, r_eff: Real) -> Real {
+        let n = g.n_vertices;
+        let mut d: Vec<Real> = std::vec![Real::INFINITY; n];
+        d[start] = 0.0;
+        for _ in 0..n {
+            for a in 0..n {
+                if !d[a].is_finite() {
+                    continue;
+                }
+                for e in g.out_edges(a) {
+                    let b = e.to as usize;
+                    if norm3(&(c_m + (g.vertices[b].pos - g.vertices[a].pos))) > r_eff {
+                        continue;
+                    }
+                    if d[a] + e.loss < d[b] {
+                        d[b] = d[a] + e.loss;
+                    }
+                }
+            }
+        }
+        d[goal]
+    }
+
+    #[test]
+    fn bounded_leg_astar_is_optimal_and_respects_both_bounds() {
+        let p = TeamParams { r_max: 9.0, ..TeamParams::DEFAULT };
+        let r_eff = p.r_max - p.landing_margin;
+        let h = p.h_max - p.landing_margin;
+        for seed in 0..20u32 {
+            let mut g: Box<HopGraph<128, 16384>> = Box::default();
+            let mut s = seed.wrapping_mul(2_654_435_761).wrapping_add(1);
+            let mut rnd = || {
+                s ^= s << 13;
+                s ^= s >> 17;
+                s ^= s << 5;
+                (s % 10_000) as Real / 10_000.0
+            };
+            for _ in 0..100 {
+                let v = AnchorVertex { pos: Vec3::new(rnd() * 40.0, rnd() * 20.0, rnd() * 2.0), score: rnd() };
+                g.push_vertex(v).unwrap();
+            }
+            g.build_edges(&p);
+            let goal_v = 99usize;
+            let goal = g.vertices[goal_v].pos;
+            let c_m = Vec3::new(-3.0 + 6.0 * rnd(), -3.0 + 6.0 * rnd(), 0.0);
+            let mut arena: Box<AStarArena<128>> = Box::default();
+            let path: LocalPath<64> = bounded_leg_astar(&g, &mut arena, 0, &goal, 1e-4, &c_m, &p);
+            let best = oracle(&g, 0, goal_v, &c_m, r_eff);
+            if best.is_finite() {
+                assert_eq!(path.status, AStarStatus::Exact, "seed {seed}");
+                assert!((path.loss - best).abs() <= 1e-3 * best.max(1.0), "seed {seed}: {} vs {best}", path.loss);
+                for w in path.vertices.windows(2) {
+                    let (a, b) = (g.vertices[w[0] as usize].pos, g.vertices[w[1] as usize].pos);
+                    assert!(norm3(&(b - a)) <= h + 1e-5);
+                    assert!(norm3(&(c_m + (b - a))) <= r_eff + 1e-5);
+                }
+                assert_eq!(*path.vertices.last().unwrap() as usize, goal_v);
+            } else {
+                assert_ne!(path.status, AStarStatus::Exact, "seed {seed}");
+            }
+        }
+    }
+
+    #[test]
+    fn budget_and_invalid_start_are_outcomes() {
+        let mut g: Box<HopGraph<16, 256>> = Box::default();
+        for k in 0..10 {
+            g.push_vertex(AnchorVertex { pos: Vec3::new(k as Real * 3.0, 0.0, 0.0), score: 0.0 }).unwrap();
+        }
+        g.build_edges(&TeamParams::DEFAULT);
+        let mut arena: Box<AStarArena<16>> = Box::default();
+        let goal = Vec3::new(27.0, 0.0, 0.0);
+        let p = TeamParams { astar_budget: 2, ..TeamParams::DEFAULT };
+        let r: LocalPath<16> = bounded_leg_astar(&g, &mut arena, 0, &goal, 0.1, &Vec3::zeros(), &p);
+        assert_eq!(r.status, AStarStatus::BudgetExhausted);
+        assert!(r.vertices.len() >= 2, "best-so-far path kept");
+        let r: LocalPath<16> = bounded_leg_astar(&g, &mut arena, 12, &goal, 0.1, &Vec3::zeros(), &TeamParams::DEFAULT);
+        assert_eq!(r.status, AStarStatus::InvalidInput);
+        // a leg already at the tether limit pointing away from the goal: no hop towards it is allowed
+        let far = Vec3::new(14.4, 0.0, 0.0);
+        let r: LocalPath<16> = bounded_leg_astar(&g, &mut arena, 0, &goal, 0.1, &far, &TeamParams::DEFAULT);
+        assert_eq!(r.status, AStarStatus::NoSolution);
+    }
+}

@@ -39,3 +39,24 @@ pub fn cull(scores: &[Real; SURFACE_MAX_VERTICES], params: &TeamParams, cap: usi
     let want = (n * params.keep_permille as usize).div_ceil(1000).min(n);
     CullOutcome { candidates: n, kept: want.min(cap), truncated: want > cap }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn keeps_the_best_fraction_in_score_order() {
+        let mut scores = [Real::INFINITY; SURFACE_MAX_VERTICES];
+        for (k, s) in scores.iter_mut().enumerate().take(1000) {
+            *s = ((k * 7919) % 1000) as Real; // a permutation of 0..1000
+        }
+        let mut order = [0u16; SURFACE_MAX_VERTICES];
+        let out = cull(&scores, &TeamParams::DEFAULT, 512, &mut order);
+        assert_eq!(out, CullOutcome { candidates: 1000, kept: 150, truncated: false });
+        for (rank, &k) in order.iter().take(150).enumerate() {
+            assert_eq!(scores[k as usize], rank as Real);
+        }
+        let out = cull(&scores, &TeamParams::DEFAULT, 100, &mut order);
+        assert_eq!(out, CullOutcome { candidates: 1000, kept: 100, truncated: true });
+    }
+}

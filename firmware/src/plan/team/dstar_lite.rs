@@ -13,7 +13,7 @@
 //! `compute_shortest_path` repairs the search incrementally.
 //!
 //! Storage is lent by the caller ([`DStarStorage`]): per cell `g`, `rhs`, an epoch stamp, a heap slot, the
-//! occupancy and wall bits, plus a binary heap of one entry per cell. Planning from scratch starts a new epoch
+//! occupancy, wall and allowed-move bits, plus a binary heap of one entry per cell. Planning from scratch starts a new epoch
 //! instead of clearing the arrays, so a host can run thousands of Moving AI scenarios on a 512 x 512 map without
 //! touching every cell each time. A board uses [`DStarArena`] (capacity [`GLOBAL_GRID_MAX_CELLS`] by default).
 //!
@@ -22,28 +22,115 @@
 //!
 //! [`GLOBAL_GRID_MAX_CELLS`]: crate::config::team::GLOBAL_GRID_MAX_CELLS
 
+use core::cmp::Ordering;
 use core::f64::consts::SQRT_2;
 
 /// Octile direction offsets (dx, dy); index = direction id. Straight first, then diagonals.
 pub const DIRS: [(i32, i32); 8] = [(1, 0), (0, 1), (-1, 0), (0, -1), (1, 1), (-1, 1), (-1, -1), (1, -1)];
 
 const NOT_IN_HEAP: u32 = u32::MAX;
-const INF: f64 = f64::INFINITY;
+const INF: Cost = Cost::INF;
+
+/// An octile path cost a + b * sqrt(2) (a straight moves' worth, b diagonals' worth), held exactly in integers.
+///
+/// Every cost D* Lite handles on an octile grid — g, rhs, the heuristic, km, the keys — is such a sum, so
+/// comparing them exactly (integer arithmetic, [`Cost::cmp`]) removes the floating-point ties that can end a
+/// D* Lite search too early (an incremental replan once missed a new wall that way: regression test
+/// `km_tie_rounding_hid_a_wall` in `workload`). It is also cheaper than soft-float f64 on the Cortex-M7.
+/// Infinity is `a == i32::MAX`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Cost {
+    /// Straight part.
+    pub a: i32,
+    /// Diagonal part (times sqrt 2).
+    pub b: i32,
+}
+
+impl Cost {
+    /// Unreachable.
+    pub const INF: Cost = Cost { a: i32::MAX, b: 0 };
+    /// Zero.
+    pub const ZERO: Cost = Cost { a: 0, b: 0 };
+    /// One straight move.
+    pub const STRAIGHT: Cost = Cost { a: 1, b: 0 };
+    /// One diagonal move.
+    pub const DIAGONAL: Cost = Cost { a: 0, b: 1 };
+
+    /// Is this infinity.
+    pub fn is_inf(self) -> bool {
+        self.a == i32::MAX
+    }
+
+    /// Sum (infinity absorbs; saturates to infinity on overflow).
+    pub fn plus(self, o: Cost) -> Cost {
+        if self.is_inf() || o.is_inf() {
+            return Cost::INF;
+        }
+        match (self.a.checked_add(o.a), self.b.checked_add(o.b)) {
+            (Some(a), Some(b)) if a != i32::MAX => Cost { a, b },
+            _ => Cost::INF,
+        }
+    }
+
+    /// The value as f64.
+    pub fn to_f64(self) -> f64 {
+        if self.is_inf() {
+            f64::INFINITY
+        } else {
+            self.a as f64 + self.b as f64 * SQRT_2
+        }
+    }
+}
+
+impl PartialOrd for Cost {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+
+impl Ord for Cost {
+    /// Exact order of a + b sqrt 2: sign of da + db sqrt 2 from da^2 vs 2 db^2 (i128, no overflow).
+    fn cmp(&self, o: &Self) -> Ordering {
+        match (self.is_inf(), o.is_inf()) {
+            (true, true) => return Ordering::Equal,
+            (true, false) => return Ordering::Greater,
+            (false, true) => return Ordering::Less,
+            _ => {}
+        }
+        let da = self.a as i128 - o.a as i128;
+        let db = self.b as i128 - o.b as i128;
+        if da >= 0 && db >= 0 {
+            if da == 0 && db == 0 {
+                Ordering::Equal
+            } else {
+                Ordering::Greater
+            }
+        } else if da <= 0 && db <= 0 {
+            Ordering::Less
+        } else if da > 0 {
+            // da > 0 > db: compare da with |db| sqrt 2
+            (da * da).cmp(&(2 * db * db))
+        } else {
+            // da < 0 < db
+            (2 * db * db).cmp(&(da * da))
+        }
+    }
+}
 
 /// One entry of the priority queue.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct HeapEntry {
-    k1: f64,
-    k2: f64,
+    k1: Cost,
+    k2: Cost,
     cell: u32,
 }
 
 /// Storage lent to the planner; every slice must hold at least `width * height` entries.
 pub struct DStarStorage<'a> {
     /// Cost-to-goal estimates g.
-    pub g: &'a mut [f64],
+    pub g: &'a mut [Cost],
     /// One-step lookahead values rhs.
-    pub rhs: &'a mut [f64],
+    pub rhs: &'a mut [Cost],
     /// Epoch stamp per cell (lazy reset).
     pub stamp: &'a mut [u32],
     /// Heap slot per cell.
@@ -54,17 +141,20 @@ pub struct DStarStorage<'a> {
     pub blocked: &'a mut [bool],
     /// Wall bits per cell: bit d set = the edge in direction `DIRS[d]` is walled.
     pub walls: &'a mut [u8],
+    /// Allowed-move bits per cell (derived from `blocked` and `walls`, kept up to date by the planner).
+    pub moves: &'a mut [u8],
 }
 
 /// Fixed arena for a board: `N` cells.
 pub struct DStarArena<const N: usize> {
-    g: [f64; N],
-    rhs: [f64; N],
+    g: [Cost; N],
+    rhs: [Cost; N],
     stamp: [u32; N],
     heap_pos: [u32; N],
     heap: [HeapEntry; N],
     blocked: [bool; N],
     walls: [u8; N],
+    moves: [u8; N],
 }
 
 impl<const N: usize> DStarArena<N> {
@@ -75,9 +165,10 @@ impl<const N: usize> DStarArena<N> {
             rhs: [INF; N],
             stamp: [0; N],
             heap_pos: [NOT_IN_HEAP; N],
-            heap: [HeapEntry { k1: 0.0, k2: 0.0, cell: 0 }; N],
+            heap: [HeapEntry { k1: Cost::ZERO, k2: Cost::ZERO, cell: 0 }; N],
             blocked: [false; N],
             walls: [0; N],
+            moves: [0; N],
         }
     }
 
@@ -91,6 +182,7 @@ impl<const N: usize> DStarArena<N> {
             heap: &mut self.heap,
             blocked: &mut self.blocked,
             walls: &mut self.walls,
+            moves: &mut self.moves,
         }
     }
 }
@@ -166,7 +258,7 @@ pub struct DStarLite<'a> {
     s: DStarStorage<'a>,
     epoch: u32,
     heap_len: usize,
-    km: f64,
+    km: Cost,
     start: u32,
     last: u32,
     goal: u32,
@@ -174,8 +266,8 @@ pub struct DStarLite<'a> {
 }
 
 #[inline]
-fn key_less(a: (f64, f64), b: (f64, f64)) -> bool {
-    a.0 < b.0 || (a.0 == b.0 && a.1 < b.1)
+fn key_less(a: (Cost, Cost), b: (Cost, Cost)) -> bool {
+    a < b
 }
 
 impl<'a> DStarLite<'a> {
@@ -197,6 +289,7 @@ impl<'a> DStarLite<'a> {
             storage.heap.len(),
             storage.blocked.len(),
             storage.walls.len(),
+            storage.moves.len(),
         ]
         .into_iter()
         .min()
@@ -204,7 +297,7 @@ impl<'a> DStarLite<'a> {
         if have < cells {
             return Err(DStarError::StorageTooSmall { needed: cells, have });
         }
-        let mut me = Self { width, height, s: storage, epoch: 0, heap_len: 0, km: 0.0, start: 0, last: 0, goal: 0, planned: false };
+        let mut me = Self { width, height, s: storage, epoch: 0, heap_len: 0, km: Cost::ZERO, start: 0, last: 0, goal: 0, planned: false };
         me.clear_map();
         me.new_epoch();
         Ok(me)
@@ -232,6 +325,11 @@ impl<'a> DStarLite<'a> {
         }
         for w in self.s.walls.iter_mut().take(n) {
             *w = 0;
+        }
+        for y in 0..self.height as i64 {
+            for x in 0..self.width as i64 {
+                self.update_mask(x, y);
+            }
         }
         self.planned = false;
     }
@@ -278,8 +376,46 @@ impl<'a> DStarLite<'a> {
         self.s.walls.get(c as usize).map(|w| w & (1u8 << d) != 0).unwrap_or(true)
     }
 
-    /// Cost of the move from cell (x, y) in direction `d`, `INF` when not allowed.
-    fn move_cost(&self, x: i64, y: i64, d: usize) -> f64 {
+    /// Cost of the move from cell (x, y) in direction `d`, `INF` when not allowed (from the cached move bits).
+    #[inline]
+    fn move_cost(&self, x: i64, y: i64, d: usize) -> Cost {
+        let bits = match self.index(x, y) {
+            Some(c) => self.s.moves.get(c as usize).copied().unwrap_or(0),
+            None => 0,
+        };
+        if bits & (1u8 << (d & 7)) == 0 {
+            INF
+        } else if d < 4 {
+            Cost::STRAIGHT
+        } else {
+            Cost::DIAGONAL
+        }
+    }
+
+    fn update_mask(&mut self, x: i64, y: i64) {
+        if let Some(c) = self.index(x, y) {
+            let mut bits = 0u8;
+            for d in 0..8 {
+                if self.rule_cost(x, y, d) < INF {
+                    bits |= 1u8 << d;
+                }
+            }
+            if let Some(m) = self.s.moves.get_mut(c as usize) {
+                *m = bits;
+            }
+        }
+    }
+
+    fn update_masks_around(&mut self, x: i64, y: i64) {
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                self.update_mask(x + dx, y + dy);
+            }
+        }
+    }
+
+    /// The movement rules: cost of the move from (x, y) in direction `d`, `INF` when not allowed.
+    fn rule_cost(&self, x: i64, y: i64, d: usize) -> Cost {
         let (dx, dy) = match DIRS.get(d) {
             Some(&(dx, dy)) => (dx as i64, dy as i64),
             None => return INF,
@@ -292,7 +428,7 @@ impl<'a> DStarLite<'a> {
             return INF;
         }
         if dx == 0 || dy == 0 {
-            return 1.0;
+            return Cost::STRAIGHT;
         }
         // diagonal: both side cells free and the four straight edges of the two detours unwalled
         if self.is_blocked(x + dx, y) || self.is_blocked(x, y + dy) {
@@ -308,24 +444,29 @@ impl<'a> DStarLite<'a> {
         if self.wall_bit(a, dir_x) || self.wall_bit(sx, dir_y) || self.wall_bit(a, dir_y) || self.wall_bit(sy, dir_x) {
             return INF;
         }
-        SQRT_2
+        Cost::DIAGONAL
     }
 
-    fn h(&self, a: u32, b: u32) -> f64 {
+    /// Octile distance: (max - min) straight + min diagonal.
+    fn h(&self, a: u32, b: u32) -> Cost {
         let (ax, ay) = self.coords(a);
         let (bx, by) = self.coords(b);
-        let dx = (ax - bx).unsigned_abs() as f64;
-        let dy = (ay - by).unsigned_abs() as f64;
+        let dx = (ax - bx).unsigned_abs() as i32;
+        let dy = (ay - by).unsigned_abs() as i32;
         let (mx, mn) = if dx > dy { (dx, dy) } else { (dy, dx) };
-        mx + (SQRT_2 - 1.0) * mn
+        Cost { a: mx - mn, b: mn }
     }
 
     fn fresh(&self, c: u32) -> bool {
         self.s.stamp.get(c as usize).copied() == Some(self.epoch)
     }
 
-    /// g of a cell in the current search.
+    /// g of a cell in the current search (cost to the goal), as f64.
     pub fn g(&self, c: u32) -> f64 {
+        self.gc(c).to_f64()
+    }
+
+    fn gc(&self, c: u32) -> Cost {
         if self.fresh(c) {
             self.s.g.get(c as usize).copied().unwrap_or(INF)
         } else {
@@ -333,7 +474,7 @@ impl<'a> DStarLite<'a> {
         }
     }
 
-    fn rhs(&self, c: u32) -> f64 {
+    fn rhs(&self, c: u32) -> Cost {
         if self.fresh(c) {
             self.s.rhs.get(c as usize).copied().unwrap_or(INF)
         } else {
@@ -359,34 +500,27 @@ impl<'a> DStarLite<'a> {
         }
     }
 
-    fn set_g(&mut self, c: u32, v: f64) {
+    fn set_g(&mut self, c: u32, v: Cost) {
         self.touch(c);
         if let Some(x) = self.s.g.get_mut(c as usize) {
             *x = v;
         }
     }
 
-    fn set_rhs(&mut self, c: u32, v: f64) {
+    fn set_rhs(&mut self, c: u32, v: Cost) {
         self.touch(c);
         if let Some(x) = self.s.rhs.get_mut(c as usize) {
             *x = v;
         }
     }
 
-    fn calc_key(&self, c: u32) -> (f64, f64) {
-        let m = {
-            let (g, r) = (self.g(c), self.rhs(c));
-            if g < r {
-                g
-            } else {
-                r
-            }
-        };
-        (m + self.h(self.start, c) + self.km, m)
+    fn calc_key(&self, c: u32) -> (Cost, Cost) {
+        let m = self.gc(c).min(self.rhs(c));
+        (m.plus(self.h(self.start, c)).plus(self.km), m)
     }
 
     // ---- indexed binary heap ----
-    fn heap_key(&self, i: usize) -> (f64, f64) {
+    fn heap_key(&self, i: usize) -> (Cost, Cost) {
         self.s.heap.get(i).map(|e| (e.k1, e.k2)).unwrap_or((INF, INF))
     }
 
@@ -449,7 +583,7 @@ impl<'a> DStarLite<'a> {
         }
     }
 
-    fn heap_insert_or_update(&mut self, c: u32, k: (f64, f64)) {
+    fn heap_insert_or_update(&mut self, c: u32, k: (Cost, Cost)) {
         self.touch(c);
         match self.heap_pos_of(c) {
             Some(p) => {
@@ -498,7 +632,7 @@ impl<'a> DStarLite<'a> {
         }
     }
 
-    fn top(&self) -> Option<(u32, (f64, f64))> {
+    fn top(&self) -> Option<(u32, (Cost, Cost))> {
         if self.heap_len == 0 {
             None
         } else {
@@ -508,7 +642,7 @@ impl<'a> DStarLite<'a> {
 
     // ---- D* Lite proper ----
     fn update_vertex(&mut self, u: u32) {
-        let (g, r) = (self.g(u), self.rhs(u));
+        let (g, r) = (self.gc(u), self.rhs(u));
         let in_heap = self.heap_pos_of(u).is_some();
         if g != r {
             let k = self.calc_key(u);
@@ -519,14 +653,14 @@ impl<'a> DStarLite<'a> {
     }
 
     /// min over successors s' of c(u, s') + g(s').
-    fn best_succ(&self, u: u32) -> f64 {
+    fn best_succ(&self, u: u32) -> Cost {
         let (x, y) = self.coords(u);
         let mut best = INF;
         for (d, &(dx, dy)) in DIRS.iter().enumerate() {
             let c = self.move_cost(x, y, d);
             if c < INF {
                 if let Some(v) = self.index(x + dx as i64, y + dy as i64) {
-                    let t = c + self.g(v);
+                    let t = c.plus(self.gc(v));
                     if t < best {
                         best = t;
                     }
@@ -552,7 +686,7 @@ impl<'a> DStarLite<'a> {
                 Some(t) => t,
                 None => break,
             };
-            if !(key_less(k_old, start_key) || self.rhs(self.start) > self.g(self.start)) {
+            if !(key_less(k_old, start_key) || self.rhs(self.start) > self.gc(self.start)) {
                 break;
             }
             if expansions >= budget {
@@ -560,7 +694,7 @@ impl<'a> DStarLite<'a> {
             }
             expansions += 1;
             let k_new = self.calc_key(u);
-            let (gu, ru) = (self.g(u), self.rhs(u));
+            let (gu, ru) = (self.gc(u), self.rhs(u));
             if key_less(k_old, k_new) {
                 self.heap_insert_or_update(u, k_new);
             } else if gu > ru {
@@ -573,7 +707,7 @@ impl<'a> DStarLite<'a> {
                     if c < INF {
                         if let Some(s) = self.index(x + dx as i64, y + dy as i64) {
                             if s != self.goal {
-                                let cand = c + ru;
+                                let cand = c.plus(ru);
                                 if cand < self.rhs(s) {
                                     self.set_rhs(s, cand);
                                 }
@@ -590,7 +724,7 @@ impl<'a> DStarLite<'a> {
                     let c = self.move_cost(x, y, d);
                     if c < INF {
                         if let Some(s) = self.index(x + dx as i64, y + dy as i64) {
-                            if self.rhs(s) == c + g_old && s != self.goal {
+                            if self.rhs(s) == c.plus(g_old) && s != self.goal {
                                 let b = self.best_succ(s);
                                 self.set_rhs(s, b);
                             }
@@ -607,7 +741,7 @@ impl<'a> DStarLite<'a> {
         }
         let cost = self.rhs(self.start);
         if cost < INF {
-            DStarOutcome::Found { cost, expansions }
+            DStarOutcome::Found { cost: cost.to_f64(), expansions }
         } else {
             DStarOutcome::NoPath { expansions }
         }
@@ -621,13 +755,13 @@ impl<'a> DStarLite<'a> {
         self.start = s;
         self.last = s;
         self.goal = g;
-        self.km = 0.0;
+        self.km = Cost::ZERO;
         self.planned = true;
         if self.is_blocked(goal.0, goal.1) || self.is_blocked(start.0, start.1) {
             return Ok(DStarOutcome::NoPath { expansions: 0 });
         }
-        self.set_rhs(g, 0.0);
-        let k = (self.h(s, g), 0.0);
+        self.set_rhs(g, Cost::ZERO);
+        let k = (self.h(s, g), Cost::ZERO);
         self.heap_insert_or_update(g, k);
         Ok(self.compute_shortest_path(budget))
     }
@@ -650,7 +784,7 @@ impl<'a> DStarLite<'a> {
             return Err(DStarError::NotPlanned);
         }
         let s = self.idx_or_err(start.0, start.1)?;
-        self.km += self.h(self.last, s);
+        self.km = self.km.plus(self.h(self.last, s));
         self.last = s;
         self.start = s;
         Ok(())
@@ -678,6 +812,7 @@ impl<'a> DStarLite<'a> {
             }
             *b = blocked;
         }
+        self.update_masks_around(x, y);
         self.refresh_around(x, y);
         Ok(())
     }
@@ -695,6 +830,8 @@ impl<'a> DStarLite<'a> {
         if let Some(w) = self.s.walls.get_mut(cb as usize) {
             *w |= 1u8 << d_ba;
         }
+        self.update_masks_around(a.0, a.1);
+        self.update_masks_around(b.0, b.1);
         self.refresh_around(a.0, a.1);
         self.refresh_around(b.0, b.1);
         Ok(())
@@ -702,7 +839,7 @@ impl<'a> DStarLite<'a> {
 
     /// Cost of the current shortest path from the start (`INF` when none).
     pub fn cost(&self) -> f64 {
-        self.rhs(self.start)
+        self.rhs(self.start).to_f64()
     }
 
     /// Current start cell.
@@ -723,7 +860,7 @@ impl<'a> DStarLite<'a> {
             if c < INF {
                 let (nx, ny) = (from.0 + dx as i64, from.1 + dy as i64);
                 if let Some(v) = self.index(nx, ny) {
-                    let t = c + self.g(v);
+                    let t = c.plus(self.gc(v));
                     if t < best {
                         best = t;
                         arg = Some((nx, ny));
@@ -739,7 +876,7 @@ impl<'a> DStarLite<'a> {
         if !self.planned {
             return Err(DStarError::NotPlanned);
         }
-        if self.cost() == INF {
+        if self.rhs(self.start).is_inf() {
             return Ok(PathOutcome::NoPath);
         }
         let mut cur = self.coords(self.start);
@@ -769,25 +906,48 @@ mod tests {
     use super::*;
 
     struct Owned {
-        g: [f64; 64],
-        rhs: [f64; 64],
+        g: [Cost; 64],
+        rhs: [Cost; 64],
         stamp: [u32; 64],
         pos: [u32; 64],
         heap: [HeapEntry; 64],
         blocked: [bool; 64],
         walls: [u8; 64],
+        moves: [u8; 64],
+    }
+
+    #[test]
+    fn exact_cost_order_matches_real_numbers() {
+        // 99 - 70 sqrt 2 = 0.00505..., 70 sqrt 2 - 99 < 0; and the Pell pair 577 vs 408 sqrt 2
+        let c = |a, b| Cost { a, b };
+        assert!(c(99, 0) > c(0, 70));
+        assert!(c(0, 408) < c(577, 0));
+        assert!(c(3, 1) > c(1, 2)); // 4.414 > 3.828
+        assert!(c(1, 2) < c(3, 1));
+        assert_eq!(c(2, 2).cmp(&c(2, 2)), Ordering::Equal);
+        assert!(Cost::INF > c(1_000_000, 1_000_000));
+        assert_eq!(c(i32::MAX - 1, 0).plus(c(5, 0)), Cost::INF);
+        for a in -30..30 {
+            for b in -30..30 {
+                let x = c(a, b);
+                let y = c(7, -3);
+                let (fx, fy) = (a as f64 + b as f64 * SQRT_2, 7.0 - 3.0 * SQRT_2);
+                assert_eq!(x.cmp(&y), fx.partial_cmp(&fy).unwrap(), "{a} {b}");
+            }
+        }
     }
 
     #[test]
     fn storage_too_small_is_typed() {
         let mut o = Owned {
-            g: [0.0; 64],
-            rhs: [0.0; 64],
+            g: [Cost::ZERO; 64],
+            rhs: [Cost::ZERO; 64],
             stamp: [0; 64],
             pos: [0; 64],
             heap: [HeapEntry::default(); 64],
             blocked: [false; 64],
             walls: [0; 64],
+            moves: [0; 64],
         };
         let st = DStarStorage {
             g: &mut o.g,
@@ -797,6 +957,7 @@ mod tests {
             heap: &mut o.heap[..10],
             blocked: &mut o.blocked,
             walls: &mut o.walls,
+            moves: &mut o.moves,
         };
         assert_eq!(DStarLite::new(8, 8, st).err(), Some(DStarError::StorageTooSmall { needed: 64, have: 10 }));
     }

@@ -143,3 +143,57 @@ impl<const N: usize> Team<N> {
         norm3(&(self.hub - old))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn paper_team() -> Team<4> {
+        // section IV: robots 1..4 at (1,1,0), (1,0,0), (0,1,0), (0,0,0) m
+        Team::new([Vec3::new(1.0, 1.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.0, 0.0, 0.0)])
+    }
+
+    #[test]
+    fn climbing_order_one_moves_three_hold_and_node_loss() {
+        let mut t = paper_team();
+        assert_eq!(t.hub, Vec3::new(0.5, 0.5, 0.0));
+        let seq: [(usize, bool); 5] = core::array::from_fn(|_| t.next_mover().unwrap());
+        assert_eq!(seq, [(0, true), (1, false), (2, false), (3, false), (0, true)]);
+        t.cut_tether(1);
+        assert_eq!(t.attached(), 3);
+        let seq: [(usize, bool); 4] = core::array::from_fn(|_| t.next_mover().unwrap());
+        assert_eq!(seq, [(2, false), (3, false), (0, true), (2, false)]);
+        for m in 0..4 {
+            t.cut_tether(m);
+        }
+        assert_eq!(t.next_mover(), None);
+    }
+
+    #[test]
+    fn hub_motion_follows_the_team_and_never_overstretches_a_tether() {
+        // the paper's climb: each robot hops 0.75 m along y; after the round the hub has moved 0.75 m
+        let mut t = paper_team();
+        for m in 0..4 {
+            let p = t.robots[m].pos + Vec3::new(0.0, 0.75, 0.0);
+            t.hop(m, p);
+        }
+        let moved = t.hub_motion(2.0);
+        assert!((moved - 0.75).abs() < 1e-6);
+        assert!((t.hub - Vec3::new(0.5, 1.25, 0.0)).norm() < 1e-6);
+        // three robots ahead, one behind: the full step to the centroid would overstretch the laggard's tether,
+        // so the hub stops where the laggard's leg is exactly r_max (analytic: hub x = 0.5)
+        let mut t = Team::new([Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 0.1, 0.0), Vec3::new(1.0, -0.1, 0.0), Vec3::new(-0.5, 0.0, 0.0)]);
+        t.hub = Vec3::zeros();
+        let r_max = 1.01;
+        t.hub_motion(r_max);
+        assert!((t.hub.x - 0.51).abs() < 1e-4 && t.hub.y.abs() < 1e-6, "{:?}", t.hub);
+        for m in 0..4 {
+            assert!(norm3(&t.leg(m).unwrap()) <= r_max + 1e-5, "leg {m}");
+        }
+        // node loss: the cut robot no longer pulls the hub
+        let mut t = paper_team();
+        t.cut_tether(0);
+        t.hub_motion(5.0);
+        assert!((t.hub - Vec3::new(1.0 / 3.0, 1.0 / 3.0, 0.0)).norm() < 1e-6);
+    }
+}

@@ -148,3 +148,59 @@ impl<const V: usize, const E: usize> Default for HopGraph<V, E> {
         Self::new()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use std::boxed::Box;
+
+    #[test]
+    fn edges_are_exactly_the_pairs_within_a_hop_with_the_documented_losses() {
+        let p = TeamParams::DEFAULT;
+        let mut g: Box<HopGraph<64, 4096>> = Box::default();
+        // a deterministic scatter
+        for k in 0..40u32 {
+            let x = ((k * 37) % 23) as Real;
+            let y = ((k * 11) % 17) as Real;
+            let z = ((k * 5) % 3) as Real;
+            g.push_vertex(AnchorVertex { pos: Vec3::new(x, y, z), score: (k % 7) as Real / 7.0 }).unwrap();
+        }
+        let out = g.build_edges(&p);
+        assert!(!out.edges_full);
+        let h = p.h_max - p.landing_margin;
+        let mut expected = 0;
+        for a in 0..40 {
+            for b in 0..40 {
+                let d = norm3(&(g.vertices[b].pos - g.vertices[a].pos));
+                let present = g.out_edges(a).iter().find(|e| e.to as usize == b);
+                if a != b && d <= h {
+                    expected += 1;
+                    let e = present.expect("missing edge");
+                    assert!((e.d - d).abs() < 1e-6);
+                    assert!((e.loss - (d + p.risk_m * g.vertices[b].score)).abs() < 1e-5);
+                } else {
+                    assert!(present.is_none(), "edge {a}->{b} of length {d}");
+                }
+            }
+        }
+        assert_eq!(out.edges, expected);
+    }
+
+    #[test]
+    fn full_edge_arena_is_an_outcome_and_keeps_earlier_vertices() {
+        let mut g: Box<HopGraph<16, 8>> = Box::default();
+        for k in 0..6 {
+            g.push_vertex(AnchorVertex { pos: Vec3::new(k as Real, 0.0, 0.0), score: 0.0 }).unwrap();
+        }
+        let out = g.build_edges(&TeamParams::DEFAULT);
+        assert!(out.edges_full);
+        assert_eq!(out.edges, 8);
+        assert_eq!(g.out_edges(0).len(), 5);
+        assert!(g.out_edges(5).is_empty());
+        let mut small: HopGraph<2, 1> = HopGraph::new();
+        let v = AnchorVertex { pos: Vec3::zeros(), score: 0.0 };
+        assert!(small.push_vertex(v).is_ok() && small.push_vertex(v).is_ok());
+        assert_eq!(small.push_vertex(v), Err(v));
+    }
+}

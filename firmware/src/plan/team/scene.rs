@@ -1,16 +1,16 @@
 //! Scene pipeline, stages 1-3 of Morad et al. section V-A (Fig. 7): range points -> normals from k nearest
 //! neighbours -> a continuous surface.
 //!
-//! **Scene frame.** A plane is fitted to the whole scan (centroid + smallest-eigenvalue eigenvector of the
-//! covariance, oriented along the robot's `up`: its outward direction from its attitude — gravity on a cliff, away
-//! from the body's centre on an asteroid; orienting towards the sensor fails in concave scenes such as a pit). Everything below is expressed in this frame: plane coordinates
-//! (a, b) and height z along the plane normal. On a cliff the plane is the wall, on an asteroid the local
-//! tangent plane; "height" is therefore protrusion from the mean surface, not altitude (regolith collects in
-//! depressions of the surface whatever the direction of gravity).
+//! **Scene frame.** Origin at the centroid of the scan; normal = the mean of the point normals (below), oriented
+//! along the robot's `up` (its outward direction from its attitude while gripping: gravity on a cliff, away from
+//! the body's centre on an asteroid). Everything is expressed in this frame: plane coordinates (a, b) and height
+//! z along the normal. On a cliff the plane is the wall, on an asteroid the local tangent plane; "height" is
+//! protrusion from the mean surface, not altitude. (A plane fitted to the points themselves was tried first and
+//! rejected: a deep crevasse or a far wall in the scan tilts it by tens of degrees.)
 //!
 //! **Normals (V-A.2).** For every point, a plane is fitted to the point and its [`KNN_K`] nearest neighbours; its
-//! normal (oriented like the scene normal) is the point's normal. The neighbours come from a fixed 2-D bucket
-//! index over the scene plane ([`KNN_BUCKETS_PER_AXIS`]^2 buckets); the search visits rings of buckets outwards
+//! normal (oriented to `up`) is the point's normal. The neighbours come from a fixed 2-D bucket
+//! index over the plane perpendicular to `up` ([`KNN_BUCKETS_PER_AXIS`]^2 buckets); the search visits rings of buckets outwards
 //! and stops when the k-th best distance is below the ring's inner radius (exact kNN, bounded by the ring count).
 //!
 //! **Surface (V-A.3): what we chose and why.** The paper reconstructs a closed surface by screened Poisson
@@ -34,6 +34,7 @@
 
 use crate::config::team::{TeamParams, KNN_BUCKETS_PER_AXIS, KNN_K, SURFACE_CELLS_PER_AXIS, SURFACE_MAX_VERTICES};
 use crate::geom::{is_finite3, norm3, normalize3, Real, Vec3};
+use nalgebra::Matrix3;
 
 /// Maximum Jacobi sweeps of the 3 x 3 symmetric eigen-solver (converges in < 10 for 3 x 3).
 pub const EIGEN_MAX_SWEEPS: usize = 32;
@@ -115,31 +116,35 @@ pub struct Scene<const P: usize> {
     pub cell_normal: [Vec3; SURFACE_MAX_VERTICES],
     /// Cell states.
     pub state: [CellState; SURFACE_MAX_VERTICES],
+    /// Mean plane coordinates of an observed cell's points (the vertex sits where the data is, not at the cell
+    /// centre, so a vertex on a rim is on the rim).
+    pub cell_ab: [(Real, Real); SURFACE_MAX_VERTICES],
     count: [u16; SURFACE_MAX_VERTICES],
 }
 
 /// 3 x 3 symmetric eigen-decomposition by cyclic Jacobi rotations, bounded by [`EIGEN_MAX_SWEEPS`]; returns the
 /// eigenvector of the smallest eigenvalue and the eigenvalues (ascending), or `None` on non-convergence.
 pub fn smallest_eigenvector(m: [[Real; 3]; 3]) -> Option<(Vec3, [Real; 3])> {
-    let mut a = m;
-    let mut v = [[1.0 as Real, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    let scale = a.iter().flatten().fold(0.0 as Real, |s, x| s + x * x);
+    let mut a = Matrix3::from_fn(|i, j| m.get(i).and_then(|r| r.get(j)).copied().unwrap_or(0.0));
+    let mut v = Matrix3::<Real>::identity();
+    let scale = a.iter().fold(0.0 as Real, |s, x| s + x * x);
     if !scale.is_finite() {
         return None;
     }
     let mut converged = false;
     for _ in 0..EIGEN_MAX_SWEEPS {
-        let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+        let off = a.m12 * a.m12 + a.m13 * a.m13 + a.m23 * a.m23;
         if off <= 1e-12 * scale || off == 0.0 {
             converged = true;
             break;
         }
         for (p, q) in [(0usize, 1usize), (0, 2), (1, 2)] {
-            let apq = a[p][q];
+            let at = |m: &Matrix3<Real>, i: usize, k: usize| m.get((i, k)).copied().unwrap_or(0.0);
+            let apq = at(&a, p, q);
             if apq == 0.0 {
                 continue;
             }
-            let theta = (a[q][q] - a[p][p]) / (2.0 * apq);
+            let theta = (at(&a, q, q) - at(&a, p, p)) / (2.0 * apq);
             let t = if theta >= 0.0 {
                 1.0 / (theta + libm::sqrtf(1.0 + theta * theta))
             } else {
@@ -147,38 +152,24 @@ pub fn smallest_eigenvector(m: [[Real; 3]; 3]) -> Option<(Vec3, [Real; 3])> {
             };
             let c = 1.0 / libm::sqrtf(1.0 + t * t);
             let s = t * c;
-            // A' = J^T A J
-            for k in 0..3 {
-                let akp = a[k][p];
-                let akq = a[k][q];
-                a[k][p] = c * akp - s * akq;
-                a[k][q] = s * akp + c * akq;
+            // Givens rotation J in the (p, q) plane; A' = J^T A J, V' = V J
+            let mut j = Matrix3::<Real>::identity();
+            for (i, k, x) in [(p, p, c), (q, q, c), (p, q, s), (q, p, -s)] {
+                if let Some(e) = j.get_mut((i, k)) {
+                    *e = x;
+                }
             }
-            for k in 0..3 {
-                let apk = a[p][k];
-                let aqk = a[q][k];
-                a[p][k] = c * apk - s * aqk;
-                a[q][k] = s * apk + c * aqk;
-            }
-            for row in v.iter_mut() {
-                let vp = row[p];
-                let vq = row[q];
-                row[p] = c * vp - s * vq;
-                row[q] = s * vp + c * vq;
-            }
+            a = j.transpose() * a * j;
+            v *= j;
         }
     }
     if !converged {
         return None;
     }
-    let ev = [a[0][0], a[1][1], a[2][2]];
-    let mut k = 0;
-    for i in 1..3 {
-        if ev[i] < ev[k] {
-            k = i;
-        }
-    }
-    let vec = Vec3::new(v[0][k], v[1][k], v[2][k]);
+    let ev = [a.m11, a.m22, a.m33];
+    let (k, _) = ev.iter().enumerate().fold((0usize, Real::INFINITY), |(bk, bv), (i, &x)| if x < bv { (i, x) } else { (bk, bv) });
+    let col = v.column(k);
+    let vec = Vec3::new(col.x, col.y, col.z);
     let mut sorted = ev;
     sorted.sort_unstable_by(|x, y| x.total_cmp(y));
     Some((vec, sorted))
@@ -196,17 +187,12 @@ fn fit_normal<'a>(pts: impl Iterator<Item = &'a Vec3> + Clone) -> Option<(Vec3, 
         return None;
     }
     c /= n;
-    let mut m = [[0.0 as Real; 3]; 3];
+    let mut m = Matrix3::<Real>::zeros();
     for p in pts {
         let d = p - c;
-        let d = [d.x, d.y, d.z];
-        for i in 0..3 {
-            for j in 0..3 {
-                m[i][j] += d[i] * d[j] / n;
-            }
-        }
+        m += d * d.transpose() / n;
     }
-    smallest_eigenvector(m)
+    smallest_eigenvector([[m.m11, m.m12, m.m13], [m.m21, m.m22, m.m23], [m.m31, m.m32, m.m33]])
 }
 
 fn any_perpendicular(n: &Vec3) -> Vec3 {
@@ -239,6 +225,7 @@ impl<const P: usize> Scene<P> {
             height: [0.0; SURFACE_MAX_VERTICES],
             cell_normal: [z; SURFACE_MAX_VERTICES],
             state: [CellState::Empty; SURFACE_MAX_VERTICES],
+            cell_ab: [(0.0, 0.0); SURFACE_MAX_VERTICES],
             count: [0; SURFACE_MAX_VERTICES],
         }
     }
@@ -254,8 +241,8 @@ impl<const P: usize> Scene<P> {
         if count > P {
             return Err(SceneError::TooManyPoints);
         }
-        // frame
-        let (n, ev) = fit_normal(finite()).ok_or(SceneError::Degenerate)?;
+        // degenerate scans (collinear or coincident points) have no surface
+        let (_, ev) = fit_normal(finite()).ok_or(SceneError::Degenerate)?;
         if ev[1] <= 1e-9 {
             return Err(SceneError::Degenerate);
         }
@@ -264,26 +251,13 @@ impl<const P: usize> Scene<P> {
             c += p;
         }
         c /= count as Real;
-        let mut n = normalize3(&n, 1e-9).ok_or(SceneError::Degenerate)?;
-        if n.dot(up) < 0.0 {
-            n = -n;
-        }
-        let u = any_perpendicular(&n);
-        let v = n.cross(&u);
-        self.frame = SceneFrame { origin: c, u, v, n };
         self.n_points = count;
-        let (mut amin, mut amax, mut bmin, mut bmax) = (Real::MAX, Real::MIN, Real::MAX, Real::MIN);
-        for (slot, p) in self.local.iter_mut().zip(finite()) {
-            let l = self.frame.to_local(p);
-            *slot = l;
-            amin = amin.min(l.x);
-            amax = amax.max(l.x);
-            bmin = bmin.min(l.y);
-            bmax = bmax.max(l.y);
-        }
-        let extent = (amax - amin).max(bmax - bmin).max(1e-3);
-        // bucket index
-        self.bucket_min = (amin, bmin);
+        // provisional frame on the robot's `up`, for the kNN bucket index
+        let n0 = normalize3(up, 1e-9).unwrap_or(Vec3::z());
+        let u0 = any_perpendicular(&n0);
+        self.frame = SceneFrame { origin: c, u: u0, v: n0.cross(&u0), n: n0 };
+        let extent = self.project(points);
+        self.bucket_min = self.min_ab;
         self.bucket_size = extent / KNN_BUCKETS_PER_AXIS as Real * 1.0001;
         for h in self.head.iter_mut() {
             *h = NONE;
@@ -295,7 +269,8 @@ impl<const P: usize> Scene<P> {
                 *h = i as u32;
             }
         }
-        // normals
+        // normals from the k nearest neighbours, oriented to `up`
+        let mut mean_n = Vec3::zeros();
         for i in 0..count {
             let mut nb = [(Real::MAX, NONE); KNN_K];
             self.knn(i, &mut nb);
@@ -308,15 +283,28 @@ impl<const P: usize> Scene<P> {
                 None => Vec3::z(),
             };
             let nl = if nl.z < 0.0 { -nl } else { nl };
-            let nw = u * nl.x + v * nl.y + n * nl.z;
+            let f = self.frame;
+            let nw = f.u * nl.x + f.v * nl.y + f.n * nl.z;
+            mean_n += nw;
             if let Some(slot) = self.normals.get_mut(i) {
                 *slot = nw;
             }
         }
+        // the scene plane: the mean surface orientation (robust to a deep crevasse or a far wall in the scan,
+        // which would tilt a plane fitted to the points themselves)
+        let n = normalize3(&mean_n, 1e-6).unwrap_or(n0);
+        let u = any_perpendicular(&n);
+        let v = n.cross(&u);
+        self.frame = SceneFrame { origin: c, u, v, n };
+        let extent = self.project(points);
+        let (amin, bmin) = self.min_ab;
         // surface grid
         self.cell = (extent / N as Real) * 1.0001;
         self.min_ab = (amin, bmin);
         for k in 0..SURFACE_MAX_VERTICES {
+            if let Some(ab) = self.cell_ab.get_mut(k) {
+                *ab = (0.0, 0.0);
+            }
             if let (Some(h), Some(cn), Some(st), Some(ct)) =
                 (self.height.get_mut(k), self.cell_normal.get_mut(k), self.state.get_mut(k), self.count.get_mut(k))
             {
@@ -332,6 +320,10 @@ impl<const P: usize> Scene<P> {
                 _ => continue,
             };
             if let Some(k) = self.cell_of(l.x, l.y) {
+                if let Some(ab) = self.cell_ab.get_mut(k) {
+                    ab.0 += l.x;
+                    ab.1 += l.y;
+                }
                 if let (Some(h), Some(cn), Some(ct)) =
                     (self.height.get_mut(k), self.cell_normal.get_mut(k), self.count.get_mut(k))
                 {
@@ -347,6 +339,10 @@ impl<const P: usize> Scene<P> {
             {
                 if *ct > 0 {
                     *h /= *ct as Real;
+                    if let Some(ab) = self.cell_ab.get_mut(k) {
+                        ab.0 /= *ct as Real;
+                        ab.1 /= *ct as Real;
+                    }
                     *cn = normalize3(cn, 1e-9).unwrap_or(n);
                     *st = CellState::Observed;
                 }
@@ -354,6 +350,22 @@ impl<const P: usize> Scene<P> {
         }
         self.fill(params);
         Ok(())
+    }
+
+    /// Local coordinates of the finite points in the current frame; sets `min_ab` and returns the extent.
+    fn project(&mut self, points: &[Vec3]) -> Real {
+        let (mut amin, mut amax, mut bmin, mut bmax) = (Real::MAX, Real::MIN, Real::MAX, Real::MIN);
+        let frame = self.frame;
+        for (slot, p) in self.local.iter_mut().zip(points.iter().filter(|p| is_finite3(p))) {
+            let l = frame.to_local(p);
+            *slot = l;
+            amin = amin.min(l.x);
+            amax = amax.max(l.x);
+            bmin = bmin.min(l.y);
+            bmax = bmax.max(l.y);
+        }
+        self.min_ab = (amin, bmin);
+        (amax - amin).max(bmax - bmin).max(1e-3)
     }
 
     fn bucket_of(&self, i: usize) -> usize {
@@ -373,7 +385,7 @@ impl<const P: usize> Scene<P> {
         let (bx, by) = ((b % KNN_BUCKETS_PER_AXIS) as i64, (b / KNN_BUCKETS_PER_AXIS) as i64);
         for ring in 0..KNN_BUCKETS_PER_AXIS as i64 {
             let inner = (ring - 1).max(0) as Real * self.bucket_size;
-            if best[KNN_K - 1].1 != NONE && best[KNN_K - 1].0 <= inner * inner {
+            if best.last().is_some_and(|w| w.1 != NONE && w.0 <= inner * inner) {
                 break;
             }
             for dy in -ring..=ring {
@@ -394,12 +406,16 @@ impl<const P: usize> Scene<P> {
                         if j as usize != i {
                             if let Some(q) = self.local.get(j as usize) {
                                 let d2 = (q - p).norm_squared();
-                                if d2 < best[KNN_K - 1].0 {
-                                    let mut k = KNN_K - 1;
-                                    best[k] = (d2, j);
-                                    while k > 0 && best[k].0 < best[k - 1].0 {
-                                        best.swap(k, k - 1);
-                                        k -= 1;
+                                if best.last().is_some_and(|w| d2 < w.0) {
+                                    if let Some(w) = best.last_mut() {
+                                        *w = (d2, j);
+                                    }
+                                    // insertion: bubble the new entry towards the front (at most K steps)
+                                    for k in (1..KNN_K).rev() {
+                                        match (best.get(k), best.get(k - 1)) {
+                                            (Some(x), Some(y)) if x.0 < y.0 => best.swap(k, k - 1),
+                                            _ => break,
+                                        }
                                     }
                                 }
                             }
@@ -422,11 +438,13 @@ impl<const P: usize> Scene<P> {
         }
     }
 
-    /// World position of a surface cell's vertex.
+    /// World position of a surface cell's vertex (observed: at the mean of its points; filled: at the centre).
     pub fn vertex(&self, k: usize) -> Vec3 {
         let (i, j) = (k % N, k / N);
-        let a = self.min_ab.0 + (i as Real + 0.5) * self.cell;
-        let b = self.min_ab.1 + (j as Real + 0.5) * self.cell;
+        let (a, b) = match (self.state.get(k), self.cell_ab.get(k)) {
+            (Some(CellState::Observed), Some(&ab)) => ab,
+            _ => (self.min_ab.0 + (i as Real + 0.5) * self.cell, self.min_ab.1 + (j as Real + 0.5) * self.cell),
+        };
         let z = self.height.get(k).copied().unwrap_or(0.0);
         self.frame.to_world(&Vec3::new(a, b, z))
     }
@@ -550,8 +568,10 @@ impl<const P: usize> Default for Scene<P> {
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
     use super::*;
     use crate::config::team::SCENE_MAX_POINTS;
+    use std::boxed::Box;
 
     #[test]
     fn jacobi_finds_smallest_eigenvector() {
