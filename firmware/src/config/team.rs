@@ -39,7 +39,7 @@ pub const GRAPH_MAX_EDGES: usize = 32768;
 pub const PATH_MAX_HOPS: usize = 64;
 
 /// Cells of the global grid of scenes that the board keeps in static memory (the host lends larger storage for
-/// Moving AI maps). Default 64 x 64 = 4096 cells (51 bytes per cell: ~210 KiB of D* Lite state).
+/// Moving AI maps). Default 64 x 64 = 4096 cells (47 bytes per cell: ~190 KiB of D* Lite state).
 pub const GLOBAL_GRID_MAX_CELLS: usize = 64 * 64;
 
 /// Tunable parameters of the team planner (all lengths metres).

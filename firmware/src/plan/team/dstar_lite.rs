@@ -89,7 +89,7 @@ impl PartialOrd for Cost {
 }
 
 impl Ord for Cost {
-    /// Exact order of a + b sqrt 2: sign of da + db sqrt 2 from da^2 vs 2 db^2 (i128, no overflow).
+    /// Exact order of a + b sqrt 2: sign of da + db sqrt 2 from da^2 vs 2 db^2 (no overflow).
     fn cmp(&self, o: &Self) -> Ordering {
         match (self.is_inf(), o.is_inf()) {
             (true, true) => return Ordering::Equal,
@@ -97,8 +97,8 @@ impl Ord for Cost {
             (false, true) => return Ordering::Less,
             _ => {}
         }
-        let da = self.a as i128 - o.a as i128;
-        let db = self.b as i128 - o.b as i128;
+        let da = self.a as i64 - o.a as i64;
+        let db = self.b as i64 - o.b as i64;
         if da >= 0 && db >= 0 {
             if da == 0 && db == 0 {
                 Ordering::Equal
@@ -107,12 +107,20 @@ impl Ord for Cost {
             }
         } else if da <= 0 && db <= 0 {
             Ordering::Less
-        } else if da > 0 {
-            // da > 0 > db: compare da with |db| sqrt 2
-            (da * da).cmp(&(2 * db * db))
         } else {
-            // da < 0 < db
-            (2 * db * db).cmp(&(da * da))
+            // opposite signs: compare da^2 with 2 db^2 (i64 while |da|, |db| < 2^30, else i128)
+            let small = da.unsigned_abs() < (1 << 30) && db.unsigned_abs() < (1 << 30);
+            let ord = if small {
+                (da * da).cmp(&(2 * db * db))
+            } else {
+                let (da, db) = (da as i128, db as i128);
+                (da * da).cmp(&(2 * db * db))
+            };
+            if da > 0 {
+                ord
+            } else {
+                ord.reverse()
+            }
         }
     }
 }
@@ -926,6 +934,9 @@ mod tests {
         assert!(c(1, 2) < c(3, 1));
         assert_eq!(c(2, 2).cmp(&c(2, 2)), Ordering::Equal);
         assert!(Cost::INF > c(1_000_000, 1_000_000));
+        // beyond 2^30 (the i128 branch): 1 414 213 562 sqrt 2 = 1 999 999 999.4
+        assert!(c(2_000_000_000, 0) > c(0, 1_414_213_562));
+        assert!(c(0, 1_414_213_563) > c(2_000_000_000, 0));
         assert_eq!(c(i32::MAX - 1, 0).plus(c(5, 0)), Cost::INF);
         for a in -30..30 {
             for b in -30..30 {
