@@ -184,9 +184,11 @@ impl Map<'_> {
         }
 
         // 4. Lower: sweep the dirty blocks until nothing changes.
-        for _ in 0..self.cfg.esdf_max_sweeps {
+        for sweep in 0..self.cfg.esdf_max_sweeps {
             let mut any = false;
-            for s in 0..used {
+            // Alternate the block order so distances cross block borders in both directions.
+            for j in 0..used {
+                let s = if sweep % 2 == 0 { j } else { used - 1 - j };
                 let Some(b) = self.blocks.get(s) else { break };
                 if b.flags & FLAG_ESDF_DIRTY == 0 {
                     continue;
