@@ -6,7 +6,7 @@
 
 pub mod cli;
 pub mod mapcheck;
-pub mod scenario;
+pub mod scenario_file;
 pub mod sensor;
 pub mod terrain;
 pub mod world;

@@ -68,12 +68,12 @@ pub fn data_dir() -> PathBuf {
 /// A world by name, or from a scenario file.
 pub fn world_by_name(name: &str) -> Result<(Box<dyn World>, String), String> {
     if name.ends_with(".toml") {
-        let sc = crate::scenario::load(std::path::Path::new(name)).map_err(|e| e.to_string())?;
+        let sc = crate::scenario_file::load(std::path::Path::new(name)).map_err(|e| e.to_string())?;
         let kind = sc.world_kind();
         let w = sc.build_world().map_err(|e| e.to_string())?;
         return Ok((w, kind));
     }
-    let spec = crate::scenario::WorldSpec::by_name(name).ok_or_else(|| {
+    let spec = crate::scenario_file::WorldSpec::by_name(name).ok_or_else(|| {
         format!("unknown world {name:?}: use crater_wall, ledge, ledge_pole, marsyard or a .toml scenario")
     })?;
     let w = spec.build(&data_dir()).map_err(|(f, r)| format!("{f}: {r}"))?;
