@@ -1,9 +1,15 @@
 //! `tetherbot`: the operator's CLI (run a scenario, campaign, record, replay, export, render).
+//!
+//! Subcommand logic lives in `host_sim::cli::<name>`; this file only parses and dispatches.
+
+use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use host_sim::cli;
 
+/// Onboard navigation for tethered extreme-terrain rovers: simulator and operator's tool.
 #[derive(Parser)]
-#[command(name = "tetherbot", version, about = "Simulator and operator's tool for tethered extreme-terrain rovers")]
+#[command(name = "tetherbot", version, about)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -11,23 +17,44 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Build the onboard map from a scan sequence and print its ESDF error against ground truth, timing, memory.
-    MapCheck(host_sim::cli::map::MapCheckArgs),
+    /// Run a scenario against the flight software on the in-process link (the main job).
+    Run(cli::run::RunArgs),
+    /// Run a scenario and record every byte into a field log (same as `run --log LOG`).
+    Record(cli::run::RunArgs),
+    /// Replay a field log against a fresh flight software and compare every output byte.
+    Replay(cli::replay::ReplayArgs),
+    /// Export a field log to MCAP.
+    Export(cli::export::ExportArgs),
+    /// Show a field log's header, frames and damage.
+    Inspect(cli::inspect::InspectArgs),
+    /// Build the onboard map from a scan sequence; print its ESDF error against ground truth, timing, memory.
+    MapCheck(cli::map::MapCheckArgs),
     /// Render the onboard map built from a scan sequence as a PNG (top view or vertical slice).
-    RenderMap(host_sim::cli::map::RenderMapArgs),
+    RenderMap(cli::map::RenderMapArgs),
     /// Time a full distance transform: the onboard ESDF vs libdynamicedt3d on the same grid.
-    EdtBench(host_sim::cli::map::EdtBenchArgs),
+    EdtBench(cli::map::EdtBenchArgs),
 }
 
-fn main() {
-    let cli = Cli::parse();
-    let result = match cli.command {
-        Command::MapCheck(a) => host_sim::cli::map::map_check(&a),
-        Command::RenderMap(a) => host_sim::cli::map::render_map(&a),
-        Command::EdtBench(a) => host_sim::cli::map::edt_bench(&a),
-    };
-    if let Err(e) = result {
-        eprintln!("tetherbot: {e}");
-        std::process::exit(1);
+fn main() -> ExitCode {
+    env_logger_lite();
+    match Cli::parse().command {
+        Command::Run(a) => cli::run::main(&a),
+        Command::Record(a) => {
+            if a.log.is_none() {
+                return cli::fail("record needs --log LOG (or -o LOG)");
+            }
+            cli::run::main(&a)
+        }
+        Command::Replay(a) => cli::replay::main(&a),
+        Command::Export(a) => cli::export::main(&a),
+        Command::Inspect(a) => cli::inspect::main(&a),
+        Command::MapCheck(a) => cli::map::exit(cli::map::map_check(&a)),
+        Command::RenderMap(a) => cli::map::exit(cli::map::render_map(&a)),
+        Command::EdtBench(a) => cli::map::exit(cli::map::edt_bench(&a)),
     }
+}
+
+/// Prints `log` records from the flight software to stderr when `TETHERBOT_LOG` is set (error/warn/info/debug).
+fn env_logger_lite() {
+    host_sim::cli::install_stderr_logger();
 }

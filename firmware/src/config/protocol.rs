@@ -15,6 +15,7 @@
 //! | [`MAX_WAYPOINTS_PER_PLAN_FRAME`] | 12 | waypoints per `Plan` frame (12 x 129 bytes at most fits a frame); longer plans go in parts |
 //! | [`MAX_LOG_TEXT`] | 120 | bytes of text in one forwarded `Log` record; longer text is cut |
 //! | [`QUATERNION_NORM_TOLERANCE`] | 1e-3 | a pose's quaternion must have norm within this of 1 |
+//! | [`MIN_TELEMETRY_PERIOD_MS`] | 100 | telemetry rate limit: a `Configure` asking for periodic telemetry faster than 10 Hz is rejected |
 
 /// The protocol version this build speaks (first byte of every frame).
 pub const PROTOCOL_VERSION: u8 = 1;
@@ -44,6 +45,9 @@ pub const MAX_WAYPOINTS_PER_PLAN_FRAME: usize = 12;
 pub const MAX_LOG_TEXT: usize = 120;
 /// Allowed deviation of a pose quaternion's norm from 1.
 pub const QUATERNION_NORM_TOLERANCE: f32 = 1e-3;
+
+/// Shortest period of unsolicited telemetry a `Configure` may ask for (0 = only on request is always allowed).
+pub const MIN_TELEMETRY_PERIOD_MS: u32 = 100;
 
 const _: () = assert!(MAX_FRAME_LEN > MIN_FRAME_LEN);
 // A full sensor chunk (pose 28 bytes, ids <= 13 bytes, points 12 each, length prefix <= 2) must fit one body.

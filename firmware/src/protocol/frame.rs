@@ -182,14 +182,79 @@ impl From<DecodeError> for NackReason {
     }
 }
 
-fn body<'a, M: serde::Deserialize<'a>>(bytes: &'a [u8]) -> Result<M, DecodeError> {
+fn body<'a, M: serde::Deserialize<'a>>(
+    kind: MessageKind,
+    bytes: &'a [u8],
+) -> Result<M, DecodeError> {
     match postcard::take_from_bytes::<M>(bytes) {
         Ok((m, [])) => Ok(m),
         Ok((_, _rest)) => Err(DecodeError::BodyTooLong),
         Err(postcard::Error::DeserializeUnexpectedEnd) => Err(DecodeError::BodyTooShort),
-        Err(postcard::Error::SerdeDeCustom) => Err(DecodeError::LengthOverLimit),
+        // serde reports both "sequence longer than its capacity" and "enum index out of range" as a custom error;
+        // the layout probe tells them apart.
+        Err(postcard::Error::SerdeDeCustom) if sequence_over_capacity(kind, bytes) => {
+            Err(DecodeError::LengthOverLimit)
+        }
         Err(_) => Err(DecodeError::MalformedBody),
     }
+}
+
+fn varint(b: &[u8], at: &mut usize) -> Option<usize> {
+    let mut v: u32 = 0;
+    for shift in [0u32, 7, 14, 21, 28] {
+        let byte = *b.get(*at)?;
+        *at += 1;
+        v |= u32::from(byte & 0x7F).checked_shl(shift)?;
+        if byte & 0x80 == 0 {
+            return Some(v as usize);
+        }
+    }
+    None
+}
+
+/// True when a sequence length prefix in `body` exceeds its capacity (walks the documented layout; only the
+/// kinds with variable-length fields can say yes).
+fn sequence_over_capacity(kind: MessageKind, b: &[u8]) -> bool {
+    use crate::config::protocol::{
+        MAX_ANCHORS_PER_WAYPOINT, MAX_LOG_TEXT, MAX_POINTS_PER_CHUNK, MAX_WAYPOINTS_PER_PLAN_FRAME,
+    };
+    const POSE_LEN: usize = 28;
+    let mut at = 0;
+    let probe = |at: &mut usize| -> Option<bool> {
+        match kind {
+            MessageKind::SensorChunk => {
+                varint(b, at)?;
+                varint(b, at)?;
+                varint(b, at)?;
+                *at += POSE_LEN;
+                Some(varint(b, at)? > MAX_POINTS_PER_CHUNK)
+            }
+            MessageKind::Log => {
+                varint(b, at)?;
+                Some(varint(b, at)? > MAX_LOG_TEXT)
+            }
+            MessageKind::Plan => {
+                varint(b, at)?;
+                varint(b, at)?;
+                varint(b, at)?;
+                let n = varint(b, at)?;
+                if n > MAX_WAYPOINTS_PER_PLAN_FRAME {
+                    return Some(true);
+                }
+                for _ in 0..n {
+                    *at += POSE_LEN;
+                    let anchors = varint(b, at)?;
+                    if anchors > MAX_ANCHORS_PER_WAYPOINT {
+                        return Some(true);
+                    }
+                    *at += 12 * anchors + 4;
+                }
+                Some(false)
+            }
+            _ => Some(false),
+        }
+    };
+    probe(&mut at).unwrap_or(false)
 }
 
 /// Decodes and validates the message in a checked frame.
@@ -201,20 +266,20 @@ pub fn decode<T: AsRef<[u8]>>(frame: &Frame<T>) -> Result<(Header, Message), Dec
     let kind = MessageKind::from_u8(h.kind).ok_or(DecodeError::UnknownKind)?;
     let b = frame.body();
     let m = match kind {
-        MessageKind::TimeTick => Message::TimeTick(body(b)?),
-        MessageKind::SensorChunk => Message::SensorChunk(body(b)?),
-        MessageKind::TetherReading => Message::TetherReading(body(b)?),
-        MessageKind::GoalRequest => Message::GoalRequest(body(b)?),
-        MessageKind::Configure => Message::Configure(body(b)?),
-        MessageKind::Shutdown => Message::Shutdown(body(b)?),
-        MessageKind::TelemetryRequest => Message::TelemetryRequest(body(b)?),
-        MessageKind::Ack => Message::Ack(body(b)?),
-        MessageKind::Nack => Message::Nack(body(b)?),
-        MessageKind::PlanStatus => Message::PlanStatus(body(b)?),
-        MessageKind::Plan => Message::Plan(body(b)?),
-        MessageKind::DriveCommand => Message::DriveCommand(body(b)?),
-        MessageKind::Telemetry => Message::Telemetry(body(b)?),
-        MessageKind::Log => Message::Log(body(b)?),
+        MessageKind::TimeTick => Message::TimeTick(body(kind, b)?),
+        MessageKind::SensorChunk => Message::SensorChunk(body(kind, b)?),
+        MessageKind::TetherReading => Message::TetherReading(body(kind, b)?),
+        MessageKind::GoalRequest => Message::GoalRequest(body(kind, b)?),
+        MessageKind::Configure => Message::Configure(body(kind, b)?),
+        MessageKind::Shutdown => Message::Shutdown(body(kind, b)?),
+        MessageKind::TelemetryRequest => Message::TelemetryRequest(body(kind, b)?),
+        MessageKind::Ack => Message::Ack(body(kind, b)?),
+        MessageKind::Nack => Message::Nack(body(kind, b)?),
+        MessageKind::PlanStatus => Message::PlanStatus(body(kind, b)?),
+        MessageKind::Plan => Message::Plan(body(kind, b)?),
+        MessageKind::DriveCommand => Message::DriveCommand(body(kind, b)?),
+        MessageKind::Telemetry => Message::Telemetry(body(kind, b)?),
+        MessageKind::Log => Message::Log(body(kind, b)?),
     };
     m.validate().map_err(DecodeError::Invalid)?;
     Ok((h, m))

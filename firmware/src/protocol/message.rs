@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::protocol::{
     MAX_ANCHORS_PER_WAYPOINT, MAX_LOG_TEXT, MAX_POINTS_PER_CHUNK, MAX_WAYPOINTS_PER_PLAN_FRAME,
-    QUATERNION_NORM_TOLERANCE,
+    MIN_TELEMETRY_PERIOD_MS, QUATERNION_NORM_TOLERANCE,
 };
 
 /// Who sends a message kind.
@@ -285,7 +285,7 @@ pub enum LogLevel {
 /// Telemetry and log-forwarding parameters.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct TelemetryParams {
-    /// Period of unsolicited telemetry, milliseconds (0 = only on request).
+    /// Period of unsolicited telemetry, milliseconds: 0 (only on request) or at least `MIN_TELEMETRY_PERIOD_MS`.
     pub period_ms: u32,
     /// Records at this level or more severe are forwarded as `Log` frames (`Off` = none).
     pub forward_log_level: LogLevel,
@@ -591,6 +591,10 @@ pub struct Telemetry {
     pub log_dropped: u32,
     /// Outgoing frames dropped because the transmit queue was full.
     pub tx_dropped: u32,
+    /// Errors reported by the link or the watchdog.
+    pub device_errors: u32,
+    /// Mode changes refused because the transition table does not allow them (a bug if ever non-zero).
+    pub illegal_transitions: u32,
     /// High-water marks.
     pub high_water: HighWater,
 }
@@ -747,6 +751,10 @@ impl Validate for Configure {
         }
         finite(p.goal_bias)?;
         if !(0.0..=1.0).contains(&p.goal_bias) {
+            return Err(Invalid::OutOfRange);
+        }
+        let period = self.telemetry.period_ms;
+        if period != 0 && period < MIN_TELEMETRY_PERIOD_MS {
             return Err(Invalid::OutOfRange);
         }
         Ok(())

@@ -187,3 +187,69 @@ fn header_errors_and_nonfinite_values() {
         Err(NackReason::OutOfRange)
     );
 }
+
+#[test]
+fn bad_enum_index_is_malformed_not_a_length_problem() {
+    // GoalRequest: goal_id varint | position 12 | tolerance 4 | planner enum index | ...
+    let g = Message::GoalRequest(GoalRequest {
+        goal_id: 1,
+        position: Point3::new(1.0, 2.0, 3.0),
+        tolerance_m: 0.5,
+        planner: PlannerChoice::Team,
+        max_iterations: 3,
+        time_budget_ms: 0,
+    });
+    let mut b = [0u8; 64];
+    let n = g.encode_body(&mut b).unwrap();
+    assert_eq!(b[17], 2, "Team is variant 2");
+    b[17] = 3;
+    assert_eq!(
+        decode_frame(&frame_with_body(MessageKind::GoalRequest, &b[..n])).map(|_| ()),
+        Err(NackReason::MalformedBody)
+    );
+    // Log text longer than its capacity
+    let mut log = std::vec![3u8, 121];
+    log.extend(core::iter::repeat_n(b'a', 121));
+    assert_eq!(
+        decode_frame(&frame_with_body(MessageKind::Log, &log)).map(|_| ()),
+        Err(NackReason::LengthOverLimit)
+    );
+}
+
+#[test]
+fn periodic_telemetry_faster_than_the_limit_is_out_of_range() {
+    let mut c = Configure {
+        rover: RoverParams {
+            mass_kg: 1.0,
+            wheel_radius_m: 0.1,
+            axle_length_m: 0.5,
+            boom_length_m: 0.4,
+            friction_coefficient: 0.5,
+        },
+        tether: TetherParams {
+            root_anchor: Point3::new(0.0, 0.0, 0.0),
+            max_payout_m: 10.0,
+            max_tension_n: 100.0,
+        },
+        planner: PlannerParams {
+            rng_seed: 1,
+            max_iterations: 1,
+            batch_size: 1,
+            goal_bias: 0.0,
+        },
+        telemetry: TelemetryParams {
+            period_ms: 0,
+            forward_log_level: LogLevel::Off,
+        },
+    };
+    for (period, ok) in [
+        (0, true),
+        (1, false),
+        (99, false),
+        (100, true),
+        (1000, true),
+    ] {
+        c.telemetry.period_ms = period;
+        assert_eq!(c.validate().is_ok(), ok, "period {period} ms");
+    }
+}

@@ -7,6 +7,14 @@ use firmware::geom::Real;
 use firmware::map::{Map, VoxelState};
 use std::path::PathBuf;
 
+/// Exit code of a map subcommand: 0, or [`super::EXIT_ERROR`] with the message on stderr.
+pub fn exit(r: Result<(), String>) -> std::process::ExitCode {
+    match r {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => super::fail(e),
+    }
+}
+
 /// Arguments of `map-check`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct MapCheckArgs {

@@ -1,1 +1,0 @@
-//! `exec`: not yet implemented (see the issue tracker).

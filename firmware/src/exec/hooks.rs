@@ -1,0 +1,97 @@
+//! Hook points where the planning modules plug into the executive.
+//!
+//! The executive owns the protocol, the modes and the budgets; everything that knows about terrain, tether and
+//! planning sits behind [`Autonomy`]. Every method has a default that does nothing (or reports that no planner
+//! is available), so [`NoAutonomy`] is the honest configuration until `map` and the planners are wired in.
+//! Wiring the map: implement [`Autonomy::scan`] to integrate the scan (Paton et al. IV, TSDF -> ESDF). Wiring a
+//! planner: [`Autonomy::goal`] validates and sets up the problem, [`Autonomy::plan_step`] runs a bounded number
+//! of iterations (OMPL's `solve(termination)` split into steps) and fills the plan buffer when it finishes,
+//! [`Autonomy::next_motion`] hands out the motion primitives to drive.
+
+use hal::Instant;
+
+use crate::config::exec::PLAN_WAYPOINTS_CAPACITY;
+use crate::protocol::{
+    Configure, GoalRequest, Motion, PlanState, Point3, Pose, TetherReading, Waypoint,
+};
+
+/// A complete, reassembled range scan, lent to [`Autonomy::scan`] for the duration of the call.
+#[derive(Debug, Clone, Copy)]
+pub struct Scan<'a> {
+    /// Scan id from the host.
+    pub scan_id: u32,
+    /// Sensor pose (sensor frame to world frame).
+    pub sensor_pose: Pose,
+    /// Returns in the sensor frame, metres.
+    pub points: &'a [Point3],
+}
+
+/// The hooks refused a message; the executive answers `Nack(Refused)` and changes nothing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Refused;
+
+/// The plan being built; a planner fills it before reporting a solution.
+pub type PlanBuffer = heapless::Vec<Waypoint, PLAN_WAYPOINTS_CAPACITY>;
+
+/// Result of one bounded planning step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PlanProgress {
+    /// Still searching; `iterations` spent in total so far.
+    Searching {
+        /// Iterations so far.
+        iterations: u32,
+        /// Best cost so far, if a path exists.
+        best_cost: Option<f32>,
+    },
+    /// Finished. With `ExactSolution` / `ApproximateSolution` the plan buffer holds the path.
+    Finished {
+        /// Final state (never `Searching` / `Accepted`).
+        state: PlanState,
+        /// Iterations spent.
+        iterations: u32,
+        /// Cost of the path, if any.
+        best_cost: Option<f32>,
+    },
+}
+
+/// Planning modules as the executive sees them. All methods get the time passed in and must bound their work.
+pub trait Autonomy {
+    /// A validated `Configure` (Idle / Mapping modes). `Err` -> `Nack(Refused)`, configuration unchanged.
+    fn configure(&mut self, _cfg: &Configure) -> Result<(), Refused> {
+        Ok(())
+    }
+    /// A validated tether-encoder reading.
+    fn tether_reading(&mut self, _reading: &TetherReading, _now: Instant) {}
+    /// A complete scan (integrate it into the map within the map's own budget).
+    fn scan(&mut self, _scan: &Scan<'_>, _now: Instant) {}
+    /// A goal request (Idle / Mapping, configured). Return `Accepted` to start planning (the executive then calls
+    /// [`Self::plan_step`] every step), or a final state (`InvalidInput`, `PlannerUnavailable`) to refuse it.
+    fn goal(&mut self, _goal: &GoalRequest, _now: Instant) -> PlanState {
+        PlanState::PlannerUnavailable
+    }
+    /// Runs at most `iterations` planner iterations. Fill `plan` before returning a solution state.
+    fn plan_step(
+        &mut self,
+        _now: Instant,
+        _iterations: u32,
+        _plan: &mut PlanBuffer,
+    ) -> PlanProgress {
+        PlanProgress::Finished {
+            state: PlanState::PlannerUnavailable,
+            iterations: 0,
+            best_cost: None,
+        }
+    }
+    /// The next motion primitive while driving; `None` ends driving (back to Mapping).
+    fn next_motion(&mut self, _now: Instant) -> Option<Motion> {
+        None
+    }
+    /// Shutdown: stop planning and driving.
+    fn abort(&mut self) {}
+}
+
+/// No map, no planner: scans are reassembled and dropped, goals get `PlannerUnavailable`.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoAutonomy;
+
+impl Autonomy for NoAutonomy {}

@@ -1,0 +1,350 @@
+use super::*;
+use crate::protocol::*;
+use std::boxed::Box;
+use std::collections::VecDeque;
+use std::vec::Vec as StdVec;
+
+#[derive(Default)]
+struct QueueLink {
+    to_flight: VecDeque<u8>,
+    to_host: StdVec<u8>,
+}
+
+impl ByteLink for QueueLink {
+    type Error = core::convert::Infallible;
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Self::Error> {
+        let n = buf.len().min(self.to_flight.len());
+        for b in buf.iter_mut().take(n) {
+            *b = self.to_flight.pop_front().unwrap();
+        }
+        Ok(n)
+    }
+    fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
+        self.to_host.extend_from_slice(buf);
+        Ok(buf.len())
+    }
+    fn read_ready(&mut self) -> Result<bool, Self::Error> {
+        Ok(!self.to_flight.is_empty())
+    }
+    fn write_ready(&mut self) -> Result<bool, Self::Error> {
+        Ok(true)
+    }
+}
+
+struct Clock(u64);
+impl MonotonicClock for Clock {
+    fn now(&mut self) -> Instant {
+        Instant::from_micros(self.0)
+    }
+}
+struct Dog;
+impl Watchdog for Dog {
+    type Error = core::convert::Infallible;
+    fn kick(&mut self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+}
+
+type Exec<A> = Executive<QueueLink, Clock, Dog, A, Box<ExecStorage>>;
+
+fn exec<A: Autonomy>(a: A) -> Exec<A> {
+    Executive::new(
+        QueueLink::default(),
+        Clock(0),
+        Dog,
+        a,
+        Box::new(ExecStorage::new()),
+    )
+}
+
+fn configure() -> Configure {
+    Configure {
+        rover: RoverParams {
+            mass_kg: 20.0,
+            wheel_radius_m: 0.25,
+            axle_length_m: 0.6,
+            boom_length_m: 0.5,
+            friction_coefficient: 0.8,
+        },
+        tether: TetherParams {
+            root_anchor: Point3::new(0.0, 0.0, 2.0),
+            max_payout_m: 50.0,
+            max_tension_n: 500.0,
+        },
+        planner: PlannerParams {
+            rng_seed: 7,
+            max_iterations: 750,
+            batch_size: 100,
+            goal_bias: 0.05,
+        },
+        telemetry: TelemetryParams {
+            period_ms: 0,
+            forward_log_level: LogLevel::Info,
+        },
+    }
+}
+
+fn goal() -> GoalRequest {
+    GoalRequest {
+        goal_id: 9,
+        position: Point3::new(5.0, 0.0, 0.0),
+        tolerance_m: 0.5,
+        planner: PlannerChoice::Abit,
+        max_iterations: 100,
+        time_budget_ms: 0,
+    }
+}
+
+/// Sends `msgs` (seq 100, 101, ...), steps until quiet, returns the decoded replies.
+fn exchange<A: Autonomy>(e: &mut Exec<A>, msgs: &[Message]) -> StdVec<Message> {
+    for (i, m) in msgs.iter().enumerate() {
+        let mut buf = [0u8; 2100];
+        let n = encode(100 + i as u32, m, &mut buf).unwrap();
+        e.link_mut().to_flight.extend(&buf[..n]);
+    }
+    for _ in 0..100 {
+        e.clock_mut().0 += 1000;
+        if !e.step().busy {
+            break;
+        }
+    }
+    let bytes = core::mem::take(&mut e.link_mut().to_host);
+    let mut d = Deframer::new();
+    let mut out = StdVec::new();
+    let mut rest = &bytes[..];
+    while !rest.is_empty() {
+        let (n, ev) = d.push(rest);
+        if let Some(ev) = ev {
+            out.push(decode_frame(ev.unwrap()).unwrap().1);
+        }
+        rest = &rest[n..];
+    }
+    out
+}
+
+#[test]
+fn boot_telemetry_then_goal_without_planner_is_reported_honestly() {
+    let mut e = exec(NoAutonomy);
+    let boot = exchange(&mut e, &[]);
+    assert!(
+        matches!(boot.as_slice(), [Message::Telemetry(t)] if t.mode == Mode::Idle && !t.configured)
+    );
+    let early = exchange(&mut e, &[Message::GoalRequest(goal())]);
+    assert_eq!(
+        early,
+        [Message::Nack(Nack {
+            seq: 100,
+            reason: NackReason::NotConfigured
+        })]
+    );
+    let r = exchange(
+        &mut e,
+        &[
+            Message::Configure(configure()),
+            Message::GoalRequest(goal()),
+        ],
+    );
+    assert_eq!(r[0], Message::Ack(Ack { seq: 100 }));
+    assert_eq!(r[1], Message::Ack(Ack { seq: 101 }));
+    assert_eq!(
+        r[2],
+        Message::PlanStatus(PlanStatus {
+            goal_id: 9,
+            state: PlanState::PlannerUnavailable,
+            iterations: 0,
+            best_cost: None
+        })
+    );
+    assert_eq!(e.mode(), Mode::Idle);
+    // forwarded log records follow (level Info configured)
+    assert!(r[3..].iter().all(|m| matches!(m, Message::Log(_))));
+}
+
+/// A scripted planner: searches for two steps, then returns a 14-waypoint plan and two motions.
+#[derive(Default)]
+struct Scripted {
+    steps: u32,
+    motions: u32,
+    scans: StdVec<(u32, usize)>,
+}
+
+impl Autonomy for Scripted {
+    fn scan(&mut self, scan: &Scan<'_>, _now: Instant) {
+        self.scans.push((scan.scan_id, scan.points.len()));
+    }
+    fn goal(&mut self, _g: &GoalRequest, _now: Instant) -> PlanState {
+        PlanState::Accepted
+    }
+    fn plan_step(&mut self, _now: Instant, iterations: u32, plan: &mut PlanBuffer) -> PlanProgress {
+        self.steps += 1;
+        if self.steps < 3 {
+            return PlanProgress::Searching {
+                iterations: self.steps * iterations,
+                best_cost: None,
+            };
+        }
+        for i in 0..14 {
+            let mut pose = Pose::IDENTITY;
+            pose.position.x = i as f32;
+            plan.push(Waypoint {
+                pose,
+                anchors: heapless::Vec::new(),
+                stability_margin: 1.0,
+            })
+            .unwrap();
+        }
+        PlanProgress::Finished {
+            state: PlanState::ExactSolution,
+            iterations: 24,
+            best_cost: Some(14.0),
+        }
+    }
+    fn next_motion(&mut self, _now: Instant) -> Option<Motion> {
+        self.motions += 1;
+        (self.motions <= 2).then_some(Motion::Straight { distance_m: 1.0 })
+    }
+}
+
+#[test]
+fn planning_sends_status_plan_parts_and_drive_commands_then_returns_to_mapping() {
+    let mut e = exec(Scripted::default());
+    let mut cfg = configure();
+    cfg.telemetry.forward_log_level = LogLevel::Off;
+    exchange(&mut e, &[Message::Configure(cfg)]);
+    let r = exchange(&mut e, &[Message::GoalRequest(goal())]);
+    let states: StdVec<PlanState> = r
+        .iter()
+        .filter_map(|m| {
+            if let Message::PlanStatus(s) = m {
+                Some(s.state)
+            } else {
+                None
+            }
+        })
+        .collect();
+    assert_eq!(
+        states,
+        [
+            PlanState::Accepted,
+            PlanState::Searching,
+            PlanState::ExactSolution
+        ]
+    );
+    let parts: StdVec<(u16, u16, usize)> = r
+        .iter()
+        .filter_map(|m| {
+            if let Message::Plan(p) = m {
+                Some((p.part, p.parts, p.waypoints.len()))
+            } else {
+                None
+            }
+        })
+        .collect();
+    assert_eq!(parts, [(0, 2, 12), (1, 2, 2)]);
+    let drives = r
+        .iter()
+        .filter(|m| matches!(m, Message::DriveCommand(_)))
+        .count();
+    assert_eq!(drives, 2);
+    assert_eq!(e.mode(), Mode::Mapping);
+}
+
+#[test]
+fn shutdown_stops_and_safe_mode_refuses_work() {
+    let mut e = exec(NoAutonomy);
+    exchange(&mut e, &[Message::Configure(configure())]);
+    let r = exchange(&mut e, &[Message::Shutdown(Shutdown)]);
+    assert_eq!(r[0], Message::Ack(Ack { seq: 100 }));
+    assert!(matches!(
+        r[1],
+        Message::DriveCommand(DriveCommand {
+            motion: Motion::Stop,
+            ..
+        })
+    ));
+    assert_eq!(e.mode(), Mode::Safe);
+    let r = exchange(
+        &mut e,
+        &[
+            Message::GoalRequest(goal()),
+            Message::TelemetryRequest(TelemetryRequest),
+        ],
+    );
+    assert_eq!(
+        r[0],
+        Message::Nack(Nack {
+            seq: 100,
+            reason: NackReason::NotAllowedInMode
+        })
+    );
+    assert_eq!(r[1], Message::Ack(Ack { seq: 101 }));
+    assert!(matches!(r[2], Message::Telemetry(t) if t.mode == Mode::Safe));
+}
+
+#[test]
+fn a_scan_in_three_chunks_reaches_the_hook_once() {
+    let mut e = exec(Scripted::default());
+    exchange(&mut e, &[Message::Configure(configure())]);
+    let chunk = |i: u16| {
+        let mut points = heapless::Vec::new();
+        for k in 0..100 {
+            points.push(Point3::new(k as f32, i as f32, 1.0)).unwrap();
+        }
+        Message::SensorChunk(SensorChunk {
+            scan_id: 4,
+            chunk_index: i,
+            chunk_count: 3,
+            sensor_pose: Pose::IDENTITY,
+            points,
+        })
+    };
+    let r = exchange(&mut e, &[chunk(0), chunk(1), chunk(2)]);
+    assert_eq!(r.iter().filter(|m| matches!(m, Message::Ack(_))).count(), 3);
+    assert_eq!(e.autonomy().scans, [(4, 300)]);
+    assert_eq!(e.mode(), Mode::Mapping);
+}
+
+#[test]
+fn log_frames_are_rate_limited_and_the_queue_is_bounded() {
+    let mut e = exec(NoAutonomy);
+    let mut cfg = configure();
+    cfg.telemetry.forward_log_level = LogLevel::Debug;
+    exchange(&mut e, &[Message::Configure(cfg)]);
+    // drain the "configured" record
+    for _ in 0..1000 {
+        e.clock_mut().0 += 1000;
+        e.step();
+    }
+    e.link_mut().to_host.clear();
+    let mut queued = 0;
+    for i in 0..20 {
+        if e.forward_log(LogLevel::Info, format_args!("record {i}")) {
+            queued += 1;
+        }
+    }
+    assert_eq!(queued, LOG_QUEUE_LEN);
+    assert_eq!(e.telemetry().log_dropped, 20 - LOG_QUEUE_LEN as u32);
+    // within 100 ms only the burst goes out
+    let mut logs = 0;
+    for _ in 0..100 {
+        e.clock_mut().0 += 1000;
+        e.step();
+    }
+    let bytes = core::mem::take(&mut e.link_mut().to_host);
+    let mut d = Deframer::new();
+    let mut rest = &bytes[..];
+    while !rest.is_empty() {
+        let (n, ev) = d.push(rest);
+        if let Some(Ok(f)) = ev {
+            if let Ok((_, Message::Log(_))) = decode_frame(f) {
+                logs += 1;
+            }
+        }
+        rest = &rest[n..];
+    }
+    // burst of LOG_BURST plus at most one refill within 100 ms at 10/s
+    assert!(
+        logs >= LOG_BURST as usize && logs <= LOG_BURST as usize + 1,
+        "{logs}"
+    );
+}

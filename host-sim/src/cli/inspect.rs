@@ -1,0 +1,94 @@
+//! `tetherbot inspect LOG`: header, record counts, decoded frames, damage.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use firmware::protocol::{self, Deframer};
+
+use crate::fieldlog::{self, Direction};
+
+/// Arguments of `inspect`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct InspectArgs {
+    /// The field log.
+    pub log: PathBuf,
+    /// List every decoded frame.
+    #[arg(long)]
+    pub frames: bool,
+}
+
+/// `inspect` entry point: exit 1 if the log is damaged.
+pub fn main(args: &InspectArgs) -> ExitCode {
+    let log = match fieldlog::read_file(&args.log) {
+        Ok(l) => l,
+        Err(e) => return super::fail(e),
+    };
+    let h = &log.header;
+    println!("field log {}", args.log.display());
+    println!(
+        "  format {}, protocol {}, seed {}, created at {} ms (Unix)",
+        fieldlog::FORMAT_VERSION,
+        h.protocol_version,
+        h.seed,
+        h.created_at_unix_ms
+    );
+    println!("  config {}", h.config);
+    let mut deframers = [Deframer::new(), Deframer::new()];
+    let mut kinds: BTreeMap<(&str, String), u32> = BTreeMap::new();
+    let mut bytes = [0usize; 2];
+    for r in &log.records {
+        let (side, name) = match r.direction {
+            Direction::HostToFlight => (0, "host->flight"),
+            Direction::FlightToHost => (1, "flight->host"),
+        };
+        bytes[side] += r.bytes.len();
+        let mut rest = &r.bytes[..];
+        while !rest.is_empty() {
+            let (n, ev) = deframers[side].push(rest);
+            rest = &rest[n..];
+            let Some(ev) = ev else { continue };
+            let decoded = ev
+                .map_err(protocol::NackReason::from)
+                .and_then(protocol::decode_frame);
+            let key = match &decoded {
+                Ok((_, m)) => format!("{:?}", m.kind()),
+                Err(reason) => format!("undecodable ({reason:?})"),
+            };
+            if args.frames {
+                match &decoded {
+                    Ok((hd, m)) => println!("  {:>12} us {name} seq {:>5} {m:?}", r.t_us, hd.seq),
+                    Err(reason) => {
+                        println!("  {:>12} us {name} undecodable frame: {reason:?}", r.t_us)
+                    }
+                }
+            }
+            *kinds.entry((name, key)).or_default() += 1;
+        }
+    }
+    println!(
+        "  records {}, host->flight {} B, flight->host {} B",
+        log.records.len(),
+        bytes[0],
+        bytes[1]
+    );
+    for ((dir, kind), n) in &kinds {
+        println!("  {dir} {kind}: {n}");
+    }
+    match log.damage {
+        None => {
+            println!("  no damage");
+            ExitCode::SUCCESS
+        }
+        Some(d) => {
+            println!(
+                "  DAMAGED at byte {} ({:?}); {} records before it are valid; {} bytes after it unread",
+                d.offset,
+                d.reason,
+                log.records.len(),
+                d.unread_bytes
+            );
+            ExitCode::from(super::EXIT_FAILED)
+        }
+    }
+}

@@ -1,0 +1,52 @@
+//! `tetherbot replay LOG`: feed the recorded input to a fresh executive, compare every output byte.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use crate::fieldlog;
+use crate::link::inproc::InProcLink;
+use crate::replay::{replay, ReplayOutcome, RunConfig};
+
+/// Arguments of `replay`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct ReplayArgs {
+    /// The field log.
+    pub log: PathBuf,
+}
+
+/// `replay` entry point: exit 0 when identical, 1 on a mismatch or a damaged log, 2 if it cannot run.
+pub fn main(args: &ReplayArgs) -> ExitCode {
+    let log = match fieldlog::read_file(&args.log) {
+        Ok(l) => l,
+        Err(e) => return super::fail(e),
+    };
+    let config: RunConfig = match serde_json::from_str(&log.header.config) {
+        Ok(c) => c,
+        Err(e) => return super::fail(format!("log configuration is not a run configuration: {e}")),
+    };
+    if config.link != "inproc" {
+        return super::fail(format!(
+            "replay of '{}' links is not supported; only inproc",
+            config.link
+        ));
+    }
+    let mut link = InProcLink::new(config.step_us);
+    let outcome = match replay(&log, &mut link) {
+        Ok(o) => o,
+        Err(e) => return super::fail(e),
+    };
+    println!("{}: {outcome}", args.log.display());
+    let mut ok = matches!(outcome, ReplayOutcome::Identical { .. });
+    if let Some(d) = log.damage {
+        println!(
+            "log damaged at byte {} ({:?}); {} bytes after it not replayed",
+            d.offset, d.reason, d.unread_bytes
+        );
+        ok = false;
+    }
+    if ok {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(super::EXIT_FAILED)
+    }
+}

@@ -1,0 +1,178 @@
+//! In-process link: the firmware executive runs inside the host, through host implementations of the `hal`
+//! traits (byte queues, a simulated clock, a counting watchdog).
+//!
+//! Time is simulated: the executive is stepped once every `step_us` microseconds of link time, only inside
+//! [`FlightLink::recv_until_quiet`] and [`FlightLink::advance_to`]. Bytes sent with [`FlightLink::send`] arrive at
+//! the current time. The same sequence of calls therefore always gives the same output bytes, which is what
+//! `replay` relies on.
+
+use std::collections::VecDeque;
+
+use firmware::exec::{Autonomy, ExecStorage, Executive, NoAutonomy, StepReport};
+use hal::{ByteLink, Instant, MonotonicClock, Watchdog};
+
+use super::{FlightLink, LinkError};
+
+/// Default executive period of the in-process link, microseconds (1 kHz).
+pub const DEFAULT_STEP_US: u64 = 1000;
+
+/// Host side of the in-process byte link: a queue each way. Reads and writes never block or fail.
+#[derive(Debug, Default)]
+pub struct QueueByteLink {
+    /// Bytes waiting for the flight software.
+    pub to_flight: VecDeque<u8>,
+    /// Bytes the flight software wrote.
+    pub to_host: Vec<u8>,
+}
+
+impl ByteLink for QueueByteLink {
+    type Error = core::convert::Infallible;
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Self::Error> {
+        let n = buf.len().min(self.to_flight.len());
+        for (dst, src) in buf.iter_mut().zip(self.to_flight.drain(..n)) {
+            *dst = src;
+        }
+        Ok(n)
+    }
+    fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
+        self.to_host.extend_from_slice(buf);
+        Ok(buf.len())
+    }
+    fn read_ready(&mut self) -> Result<bool, Self::Error> {
+        Ok(!self.to_flight.is_empty())
+    }
+    fn write_ready(&mut self) -> Result<bool, Self::Error> {
+        Ok(true)
+    }
+}
+
+/// A clock that reads whatever the simulation set.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct SimClock {
+    /// Current simulated time, microseconds.
+    pub now_us: u64,
+}
+
+impl MonotonicClock for SimClock {
+    fn now(&mut self) -> Instant {
+        Instant::from_micros(self.now_us)
+    }
+}
+
+/// A watchdog that counts kicks.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct SimWatchdog {
+    /// Kicks so far.
+    pub kicks: u64,
+}
+
+impl Watchdog for SimWatchdog {
+    type Error = core::convert::Infallible;
+    fn kick(&mut self) -> Result<(), Self::Error> {
+        self.kicks += 1;
+        Ok(())
+    }
+}
+
+/// The executive type the in-process link runs.
+pub type InProcExecutive<A> = Executive<QueueByteLink, SimClock, SimWatchdog, A, Box<ExecStorage>>;
+
+/// The firmware executive behind a [`FlightLink`].
+pub struct InProcLink<A: Autonomy = NoAutonomy> {
+    exec: InProcExecutive<A>,
+    step_us: u64,
+    last_step: StepReport,
+}
+
+impl InProcLink<NoAutonomy> {
+    /// A freshly booted executive without planning modules, stepped every `step_us` microseconds.
+    pub fn new(step_us: u64) -> Self {
+        Self::with_autonomy(NoAutonomy, step_us)
+    }
+}
+
+impl<A: Autonomy> InProcLink<A> {
+    /// A freshly booted executive with the given planning hooks.
+    pub fn with_autonomy(autonomy: A, step_us: u64) -> Self {
+        let exec = Executive::new(
+            QueueByteLink::default(),
+            SimClock::default(),
+            SimWatchdog::default(),
+            autonomy,
+            Box::new(ExecStorage::new()),
+        );
+        Self {
+            exec,
+            step_us: step_us.max(1),
+            last_step: StepReport::default(),
+        }
+    }
+
+    /// The executive (for tests and glue: telemetry snapshot, mode, hooks).
+    pub fn executive(&self) -> &InProcExecutive<A> {
+        &self.exec
+    }
+
+    /// The executive, mutably.
+    pub fn executive_mut(&mut self) -> &mut InProcExecutive<A> {
+        &mut self.exec
+    }
+
+    /// The executive period, microseconds.
+    pub fn step_us(&self) -> u64 {
+        self.step_us
+    }
+
+    /// What the last step did.
+    pub fn last_step(&self) -> StepReport {
+        self.last_step
+    }
+
+    /// Runs one executive step at the current time, then advances the clock by one period.
+    pub fn step_once(&mut self) -> Vec<u8> {
+        self.last_step = self.exec.step();
+        self.exec.clock_mut().now_us += self.step_us;
+        core::mem::take(&mut self.exec.link_mut().to_host)
+    }
+}
+
+impl<A: Autonomy> FlightLink for InProcLink<A> {
+    fn name(&self) -> &str {
+        "inproc"
+    }
+
+    fn now_us(&self) -> u64 {
+        self.last_now()
+    }
+
+    fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+        self.exec.link_mut().to_flight.extend(bytes.iter().copied());
+        Ok(())
+    }
+
+    fn recv_until_quiet(&mut self, max_wait_us: u64) -> Result<Vec<u8>, LinkError> {
+        let mut out = Vec::new();
+        let steps = max_wait_us.div_ceil(self.step_us).max(1);
+        for _ in 0..steps {
+            out.extend(self.step_once());
+            if !self.last_step.busy {
+                break;
+            }
+        }
+        Ok(out)
+    }
+
+    fn advance_to(&mut self, t_us: u64) -> Result<Vec<u8>, LinkError> {
+        let mut out = Vec::new();
+        while self.last_now() < t_us {
+            out.extend(self.step_once());
+        }
+        Ok(out)
+    }
+}
+
+impl<A: Autonomy> InProcLink<A> {
+    fn last_now(&self) -> u64 {
+        self.exec.clock().now_us
+    }
+}

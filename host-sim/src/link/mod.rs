@@ -1,0 +1,68 @@
+//! Host-side links to the flight software.
+//!
+//! [`FlightLink`] is what the simulator, the scenarios, the field-log recorder and the test kit talk to. Two
+//! implementations are planned: [`inproc::InProcLink`] (the firmware executive linked in as a library, stepped on
+//! a simulated clock) and a QEMU-backed link to the board binary (emulated UART over TCP). Anything written
+//! against `FlightLink` runs over both.
+
+pub mod inproc;
+pub mod recording;
+
+/// Why a link operation failed.
+#[derive(Debug)]
+pub enum LinkError {
+    /// The flight side went away (emulator exited, socket closed).
+    Disconnected(String),
+    /// An I/O error on a real link.
+    Io(std::io::Error),
+    /// A field-log write failed while recording.
+    Record(std::io::Error),
+}
+
+impl core::fmt::Display for LinkError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            LinkError::Disconnected(why) => write!(f, "flight link disconnected: {why}"),
+            LinkError::Io(e) => write!(f, "flight link I/O error: {e}"),
+            LinkError::Record(e) => write!(f, "field log write failed: {e}"),
+        }
+    }
+}
+
+impl core::error::Error for LinkError {}
+
+/// A byte link to a running flight software, with the link's own notion of time.
+///
+/// Time: every link has a clock in microseconds (`now_us`). In-process it is simulated and advances only inside
+/// `recv_until_quiet` / `advance_to`, so runs are deterministic; on a real link it is wall time since start.
+pub trait FlightLink {
+    /// A short name for reports ("inproc", "qemu").
+    fn name(&self) -> &str;
+    /// The link's current time, microseconds.
+    fn now_us(&self) -> u64;
+    /// Hands `bytes` to the flight software at the current time.
+    fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError>;
+    /// Lets the flight software run until it is quiet (no pending work, no more output) or `max_wait_us` of link
+    /// time have passed; returns the bytes it sent meanwhile.
+    fn recv_until_quiet(&mut self, max_wait_us: u64) -> Result<Vec<u8>, LinkError>;
+    /// Lets link time run up to `t_us` (no-op if already there); returns the bytes sent meanwhile.
+    fn advance_to(&mut self, t_us: u64) -> Result<Vec<u8>, LinkError>;
+}
+
+impl<T: FlightLink + ?Sized> FlightLink for &mut T {
+    fn name(&self) -> &str {
+        (**self).name()
+    }
+    fn now_us(&self) -> u64 {
+        (**self).now_us()
+    }
+    fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+        (**self).send(bytes)
+    }
+    fn recv_until_quiet(&mut self, max_wait_us: u64) -> Result<Vec<u8>, LinkError> {
+        (**self).recv_until_quiet(max_wait_us)
+    }
+    fn advance_to(&mut self, t_us: u64) -> Result<Vec<u8>, LinkError> {
+        (**self).advance_to(t_us)
+    }
+}

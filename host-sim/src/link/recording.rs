@@ -1,0 +1,68 @@
+//! A [`FlightLink`] wrapper that records every byte, both ways, into a field log.
+
+use std::io::Write;
+
+use super::{FlightLink, LinkError};
+use crate::fieldlog::{Direction, Writer};
+
+/// Records everything passing through `inner` into `log`, stamped with the link's time.
+pub struct RecordingLink<L: FlightLink, W: Write> {
+    inner: L,
+    log: Writer<W>,
+}
+
+impl<L: FlightLink, W: Write> RecordingLink<L, W> {
+    /// Wraps `inner`; `log` already holds its header.
+    pub fn new(inner: L, log: Writer<W>) -> Self {
+        Self { inner, log }
+    }
+
+    /// The wrapped link.
+    pub fn inner(&self) -> &L {
+        &self.inner
+    }
+
+    /// The wrapped link, mutably (bytes sent through it directly are not recorded).
+    pub fn inner_mut(&mut self) -> &mut L {
+        &mut self.inner
+    }
+
+    /// Flushes the log and gives both parts back.
+    pub fn finish(mut self) -> Result<(L, W), LinkError> {
+        self.log.flush().map_err(LinkError::Record)?;
+        Ok((self.inner, self.log.into_inner()))
+    }
+
+    fn record_rx(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+        let t = self.inner.now_us();
+        self.log
+            .append(Direction::FlightToHost, t, bytes)
+            .map_err(LinkError::Record)
+    }
+}
+
+impl<L: FlightLink, W: Write> FlightLink for RecordingLink<L, W> {
+    fn name(&self) -> &str {
+        self.inner.name()
+    }
+    fn now_us(&self) -> u64 {
+        self.inner.now_us()
+    }
+    fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+        let t = self.inner.now_us();
+        self.log
+            .append(Direction::HostToFlight, t, bytes)
+            .map_err(LinkError::Record)?;
+        self.inner.send(bytes)
+    }
+    fn recv_until_quiet(&mut self, max_wait_us: u64) -> Result<Vec<u8>, LinkError> {
+        let got = self.inner.recv_until_quiet(max_wait_us)?;
+        self.record_rx(&got)?;
+        Ok(got)
+    }
+    fn advance_to(&mut self, t_us: u64) -> Result<Vec<u8>, LinkError> {
+        let got = self.inner.advance_to(t_us)?;
+        self.record_rx(&got)?;
+        Ok(got)
+    }
+}

@@ -1,0 +1,115 @@
+//! Replay: feed a field log's host -> flight bytes to a fresh flight software at the recorded times and compare
+//! every flight -> host byte with the recording.
+//!
+//! The in-process link steps the executive on a fixed grid of link time (`step_us`, from the log's configuration),
+//! so a recording made through [`crate::link::inproc::InProcLink`] is reproduced exactly by calling
+//! `advance_to(t)` before each recorded send and at the end up to the last record's time. The comparison is over the
+//! concatenated flight -> host byte stream; a difference is reported as the first differing record (index in the
+//! log and byte offset inside it) and the offset in the stream.
+
+use crate::fieldlog::{Direction, FieldLog};
+use crate::link::{FlightLink, LinkError};
+
+/// Run configuration stored in a field log's header (JSON).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RunConfig {
+    /// Scenario name.
+    pub scenario: String,
+    /// Link kind that recorded it ("inproc").
+    pub link: String,
+    /// Executive period of the in-process link, microseconds.
+    pub step_us: u64,
+}
+
+/// The outcome of a replay.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ReplayOutcome {
+    /// Every flight -> host byte matched.
+    Identical {
+        /// Host -> flight records fed.
+        records_fed: usize,
+        /// Flight -> host bytes compared.
+        bytes_compared: usize,
+    },
+    /// The outputs differ.
+    Differs {
+        /// Index (in the log) of the first flight -> host record that differs (or the last one, if the replay
+        /// produced more bytes than were recorded).
+        record: usize,
+        /// Byte offset inside that record.
+        offset_in_record: usize,
+        /// Byte offset in the whole flight -> host stream.
+        stream_offset: usize,
+        /// Recorded byte there (`None` past the end of the recording).
+        expected: Option<u8>,
+        /// Replayed byte there (`None` past the end of the replay).
+        got: Option<u8>,
+    },
+}
+
+impl core::fmt::Display for ReplayOutcome {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ReplayOutcome::Identical { records_fed, bytes_compared } => write!(
+                f,
+                "identical: fed {records_fed} host->flight records, {bytes_compared} flight->host bytes match"
+            ),
+            ReplayOutcome::Differs { record, offset_in_record, stream_offset, expected, got } => write!(
+                f,
+                "DIFFERS at flight->host record #{record}, byte {offset_in_record} (stream offset {stream_offset}): \
+                 recorded {expected:02x?}, replayed {got:02x?}"
+            ),
+        }
+    }
+}
+
+/// Replays `log` through `link` (a fresh flight software) and compares the output.
+pub fn replay(log: &FieldLog, link: &mut impl FlightLink) -> Result<ReplayOutcome, LinkError> {
+    let mut got = Vec::new();
+    let mut expected = Vec::new();
+    // (stream offset where the record starts, record index)
+    let mut starts = Vec::new();
+    let mut fed = 0;
+    let mut end_t = 0;
+    for (i, r) in log.records.iter().enumerate() {
+        end_t = end_t.max(r.t_us);
+        match r.direction {
+            Direction::HostToFlight => {
+                got.extend(link.advance_to(r.t_us)?);
+                link.send(&r.bytes)?;
+                fed += 1;
+            }
+            Direction::FlightToHost => {
+                starts.push((expected.len(), i));
+                expected.extend_from_slice(&r.bytes);
+            }
+        }
+    }
+    got.extend(link.advance_to(end_t)?);
+    let first_diff = expected
+        .iter()
+        .zip(&got)
+        .position(|(a, b)| a != b)
+        .or_else(|| (expected.len() != got.len()).then_some(expected.len().min(got.len())));
+    Ok(match first_diff {
+        None => ReplayOutcome::Identical {
+            records_fed: fed,
+            bytes_compared: expected.len(),
+        },
+        Some(at) => {
+            let (start, record) = starts
+                .iter()
+                .rev()
+                .find(|(s, _)| *s <= at)
+                .copied()
+                .unwrap_or((0, 0));
+            ReplayOutcome::Differs {
+                record,
+                offset_in_record: at - start,
+                stream_offset: at,
+                expected: expected.get(at).copied(),
+                got: got.get(at).copied(),
+            }
+        }
+    })
+}
