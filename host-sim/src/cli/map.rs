@@ -50,6 +50,9 @@ pub struct RenderMapArgs {
     /// Vertical slice at this y (metres) instead of the top view.
     #[arg(long)]
     pub slice_y: Option<Real>,
+    /// Pixels per voxel.
+    #[arg(long, default_value_t = 4)]
+    pub px: usize,
 }
 
 /// Arguments of `edt-bench`.
@@ -161,8 +164,10 @@ fn colour(d: Real, dmax: Real) -> [u8; 3] {
     }
 }
 
-/// `render-map`: PNG top view (ESDF at 0.5 m above the highest observed surface in each column... simplified:
-/// the ESDF of the first known voxel from the top) or a vertical slice at `y`. Unknown is grey, surface black.
+/// `render-map`: a PNG of the map built from the world's standard scan sequence. Top view: the height of the
+/// highest occupied voxel in each column (dark low, light high), grey where no surface was observed. Slice at
+/// `y`: ESDF colour (blue inside the terrain, white at the surface, red to yellow up to the ESDF cap), black on the
+/// surface (|ESDF| < half a voxel), grey where unknown.
 pub fn render_map(a: &RenderMapArgs) -> Result<(), String> {
     let (world, kind) = world_by_name(&a.world)?;
     let cfg = CheckConfig::at_voxel_size(a.voxel);
@@ -221,6 +226,19 @@ pub fn render_map(a: &RenderMapArgs) -> Result<(), String> {
             (w, h, px)
         }
     };
+    let k = a.px.clamp(1, 16);
+    let mut big = Vec::with_capacity(pixels.len() * k * k);
+    for r in 0..h {
+        let row = &pixels[r * w * 3..(r + 1) * w * 3];
+        for _ in 0..k {
+            for c in 0..w {
+                for _ in 0..k {
+                    big.extend_from_slice(&row[c * 3..c * 3 + 3]);
+                }
+            }
+        }
+    }
+    let (w, h, pixels) = (w * k, h * k, big);
     let f = std::fs::File::create(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
     let mut enc = png::Encoder::new(std::io::BufWriter::new(f), w as u32, h as u32);
     enc.set_color(png::ColorType::Rgb);
