@@ -295,9 +295,9 @@ const NEIGHBOUR_DELTAS: [isize; 26] = {
     let mut out = [0isize; 26];
     let mut n = 0;
     while n < 26 {
-        let d = NEIGHBOURS[n];
         #[allow(clippy::indexing_slicing)] // const evaluation: an out-of-bounds index fails the build
         {
+            let d = NEIGHBOURS[n];
             out[n] = d[0] as isize + BLOCK_EDGE as isize * (d[1] as isize + BLOCK_EDGE as isize * d[2] as isize);
         }
         n += 1;
