@@ -246,17 +246,25 @@ impl Map<'_> {
                 }
                 let inside = t0 < 0;
                 let mut cand = Candidate::new(w0, o0, inside);
+                // Forward pass: the 13 neighbours before the voxel in raster order; backward: the 13 after. A sweep
+                // without changes has therefore compared every voxel with all 26 neighbours (the fixed point).
+                let (nbrs, deltas) = if pass == 0 {
+                    (NEIGHBOURS.get(..13), NEIGHBOUR_DELTAS.get(..13))
+                } else {
+                    (NEIGHBOURS.get(13..), NEIGHBOUR_DELTAS.get(13..))
+                };
+                let (Some(nbrs), Some(deltas)) = (nbrs, deltas) else { return changed };
                 let interior = l.iter().all(|&c| c >= 1 && c + 1 < BLOCK_EDGE);
                 if interior {
                     // Fast path: all 26 neighbours are in this block.
-                    for (d, delta) in NEIGHBOURS.iter().zip(NEIGHBOUR_DELTAS.iter()) {
+                    for (d, delta) in nbrs.iter().zip(deltas.iter()) {
                         let ni = (i as isize + delta) as usize;
                         if let (Some(&w), Some(&so)) = (b.site_w.get(ni), b.site.get(ni)) {
                             cand.consider(w, so, d, dmax);
                         }
                     }
                 } else {
-                    for d in NEIGHBOURS.iter() {
+                    for d in nbrs.iter() {
                         let nl = [l[0] as i32 + d[0], l[1] as i32 + d[1], l[2] as i32 + d[2]];
                         let ob = [
                             if nl[0] < 0 { 0 } else if nl[0] >= e { 2 } else { 1 },
