@@ -47,6 +47,10 @@ pub struct MapConfig {
     /// distance is their TSDF value (Voxblox's "fixed band"). Default 1.0. Must be <= 1.25 (site values are stored as
     /// signed hundredths of a voxel in an `i8`).
     pub esdf_band: Real,
+    /// ESDF hysteresis, in voxels: a fixed-band site whose TSDF moves by less than this keeps its old value, so
+    /// sensor noise on an already-seen surface does not trigger ESDF updates. Default 0.1 (5 mm at 5 cm); it adds
+    /// at most this much to the ESDF error. 0 = update on every change.
+    pub esdf_site_tolerance: Real,
     /// ESDF saturation distance, metres: beyond it the ESDF reports exactly this value (a lower bound on the true
     /// distance). Default 1.5 (covers Axel's 1 m wheel base and the tether sweep). At most 127 voxels.
     pub esdf_max_distance: Real,
@@ -66,6 +70,7 @@ impl MapConfig {
         max_range: 20.0,
         min_range: 0.1,
         esdf_band: 1.0,
+        esdf_site_tolerance: 0.1,
         esdf_max_distance: 1.5,
         esdf_max_sweeps: 32,
     };
@@ -102,6 +107,9 @@ impl MapConfig {
         }
         if !pos(self.esdf_band) || self.esdf_band > 1.25 {
             return Err(ConfigError { field: "esdf_band", reason: "must be in (0, 1.25] voxels" });
+        }
+        if !(self.esdf_site_tolerance >= 0.0 && self.esdf_site_tolerance <= 0.5) {
+            return Err(ConfigError { field: "esdf_site_tolerance", reason: "must be in [0, 0.5] voxels" });
         }
         if !pos(self.esdf_max_distance) || self.esdf_max_distance / self.voxel_size > 127.0 {
             return Err(ConfigError {

@@ -2,7 +2,7 @@
 
 use super::{
     local_coords, local_index, split, Map, BLOCK_EDGE, BLOCK_VOXELS, FLAG_ESDF_DIRTY, FLAG_ESDF_NEXT, FLAG_REGION,
-    FLAG_TSDF_DIRTY, NO_SITE,
+    FLAG_SITES_CHANGED, FLAG_TSDF_DIRTY, NO_SITE,
 };
 use crate::geom::Real;
 
@@ -11,7 +11,7 @@ use crate::geom::Real;
 pub struct EsdfOutcome {
     /// Blocks whose TSDF had changed (their sites were rebuilt).
     pub blocks_rebuilt: u32,
-    /// Blocks in the update region (within `esdf_max_distance` of a rebuilt block).
+    /// Blocks checked for stale sites (within `esdf_max_distance` of a block whose sites moved or vanished).
     pub blocks_in_region: u32,
     /// Sweeps run (each visits every dirty block once forward and once backward).
     pub sweeps: u32,
@@ -72,97 +72,123 @@ impl Map<'_> {
         let tq = self.cfg.truncation / 32767.0;
         let dmax = self.cfg.esdf_max_distance / vs;
 
-        // 1. Rebuild the sites of blocks whose TSDF changed.
+        // 1. Rebuild the fixed-band sites of blocks whose TSDF changed (values within the hysteresis are kept).
+        let tol = self.site_tolerance();
         for b in self.blocks.iter_mut().take(used) {
             if b.flags & FLAG_TSDF_DIRTY == 0 {
                 continue;
             }
             out.blocks_rebuilt += 1;
+            let mut sites_changed = false;
             for ((t, w), (s, sw)) in
                 b.tsdf.iter().zip(b.weight.iter()).zip(b.site.iter_mut().zip(b.site_w.iter_mut()))
             {
-                *s = [0; 3];
-                *sw = if *w > 0 { band_site(*t as Real * tq, band, vs) } else { NO_SITE };
+                let nb = if *w > 0 { band_site(*t as Real * tq, band, vs) } else { NO_SITE };
+                let is_site = *sw != NO_SITE && *s == [0, 0, 0];
+                if nb != NO_SITE {
+                    if !(is_site && (nb as i32 - *sw as i32).abs() <= tol) {
+                        sites_changed |= is_site;
+                        *s = [0; 3];
+                        *sw = nb;
+                    }
+                } else if is_site {
+                    *sw = NO_SITE;
+                    sites_changed = true;
+                }
             }
             b.flags |= FLAG_ESDF_DIRTY;
+            if sites_changed {
+                b.flags |= FLAG_SITES_CHANGED;
+            }
+            b.flags &= !FLAG_TSDF_DIRTY;
         }
 
-        if out.blocks_rebuilt > 0 {
-            // 2. The update region: every block within esdf_max_distance of a rebuilt block.
-            let k = libm::ceilf(dmax / BLOCK_EDGE as Real) as i32;
-            for s in 0..used {
-                let Some(b) = self.blocks.get(s) else { break };
-                if b.flags & FLAG_TSDF_DIRTY == 0 {
-                    continue;
-                }
-                let c = b.coord;
-                for dz in -k..=k {
-                    for dy in -k..=k {
-                        for dx in -k..=k {
-                            if let Some(n) = self.find_block([c[0] + dx, c[1] + dy, c[2] + dz]) {
-                                if let Some(nb) = self.blocks.get_mut(n) {
-                                    nb.flags |= FLAG_REGION;
-                                }
+        // 2. The raise region: every block within esdf_max_distance of a block whose sites moved or vanished.
+        let k = libm::ceilf(dmax / BLOCK_EDGE as Real) as i32;
+        let mut any_changed = false;
+        for s in 0..used {
+            let Some(b) = self.blocks.get(s) else { break };
+            if b.flags & FLAG_SITES_CHANGED == 0 {
+                continue;
+            }
+            any_changed = true;
+            let c = b.coord;
+            for dz in -k..=k {
+                for dy in -k..=k {
+                    for dx in -k..=k {
+                        if let Some(n) = self.find_block([c[0] + dx, c[1] + dy, c[2] + dz]) {
+                            if let Some(nb) = self.blocks.get_mut(n) {
+                                nb.flags |= FLAG_REGION;
                             }
                         }
                     }
                 }
             }
-            // 3. Raise: forget sites that lie in rebuilt blocks (they may have moved or vanished).
+        }
+        // 3. Raise: forget every site that is no longer a fixed-band voxel with the same value.
+        if any_changed {
+            let e = BLOCK_EDGE as i32;
             for s in 0..used {
                 let Some(b) = self.blocks.get(s) else { break };
                 if b.flags & FLAG_REGION == 0 {
                     continue;
                 }
                 out.blocks_in_region += 1;
-                if b.flags & FLAG_TSDF_DIRTY != 0 {
-                    continue;
-                }
                 let bc = b.coord;
-                let mut cache: Option<([i32; 3], bool)> = None;
+                let mut cache: Option<([i32; 3], Option<usize>)> = None;
+                let mut reset = false;
                 for i in 0..BLOCK_VOXELS {
                     let Some(b) = self.blocks.get(s) else { break };
                     let (Some(&w), Some(&off)) = (b.site_w.get(i), b.site.get(i)) else { break };
-                    if w == NO_SITE {
+                    if w == NO_SITE || off == [0, 0, 0] {
                         continue;
                     }
                     let l = local_coords(i);
-                    let e = BLOCK_EDGE as i32;
-                    let sb = [
-                        split(bc[0] * e + l[0] as i32 + off[0] as i32).0,
-                        split(bc[1] * e + l[1] as i32 + off[1] as i32).0,
-                        split(bc[2] * e + l[2] as i32 + off[2] as i32).0,
+                    let sg = [
+                        bc[0] * e + l[0] as i32 + off[0] as i32,
+                        bc[1] * e + l[1] as i32 + off[1] as i32,
+                        bc[2] * e + l[2] as i32 + off[2] as i32,
                     ];
-                    let stale = match cache {
-                        Some((c, st)) if c == sb => st,
+                    let (sbx, slx) = split(sg[0]);
+                    let (sby, sly) = split(sg[1]);
+                    let (sbz, slz) = split(sg[2]);
+                    let sb = [sbx, sby, sbz];
+                    let slot = match cache {
+                        Some((c, sl)) if c == sb => sl,
                         _ => {
-                            let st = self
-                                .find_block(sb)
-                                .and_then(|n| self.blocks.get(n))
-                                .is_none_or(|nb| nb.flags & FLAG_TSDF_DIRTY != 0);
-                            cache = Some((sb, st));
-                            st
+                            let sl = self.find_block(sb);
+                            cache = Some((sb, sl));
+                            sl
                         }
                     };
-                    if stale {
+                    let si = local_index([slx, sly, slz]);
+                    let valid = slot.and_then(|n| self.blocks.get(n)).is_some_and(|nb| {
+                        nb.site_w.get(si) == Some(&w) && nb.site.get(si) == Some(&[0, 0, 0])
+                    });
+                    if !valid {
+                        reset = true;
                         if let Some(sw) = self.blocks.get_mut(s).and_then(|b| b.site_w.get_mut(i)) {
                             *sw = NO_SITE;
                         }
                     }
                 }
-            }
-            for b in self.blocks.iter_mut().take(used) {
-                if b.flags & FLAG_REGION != 0 {
-                    b.flags |= FLAG_ESDF_DIRTY;
+                if reset {
+                    if let Some(b) = self.blocks.get_mut(s) {
+                        b.flags |= FLAG_ESDF_DIRTY;
+                    }
                 }
-                b.flags &= !(FLAG_REGION | FLAG_TSDF_DIRTY);
             }
+        }
+        for b in self.blocks.iter_mut().take(used) {
+            b.flags &= !(FLAG_REGION | FLAG_SITES_CHANGED);
         }
 
         // 4. Lower: sweep the dirty blocks until nothing changes.
-        for _ in 0..self.cfg.esdf_max_sweeps {
+        for sweep in 0..self.cfg.esdf_max_sweeps {
             let mut any = false;
-            for s in 0..used {
+            // Alternate the block order so distances cross block borders in both directions.
+            for j in 0..used {
+                let s = if sweep % 2 == 0 { j } else { used - 1 - j };
                 let Some(b) = self.blocks.get(s) else { break };
                 if b.flags & FLAG_ESDF_DIRTY == 0 {
                     continue;
@@ -215,42 +241,49 @@ impl Map<'_> {
                 let (Some(&w0), Some(&o0), Some(&t0)) = (b.site_w.get(i), b.site.get(i), b.tsdf.get(i)) else {
                     return changed;
                 };
+                if w0 != NO_SITE && o0 == [0, 0, 0] {
+                    continue; // a fixed-band site keeps its own value
+                }
                 let inside = t0 < 0;
-                let mut best_d = if w0 == NO_SITE {
-                    Real::INFINITY
+                let mut cand = Candidate::new(w0, o0, inside);
+                // Forward pass: the 13 neighbours before the voxel in raster order; backward: the 13 after. A sweep
+                // without changes has therefore compared every voxel with all 26 neighbours (the fixed point).
+                let (nbrs, deltas) = if pass == 0 {
+                    (NEIGHBOURS.get(..13), NEIGHBOUR_DELTAS.get(..13))
                 } else {
-                    site_distance(w0, [o0[0] as i32, o0[1] as i32, o0[2] as i32], inside)
+                    (NEIGHBOURS.get(13..), NEIGHBOUR_DELTAS.get(13..))
                 };
-                let mut best: Option<([i8; 3], i8)> = None;
-                for d in NEIGHBOURS.iter() {
-                    let nl = [l[0] as i32 + d[0], l[1] as i32 + d[1], l[2] as i32 + d[2]];
-                    let ob = [
-                        if nl[0] < 0 { 0 } else if nl[0] >= e { 2 } else { 1 },
-                        if nl[1] < 0 { 0 } else if nl[1] >= e { 2 } else { 1 },
-                        if nl[2] < 0 { 0 } else if nl[2] >= e { 2 } else { 1 },
-                    ];
-                    let Some(Some(ns)) = nb.get(ob[0] + 3 * ob[1] + 9 * ob[2]) else { continue };
-                    let Some(nblk) = self.blocks.get(*ns) else { continue };
-                    let ni = local_index([
-                        (nl[0] & (e - 1)) as usize,
-                        (nl[1] & (e - 1)) as usize,
-                        (nl[2] & (e - 1)) as usize,
-                    ]);
-                    let (Some(&w), Some(&so)) = (nblk.site_w.get(ni), nblk.site.get(ni)) else { continue };
-                    if w == NO_SITE {
-                        continue;
+                let (Some(nbrs), Some(deltas)) = (nbrs, deltas) else { return changed };
+                let interior = l.iter().all(|&c| c >= 1 && c + 1 < BLOCK_EDGE);
+                if interior {
+                    // Fast path: all 26 neighbours are in this block.
+                    for (d, delta) in nbrs.iter().zip(deltas.iter()) {
+                        let ni = (i as isize + delta) as usize;
+                        if let (Some(&w), Some(&so)) = (b.site_w.get(ni), b.site.get(ni)) {
+                            cand.consider(w, so, d, dmax);
+                        }
                     }
-                    let off = [so[0] as i32 + d[0], so[1] as i32 + d[1], so[2] as i32 + d[2]];
-                    if off.iter().any(|o| o.abs() > 127) {
-                        continue;
-                    }
-                    let dist = site_distance(w, off, inside);
-                    if dist < best_d - 1e-5 && dist <= dmax {
-                        best_d = dist;
-                        best = Some(([off[0] as i8, off[1] as i8, off[2] as i8], w));
+                } else {
+                    for d in nbrs.iter() {
+                        let nl = [l[0] as i32 + d[0], l[1] as i32 + d[1], l[2] as i32 + d[2]];
+                        let ob = [
+                            if nl[0] < 0 { 0 } else if nl[0] >= e { 2 } else { 1 },
+                            if nl[1] < 0 { 0 } else if nl[1] >= e { 2 } else { 1 },
+                            if nl[2] < 0 { 0 } else if nl[2] >= e { 2 } else { 1 },
+                        ];
+                        let Some(Some(ns)) = nb.get(ob[0] + 3 * ob[1] + 9 * ob[2]) else { continue };
+                        let Some(nblk) = self.blocks.get(*ns) else { continue };
+                        let ni = local_index([
+                            (nl[0] & (e - 1)) as usize,
+                            (nl[1] & (e - 1)) as usize,
+                            (nl[2] & (e - 1)) as usize,
+                        ]);
+                        if let (Some(&w), Some(&so)) = (nblk.site_w.get(ni), nblk.site.get(ni)) {
+                            cand.consider(w, so, d, dmax);
+                        }
                     }
                 }
-                if let Some((off, w)) = best {
+                if let Some((off, w)) = cand.best {
                     if let Some(b) = self.blocks.get_mut(s) {
                         if let (Some(sw), Some(so)) = (b.site_w.get_mut(i), b.site.get_mut(i)) {
                             *sw = w;
@@ -262,5 +295,78 @@ impl Map<'_> {
             }
         }
         changed
+    }
+}
+
+/// Local-index deltas of [`NEIGHBOURS`] inside a block.
+const NEIGHBOUR_DELTAS: [isize; 26] = {
+    let mut out = [0isize; 26];
+    let mut n = 0;
+    while n < 26 {
+        #[allow(clippy::indexing_slicing)] // const evaluation: an out-of-bounds index fails the build
+        {
+            let d = NEIGHBOURS[n];
+            out[n] = d[0] as isize + BLOCK_EDGE as isize * (d[1] as isize + BLOCK_EDGE as isize * d[2] as isize);
+        }
+        n += 1;
+    }
+    out
+};
+
+/// The best site seen so far for one voxel during a sweep.
+struct Candidate {
+    cur_off: [i8; 3],
+    cur_w: i8,
+    best_d: Real,
+    /// Squared offset length beyond which no candidate can win (|w| <= 1.27 voxels).
+    reject_n2: i32,
+    inside: bool,
+    best: Option<([i8; 3], i8)>,
+}
+
+impl Candidate {
+    fn new(w0: i8, o0: [i8; 3], inside: bool) -> Candidate {
+        let best_d = if w0 == NO_SITE {
+            Real::INFINITY
+        } else {
+            site_distance(w0, [o0[0] as i32, o0[1] as i32, o0[2] as i32], inside)
+        };
+        let mut c = Candidate { cur_off: o0, cur_w: w0, best_d, reject_n2: i32::MAX, inside, best: None };
+        c.update_reject();
+        c
+    }
+
+    fn update_reject(&mut self) {
+        if self.best_d.is_finite() {
+            let r = self.best_d + 1.28;
+            self.reject_n2 = (r * r) as i32 + 1;
+        }
+    }
+
+    #[inline]
+    fn consider(&mut self, w: i8, so: [i8; 3], d: &[i32; 3], dmax: Real) {
+        if w == NO_SITE {
+            return;
+        }
+        let off = [so[0] as i32 + d[0], so[1] as i32 + d[1], so[2] as i32 + d[2]];
+        if off.iter().any(|o| o.abs() > 127) {
+            return;
+        }
+        let off8 = [off[0] as i8, off[1] as i8, off[2] as i8];
+        if off8 == self.cur_off && w == self.cur_w {
+            return; // the same site
+        }
+        let n2 = off[0] * off[0] + off[1] * off[1] + off[2] * off[2];
+        if n2 > self.reject_n2 {
+            return;
+        }
+        let dist = site_distance(w, off, self.inside);
+        if dist < self.best_d - 1e-5 && dist <= dmax {
+            self.best_d = dist;
+            self.cur_off = off8;
+            self.cur_w = w;
+            self.best = Some((off8, w));
+            self.update_reject();
+        }
     }
 }

@@ -34,9 +34,11 @@
 //! tight; without it the ESDF is biased by up to two band widths). The minimum is found by vector propagation (each voxel stores the offset of its
 //! nearest site and takes the best site of its 26 neighbours), run as forward/backward raster sweeps over the dirty
 //! blocks until nothing changes or the sweep budget `esdf_max_sweeps` runs out (then the next call continues).
-//! Updates are incremental: sites inside blocks whose TSDF changed are rebuilt, voxels within
-//! `esdf_max_distance` whose site lay in such a block are reset (Voxblox's "raise" wave, done directly since
-//! each voxel knows its site), and the sweeps lower the rest. Vector propagation with 26 neighbours is not
+//! Fixed-band sites keep their own value (they are never overwritten by propagation). Updates are incremental:
+//! a TSDF update marks its block only if it changes what the ESDF uses (observed, sign, band membership, or the
+//! site value by more than `esdf_site_tolerance`); the sites of marked blocks are rebuilt; voxels within
+//! `esdf_max_distance` of a block whose sites moved or vanished are checked against their site and reset if it
+//! is gone (Voxblox's "raise" wave, done directly since each voxel knows its site); the sweeps lower the rest. Vector propagation with 26 neighbours is not
 //! guaranteed exact in every configuration (Danielsson 1980; Cuisenaire & Macq 1999); the tests measure it
 //! against brute force.
 //!
@@ -93,6 +95,7 @@ const FLAG_TSDF_DIRTY: u8 = 2;
 const FLAG_ESDF_DIRTY: u8 = 4;
 const FLAG_ESDF_NEXT: u8 = 8;
 const FLAG_REGION: u8 = 16;
+const FLAG_SITES_CHANGED: u8 = 32;
 
 /// One voxel block: `BLOCK_EDGE`^3 voxels, structure of arrays, voxel `(x, y, z)` at `x + E * (y + E * z)`.
 #[derive(Clone, Copy)]
@@ -348,6 +351,11 @@ impl<'a> Map<'a> {
 
     pub(crate) fn dequantize_tsdf(&self, q: i16) -> Real {
         q as Real * (self.cfg.truncation / 32767.0)
+    }
+
+    /// Site hysteresis in hundredths of a voxel.
+    pub(crate) fn site_tolerance(&self) -> i32 {
+        libm::roundf(self.cfg.esdf_site_tolerance * 100.0) as i32
     }
 
     /// Bytes of storage per block (what the pool costs per allocated block, index share excluded).

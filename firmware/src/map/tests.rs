@@ -126,7 +126,11 @@ fn plane_distance_and_gradient_match_analytic_plane() {
 /// Brute force: for every voxel of the grid, min over sites of (|c - c_s| + sign_v * site value), capped; the
 /// voxel is inside (sign -1) only if it is itself a site with a negative value.
 fn brute_force(sites: &[([i32; 3], i8)], g: [i32; 3], dmax: Real) -> Option<Real> {
-    let inside = sites.iter().any(|(s, w)| *s == g && *w < 0);
+    // A fixed-band site keeps its own value.
+    if let Some((_, w)) = sites.iter().find(|(s, _)| *s == g) {
+        return Some((*w as Real * 0.01).abs());
+    }
+    let inside = false;
     let sign = if inside { -1.0 } else { 1.0 };
     let mut best = Real::INFINITY;
     for (s, w) in sites {
@@ -207,6 +211,7 @@ fn esdf_matches_brute_force_on_random_small_grids() {
         let (mut b, mut i) = slices(256, 512);
         let mut cfg = MapConfig::with_voxel_size(0.1);
         cfg.esdf_max_distance = 1.2;
+        cfg.esdf_site_tolerance = 0.0;
         let mut map = Map::from_slices(cfg, &mut b, &mut i).unwrap();
         let n = 24;
         let sites = random_site_map(&mut map, &mut rng, n, 3 + trial * 4);
@@ -227,6 +232,7 @@ fn incremental_update_matches_brute_force_after_sites_vanish_and_appear() {
     let (mut b, mut i) = slices(256, 512);
     let mut cfg = MapConfig::with_voxel_size(0.1);
     cfg.esdf_max_distance = 1.2;
+    cfg.esdf_site_tolerance = 0.0;
     let mut map = Map::from_slices(cfg, &mut b, &mut i).unwrap();
     let n = 24;
     let mut sites = random_site_map(&mut map, &mut rng, n, 10);
@@ -237,6 +243,11 @@ fn incremental_update_matches_brute_force_after_sites_vanish_and_appear() {
         map.set_voxel(*g, t, 1.0).unwrap();
     }
     sites.drain(..5);
+    // Move the values of two remaining sites (raise and lower through a value change).
+    for (g, w) in sites.iter_mut().take(2) {
+        *w = if *w > 0 { *w - 60 } else { *w + 60 };
+        map.set_voxel(*g, *w as Real * 0.01 * map.config().voxel_size, 1.0).unwrap();
+    }
     for _ in 0..4 {
         let g = [
             (rng.next_u32() % n as u32) as i32 - n / 2,
@@ -261,6 +272,7 @@ fn esdf_budget_exhaustion_is_resumable() {
     let mut cfg = MapConfig::with_voxel_size(0.1);
     cfg.esdf_max_distance = 1.2;
     cfg.esdf_max_sweeps = 1;
+    cfg.esdf_site_tolerance = 0.0;
     let mut map = Map::from_slices(cfg, &mut b, &mut i).unwrap();
     let n = 24;
     let sites = random_site_map(&mut map, &mut rng, n, 2);

@@ -1,7 +1,7 @@
 //! TSDF integration by ray casting (Voxblox's "simple" integrator with a carving-length budget per ray).
 
 use super::esdf::band_site;
-use super::{quantize_weight, split, local_index, Map, MapError, FLAG_TSDF_DIRTY, WEIGHT_SCALE};
+use super::{quantize_weight, NO_SITE, split, local_index, Map, MapError, FLAG_TSDF_DIRTY, WEIGHT_SCALE};
 use crate::geom::{norm3, Pose3, Real, Vec3};
 
 /// What one call of [`Map::integrate_points`] did.
@@ -139,22 +139,32 @@ impl Map<'_> {
         let trunc = self.cfg.truncation;
         let vs = self.cfg.voxel_size;
         let band = self.cfg.esdf_band * vs;
+        let tol = self.site_tolerance();
         let Some(b) = self.blocks.get_mut(slot) else { return };
-        let (Some(tq), Some(wq)) = (b.tsdf.get_mut(li), b.weight.get_mut(li)) else { return };
+        let (Some(tq), Some(wq), Some(&sw), Some(&so)) =
+            (b.tsdf.get_mut(li), b.weight.get_mut(li), b.site_w.get(li), b.site.get(li))
+        else {
+            return;
+        };
         let w_old = *wq as Real / WEIGHT_SCALE;
         let d_old = *tq as Real * (trunc / 32767.0);
         let w_new = w_old + w;
         let d_new = (d_old * w_old + sdf * w) / w_new;
         let q = libm::roundf((d_new.clamp(-trunc, trunc) / trunc) * 32767.0) as i16;
-        let wn = quantize_weight(w_new, max_w);
-        // The ESDF only depends on: observed or not, the sign, and the site value inside the fixed band.
-        let key = |q: i16, w: u16| (w > 0, q < 0, band_site(q as Real * (trunc / 32767.0), band, vs));
-        let before = key(*tq, *wq);
-        let wn = wn.max(1);
-        let after = key(q, wn);
+        let wn = quantize_weight(w_new, max_w).max(1);
+        // The ESDF depends on: observed or not, the sign, and the fixed-band site value (with hysteresis).
+        let was_observed = *wq > 0;
+        let was_inside = *tq < 0;
         *tq = q;
         *wq = wn;
-        if before != after {
+        let is_site = sw != NO_SITE && so == [0, 0, 0];
+        let nb = band_site(q as Real * (trunc / 32767.0), band, vs);
+        let site_moved = match (is_site, nb != NO_SITE) {
+            (true, true) => (nb as i32 - sw as i32).abs() > tol,
+            (false, false) => false,
+            _ => true,
+        };
+        if !was_observed || was_inside != (q < 0) || site_moved {
             b.flags |= FLAG_TSDF_DIRTY;
         }
     }

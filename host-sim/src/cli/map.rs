@@ -7,6 +7,14 @@ use firmware::geom::Real;
 use firmware::map::{Map, VoxelState};
 use std::path::PathBuf;
 
+/// Exit code of a map subcommand: 0, or [`super::EXIT_ERROR`] with the message on stderr.
+pub fn exit(r: Result<(), String>) -> std::process::ExitCode {
+    match r {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => super::fail(e),
+    }
+}
+
 /// Arguments of `map-check`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct MapCheckArgs {
@@ -22,6 +30,9 @@ pub struct MapCheckArgs {
     /// Evaluate every n-th voxel.
     #[arg(long, default_value_t = 7)]
     pub stride: usize,
+    /// Free-space carving length per ray, metres (MapConfig::max_carve_length).
+    #[arg(long)]
+    pub carve: Option<Real>,
 }
 
 /// Arguments of `render-map`.
@@ -39,6 +50,9 @@ pub struct RenderMapArgs {
     /// Vertical slice at this y (metres) instead of the top view.
     #[arg(long)]
     pub slice_y: Option<Real>,
+    /// Pixels per voxel.
+    #[arg(long, default_value_t = 4)]
+    pub px: usize,
 }
 
 /// Arguments of `edt-bench`.
@@ -83,6 +97,9 @@ pub fn map_check(a: &MapCheckArgs) -> Result<(), String> {
     let mut cfg = CheckConfig::at_voxel_size(a.voxel);
     cfg.seed = a.seed;
     cfg.sample_stride = a.stride.max(1);
+    if let Some(c) = a.carve {
+        cfg.map.max_carve_length = c;
+    }
     cfg.map.validate().map_err(|e| format!("voxel: {} {}", e.field, e.reason))?;
     let poses = standard_poses(world.as_ref(), &kind);
     let (mut blocks, mut index) = host_storage(cfg.pool_blocks);
@@ -91,10 +108,26 @@ pub fn map_check(a: &MapCheckArgs) -> Result<(), String> {
     esdf_errors(world.as_ref(), &map, &cfg, &mut rep);
     rep.surface_m2 = observed_surface_m2(&map);
     let bb = Map::block_bytes();
-    println!("world {} ({kind}), voxel {} m, truncation {} m, ESDF cap {} m", world.name(), a.voxel, cfg.map.truncation, cfg.map.esdf_max_distance);
+    println!(
+        "world {} ({kind}), voxel {} m, truncation {} m, ESDF cap {} m, carving {} m",
+        world.name(),
+        a.voxel,
+        cfg.map.truncation,
+        cfg.map.esdf_max_distance,
+        cfg.map.max_carve_length
+    );
     println!("scans {}  points {}  sensor {} rays/scan  seed {}", rep.scans, rep.points, cfg.sensor.ray_count(), cfg.seed);
-    println!("integration: {:.3} s total, {:.0} points/s, {:.2} ms/scan", rep.integrate_s, rep.points_per_s(), 1e3 * rep.integrate_s / rep.scans.max(1) as f64);
-    println!("ESDF update per scan: mean {:.2} ms, max {:.2} ms, all converged: {}", rep.esdf_ms_mean, rep.esdf_ms_max, rep.esdf_all_converged);
+    println!(
+        "integration (thread CPU time): {:.3} s total, {:.0} points/s, {:.2} ms/scan (wall {:.3} s)",
+        rep.integrate_s,
+        rep.points_per_s(),
+        1e3 * rep.integrate_s / rep.scans.max(1) as f64,
+        rep.integrate_wall_s
+    );
+    println!(
+        "ESDF update per scan (thread CPU time): mean {:.2} ms, max {:.2} ms (wall mean {:.2} ms), all converged: {}",
+        rep.esdf_ms_mean, rep.esdf_ms_max, rep.esdf_wall_ms_mean, rep.esdf_all_converged
+    );
     println!("ESDF error, all observed voxels:  {}", rep.all);
     println!("ESDF error, near (|SD| < {} m): {}", cfg.near_m, rep.near);
     println!(
@@ -131,8 +164,10 @@ fn colour(d: Real, dmax: Real) -> [u8; 3] {
     }
 }
 
-/// `render-map`: PNG top view (ESDF at 0.5 m above the highest observed surface in each column... simplified:
-/// the ESDF of the first known voxel from the top) or a vertical slice at `y`. Unknown is grey, surface black.
+/// `render-map`: a PNG of the map built from the world's standard scan sequence. Top view: the height of the
+/// highest occupied voxel in each column (dark low, light high), grey where no surface was observed. Slice at
+/// `y`: ESDF colour (blue inside the terrain, white at the surface, red to yellow up to the ESDF cap), black on the
+/// surface (|ESDF| < half a voxel), grey where unknown.
 pub fn render_map(a: &RenderMapArgs) -> Result<(), String> {
     let (world, kind) = world_by_name(&a.world)?;
     let cfg = CheckConfig::at_voxel_size(a.voxel);
@@ -191,6 +226,19 @@ pub fn render_map(a: &RenderMapArgs) -> Result<(), String> {
             (w, h, px)
         }
     };
+    let k = a.px.clamp(1, 16);
+    let mut big = Vec::with_capacity(pixels.len() * k * k);
+    for r in 0..h {
+        let row = &pixels[r * w * 3..(r + 1) * w * 3];
+        for _ in 0..k {
+            for c in 0..w {
+                for _ in 0..k {
+                    big.extend_from_slice(&row[c * 3..c * 3 + 3]);
+                }
+            }
+        }
+    }
+    let (w, h, pixels) = (w * k, h * k, big);
     let f = std::fs::File::create(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
     let mut enc = png::Encoder::new(std::io::BufWriter::new(f), w as u32, h as u32);
     enc.set_color(png::ColorType::Rgb);
@@ -222,7 +270,7 @@ pub fn edt_bench(a: &EdtBenchArgs) -> Result<(), String> {
     let text = String::from_utf8_lossy(&out.stdout);
     let ms_ref: f64 = text
         .split_whitespace()
-        .find_map(|t| t.strip_prefix("ms="))
+        .find_map(|t| t.strip_prefix("cpu_ms="))
         .and_then(|v| v.parse().ok())
         .ok_or_else(|| format!("unexpected reference output: {text}"))?;
     let reference: Vec<f32> = std::fs::read(&dpath)
@@ -244,8 +292,9 @@ pub fn edt_bench(a: &EdtBenchArgs) -> Result<(), String> {
     }
     let occupied = grid.iter().filter(|o| **o).count();
     println!("grid {n}^3 = {} voxels, {occupied} occupied", n * n * n);
-    println!("onboard ESDF (full, vector propagation, {} voxel cap): {ms_ours:.1} ms", n);
-    println!("libdynamicedt3d DynamicEDT3D::update (full):          {ms_ref:.1} ms");
+    println!("thread CPU time, full transform from occupancy (cap 127 voxels):");
+    println!("  onboard ESDF (update_esdf: site rebuild + vector propagation sweeps): {ms_ours:.1} ms");
+    println!("  libdynamicedt3d (DynamicEDT3D initializeMap + update):              {ms_ref:.1} ms");
     println!("ratio onboard / dynamicedt3d: {:.2}", ms_ours / ms_ref);
     println!("agreement: {differ} of {} voxels differ by > 0.001 voxel, max difference {max_diff:.4} voxel", ours.len());
     Ok(())
