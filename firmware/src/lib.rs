@@ -12,6 +12,7 @@
 //! - [`rover`], [`tether`], [`stability`]: tether-aware traversability — Paton et al. IV-A, IV-B, IV-C.
 //! - [`plan`]: planners: ABIT* (Paton et al. V), homotopy planning on tether-demand planes (Abad-Manterola et
 //!   al.; Tanner et al.), tethered climbing teams (Morad et al.).
+//! - [`nav`]: the executive's autonomy: builds the onboard map from the link's scans (planning on it comes next).
 //! - [`exec`]: the flight executive: mode machine, frame dispatch, per-cycle budgets, telemetry.
 //!
 //! ## Rules of the core
@@ -44,6 +45,7 @@ pub mod config;
 pub mod exec;
 pub mod geom;
 pub mod map;
+pub mod nav;
 pub mod plan;
 pub mod protocol;
 pub mod rover;

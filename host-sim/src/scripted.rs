@@ -60,12 +60,15 @@ impl core::fmt::Display for ScenarioReport {
             let rejected: u32 = t.frames_rejected.iter().sum();
             writeln!(
                 f,
-                "final telemetry: mode {:?}, accepted {}, rejected {}, scans {}, tether readings {}, steps {}, \
-                 tx high water {} B, largest frame {} B",
+                "final telemetry: mode {:?}, accepted {}, rejected {}, scans {}, map: {} points in {} of {} blocks, \
+                 tether readings {}, steps {}, tx high water {} B, largest frame {} B",
                 t.mode,
                 t.frames_accepted,
                 rejected,
                 t.scans_completed,
+                t.map.points_integrated,
+                t.map.blocks_used,
+                t.map.blocks_capacity,
                 t.tether_readings,
                 t.steps,
                 t.high_water.tx_queue,
@@ -205,6 +208,16 @@ pub fn run_protocol(link: impl FlightLink, seed: u64) -> Result<ScenarioReport, 
 
     let t = s.telemetry()?;
     expect(&mut rep, t.scans_completed == 1, "scan reassembled");
+    expect(
+        &mut rep,
+        t.map.scans_integrated == 1 && t.map.points_integrated > 0 && t.map.blocks_used > 0,
+        "scan integrated into the onboard map",
+    );
+    expect(
+        &mut rep,
+        t.map.pool_errors == 0 && t.map.voxels_dropped == 0,
+        "map pool had room for the scan",
+    );
     expect(
         &mut rep,
         t.mode == Mode::Mapping,

@@ -150,6 +150,16 @@ fn one_of_every_kind() -> Vec<Message> {
                 frames_per_step: 23,
                 rx_bytes_per_step: 24,
             },
+            map: MapStatus {
+                blocks_used: 25,
+                blocks_capacity: 26,
+                scans_integrated: 27,
+                points_integrated: 28,
+                points_rejected: 29,
+                voxels_dropped: 30,
+                pool_errors: 31,
+                esdf_budget_exhausted: 32,
+            },
         }),
         Message::Log(Log {
             level: LogLevel::Warn,

@@ -138,3 +138,7 @@ pub struct ConfigError {
     /// What is wrong with it.
     pub reason: &'static str,
 }
+
+/// Points of a scan converted and integrated per batch by [`crate::nav::Navigator`] (its only stack buffer:
+/// 12 bytes a point). Default 256 (3 KiB of stack).
+pub const NAV_POINT_BATCH: usize = 256;

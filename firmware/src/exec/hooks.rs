@@ -12,7 +12,7 @@ use hal::Instant;
 
 use crate::config::exec::PLAN_WAYPOINTS_CAPACITY;
 use crate::protocol::{
-    Configure, GoalRequest, Motion, PlanState, Point3, Pose, TetherReading, Waypoint,
+    Configure, GoalRequest, MapStatus, Motion, PlanState, Point3, Pose, TetherReading, Waypoint,
 };
 
 /// A complete, reassembled range scan, lent to [`Autonomy::scan`] for the duration of the call.
@@ -88,6 +88,10 @@ pub trait Autonomy {
     }
     /// Shutdown: stop planning and driving.
     fn abort(&mut self) {}
+    /// The onboard map's state, for telemetry (zeros when there is no map).
+    fn map_status(&self) -> MapStatus {
+        MapStatus::default()
+    }
 }
 
 /// No map, no planner: scans are reassembled and dropped, goals get `PlannerUnavailable`.

@@ -300,6 +300,7 @@ where
             device_errors: c.device_errors,
             illegal_transitions: c.illegal_transitions,
             high_water: hw,
+            map: self.autonomy.map_status(),
         }
     }
 

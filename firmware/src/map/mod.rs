@@ -224,6 +224,23 @@ impl<'a> Map<'a> {
         Ok(Map { cfg, blocks, index, used: 0 })
     }
 
+    /// A map view over slices that an earlier [`Map`] built (with `used` = that map's [`Map::blocks_used`]),
+    /// **without clearing them**: the owner of long-lived storage (the flight executive's navigator) rebuilds a view
+    /// per call instead of holding a borrow. Checked like [`Map::from_slices`], plus `used <= blocks.len()`; slices
+    /// that no `Map` built give a map of garbage, never a panic.
+    pub fn reattach(
+        cfg: MapConfig,
+        blocks: &'a mut [Block],
+        index: &'a mut [u32],
+        used: usize,
+    ) -> Result<Map<'a>, MapError> {
+        cfg.validate().map_err(MapError::Config)?;
+        if blocks.is_empty() || !index.len().is_power_of_two() || index.len() < blocks.len() || used > blocks.len() {
+            return Err(MapError::BadStorage);
+        }
+        Ok(Map { cfg, blocks, index, used })
+    }
+
     /// The configuration.
     pub fn config(&self) -> &MapConfig {
         &self.cfg

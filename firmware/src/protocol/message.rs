@@ -529,6 +529,27 @@ pub enum Mode {
     Safe,
 }
 
+/// The onboard map as telemetry reports it (all zero while no map is wired in).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct MapStatus {
+    /// Voxel blocks in use.
+    pub blocks_used: u32,
+    /// Voxel blocks in the pool.
+    pub blocks_capacity: u32,
+    /// Scans integrated into the map.
+    pub scans_integrated: u32,
+    /// Points whose ray was integrated.
+    pub points_integrated: u32,
+    /// Points ignored (not finite, too near, too far).
+    pub points_rejected: u32,
+    /// Voxel updates lost because a block could not be allocated (pool full or index probe exhausted).
+    pub voxels_dropped: u32,
+    /// Scans during which the pool was full or the index probe ran out.
+    pub pool_errors: u32,
+    /// ESDF updates that ran out of their sweep budget (the next update continues).
+    pub esdf_budget_exhausted: u32,
+}
+
 /// Largest use of each bounded resource since boot.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub struct HighWater {
@@ -597,6 +618,8 @@ pub struct Telemetry {
     pub illegal_transitions: u32,
     /// High-water marks.
     pub high_water: HighWater,
+    /// The onboard map.
+    pub map: MapStatus,
 }
 
 /// Flight -> host: a forwarded log record (bounded text).

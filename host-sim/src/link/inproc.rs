@@ -8,7 +8,10 @@
 
 use std::collections::VecDeque;
 
-use firmware::exec::{Autonomy, ExecStorage, Executive, NoAutonomy, StepReport};
+use firmware::config::map::{MapConfig, FLIGHT_BLOCKS, FLIGHT_INDEX};
+use firmware::exec::{Autonomy, ExecStorage, Executive, StepReport};
+use firmware::map::Block;
+use firmware::nav::Navigator;
 use hal::{ByteLink, Instant, MonotonicClock, Watchdog};
 
 use super::{FlightLink, LinkError};
@@ -77,17 +80,31 @@ impl Watchdog for SimWatchdog {
 /// The executive type the in-process link runs.
 pub type InProcExecutive<A> = Executive<QueueByteLink, SimClock, SimWatchdog, A, Box<ExecStorage>>;
 
+/// The flight software's autonomy as it flies: the [`Navigator`] over a map pool of the flight computer's size
+/// ([`FLIGHT_BLOCKS`] blocks, ~14 MiB, the board's PSRAM), here on the heap.
+pub type FlightAutonomy = Navigator<Vec<Block>, Vec<u32>>;
+
+/// A fresh [`FlightAutonomy`] with the flight defaults ([`MapConfig::DEFAULT`]); the board builds the same.
+pub fn flight_autonomy() -> FlightAutonomy {
+    match Navigator::new(MapConfig::DEFAULT, vec![Block::EMPTY; FLIGHT_BLOCKS], vec![0u32; FLIGHT_INDEX]) {
+        Ok(nav) => nav,
+        // The defaults and the storage sizes are constants checked by the firmware's own tests.
+        Err(e) => unreachable!("flight map defaults rejected: {e:?}"),
+    }
+}
+
 /// The firmware executive behind a [`FlightLink`].
-pub struct InProcLink<A: Autonomy = NoAutonomy> {
+pub struct InProcLink<A: Autonomy = FlightAutonomy> {
     exec: InProcExecutive<A>,
     step_us: u64,
     last_step: StepReport,
 }
 
-impl InProcLink<NoAutonomy> {
-    /// A freshly booted executive without planning modules, stepped every `step_us` microseconds.
+impl InProcLink<FlightAutonomy> {
+    /// A freshly booted flight software (executive + [`FlightAutonomy`], as on the board), stepped every
+    /// `step_us` microseconds.
     pub fn new(step_us: u64) -> Self {
-        Self::with_autonomy(NoAutonomy, step_us)
+        Self::with_autonomy(flight_autonomy(), step_us)
     }
 }
 
