@@ -118,6 +118,18 @@ impl Block {
         site: [[0; 3]; BLOCK_VOXELS],
         site_w: [NO_SITE; BLOCK_VOXELS],
     };
+
+    /// An unused block whose bytes are all zero: the initial value of storage in memory the board zeroes itself
+    /// (its NOLOAD PSRAM section). Equivalent to [`Block::EMPTY`] for the map: a block's `flags` say it is unused,
+    /// and allocation overwrites the whole block.
+    pub const ZEROED: Block = Block {
+        coord: [0; 3],
+        flags: 0,
+        tsdf: [0; BLOCK_VOXELS],
+        weight: [0; BLOCK_VOXELS],
+        site: [[0; 3]; BLOCK_VOXELS],
+        site_w: [0; BLOCK_VOXELS],
+    };
 }
 
 impl core::fmt::Debug for Block {

@@ -26,7 +26,10 @@
 
 use cortex_m::peripheral::NVIC;
 use cortex_m_semihosting::{debug, heprintln, hprintln};
+use firmware::config::map::{MapConfig, FLIGHT_BLOCKS, FLIGHT_INDEX};
 use firmware::exec::{ExecStorage, Executive, NoAutonomy};
+use firmware::map::Block;
+use firmware::nav::Navigator;
 use hal::{ByteLink, Instant, MonotonicClock};
 
 use crate::clock::SysTickClock;
@@ -36,6 +39,16 @@ use crate::watchdog::{CmsdkWatchdog, TIMEOUT_TICKS};
 
 /// The executive's large buffers (scan reassembly, plan), lent once. ~130 KiB of `.bss` in SRAM.
 static EXEC_STORAGE: Lent<ExecStorage> = Lent::new(ExecStorage::new());
+
+/// The onboard map's block pool (`FLIGHT_BLOCKS` blocks, ~14 MiB) and index, in PSRAM: the `.psram` section is
+/// NOLOAD and zeroed at boot (`storage::zero_psram`), hence the all-zero initial values.
+#[link_section = ".psram"]
+static MAP_BLOCKS: Lent<[Block; FLIGHT_BLOCKS]> = Lent::new([Block::ZEROED; FLIGHT_BLOCKS]);
+#[link_section = ".psram"]
+static MAP_INDEX: Lent<[u32; FLIGHT_INDEX]> = Lent::new([0; FLIGHT_INDEX]);
+
+/// The flight software's autonomy, the same as the host's in-process `FlightAutonomy` (so outputs are equal).
+type BoardAutonomy = Navigator<&'static mut [Block], &'static mut [u32]>;
 
 /// Bytes of an `R` command after its tag.
 const RUN_LEN: usize = 21;
@@ -123,7 +136,7 @@ impl ByteLink for BoardLink {
 }
 
 type BoardExecutive =
-    Executive<BoardLink, BoardClock, CmsdkWatchdog, NoAutonomy, &'static mut ExecStorage>;
+    Executive<BoardLink, BoardClock, CmsdkWatchdog, BoardAutonomy, &'static mut ExecStorage>;
 
 /// Reads exactly `buf.len()` control bytes, kicking the watchdog and sleeping between bytes. The host sends each
 /// command in one write, so this waits only while it crosses the UART.
@@ -233,7 +246,18 @@ pub fn run(systick: SysTickClock, lockstep: bool) -> ! {
         systick,
         lockstep_now: lockstep.then_some(Instant::from_micros(0)),
     };
-    let mut exec: BoardExecutive = Executive::new(link, clock, wdog, NoAutonomy, storage);
+    let (Some(blocks), Some(index)) = (MAP_BLOCKS.take(), MAP_INDEX.take()) else {
+        heprintln!("board: map storage lent twice");
+        crate::fault::fail()
+    };
+    let autonomy = match Navigator::new(MapConfig::DEFAULT, &mut blocks[..], &mut index[..]) {
+        Ok(nav) => nav,
+        Err(e) => {
+            heprintln!("board: onboard map refused its storage: {:?}", e);
+            crate::fault::fail()
+        }
+    };
+    let mut exec: BoardExecutive = Executive::new(link, clock, wdog, autonomy, storage);
     // The harness handshake; in free-running mode the executive's first step also sends the boot Telemetry.
     write_control(&mut ctl, b"H");
     if lockstep {
