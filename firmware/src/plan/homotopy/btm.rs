@@ -242,8 +242,8 @@ fn id(i: usize) -> Id {
 }
 
 impl Btm {
-    /// An empty BTM (no plane).
-    pub fn new() -> Self {
+    /// An empty BTM (no plane). `const`, so a board can keep it in a `static`.
+    pub const fn new() -> Self {
         const NO_OBSTACLE: Option<Obstacle> = None;
         Btm {
             plane: HVec::new(),
