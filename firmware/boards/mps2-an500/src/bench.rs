@@ -54,4 +54,11 @@ pub fn run(clock: &mut SysTickClock) {
         calibration_loop(CALIBRATION_LOOPS)
     });
     crate::flight::bench_workloads(clock);
+    crate::planning::run(clock);
+    let stack = crate::stack::usage();
+    hprintln!(
+        "bench: stack_high_water_bytes={} stack_size_bytes={}",
+        stack.high_water_bytes,
+        stack.size_bytes
+    );
 }
