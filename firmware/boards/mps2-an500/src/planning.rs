@@ -4,8 +4,10 @@
 //! and compares the summaries. Finally the stack high-water mark of the whole bench run:
 //! `bench: stack_high_water_bytes=<B> stack_size_bytes=<S>`.
 //!
-//! Arenas: the ABIT* arena (~1.5 MiB, all-zero initial value: empty `heapless` vectors) lives in `.psram`; the
-//! others are in SRAM (`.bss`, or `.data` for the homotopy BTM and workspace, whose empty state is not all zero).
+//! Arenas: all in `.psram` (16 MiB, zeroed at boot, never loaded), so the flight mode's SRAM layout and boot are
+//! those of a board without these workloads. The ABIT* arena (~1.7 MiB) and the scan start all-zero (`Lent`);
+//! the local planner, D* Lite arena, BTM and homotopy workspace have non-zero empty states and are initialised in
+//! place from their `const` images in flash when the bench takes them (`PsramSlot`).
 
 use cortex_m_semihosting::hprintln;
 use firmware::config::team::GLOBAL_GRID_MAX_CELLS;
@@ -17,19 +19,38 @@ use firmware::plan::team::DefaultLocalPlanner;
 use firmware::workload::{Arenas, Harness, WallGapArena, SCAN_POINTS};
 
 use crate::clock::SysTickClock;
-use crate::storage::Lent;
+use crate::storage::{ConstInit, Lent, PsramSlot};
 
+impl ConstInit for DefaultLocalPlanner {
+    const INIT: Self = DefaultLocalPlanner::new();
+}
+impl ConstInit for DStarArena<GLOBAL_GRID_MAX_CELLS> {
+    const INIT: Self = DStarArena::new();
+}
+impl ConstInit for Btm {
+    const INIT: Self = Btm::new();
+}
+impl ConstInit for Workspace {
+    const INIT: Self = Workspace {
+        search: SearchArena::new(),
+        grid: ControlGrid::new(),
+        classes: heapless::Vec::new(),
+    };
+}
+
+// The ABIT* arena's empty state is all zero bytes (empty `heapless` vectors): a plain `Lent` in `.psram`.
 #[link_section = ".psram"]
 static ABIT: Lent<WallGapArena> = Lent::new(WallGapArena::new());
-static LOCAL: Lent<DefaultLocalPlanner> = Lent::new(DefaultLocalPlanner::new());
+#[link_section = ".psram"]
 static SCAN: Lent<[Vec3; SCAN_POINTS]> = Lent::new([Vec3::new(0.0, 0.0, 0.0); SCAN_POINTS]);
-static DSTAR: Lent<DStarArena<GLOBAL_GRID_MAX_CELLS>> = Lent::new(DStarArena::new());
-static BTM: Lent<Btm> = Lent::new(Btm::new());
-static HOMOTOPY: Lent<Workspace> = Lent::new(Workspace {
-    search: SearchArena::new(),
-    grid: ControlGrid::new(),
-    classes: heapless::Vec::new(),
-});
+#[link_section = ".psram"]
+static LOCAL: PsramSlot<DefaultLocalPlanner> = PsramSlot::new();
+#[link_section = ".psram"]
+static DSTAR: PsramSlot<DStarArena<GLOBAL_GRID_MAX_CELLS>> = PsramSlot::new();
+#[link_section = ".psram"]
+static BTM: PsramSlot<Btm> = PsramSlot::new();
+#[link_section = ".psram"]
+static HOMOTOPY: PsramSlot<Workspace> = PsramSlot::new();
 
 struct Board<'a> {
     clock: &'a mut SysTickClock,
