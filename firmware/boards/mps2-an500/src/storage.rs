@@ -91,8 +91,8 @@ extern "C" {
 }
 
 /// Zeroes the `.psram` section (see `memory.x`): statics placed there with `#[link_section = ".psram"]` must have
-/// an all-zero initial value. Called once at boot, before anything in `.psram` is used. Empty today: the
-/// executive's storage (132 KiB) fits the 4 MiB SRAM; planner arenas of later issues may move here.
+/// an all-zero initial value (or be a [`PsramSlot`]). Called once at boot, before anything in `.psram` is used.
+/// Holds the benchmark's planning arenas (`planning.rs`); the executive's storage (132 KiB) stays in SRAM.
 pub fn zero_psram() {
     let start = core::ptr::addr_of_mut!(__spsram);
     let end = core::ptr::addr_of_mut!(__epsram);
