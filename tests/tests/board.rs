@@ -248,7 +248,9 @@ fn planning_workloads_give_the_host_answers_on_target_within_the_stack() {
     assert_eq!(board, host, "board vs host planning outcomes:\n{text}");
     for (name, _) in &host {
         assert!(
-            results.iter().any(|r| &r.name == name && r.instructions > 0),
+            results
+                .iter()
+                .any(|r| &r.name == name && r.instructions > 0),
             "{name} not measured: {text}"
         );
     }

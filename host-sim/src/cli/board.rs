@@ -168,7 +168,10 @@ fn bench_cmd(elf: &std::path::Path) -> Result<(), Box<dyn core::error::Error>> {
             .iter()
             .find(|r| r.name == name)
             .map_or_else(|| "-".to_owned(), |r| r.instructions.to_string());
-        println!("{name:<28} {ins:>14}  board: {}", b.as_deref().unwrap_or("(missing)"));
+        println!(
+            "{name:<28} {ins:>14}  board: {}",
+            b.as_deref().unwrap_or("(missing)")
+        );
         if b == h {
             println!("{:<28} {:>14}  host:  same", "", "");
         } else {
@@ -185,7 +188,10 @@ fn bench_cmd(elf: &std::path::Path) -> Result<(), Box<dyn core::error::Error>> {
         println!("{line}");
     }
     if mismatches > 0 {
-        return Err(format!("{mismatches} planning workload(s) differ between the board and the host").into());
+        return Err(format!(
+            "{mismatches} planning workload(s) differ between the board and the host"
+        )
+        .into());
     }
     Ok(())
 }

@@ -12,8 +12,8 @@
 use cortex_m_semihosting::hprintln;
 use firmware::config::team::GLOBAL_GRID_MAX_CELLS;
 use firmware::geom::Vec3;
-use firmware::plan::homotopy::{Btm, SearchArena, Workspace};
 use firmware::plan::homotopy::control::ControlGrid;
+use firmware::plan::homotopy::{Btm, SearchArena, Workspace};
 use firmware::plan::team::dstar_lite::DStarArena;
 use firmware::plan::team::DefaultLocalPlanner;
 use firmware::workload::{Arenas, Harness, WallGapArena, SCAN_POINTS};
@@ -72,11 +72,23 @@ impl Harness for Board<'_> {
 
 /// Runs the planning workloads (once; a second call finds the arenas taken and does nothing).
 pub fn run(clock: &mut SysTickClock) {
-    let (Some(abit), Some(local), Some(scan), Some(dstar), Some(btm), Some(homotopy)) =
-        (ABIT.take(), LOCAL.take(), SCAN.take(), DSTAR.take(), BTM.take(), HOMOTOPY.take())
-    else {
+    let (Some(abit), Some(local), Some(scan), Some(dstar), Some(btm), Some(homotopy)) = (
+        ABIT.take(),
+        LOCAL.take(),
+        SCAN.take(),
+        DSTAR.take(),
+        BTM.take(),
+        HOMOTOPY.take(),
+    ) else {
         return;
     };
-    let mut arenas = Arenas { abit, local, scan, dstar, btm, homotopy };
+    let mut arenas = Arenas {
+        abit,
+        local,
+        scan,
+        dstar,
+        btm,
+        homotopy,
+    };
     firmware::workload::run_all(&mut arenas, &mut Board { clock });
 }
