@@ -3,7 +3,9 @@
 //! - `tetherbot board report`: flash and RAM by section of the board binary, then the `protocol` scenario on the
 //!   board (lockstep) and its on-target resource report: stack high-water mark (paint) and the peak use of each
 //!   executive buffer / arena.
-//! - `tetherbot board bench`: instruction counts of the fixed on-target workloads under `-icount shift=0`.
+//! - `tetherbot board bench`: instruction counts of the fixed on-target workloads under `-icount shift=0`, and the
+//!   planning workloads of `firmware::workload` with their outcomes next to the host's (exit status 1 unless equal)
+//!   and the run's stack high-water mark.
 //! - `tetherbot board perf`: boot-to-ready time, round-trip latency and sustained frame throughput over the
 //!   emulated UART (free-running board, host wall clock).
 //!

@@ -7,6 +7,8 @@
 //! every run. Output, one line per workload on semihosting stdout:
 //! `bench: name=<workload> iterations=<N> ticks=<T> instructions=<I> instructions_per_iteration=<I/N>`.
 //! Without `-icount` the figures are real-time based and vary; the host command always passes it.
+//! Then the planning workloads (`planning.rs`: `bench: result ...` lines) and the stack high-water mark of the run
+//! (`bench: stack_high_water_bytes=<B> stack_size_bytes=<S>`).
 
 use cortex_m_semihosting::hprintln;
 
