@@ -51,3 +51,4 @@ pub mod protocol;
 pub mod rover;
 pub mod stability;
 pub mod tether;
+pub mod workload;

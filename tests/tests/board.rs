@@ -233,3 +233,41 @@ fn absent_qemu_skips_with_install_hint_outside_ci_and_fails_under_ci() {
         }
     }
 }
+
+#[test]
+fn planning_workloads_give_the_host_answers_on_target_within_the_stack() {
+    let Some(elf) = board("planning workloads") else {
+        return;
+    };
+    let (results, text) =
+        report::run_bench(&elf, Duration::from_secs(120)).unwrap_or_else(|e| panic!("{e}"));
+    let board = qemu::bench::board_summaries(&text);
+    let host = qemu::bench::host_summaries();
+    assert_eq!(host.len(), 8, "{host:?}");
+    // Same code, same inputs, IEEE arithmetic on both (libm, soft f64 on the board): identical outcomes.
+    assert_eq!(board, host, "board vs host planning outcomes:\n{text}");
+    for (name, _) in &host {
+        assert!(
+            results
+                .iter()
+                .any(|r| &r.name == name && r.instructions > 0),
+            "{name} not measured: {text}"
+        );
+    }
+    // The paint must survive somewhere: a high-water mark equal to the region means the stack overflowed.
+    let v = |k: &str| -> u64 {
+        text.lines()
+            .find_map(|l| l.strip_prefix("bench: stack_high_water_bytes="))
+            .and_then(|rest| {
+                if k == "hw" {
+                    rest.split_whitespace().next()
+                } else {
+                    rest.split("stack_size_bytes=").nth(1)
+                }
+            })
+            .and_then(|s| s.trim().parse().ok())
+            .unwrap_or_else(|| panic!("no stack line in {text}"))
+    };
+    let (hw, size) = (v("hw"), v("size"));
+    assert!(hw > 0 && hw < size, "stack high-water {hw} of {size}");
+}

@@ -3,7 +3,9 @@
 //! - `tetherbot board report`: flash and RAM by section of the board binary, then the `protocol` scenario on the
 //!   board (lockstep) and its on-target resource report: stack high-water mark (paint) and the peak use of each
 //!   executive buffer / arena.
-//! - `tetherbot board bench`: instruction counts of the fixed on-target workloads under `-icount shift=0`.
+//! - `tetherbot board bench`: instruction counts of the fixed on-target workloads under `-icount shift=0`, and the
+//!   planning workloads of `firmware::workload` with their outcomes next to the host's (exit status 1 unless equal)
+//!   and the run's stack high-water mark.
 //! - `tetherbot board perf`: boot-to-ready time, round-trip latency and sustained frame throughput over the
 //!   emulated UART (free-running board, host wall clock).
 //!
@@ -146,7 +148,7 @@ fn report_cmd(elf: &std::path::Path) -> Result<(), Box<dyn core::error::Error>> 
 }
 
 fn bench_cmd(elf: &std::path::Path) -> Result<(), Box<dyn core::error::Error>> {
-    let (results, text) = report::run_bench(elf, Duration::from_secs(120))?;
+    let (results, text) = report::run_bench(elf, Duration::from_secs(300))?;
     println!(
         "on-target instruction counts (qemu-system-arm -icount shift=0, mps2-an500 Cortex-M7)"
     );
@@ -156,6 +158,42 @@ fn bench_cmd(elf: &std::path::Path) -> Result<(), Box<dyn core::error::Error>> {
         .filter(|l| l.starts_with("bench: check") || l.contains("expected_instructions"))
     {
         println!("{line}");
+    }
+    // Planning workloads: the board's outcome next to the host's (same code, same inputs).
+    let board = qemu::bench::board_summaries(&text);
+    let host = qemu::bench::host_summaries();
+    println!("\nplanning workloads (one run each; result summary on the board, checked against the host)");
+    println!("{:<28} {:>14}  result", "workload", "instructions");
+    let mut mismatches = 0;
+    for (name, b, h) in qemu::bench::compare(&board, &host) {
+        let ins = results
+            .iter()
+            .find(|r| r.name == name)
+            .map_or_else(|| "-".to_owned(), |r| r.instructions.to_string());
+        println!(
+            "{name:<28} {ins:>14}  board: {}",
+            b.as_deref().unwrap_or("(missing)")
+        );
+        if b == h {
+            println!("{:<28} {:>14}  host:  same", "", "");
+        } else {
+            mismatches += 1;
+            println!(
+                "{:<28} {:>14}  host:  {}   <-- MISMATCH",
+                "",
+                "",
+                h.as_deref().unwrap_or("(missing)")
+            );
+        }
+    }
+    for line in text.lines().filter(|l| l.starts_with("bench: stack")) {
+        println!("{line}");
+    }
+    if mismatches > 0 {
+        return Err(format!(
+            "{mismatches} planning workload(s) differ between the board and the host"
+        )
+        .into());
     }
     Ok(())
 }

@@ -27,6 +27,7 @@
 //! `cargo build --release` in `firmware/boards/mps2-an500` (the directory's `.cargo/config.toml` picks the target),
 //! or [`build_board_elf`]. [`board_elf_path`] finds the result; `TETHERBOT_BOARD_ELF` overrides the path.
 
+pub mod bench;
 pub mod link;
 pub mod perf;
 pub mod report;

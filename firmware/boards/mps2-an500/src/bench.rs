@@ -7,6 +7,8 @@
 //! every run. Output, one line per workload on semihosting stdout:
 //! `bench: name=<workload> iterations=<N> ticks=<T> instructions=<I> instructions_per_iteration=<I/N>`.
 //! Without `-icount` the figures are real-time based and vary; the host command always passes it.
+//! Then the planning workloads (`planning.rs`: `bench: result ...` lines) and the stack high-water mark of the run
+//! (`bench: stack_high_water_bytes=<B> stack_size_bytes=<S>`).
 
 use cortex_m_semihosting::hprintln;
 
@@ -54,4 +56,11 @@ pub fn run(clock: &mut SysTickClock) {
         calibration_loop(CALIBRATION_LOOPS)
     });
     crate::flight::bench_workloads(clock);
+    crate::planning::run(clock);
+    let stack = crate::stack::usage();
+    hprintln!(
+        "bench: stack_high_water_bytes={} stack_size_bytes={}",
+        stack.high_water_bytes,
+        stack.size_bytes
+    );
 }

@@ -19,6 +19,7 @@ mod clock;
 mod fault;
 mod flight;
 mod host;
+mod planning;
 mod stack;
 mod storage;
 mod uart;

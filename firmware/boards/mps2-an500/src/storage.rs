@@ -5,6 +5,7 @@
 //! creates a mutable reference to a static, and the `taken` flag makes a second one impossible.
 
 use core::cell::UnsafeCell;
+use core::mem::MaybeUninit;
 use core::sync::atomic::{AtomicBool, Ordering};
 
 /// A static value that can be borrowed mutably once, for the rest of the program.
@@ -39,14 +40,59 @@ impl<T> Lent<T> {
     }
 }
 
+/// A value with a compile-time initial state (the empty arena), copied into a [`PsramSlot`] on first use.
+pub trait ConstInit: Sized {
+    /// The initial value.
+    const INIT: Self;
+}
+
+/// A static in `.psram` (NOLOAD, zeroed at boot) for a value whose initial state is not all zero bytes: it starts
+/// uninitialised and [`PsramSlot::take`] writes `T::INIT` into it in place, once, then lends it like [`Lent`].
+/// Unlike a `Lent` in `.data`, the initial image is not copied to SRAM at every boot (the flight mode never pays
+/// for the benchmark's arenas); it is copied from flash (`.rodata`) when the slot is first taken. The copy is a
+/// `memcpy` from the constant's image, not a stack temporary (checked by the bench run's stack high-water mark).
+pub struct PsramSlot<T> {
+    taken: AtomicBool,
+    value: UnsafeCell<MaybeUninit<T>>,
+}
+
+// SAFETY: as for `Lent`: the value is reachable only through the single `&'static mut` handed out by `take`.
+unsafe impl<T: Send> Sync for PsramSlot<T> {}
+
+impl<T: ConstInit> PsramSlot<T> {
+    /// An empty slot (all-zero bytes, as `.psram` requires).
+    pub const fn new() -> Self {
+        Self {
+            taken: AtomicBool::new(false),
+            value: UnsafeCell::new(MaybeUninit::uninit()),
+        }
+    }
+
+    /// The one mutable borrow, initialised to `T::INIT`; `None` if it was already taken.
+    #[allow(clippy::mut_from_ref)]
+    pub fn take(&'static self) -> Option<&'static mut T> {
+        if self.taken.swap(true, Ordering::AcqRel) {
+            return None;
+        }
+        // SAFETY: the flag was false, so no reference to the value exists, and none will be created later except
+        // the one returned here. The slot is valid, aligned memory for a `T` (a static of `MaybeUninit<T>`);
+        // after the write it holds an initialised `T`.
+        unsafe {
+            let slot = &mut *self.value.get();
+            slot.as_mut_ptr().write(T::INIT);
+            Some(slot.assume_init_mut())
+        }
+    }
+}
+
 extern "C" {
     static mut __spsram: u64;
     static mut __epsram: u64;
 }
 
 /// Zeroes the `.psram` section (see `memory.x`): statics placed there with `#[link_section = ".psram"]` must have
-/// an all-zero initial value. Called once at boot, before anything in `.psram` is used. Empty today: the
-/// executive's storage (132 KiB) fits the 4 MiB SRAM; planner arenas of later issues may move here.
+/// an all-zero initial value (or be a [`PsramSlot`]). Called once at boot, before anything in `.psram` is used.
+/// Holds the benchmark's planning arenas (`planning.rs`); the executive's storage (132 KiB) stays in SRAM.
 pub fn zero_psram() {
     let start = core::ptr::addr_of_mut!(__spsram);
     let end = core::ptr::addr_of_mut!(__epsram);

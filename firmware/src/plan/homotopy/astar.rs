@@ -88,8 +88,8 @@ impl Default for SearchArena {
 }
 
 impl SearchArena {
-    /// An empty arena.
-    pub fn new() -> Self {
+    /// An empty arena (`const`, so a board can keep it in a `static`).
+    pub const fn new() -> Self {
         const N: Node = Node {
             tri: NONE,
             point: Pt { x: 0.0, y: 0.0 },

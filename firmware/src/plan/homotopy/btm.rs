@@ -242,8 +242,8 @@ fn id(i: usize) -> Id {
 }
 
 impl Btm {
-    /// An empty BTM (no plane).
-    pub fn new() -> Self {
+    /// An empty BTM (no plane). `const`, so a board can keep it in a `static`.
+    pub const fn new() -> Self {
         const NO_OBSTACLE: Option<Obstacle> = None;
         Btm {
             plane: HVec::new(),
@@ -264,7 +264,7 @@ impl Btm {
     /// Builds the BTM of `plane` (a simple polygon, either orientation) minus `obstacles` from scratch.
     /// Obstacles keep the slots `0..obstacles.len()`.
     pub fn build(&mut self, plane: &[Pt], obstacles: &[&[Pt]]) -> Result<UpdateReport, BtmError> {
-        *self = Self::new_reset(core::mem::take(&mut self.plane));
+        self.reset();
         if plane.len() < 3 || plane.len() > MAX_PLANE_VERTICES {
             return Err(BtmError::InvalidPlane("outline needs 3..=MAX_PLANE_VERTICES corners"));
         }
@@ -292,11 +292,25 @@ impl Btm {
         self.rebuild()
     }
 
-    fn new_reset(mut plane: HVec<Pt, MAX_PLANE_VERTICES>) -> Self {
-        plane.clear();
-        let mut b = Self::new();
-        b.plane = plane;
-        b
+    /// Back to the state of [`Btm::new`], in place: `*self = Self::new()` would build a ~0.25 MiB temporary on
+    /// the stack (it overflowed the board's 256 KiB stack, found by the on-target `homotopy_btm_build_c` workload).
+    fn reset(&mut self) {
+        self.plane.clear();
+        self.verts.fill(DEAD_VERTEX);
+        for a in self.adj.iter_mut() {
+            a.fill(NONE);
+        }
+        self.deg.fill(0);
+        self.tris.fill(DEAD_TRI);
+        for o in self.obstacles.iter_mut() {
+            *o = None;
+        }
+        self.cand.fill((NONE, NONE, 0.0));
+        self.in_region.fill(false);
+        self.tri_mark.fill(false);
+        self.region_tris.clear();
+        self.region_hole.clear();
+        self.region_full = true;
     }
 
     /// Retriangulates the whole plane with the current obstacles (the "full rebuild" baseline).

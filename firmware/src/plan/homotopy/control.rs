@@ -43,8 +43,8 @@ pub struct ControllableSet {
 
 impl ControlGrid {
     /// Empty grid.
-    pub fn new() -> Self {
-        ControlGrid { set: [0; CELLS.div_ceil(64)], queue: [0; CELLS], origin: Pt::default(), cell: 1.0 }
+    pub const fn new() -> Self {
+        ControlGrid { set: [0; CELLS.div_ceil(64)], queue: [0; CELLS], origin: Pt { x: 0.0, y: 0.0 }, cell: 1.0 }
     }
     /// Cell size (m) of the last construction.
     pub fn cell_size(&self) -> f64 {

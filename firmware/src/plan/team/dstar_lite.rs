@@ -306,6 +306,11 @@ impl<'a> DStarLite<'a> {
             return Err(DStarError::StorageTooSmall { needed: cells, have });
         }
         let mut me = Self { width, height, s: storage, epoch: 0, heap_len: 0, km: Cost::ZERO, start: 0, last: 0, goal: 0, planned: false };
+        // Stamps left by an earlier planner on the same storage would make its stale g / rhs look current (its
+        // epochs start at 1 like ours): clear them (bounded by the cell count).
+        for st in me.s.stamp.iter_mut().take(cells) {
+            *st = 0;
+        }
         me.clear_map();
         me.new_epoch();
         Ok(me)

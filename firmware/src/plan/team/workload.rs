@@ -99,6 +99,17 @@ mod regression {
     use super::*;
     use std::boxed::Box;
 
+    /// Found by `firmware::workload`'s determinism test: a second planner on a reused arena saw the first
+    /// planner's epoch stamps as its own and returned `NoPath` with zero expansions.
+    #[test]
+    fn reused_arena_gives_the_same_answer() {
+        let mut a: Box<DStarArena<GLOBAL_GRID_MAX_CELLS>> = Box::default();
+        let first = dstar_workload(&mut a).unwrap();
+        let second = dstar_workload(&mut a).unwrap();
+        assert_eq!(first, second);
+        assert!(matches!(first, DStarOutcome::Found { .. }), "{first:?}");
+    }
+
     /// Found by the on-target workload: after the robot moved and a 50-cell crevasse was walled across its path,
     /// the incremental replan returned the old cost with zero expansions (a rounding-broken tie in the first key
     /// component ended the search). The replan must equal planning from scratch.
