@@ -169,7 +169,7 @@ pub struct MapSection {
     pub truncation_m: Option<f64>,
     /// ESDF saturation distance, metres. Default 1.5.
     pub esdf_max_distance_m: f64,
-    /// Pool size in blocks. Default 3584 (the flight board's pool).
+    /// Pool size in blocks. Default `FLIGHT_BLOCKS` (the flight board's pool, 3072).
     pub pool_blocks: usize,
 }
 

@@ -12,10 +12,11 @@ pub const BLOCK_EDGE: usize = 8;
 /// Voxels per block (`BLOCK_EDGE^3`).
 pub const BLOCK_VOXELS: usize = BLOCK_EDGE * BLOCK_EDGE * BLOCK_EDGE;
 
-/// Default number of blocks in the flight computer's pool. 3584 blocks x ~4.1 KiB = ~14.4 MiB, which fits the
-/// mps2-an500 board's 16 MiB PSRAM with room for the planner's arenas in SRAM. At 5 cm voxels a block is 0.4 m
-/// on a side; flat ground observed with free space above costs ~2 blocks per 0.16 m^2 column.
-pub const FLIGHT_BLOCKS: usize = 3584;
+/// Default number of blocks in the flight computer's pool. 3072 blocks x 4112 B = 12.0 MiB of the mps2-an500
+/// board's 16 MiB PSRAM, leaving ~4 MiB of PSRAM for the planners' arenas (the board's `bench` mode places the
+/// ABIT*, homotopy and team arenas there). At 5 cm voxels a block is 0.4 m on a side; observed terrain costs
+/// 84-120 kB per m^2 (host-sim/doc/map.md), so the pool holds ~100-150 m^2 of terrain at 5 cm.
+pub const FLIGHT_BLOCKS: usize = 3072;
 /// Default size of the block index (open addressing, power of two, at least 2x the pool so probes stay short).
 pub const FLIGHT_INDEX: usize = 8192;
 
