@@ -224,12 +224,9 @@ pub fn ray_triangle(o: P3, d: P3, a: P3, b: P3, c: P3) -> Option<f64> {
     (t >= 0.0).then_some(t)
 }
 
-/// Fixed, skew directions for ray-parity signs (unit, no two coplanar with a coordinate axis).
-const PARITY_DIRS: [P3; 3] = [
-    [0.577_215_664_9, 0.301_029_995_7, 0.759_134_271_0],
-    [-0.415_038_932_4, 0.858_306_438_7, -0.301_841_125_3],
-    [0.205_467_853_7, -0.660_156_481_5, -0.722_512_066_1],
-];
+/// Fixed, skew directions for ray-parity signs (not unit: parity needs none; no component zero, so no ray runs
+/// along a coordinate plane where shape-model vertices often line up).
+const PARITY_DIRS: [P3; 3] = [[0.5813, 0.3127, 0.7511], [-0.4172, 0.8566, -0.3035], [0.2063, -0.6612, -0.7214]];
 
 impl MeshWorld {
     /// Builds the world from `mesh` (already in metres), multiplying every coordinate by `scale`.
@@ -567,7 +564,7 @@ impl World for MeshWorld {
     fn raycast(&self, origin: &Vec3, dir: &Vec3, max_range: Real) -> Option<Real> {
         let o = [origin.x as f64, origin.y as f64, origin.z as f64];
         let d = unit([dir.x as f64, dir.y as f64, dir.z as f64]);
-        if norm(d) == 0.0 || !(max_range >= 0.0) {
+        if norm(d) == 0.0 || max_range.is_nan() || max_range < 0.0 {
             return None;
         }
         self.first_hit(o, d, max_range as f64).map(|t| t as Real)
