@@ -261,7 +261,9 @@ pub enum WorldSpec {
 }
 
 impl WorldSpec {
-    /// The built-in worlds by name: `crater_wall`, `ledge`, `ledge_pole`, `marsyard` (the ERC Mars Yard DEM).
+    /// The built-in worlds by name: `crater_wall`, `ledge`, `ledge_pole`, `marsyard` (the ERC Mars Yard DEM),
+    /// `hirise_cliff` (the HiRISE NumPy crop at 1.01 m) and `itokawa` (the shape model in km, scaled by 0.2), with
+    /// file paths relative to the shared data directory; the same worlds as the shipped scenario files.
     pub fn by_name(name: &str) -> Option<WorldSpec> {
         Some(match name {
             "crater_wall" => WorldSpec::CraterWall(CraterWallParams::default()),
@@ -276,6 +278,22 @@ impl WorldSpec {
                 spacing_m: None,
                 nodata: None,
                 first_row: None,
+            }),
+            "hirise_cliff" => WorldSpec::Terrain(TerrainSection {
+                file: PathBuf::from("terrain/hirise_DTEEC_010228_1490_016320_1490_crop_120x70.npy"),
+                format: Some("npy".into()),
+                height_scale: 1.0,
+                horizontal_scale: 1.0,
+                vertical_scale: 1.0,
+                spacing_m: Some(1.01),
+                nodata: None,
+                first_row: None,
+            }),
+            "itokawa" => WorldSpec::Mesh(MeshSection {
+                file: PathBuf::from("asteroids/itokawa.obj"),
+                format: None,
+                units: Some("km".into()),
+                scale: 0.2,
             }),
             _ => return None,
         })
@@ -632,6 +650,19 @@ root_anchor = [-14.0, -14.0, 19.76]
 [goal]
 position = [10.0, 10.0, 21.67]
 "#;
+
+    #[test]
+    fn built_in_names_match_the_shipped_scenarios() {
+        let data = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data");
+        for name in ["hirise_cliff", "itokawa"] {
+            let by_name = WorldSpec::by_name(name).unwrap().build(&data).unwrap();
+            let sc = load(&dir().join(format!("{name}.toml"))).unwrap();
+            let from_file = sc.build_world().unwrap();
+            assert_eq!(by_name.bounds(), from_file.bounds(), "{name}");
+            let p = Vec3::new(1.0, 2.0, 30.0);
+            assert_eq!(by_name.query(&p), from_file.query(&p), "{name}");
+        }
+    }
 
     #[test]
     fn npy_and_mesh_rejections_name_field_and_reason() {

@@ -541,6 +541,9 @@ impl MeshWorld {
 impl DistanceField for MeshWorld {
     fn query(&self, p: &Vec3) -> DistanceQuery {
         let q = [p.x as f64, p.y as f64, p.z as f64];
+        if !q.iter().all(|x| x.is_finite()) {
+            return DistanceQuery::Unknown;
+        }
         let (d, c) = self.sdf_closest(q);
         let v = sub(q, c);
         let n = norm(v);
@@ -711,6 +714,8 @@ mod tests {
 
     #[test]
     fn bad_meshes_are_rejected() {
+        let w = MeshWorld::new("x", &icosphere(1.0, 0), 1.0).unwrap();
+        assert_eq!(w.query(&Vec3::new(f32::NAN, 0.0, 0.0)), DistanceQuery::Unknown);
         assert!(MeshWorld::new("x", &TriMesh::default(), 1.0).is_err());
         assert!(MeshWorld::new("x", &icosphere(1.0, 0), f64::NAN).is_err());
         assert!(MeshWorld::new("x", &icosphere(1.0, 0), 0.0).is_err());
