@@ -9,9 +9,12 @@
 use crate::sensor::RangeSensorParams;
 use crate::terrain::asc::load_asc;
 use crate::terrain::geotiff::{load_geotiff, GeoTiffOptions};
+use crate::terrain::npy::{load_npy, FirstRow, NpyOptions};
+use crate::terrain::obj::{load_obj, ObjOptions};
 use crate::world::crater::{CraterWall, CraterWallParams};
 use crate::world::heightmap::HeightmapWorld;
 use crate::world::ledge::LedgeWorld;
+use crate::world::mesh::MeshWorld;
 use crate::world::World;
 use firmware::config::map::MapConfig;
 use firmware::geom::{Real, Vec3};
@@ -44,7 +47,7 @@ impl core::error::Error for ScenarioError {}
 pub struct TerrainSection {
     /// Path of the DEM, relative to the scenario file.
     pub file: PathBuf,
-    /// `geotiff` or `asc`; default from the extension (`.tif`, `.tiff`, `.asc`).
+    /// `geotiff`, `asc` or `npy`; default from the extension (`.tif`, `.tiff`, `.asc`, `.npy`).
     #[serde(default)]
     pub format: Option<String>,
     /// Stored sample to metres (e.g. 0.5 for the LOLA Kepler file). Default 1.
@@ -56,12 +59,33 @@ pub struct TerrainSection {
     /// Multiplies the heights (after `height_scale`). Default 1.
     #[serde(default = "one")]
     pub vertical_scale: f64,
-    /// Post spacing override, metres (GeoTIFF without a pixel-scale tag). Default: from the file.
+    /// Post spacing override, metres (GeoTIFF without a pixel-scale tag). Default: from the file. Required for
+    /// `npy` (the format carries no georeferencing).
     #[serde(default)]
     pub spacing_m: Option<f64>,
-    /// "No data" override (GeoTIFF). Default: from the file's GDAL_NODATA tag.
+    /// "No data" stored value (GeoTIFF: overrides the GDAL_NODATA tag; npy: a sentinel besides NaN).
     #[serde(default)]
     pub nodata: Option<f64>,
+    /// `npy` only: which map edge the array's first row is, `north` (image convention, default) or `south`.
+    #[serde(default)]
+    pub first_row: Option<String>,
+}
+
+/// `[world.mesh]`: a closed triangle mesh (OBJ shape model).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshSection {
+    /// Path of the mesh, relative to the scenario file.
+    pub file: PathBuf,
+    /// `obj` (the only mesh format); default from the extension.
+    #[serde(default)]
+    pub format: Option<String>,
+    /// Unit of the file's coordinates: `m` (default) or `km` (the asteroid shape models).
+    #[serde(default)]
+    pub units: Option<String>,
+    /// Extra scale after the unit conversion (e.g. 0.1 makes a 535 m asteroid a 53 m rock field). Default 1.
+    #[serde(default = "one")]
+    pub scale: f64,
 }
 
 fn one() -> f64 {
@@ -72,7 +96,7 @@ fn one() -> f64 {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct WorldSection {
-    /// `crater_wall`, `ledge`, `ledge_pole` or `terrain`.
+    /// `crater_wall`, `ledge`, `ledge_pole`, `terrain` or `mesh`.
     pub kind: String,
     /// Parameters when `kind = "crater_wall"` (all optional, defaults in [`CraterWallParams`]).
     #[serde(default)]
@@ -80,6 +104,9 @@ pub struct WorldSection {
     /// The DEM when `kind = "terrain"`.
     #[serde(default)]
     pub terrain: Option<TerrainSection>,
+    /// The mesh when `kind = "mesh"`.
+    #[serde(default)]
+    pub mesh: Option<MeshSection>,
 }
 
 /// `[rover]`.
@@ -229,10 +256,14 @@ pub enum WorldSpec {
     LedgePole,
     /// A DEM.
     Terrain(TerrainSection),
+    /// A closed triangle mesh.
+    Mesh(MeshSection),
 }
 
 impl WorldSpec {
-    /// The built-in worlds by name: `crater_wall`, `ledge`, `ledge_pole`, `marsyard` (the ERC Mars Yard DEM).
+    /// The built-in worlds by name: `crater_wall`, `ledge`, `ledge_pole`, `marsyard` (the ERC Mars Yard DEM),
+    /// `hirise_cliff` (the HiRISE NumPy crop at 1.01 m) and `itokawa` (the shape model in km, scaled by 0.2), with
+    /// file paths relative to the shared data directory; the same worlds as the shipped scenario files.
     pub fn by_name(name: &str) -> Option<WorldSpec> {
         Some(match name {
             "crater_wall" => WorldSpec::CraterWall(CraterWallParams::default()),
@@ -246,6 +277,23 @@ impl WorldSpec {
                 vertical_scale: 1.0,
                 spacing_m: None,
                 nodata: None,
+                first_row: None,
+            }),
+            "hirise_cliff" => WorldSpec::Terrain(TerrainSection {
+                file: PathBuf::from("terrain/hirise_DTEEC_010228_1490_016320_1490_crop_120x70.npy"),
+                format: Some("npy".into()),
+                height_scale: 1.0,
+                horizontal_scale: 1.0,
+                vertical_scale: 1.0,
+                spacing_m: Some(1.01),
+                nodata: None,
+                first_row: None,
+            }),
+            "itokawa" => WorldSpec::Mesh(MeshSection {
+                file: PathBuf::from("asteroids/itokawa.obj"),
+                format: None,
+                units: Some("km".into()),
+                scale: 0.2,
             }),
             _ => return None,
         })
@@ -277,23 +325,81 @@ impl WorldSpec {
                     )
                     .map_err(|e| f(format!("{}: {e}", path.display())))?,
                     "asc" => load_asc(&path, t.height_scale).map_err(|e| f(format!("{}: {e}", path.display())))?,
-                    "npy" | "obj" => {
+                    "npy" => {
+                        let Some(spacing_m) = t.spacing_m else {
+                            return Err((
+                                "world.terrain.spacing_m".into(),
+                                "a .npy grid carries no post spacing: give spacing_m (1.01 for the HiRISE crop)".into(),
+                            ));
+                        };
+                        if !(spacing_m.is_finite() && spacing_m > 0.0) {
+                            return Err(("world.terrain.spacing_m".into(), format!("must be finite and > 0, got {spacing_m}")));
+                        }
+                        if !(t.height_scale.is_finite() && t.height_scale > 0.0) {
+                            return Err((
+                                "world.terrain.height_scale".into(),
+                                format!("must be finite and > 0, got {}", t.height_scale),
+                            ));
+                        }
+                        let first_row = match t.first_row.as_deref() {
+                            None | Some("north") => FirstRow::North,
+                            Some("south") => FirstRow::South,
+                            Some(other) => {
+                                return Err((
+                                    "world.terrain.first_row".into(),
+                                    format!("unknown edge {other:?}: use north or south"),
+                                ))
+                            }
+                        };
+                        let opts = NpyOptions { spacing_m, height_scale: t.height_scale, nodata: t.nodata, first_row };
+                        load_npy(&path, &opts).map_err(|e| f(format!("{}: {e}", path.display())))?
+                    }
+                    "obj" => {
                         return Err((
                             "world.terrain.format".into(),
-                            format!("{format} terrain is loaded by the npy/obj loaders of the `team` branch, not merged here"),
+                            "an OBJ mesh is not a height field: use kind = \"mesh\" with a [world.mesh] table".into(),
                         ))
                     }
                     other => {
                         return Err((
                             "world.terrain.format".into(),
-                            format!("unknown format {other:?}: use geotiff or asc"),
+                            format!("unknown format {other:?}: use geotiff, asc or npy"),
                         ))
                     }
                 };
+                if format != "npy" && t.first_row.is_some() {
+                    return Err(("world.terrain.first_row".into(), "only applies to format = \"npy\"".into()));
+                }
                 let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("terrain").to_string();
                 HeightmapWorld::new(&name, &hm, t.horizontal_scale, t.vertical_scale)
                     .map(|w| Box::new(w) as Box<dyn World>)
                     .map_err(|e| f(e.0))
+            }
+            WorldSpec::Mesh(m) => {
+                let path = base.join(&m.file);
+                if !path.is_file() {
+                    return Err(("world.mesh.file".into(), format!("no such file: {}", path.display())));
+                }
+                let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+                let format = m.format.clone().unwrap_or(ext);
+                if format != "obj" {
+                    return Err(("world.mesh.format".into(), format!("unknown mesh format {format:?}: use obj")));
+                }
+                let unit = match m.units.as_deref() {
+                    None | Some("m") => ObjOptions::METRES,
+                    Some("km") => ObjOptions::KILOMETRES,
+                    Some(other) => {
+                        return Err(("world.mesh.units".into(), format!("unknown unit {other:?}: use m or km")))
+                    }
+                };
+                if !(m.scale.is_finite() && m.scale > 0.0) {
+                    return Err(("world.mesh.scale".into(), format!("must be finite and > 0, got {}", m.scale)));
+                }
+                let mesh = load_obj(&path, &unit).map_err(|e| ("world.mesh".to_string(), format!("{}: {e}", path.display())))?;
+                let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("mesh").to_string();
+                MeshWorld::new(&name, &mesh, m.scale)
+                    .map(|w| Box::new(w) as Box<dyn World>)
+                    .map_err(|e| ("world.mesh".to_string(), e.0))
             }
         }
     }
@@ -321,9 +427,14 @@ impl Scenario {
                 .clone()
                 .map(WorldSpec::Terrain)
                 .ok_or_else(|| self.err("world.terrain", "kind = \"terrain\" needs a [world.terrain] table with `file`")),
+            "mesh" => w
+                .mesh
+                .clone()
+                .map(WorldSpec::Mesh)
+                .ok_or_else(|| self.err("world.mesh", "kind = \"mesh\" needs a [world.mesh] table with `file`")),
             other => Err(self.err(
                 "world.kind",
-                format!("unknown world kind {other:?}: use crater_wall, ledge, ledge_pole or terrain"),
+                format!("unknown world kind {other:?}: use crater_wall, ledge, ledge_pole, terrain or mesh"),
             )),
         }
     }
@@ -506,6 +617,85 @@ position = [7.0, 0.0, 0.4]
             assert_eq!(e.field, field, "{e}");
             assert!(e.reason.contains(reason), "{e}");
             assert!(e.to_string().contains("inline.toml"), "{e}");
+        }
+    }
+
+    const HIRISE: &str = r#"
+name = "h"
+[world]
+kind = "terrain"
+[world.terrain]
+file = "../../../shared/data/terrain/hirise_DTEEC_010228_1490_016320_1490_crop_120x70.npy"
+spacing_m = 1.01
+[rover]
+start = [10.0, 10.0, 35.09]
+[tether]
+root_anchor = [14.0, 14.0, 35.48]
+[goal]
+position = [-10.0, -10.0, 19.40]
+"#;
+
+    const ITOKAWA: &str = r#"
+name = "i"
+[world]
+kind = "mesh"
+[world.mesh]
+file = "../../../shared/data/asteroids/itokawa.obj"
+units = "km"
+scale = 0.2
+[rover]
+start = [-10.0, -10.0, 21.18]
+[tether]
+root_anchor = [-14.0, -14.0, 19.76]
+[goal]
+position = [10.0, 10.0, 21.67]
+"#;
+
+    #[test]
+    fn built_in_names_match_the_shipped_scenarios() {
+        let data = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data");
+        for name in ["hirise_cliff", "itokawa"] {
+            let by_name = WorldSpec::by_name(name).unwrap().build(&data).unwrap();
+            let sc = load(&dir().join(format!("{name}.toml"))).unwrap();
+            let from_file = sc.build_world().unwrap();
+            assert_eq!(by_name.bounds(), from_file.bounds(), "{name}");
+            let p = Vec3::new(1.0, 2.0, 30.0);
+            assert_eq!(by_name.query(&p), from_file.query(&p), "{name}");
+        }
+    }
+
+    #[test]
+    fn npy_and_mesh_rejections_name_field_and_reason() {
+        let cases: Vec<(String, &str, &str)> = vec![
+            (HIRISE.replace("spacing_m = 1.01", ""), "world.terrain.spacing_m", "no post spacing"),
+            (HIRISE.replace("spacing_m = 1.01", "spacing_m = -1.0"), "world.terrain.spacing_m", "> 0"),
+            (HIRISE.replace("spacing_m = 1.01", "spacing_m = 1.01\nfirst_row = \"west\""), "world.terrain.first_row", "north or south"),
+            (HIRISE.replace("spacing_m = 1.01", "spacing_m = 1.01\nheight_scale = 0.0"), "world.terrain.height_scale", "> 0"),
+            (HIRISE.replace("spacing_m = 1.01", "spacing_m = 1.01\nvertical_scale = inf"), "world.terrain", "vertical_scale"),
+            (
+                HIRISE.replace("terrain/hirise_DTEEC_010228_1490_016320_1490_crop_120x70.npy", "asteroids/itokawa.obj"),
+                "world.terrain.format",
+                "kind = \"mesh\"",
+            ),
+            (HIRISE.replace("spacing_m = 1.01", "spacing_m = 1.01\nformat = \"png\""), "world.terrain.format", "geotiff, asc or npy"),
+            (HIRISE.replace("start = [10.0, 10.0, 35.09]", "start = [10.0, 10.0, 30.0]"), "rover.start", "inside the terrain"),
+            (ITOKAWA.replace("units = \"km\"", "units = \"au\""), "world.mesh.units", "m or km"),
+            (ITOKAWA.replace("scale = 0.2", "scale = 0.0"), "world.mesh.scale", "> 0"),
+            (ITOKAWA.replace("scale = 0.2", "scale = nan"), "world.mesh.scale", "> 0"),
+            (ITOKAWA.replace("itokawa.obj\"", "itokawa.obj\"\nformat = \"stl\""), "world.mesh.format", "use obj"),
+            (ITOKAWA.replace("asteroids/itokawa.obj", "asteroids/nope.obj"), "world.mesh.file", "no such file"),
+            (ITOKAWA.replace("asteroids/itokawa.obj", "terrain/erc_marsyard2021_hm.tif"), "world.mesh.format", "use obj"),
+            (ITOKAWA.replace("[world.mesh]", "[world.other]"), "(syntax)", "unknown field"),
+            (ITOKAWA.replace("kind = \"mesh\"", "kind = \"terrain\""), "world.terrain", "[world.terrain]"),
+            (ITOKAWA.replace("start = [-10.0, -10.0, 21.18]", "start = [0.0, 0.0, 0.0]"), "rover.start", "inside the terrain"),
+            (ITOKAWA.replace("position = [10.0, 10.0, 21.67]", "position = [100.0, 10.0, 21.67]"), "goal.position", "outside the world's bounds"),
+        ];
+        assert!(check_text(HIRISE).is_ok());
+        assert!(check_text(ITOKAWA).is_ok());
+        for (text, field, reason) in cases {
+            let e = check_text(&text).unwrap_err();
+            assert_eq!(e.field, field, "{e}");
+            assert!(e.reason.contains(reason), "{e}");
         }
     }
 

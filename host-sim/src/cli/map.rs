@@ -18,7 +18,7 @@ pub fn exit(r: Result<(), String>) -> std::process::ExitCode {
 /// Arguments of `map-check`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct MapCheckArgs {
-    /// World: crater_wall, ledge, ledge_pole, marsyard, or a scenario file (.toml).
+    /// World: crater_wall, ledge, ledge_pole, marsyard, hirise_cliff, itokawa, or a scenario file (.toml).
     #[arg(long, default_value = "crater_wall")]
     pub world: String,
     /// Voxel size, metres.
@@ -85,7 +85,7 @@ pub fn world_by_name(name: &str) -> Result<(Box<dyn World>, String), String> {
         return Ok((w, kind));
     }
     let spec = crate::scenario::WorldSpec::by_name(name).ok_or_else(|| {
-        format!("unknown world {name:?}: use crater_wall, ledge, ledge_pole, marsyard or a .toml scenario")
+        format!("unknown world {name:?}: use crater_wall, ledge, ledge_pole, marsyard, hirise_cliff, itokawa or a .toml scenario")
     })?;
     let w = spec.build(&data_dir()).map_err(|(f, r)| format!("{f}: {r}"))?;
     Ok((w, name.to_string()))

@@ -9,6 +9,7 @@ pub mod crater;
 pub mod geometry;
 pub mod heightmap;
 pub mod ledge;
+pub mod mesh;
 
 use firmware::geom::{Real, Vec3};
 use firmware::map::DistanceField;
