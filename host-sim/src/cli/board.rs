@@ -132,7 +132,8 @@ fn report_cmd(elf: &std::path::Path) -> Result<(), Box<dyn core::error::Error>> 
     let v = |k: &str| exit.output.value(k).unwrap_or_else(|| "?".into());
     println!(
         "stack high-water mark: {} of {} bytes\nexecutive storage (static, lent): {} bytes; scan points peak {} of {}; \
-         tx queue peak {} of {} bytes; rx staging peak {} bytes; largest frame {} bytes; log queue peak {}",
+         tx queue peak {} of {} bytes; rx staging peak {} bytes; largest frame {} bytes; log queue peak {}\n\
+         onboard map (static, PSRAM): {} bytes; blocks peak {} of {}",
         v("stack_high_water_bytes"),
         v("stack_size_bytes"),
         v("exec_storage_bytes"),
@@ -142,7 +143,10 @@ fn report_cmd(elf: &std::path::Path) -> Result<(), Box<dyn core::error::Error>> 
         v("tx_queue_capacity"),
         v("rx_staging_peak"),
         v("frame_len_peak"),
-        v("log_queue_peak")
+        v("log_queue_peak"),
+        v("map_storage_bytes"),
+        v("map_blocks_peak"),
+        v("map_blocks_capacity")
     );
     Ok(())
 }

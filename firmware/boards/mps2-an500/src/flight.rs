@@ -191,7 +191,8 @@ fn quit(exec: &BoardExecutive) -> ! {
     hprintln!(
         "board: stack_high_water_bytes={} stack_size_bytes={} exec_storage_bytes={} scan_points_peak={} \
          scan_points_capacity={} tx_queue_peak={} tx_queue_capacity={} rx_staging_peak={} frame_len_peak={} \
-         log_queue_peak={} steps={} frames_accepted={} frames_sent={}",
+         log_queue_peak={} map_blocks_peak={} map_blocks_capacity={} map_storage_bytes={} steps={} frames_accepted={} \
+         frames_sent={}",
         stack.high_water_bytes,
         stack.size_bytes,
         core::mem::size_of::<ExecStorage>(),
@@ -202,6 +203,9 @@ fn quit(exec: &BoardExecutive) -> ! {
         hw.rx_staging,
         hw.frame_len,
         hw.log_queue,
+        t.map.blocks_used, // blocks are never freed: in use = peak
+        t.map.blocks_capacity,
+        core::mem::size_of::<[Block; FLIGHT_BLOCKS]>() + core::mem::size_of::<[u32; FLIGHT_INDEX]>(),
         t.steps,
         t.frames_accepted,
         t.frames_sent
