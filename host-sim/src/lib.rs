@@ -16,6 +16,7 @@
 //! Planning: [`harness`] (every planner on every shared problem), [`homotopy`] (tether-demand planes, closed
 //! loop), [`team`] and [`movingai`] (tethered climbing teams, grid benchmarks).
 
+pub mod campaign;
 pub mod cli;
 pub mod fieldlog;
 pub mod harness;

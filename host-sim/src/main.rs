@@ -37,6 +37,8 @@ enum Command {
     RenderMap(cli::map::RenderMapArgs),
     /// Time a full distance transform: the onboard ESDF vs libdynamicedt3d on the same grid.
     EdtBench(cli::map::EdtBenchArgs),
+    /// Paton et al.'s Table I for a scenario: N planning trials, each path re-validated on the true terrain.
+    Campaign(cli::campaign::CampaignArgs),
     /// ABIT* side by side with OMPL 1.5.2's ABIT* on the shared geometric problems.
     AbitBench(cli::abit_bench::Args),
     /// Homotopy planning on a tether-demand plane (scenarios B, C; closed loop with a range sensor).
@@ -65,6 +67,7 @@ fn main() -> ExitCode {
         Command::MapCheck(a) => cli::done(cli::map::map_check(&a)),
         Command::RenderMap(a) => cli::done(cli::map::render_map(&a)),
         Command::EdtBench(a) => cli::done(cli::map::edt_bench(&a)),
+        Command::Campaign(a) => cli::campaign::main(&a),
         Command::AbitBench(a) => cli::printed(cli::abit_bench::run(&a)),
         Command::Homotopy(a) => cli::homotopy::main(&a),
         Command::Board(a) => cli::board::main(&a),

@@ -168,6 +168,16 @@ impl Default for Seeds {
     }
 }
 
+/// `[plan]`: where the tether-aware planner samples (Paton et al. V). Both corners or neither.
+#[derive(Debug, Clone, PartialEq, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlanSection {
+    /// Lower corner of the planning box, metres. Default: the world's bounds.
+    pub bounds_min: Option<[f64; 3]>,
+    /// Upper corner of the planning box, metres. Default: the world's bounds.
+    pub bounds_max: Option<[f64; 3]>,
+}
+
 /// `[budgets]`.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -240,6 +250,9 @@ pub struct Scenario {
     /// Map parameters.
     #[serde(default)]
     pub map: MapSection,
+    /// Planning region (the `campaign` command and the onboard planner's bounds).
+    #[serde(default)]
+    pub plan: PlanSection,
     /// The file it came from (set by [`load`]).
     #[serde(skip)]
     pub file: PathBuf,
@@ -500,6 +513,17 @@ impl Scenario {
         }
         self.sensor.validate().map_err(|(f, r)| self.err(&format!("sensor.{f}"), r))?;
         self.map_config()?;
+        match (&self.plan.bounds_min, &self.plan.bounds_max) {
+            (None, None) => {}
+            (Some(lo), Some(hi)) => {
+                finite3("plan.bounds_min", lo)?;
+                finite3("plan.bounds_max", hi)?;
+                if !(0..3).all(|i| lo[i] < hi[i]) {
+                    return Err(self.err("plan.bounds_max", format!("must exceed plan.bounds_min on every axis: {lo:?} vs {hi:?}")));
+                }
+            }
+            _ => return Err(self.err("plan.bounds_min", "give both plan.bounds_min and plan.bounds_max, or neither")),
+        }
         let b = world.bounds();
         let inside_xy = |p: &[f64; 3]| {
             p[0] >= b.min.x as f64 && p[0] <= b.max.x as f64 && p[1] >= b.min.y as f64 && p[1] <= b.max.y as f64

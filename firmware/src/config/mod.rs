@@ -12,4 +12,5 @@ pub mod protocol;
 pub mod rover;
 pub mod stability;
 pub mod team;
+pub mod tethered;
 pub mod tether;

@@ -6,9 +6,12 @@
 //! - [`abit`]: ABIT* over settled SE(3) states with non-Markovian anchor histories (Paton et al. V).
 //! - [`homotopy`]: homotopy-based planning on tether-demand planes (Abad-Manterola et al.; Tanner et al.).
 //! - [`team`]: tethered climbing teams (Morad et al.).
+//! - [`tethered`]: the tether-aware state space of Paton et al. IV-V (settled SE(3) states, anchor histories,
+//!   stability-checked motions) for [`abit`].
 
 pub mod abit;
 pub mod geometric;
 pub mod homotopy;
 pub mod space;
 pub mod team;
+pub mod tethered;

@@ -2,6 +2,7 @@
 //! subcommand returns its process exit code (0 success, 1 the check failed, 2 the command could not run).
 
 pub mod abit_bench;
+pub mod campaign;
 pub mod board;
 pub mod export;
 pub mod homotopy;

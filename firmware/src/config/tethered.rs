@@ -1,0 +1,49 @@
+//! Capacities, budgets and default parameters of [`crate::plan::tethered`], the tether-aware state space of
+//! Paton et al. section V (settled SE(3) states, in-place turns plus straight drives, anchor histories).
+
+/// Sphere-tracing steps of the top-down search for the terrain surface under a sampled (x, y). Each step moves
+/// down by the ESDF distance (at least [`SURFACE_MIN_STEP_M`]); 64 steps cover 64 x 1.5 m (the ESDF band) and any
+/// surface reached through a 5 cm minimum step over 3.2 m of unbanded space.
+pub const SURFACE_TRACE_STEPS: u32 = 64;
+
+/// Smallest step of the surface trace, metres (default 0.05 m: one voxel of the default map).
+pub const SURFACE_MIN_STEP_M: f32 = 0.05;
+
+/// Most interpolated states of one motion (turns and drive together). A motion that would need more is invalid
+/// (`MotionFailure::TooLong`): 256 states at the default 0.2 m resolution is a 51 m drive.
+pub const MAX_MOTION_STATES: u32 = 256;
+
+/// An anchor closer to the axle than the boom length plus this clearance is within the boom's reach: the tether
+/// pulls towards the anchor before it (`plan::tethered::tether_pull_anchor`). Default 0.1 m.
+pub const BOOM_REACH_CLEARANCE_M: f32 = 0.1;
+
+/// Default parameters of the tether-aware space ([`crate::plan::tethered::TetherSpaceParams::DEFAULT`]).
+pub mod defaults {
+    /// Weight of path length in the objective (per metre of axle travel). Default 1.0.
+    pub const W_LENGTH: f64 = 1.0;
+    /// Weight of yaw change (per radian of in-place turning). Default 0.25: a half turn costs as much as 0.8 m.
+    pub const W_YAW: f64 = 0.25;
+    /// Weight of roll (per radian of roll per metre driven). Default 1.0: driving 1 m at 10 degrees of roll costs
+    /// 0.17 m extra.
+    pub const W_ROLL: f64 = 1.0;
+    /// Spacing of interpolated states along a straight drive, metres. Default 0.2 m (a fifth of the track width, so
+    /// the lip of a ledge cannot slip between two checked states unnoticed by the wheels).
+    pub const DRIVE_RESOLUTION_M: f32 = 0.2;
+    /// Spacing of interpolated headings of an in-place turn, radians. Default 0.5 rad (29 degrees).
+    pub const TURN_RESOLUTION_RAD: f32 = 0.5;
+    /// The tether end moves less than this between two interpolated states: anchor prediction is skipped (the
+    /// history cannot change). Default 0.01 m.
+    pub const TETHER_STILL_M: f32 = 0.01;
+    /// Smallest stability margin (friction headroom, see `crate::stability`) an interpolated state must keep.
+    /// Default 0.02: 2 % of the rover's weight in reserve on every friction facet for the difference between the
+    /// map and the terrain (Axel standing on flat ground has a margin of 0.055).
+    pub const MIN_STABILITY_MARGIN: f64 = 0.02;
+    /// Half-width of the uniform perturbation of a sampled surface point in x and y, metres. Default 0.05 m.
+    pub const SAMPLE_PERTURBATION_M: f32 = 0.05;
+    /// A state within this distance (in x, y) of the planning bounds may connect to an off-map goal (Paton et al.
+    /// VI-B). Default 1.0 m.
+    pub const OFF_MAP_EDGE_M: f32 = 1.0;
+    /// Two anchor histories are compatible when they have the same number of anchors and corresponding anchors
+    /// are within this distance. Default 0.1 m (two voxels of the default map).
+    pub const ANCHOR_MATCH_M: f32 = 0.1;
+}

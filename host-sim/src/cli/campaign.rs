@@ -1,0 +1,145 @@
+//! `tetherbot campaign SCENARIO`: Paton et al.'s Table I for any scenario (see [`crate::campaign`] and
+//! `host-sim/doc/campaign.md`).
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use firmware::geom::Real;
+use firmware::plan::abit::AbitParams;
+use firmware::plan::tethered::{PlanBounds, TetherSpaceParams};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::campaign::{self, CampaignSpec, PlanningField};
+
+/// Arguments of `campaign`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct CampaignArgs {
+    /// A scenario name from `host-sim/scenarios/` (e.g. `ledge_test3`) or a path to a `.toml` scenario.
+    pub scenario: String,
+    /// Trials (default: the scenario's `seeds.trials`).
+    #[arg(long)]
+    pub trials: Option<u32>,
+    /// Planner iterations per trial (default: the scenario's `budgets.planner_iterations`).
+    #[arg(long)]
+    pub iterations: Option<u32>,
+    /// Seed of the first trial (default: the scenario's `seeds.planner`).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Worker threads (default: the machine's cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Voxel edge of the planning map, metres.
+    #[arg(long, default_value_t = 0.1)]
+    pub voxel: f64,
+    /// Plan on the onboard `map` (filled from the world's signed distance) or the exact world (`truth`).
+    #[arg(long, default_value = "map")]
+    pub field: String,
+    /// Output directory for results.json, results.csv and paths.svg (default target/campaign/<scenario>).
+    #[arg(long, short)]
+    pub out: Option<PathBuf>,
+    /// Exit with status 1 unless at least this many trials are found stable.
+    #[arg(long)]
+    pub require_stable: Option<usize>,
+}
+
+/// Resolve a scenario argument to a file.
+pub fn scenario_file(arg: &str) -> PathBuf {
+    if arg.ends_with(".toml") {
+        PathBuf::from(arg)
+    } else {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios").join(format!("{arg}.toml"))
+    }
+}
+
+/// The paper's Table I row for the ledge tests, for side-by-side printing.
+pub fn paper_row(name: &str) -> Option<&'static str> {
+    match name {
+        "ledge_test1" => Some("paper (Paton et al. Table I): 100 stable / 0 unstable, 0.29 s (0.05), 1 (0) iterations"),
+        "ledge_test2" => Some("paper (Paton et al. Table I): 0 stable / 0 unstable"),
+        "ledge_test3" => Some("paper (Paton et al. Table I): 84 stable / 0 unstable, 12.8 s (10.3), 188 (141) iterations"),
+        _ => None,
+    }
+}
+
+/// Build the campaign spec from a scenario and the arguments.
+pub fn spec_from(a: &CampaignArgs) -> Result<CampaignSpec, String> {
+    let file = scenario_file(&a.scenario);
+    let sc = crate::scenario::load(&file).map_err(|e| e.to_string())?;
+    let world = sc.build_world().map_err(|e| e.to_string())?;
+    let wb = world.bounds();
+    let lo = sc.plan.bounds_min.unwrap_or([f64::from(wb.min.x), f64::from(wb.min.y), f64::from(wb.min.z) - 1.0]);
+    let hi = sc.plan.bounds_max.unwrap_or([f64::from(wb.max.x), f64::from(wb.max.y), f64::from(wb.max.z) + 1.0]);
+    let bounds = PlanBounds {
+        min: [lo[0] as Real, lo[1] as Real, lo[2] as Real],
+        max: [hi[0] as Real, hi[1] as Real, hi[2] as Real],
+    };
+    let field = match a.field.as_str() {
+        "map" => PlanningField::Map,
+        "truth" => PlanningField::Truth,
+        f => return Err(format!("--field {f:?}: use map or truth")),
+    };
+    if !(a.voxel > 0.0 && a.voxel.is_finite()) {
+        return Err(format!("--voxel {}: must be > 0", a.voxel));
+    }
+    let trials = a.trials.unwrap_or(sc.seeds.trials);
+    if trials == 0 {
+        return Err("--trials must be at least 1".into());
+    }
+    let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())).max(1);
+    Ok(CampaignSpec {
+        name: sc.name.clone(),
+        world,
+        root: sc.tether.root_anchor,
+        start: sc.rover.start,
+        start_yaw_deg: sc.rover.yaw_deg,
+        goal: sc.goal.position,
+        goal_tolerance_m: sc.goal.tolerance_m,
+        bounds,
+        voxel_m: a.voxel,
+        iterations: a.iterations.unwrap_or(sc.budgets.planner_iterations),
+        trials,
+        first_seed: a.seed.unwrap_or(sc.seeds.planner),
+        threads,
+        field,
+        params: TetherSpaceParams::DEFAULT,
+        abit: AbitParams::ompl_defaults(),
+    })
+}
+
+/// Run the command.
+pub fn main(a: &CampaignArgs) -> ExitCode {
+    match run(a) {
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::from(1),
+        Err(e) => super::fail(e),
+    }
+}
+
+fn run(a: &CampaignArgs) -> Result<bool, String> {
+    let spec = spec_from(a)?;
+    let bar = ProgressBar::new(u64::from(spec.trials));
+    if let Ok(style) = ProgressStyle::with_template("{prefix} [{bar:40}] {pos}/{len} trials, {elapsed} elapsed, eta {eta}") {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar.set_prefix(spec.name.clone());
+    let result = campaign::run(&spec, &|done, _| bar.set_position(done as u64))?;
+    bar.finish_and_clear();
+    print!("{}", result.table());
+    if let Some(p) = paper_row(&result.name) {
+        println!("{p}");
+    }
+    let out = a.out.clone().unwrap_or_else(|| {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/campaign").join(&result.name)
+    });
+    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let json = serde_json::to_string_pretty(&result).map_err(|e| e.to_string())?;
+    let write = |name: &str, text: &str| {
+        let p = out.join(name);
+        std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))
+    };
+    write("results.json", &json)?;
+    write("results.csv", &result.csv())?;
+    write("paths.svg", &campaign::paths_svg(spec.world.as_ref(), &spec, &result))?;
+    println!("wrote {}/{{results.json,results.csv,paths.svg}}", out.display());
+    Ok(a.require_stable.is_none_or(|n| result.found_stable() >= n))
+}
