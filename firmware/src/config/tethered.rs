@@ -14,8 +14,9 @@ pub const SURFACE_MIN_STEP_M: f32 = 0.05;
 pub const MAX_MOTION_STATES: u32 = 256;
 
 /// An anchor closer to the axle than the boom length plus this clearance is within the boom's reach: the tether
-/// pulls towards the anchor before it (`plan::tethered::tether_pull_anchor`). Default 0.1 m.
-pub const BOOM_REACH_CLEARANCE_M: f32 = 0.1;
+/// pulls towards the anchor before it (`plan::tethered::tether_pull_anchor`). Default 0.35 m (the wheel radius:
+/// closer than that, the inline boom tip ends at the edge the tether wraps).
+pub const BOOM_REACH_CLEARANCE_M: f32 = 0.35;
 
 /// Default parameters of the tether-aware space ([`crate::plan::tethered::TetherSpaceParams::DEFAULT`]).
 pub mod defaults {
@@ -43,7 +44,14 @@ pub mod defaults {
     /// A state within this distance (in x, y) of the planning bounds may connect to an off-map goal (Paton et al.
     /// VI-B). Default 1.0 m.
     pub const OFF_MAP_EDGE_M: f32 = 1.0;
-    /// Two anchor histories are compatible when they have the same number of anchors and corresponding anchors
-    /// are within this distance. Default 0.1 m (two voxels of the default map).
-    pub const ANCHOR_MATCH_M: f32 = 0.1;
+    /// Two anchor histories are compatible when their wraps' representative anchors are within this distance.
+    /// Default 0.15 m (1.5 voxels of the campaign's map, 3 of the flight map).
+    pub const ANCHOR_MATCH_M: f32 = 0.15;
+    /// Consecutive anchors closer than this belong to one wrap (one obstacle the tether bends around). Default
+    /// 0.6 m: more than the diameter of the ledge's 0.5 m pole, less than the distance between distinct obstacles.
+    pub const ANCHOR_CLUSTER_M: f32 = 0.6;
+    /// Largest total bend of the tether over its anchors, radians. Default 1.5 pi (270 degrees): enough to wrap
+    /// behind a pole and come back over the lip of a ledge (Paton et al. test 3, about 220 degrees), not enough to
+    /// circle an obstacle (a full turn multiplies the tension across the wrap by exp(2 pi mu), 6.6 at mu = 0.3).
+    pub const MAX_TETHER_BEND_RAD: f32 = 1.5 * core::f32::consts::PI;
 }

@@ -21,7 +21,10 @@
 //! statically stable ([`check_pose_stability`]) with a margin of at least `min_stability_margin`, the tether pulling
 //! towards the last anchor of the history that lies beyond the boom's reach ([`tether_pull_anchor`]: an anchor
 //! closer than the boom, e.g. the lip right after the rover went over it, is under the boom, which rests on it). The motion's attachment is the anchor history at `b`. Every failure is counted by
-//! reason ([`MotionStats`]).
+//! reason ([`MotionStats`]). A tether that bends more than `max_tether_bend_rad` in total over its anchors
+//! ([`tether_bend`]) makes the motion invalid: the stability model treats anchors as frictionless, while a real
+//! tether wrapped by an angle `phi` carries a tension ratio of up to `exp(mu phi)` (the capstan equation) across the
+//! wrap; the limit also keeps the planner from exploring paths that circle an obstacle again and again.
 //!
 //! # Objective ([`TetherObjective`])
 //! `cost = w_length * |axle_b - axle_a| + w_yaw * (|turn at a| + |turn at b|) + w_roll * |axle_b - axle_a| *
@@ -35,8 +38,13 @@
 //! the bounds (in `x, y`), at the cost of the straight-line distance.
 //!
 //! # Anchor-history compatibility (section V-A)
-//! Two histories are compatible when they have the same number of anchors and corresponding anchors lie within
-//! `anchor_match_m`.
+//! Rewiring is only allowed between compatible histories. Anchor prediction discretises a tether wrapped around a
+//! curved obstacle into many anchors (about one per 0.4 rad on the 0.25 m pole), so two tree vertices reached around
+//! the same side of the same pole rarely hold identical lists. Histories are therefore compared by their wraps
+//! ([`wraps`]: runs of consecutive anchors closer than `anchor_cluster_m`, each represented by its last anchor):
+//! compatible when they have as many wraps and the representatives lie within `anchor_match_m`
+//! ([`TetherSpace::histories_match`]). Every returned path is re-checked from the root anchor when it is
+//! re-validated, so this tolerance cannot hide an unstable path.
 //!
 //! # Parameters ([`TetherSpaceParams::DEFAULT`], `config::tethered::defaults`)
 //! | parameter | default |
@@ -48,7 +56,9 @@
 //! | `min_stability_margin` | 0.02 rover weights |
 //! | `sample_perturbation_m` | 0.05 m |
 //! | `off_map_edge_m` | 1.0 m |
-//! | `anchor_match_m` | 0.1 m |
+//! | `anchor_match_m` | 0.15 m |
+//! | `anchor_cluster_m` | 0.6 m |
+//! | `max_tether_bend_rad` | 4.71 rad (270 degrees) |
 //!
 //! Budgets (`config::tethered`): `SURFACE_TRACE_STEPS = 64` (minimum step `SURFACE_MIN_STEP_M = 0.05`),
 //! `MAX_MOTION_STATES = 256` interpolated states per motion.
@@ -58,6 +68,7 @@ use core::cell::Cell;
 use rand_core::Rng;
 
 use crate::config::rover::RoverParams;
+use crate::config::tether::ANCHOR_HISTORY_CAPACITY;
 use crate::config::tethered::{
     defaults, BOOM_REACH_CLEARANCE_M, MAX_MOTION_STATES, SURFACE_MIN_STEP_M, SURFACE_TRACE_STEPS,
 };
@@ -94,6 +105,10 @@ pub struct TetherSpaceParams {
     pub off_map_edge_m: Real,
     /// Anchor-matching tolerance of history compatibility, metres.
     pub anchor_match_m: Real,
+    /// Consecutive anchors closer than this belong to one wrap, metres.
+    pub anchor_cluster_m: Real,
+    /// Largest total bend of the tether over all its anchors, radians.
+    pub max_tether_bend_rad: Real,
 }
 
 impl TetherSpaceParams {
@@ -109,6 +124,8 @@ impl TetherSpaceParams {
         sample_perturbation_m: defaults::SAMPLE_PERTURBATION_M,
         off_map_edge_m: defaults::OFF_MAP_EDGE_M,
         anchor_match_m: defaults::ANCHOR_MATCH_M,
+        anchor_cluster_m: defaults::ANCHOR_CLUSTER_M,
+        max_tether_bend_rad: defaults::MAX_TETHER_BEND_RAD,
     };
 
     /// The first field that is out of range, with the reason.
@@ -128,6 +145,8 @@ impl TetherSpaceParams {
             || !nonneg(f64::from(self.sample_perturbation_m))
             || !nonneg(f64::from(self.off_map_edge_m))
             || !nonneg(f64::from(self.anchor_match_m))
+            || !nonneg(f64::from(self.anchor_cluster_m))
+            || !nonneg(f64::from(self.max_tether_bend_rad))
         {
             return Err(("tether_still_m/sample_perturbation_m/off_map_edge_m/anchor_match_m", "must be >= 0"));
         }
@@ -300,7 +319,7 @@ pub struct MotionStats {
     pub fail_settle: u32,
     /// Invalid: unknown space met (settling, tether sweep or stability).
     pub fail_unknown: u32,
-    /// Invalid: anchor prediction failed (history full, budget).
+    /// Invalid: anchor prediction failed (history full, budget) or the tether bends too much.
     pub fail_tether: u32,
     /// Invalid: an interpolated state is not statically stable with its anchor history.
     pub fail_unstable: u32,
@@ -409,7 +428,7 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
             }
             Err(MotionFailure::Settle(_)) => s.fail_settle += 1,
             Err(MotionFailure::Tether(TetherError::UnknownSpace)) => s.fail_unknown += 1,
-            Err(MotionFailure::Tether(_)) => s.fail_tether += 1,
+            Err(MotionFailure::Tether(_)) | Err(MotionFailure::TetherBend) => s.fail_tether += 1,
             Err(MotionFailure::Unstable) => s.fail_unstable += 1,
             Err(MotionFailure::TooLong) | Err(MotionFailure::OffMap) => s.fail_too_long += 1,
         });
@@ -452,20 +471,57 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
                 predict_anchors(self.map, &hist, &tether_end, &end, &mut scratch).map_err(MotionFailure::Tether)?;
                 core::mem::swap(&mut hist, &mut scratch);
                 tether_end = end;
+                if tether_bend(&hist, &end) > self.params.max_tether_bend_rad {
+                    return Err(MotionFailure::TetherBend);
+                }
             }
             self.stable_with(&st.settled, &hist)?;
         }
         Ok(hist)
     }
 
-    /// Are two anchor histories compatible (same length, anchors within `anchor_match_m`)?
+    /// Are two anchor histories compatible? Both are reduced to their **wraps** (runs of consecutive anchors less
+    /// than `anchor_cluster_m` apart: one obstacle the tether bends around, e.g. the 8 anchors of half a turn
+    /// around a pole), each represented by its last anchor; compatible when they have the same number of wraps and
+    /// the representatives lie within `anchor_match_m` of each other. Histories that differ only in how finely
+    /// the same wrap was discretised are compatible; wraps on different sides of an obstacle are not.
     pub fn histories_match(&self, a: &AnchorHistory, b: &AnchorHistory) -> bool {
-        a.len() == b.len()
-            && a.as_slice()
-                .iter()
-                .zip(b.as_slice().iter())
-                .all(|(p, q)| norm3(&(p.point - q.point)) <= self.params.anchor_match_m)
+        let (wa, wb) = (wraps(a, self.params.anchor_cluster_m), wraps(b, self.params.anchor_cluster_m));
+        wa.len() == wb.len() && wa.iter().zip(wb.iter()).all(|(p, q)| norm3(&(p - q)) <= self.params.anchor_match_m)
     }
+}
+
+/// The wraps of a history (see [`TetherSpace::histories_match`]): the last anchor of every run of consecutive
+/// anchors closer than `cluster_m`, root first.
+pub fn wraps(h: &AnchorHistory, cluster_m: Real) -> heapless::Vec<Vec3, ANCHOR_HISTORY_CAPACITY> {
+    let mut out: heapless::Vec<Vec3, ANCHOR_HISTORY_CAPACITY> = heapless::Vec::new();
+    let mut prev: Option<Vec3> = None;
+    for a in h.as_slice() {
+        match (prev, out.last_mut()) {
+            (Some(p), Some(last)) if norm3(&(a.point - p)) < cluster_m => *last = a.point,
+            _ => {
+                let _ = out.push(a.point);
+            }
+        }
+        prev = Some(a.point);
+    }
+    out
+}
+
+/// Total bend of the tether, radians: the sum over the intermediate anchors of the angle between the incoming and
+/// the outgoing tether segment (the last segment ends at `end`).
+pub fn tether_bend(h: &AnchorHistory, end: &Vec3) -> Real {
+    let a = h.as_slice();
+    let mut total = 0.0;
+    for (i, mid) in a.iter().enumerate().skip(1) {
+        let (Some(prev), next) = (a.get(i - 1), a.get(i + 1).map_or(*end, |n| n.point)) else { continue };
+        let (u, v) = (mid.point - prev.point, next - mid.point);
+        let (nu, nv) = (norm3(&u), norm3(&v));
+        if nu > 1e-6 && nv > 1e-6 {
+            total += libm::acosf((u.dot(&v) / (nu * nv)).clamp(-1.0, 1.0));
+        }
+    }
+    total
 }
 
 /// The anchor the tether pulls the rover towards: the most recent anchor farther from the axle than the boom
@@ -498,6 +554,8 @@ pub enum MotionFailure {
     Unknown,
     /// More interpolated states than `MAX_MOTION_STATES`.
     TooLong,
+    /// The tether would bend more than `max_tether_bend_rad` over its anchors.
+    TetherBend,
     /// A motion from an off-map goal, or to one from too far from the bounds' edge.
     OffMap,
 }

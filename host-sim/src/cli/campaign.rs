@@ -37,6 +37,15 @@ pub struct CampaignArgs {
     /// Output directory for results.json, results.csv and paths.svg (default target/campaign/<scenario>).
     #[arg(long, short)]
     pub out: Option<PathBuf>,
+    /// ABIT* samples per batch (default: OMPL's 100).
+    #[arg(long)]
+    pub samples_per_batch: Option<u32>,
+    /// ABIT* rewire factor (default: OMPL's 1.1).
+    #[arg(long)]
+    pub rewire_factor: Option<f64>,
+    /// Smallest stability margin of a planned state (default `config::tethered::defaults::MIN_STABILITY_MARGIN`).
+    #[arg(long)]
+    pub min_margin: Option<f64>,
     /// Exit with status 1 unless at least this many trials are found stable.
     #[arg(long)]
     pub require_stable: Option<usize>,
@@ -85,6 +94,18 @@ pub fn spec_from(a: &CampaignArgs) -> Result<CampaignSpec, String> {
     if trials == 0 {
         return Err("--trials must be at least 1".into());
     }
+    let mut abit = AbitParams::ompl_defaults();
+    if let Some(n) = a.samples_per_batch {
+        abit.samples_per_batch = n;
+    }
+    if let Some(r) = a.rewire_factor {
+        abit.rewire_factor = r;
+    }
+    let mut params = TetherSpaceParams::DEFAULT;
+    if let Some(m) = a.min_margin {
+        params.min_stability_margin = m;
+    }
+    params.validate().map_err(|(f, r)| format!("{f}: {r}"))?;
     let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())).max(1);
     Ok(CampaignSpec {
         name: sc.name.clone(),
@@ -101,8 +122,8 @@ pub fn spec_from(a: &CampaignArgs) -> Result<CampaignSpec, String> {
         first_seed: a.seed.unwrap_or(sc.seeds.planner),
         threads,
         field,
-        params: TetherSpaceParams::DEFAULT,
-        abit: AbitParams::ompl_defaults(),
+        params,
+        abit,
     })
 }
 
