@@ -54,4 +54,10 @@ pub mod defaults {
     /// behind a pole and come back over the lip of a ledge (Paton et al. test 3, about 220 degrees), not enough to
     /// circle an obstacle (a full turn multiplies the tension across the wrap by exp(2 pi mu), 6.6 at mu = 0.3).
     pub const MAX_TETHER_BEND_RAD: f32 = 1.5 * core::f32::consts::PI;
+    /// Samples on surfaces tilted more than this face along the fall line (downhill), radians. Default 0.35 rad
+    /// (20 degrees): on gentler ground Axel can stand at any heading.
+    pub const FALL_LINE_TILT_RAD: f32 = 0.35;
+    /// Half-width of the uniform yaw perturbation about the fall line, radians. Default 0.15 rad (8.6 degrees):
+    /// within the +-15 degrees that Axel holds on the 55-degree slope.
+    pub const FALL_LINE_YAW_SPREAD_RAD: f32 = 0.15;
 }

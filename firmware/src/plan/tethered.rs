@@ -7,8 +7,12 @@
 //! A state is the surface point it was settled from (`ground`), the yaw about the surface normal given to the
 //! settler (`theta`), and the settled pose ([`crate::rover::settle`], Fig. 2). A sample (section V): draw `(x, y)`
 //! uniformly in the planning bounds, find the terrain surface below it by sphere tracing down the ESDF from the top
-//! of the bounds ([`surface_point`]), perturb `(x, y)` by up to `sample_perturbation_m`, draw a yaw uniformly,
-//! settle. A failed settle (no ground, body collision, unknown space, budget) is a failed draw. The planner only
+//! of the bounds ([`surface_point`]), perturb `(x, y)` by up to `sample_perturbation_m`, draw a yaw, settle.
+//! The yaw is uniform on surfaces tilted up to `fall_line_tilt_rad`; on steeper ones it is the downhill fall line
+//! plus a uniform perturbation of up to `fall_line_yaw_spread_rad` ([`fall_line_theta`]). Axel holds a steep slope
+//! only along the fall line (on the 55-degree slope of Paton et al. VI-A a pose turned 15 degrees off it is already
+//! unstable), so a uniformly drawn yaw would waste eleven samples in twelve there; and facing downhill loses nothing,
+//! because the rover is symmetric and drives either way. A failed settle (no ground, body collision, unknown space, budget) is a failed draw. The planner only
 //! ever sees settled states, so state validity is settledness; attachment-dependent checks belong to the motion.
 //!
 //! # Motions ([`TetherMotionValidator`])
@@ -59,6 +63,8 @@
 //! | `anchor_match_m` | 0.15 m |
 //! | `anchor_cluster_m` | 0.6 m |
 //! | `max_tether_bend_rad` | 4.71 rad (270 degrees) |
+//! | `fall_line_tilt_rad` | 0.35 rad (20 degrees) |
+//! | `fall_line_yaw_spread_rad` | 0.15 rad (8.6 degrees) |
 //!
 //! Budgets (`config::tethered`): `SURFACE_TRACE_STEPS = 64` (minimum step `SURFACE_MIN_STEP_M = 0.05`),
 //! `MAX_MOTION_STATES = 256` interpolated states per motion.
@@ -109,6 +115,10 @@ pub struct TetherSpaceParams {
     pub anchor_cluster_m: Real,
     /// Largest total bend of the tether over all its anchors, radians.
     pub max_tether_bend_rad: Real,
+    /// Samples on surfaces tilted more than this face along the fall line, radians.
+    pub fall_line_tilt_rad: Real,
+    /// Half-width of the uniform yaw perturbation about the fall line, radians.
+    pub fall_line_yaw_spread_rad: Real,
 }
 
 impl TetherSpaceParams {
@@ -126,6 +136,8 @@ impl TetherSpaceParams {
         anchor_match_m: defaults::ANCHOR_MATCH_M,
         anchor_cluster_m: defaults::ANCHOR_CLUSTER_M,
         max_tether_bend_rad: defaults::MAX_TETHER_BEND_RAD,
+        fall_line_tilt_rad: defaults::FALL_LINE_TILT_RAD,
+        fall_line_yaw_spread_rad: defaults::FALL_LINE_YAW_SPREAD_RAD,
     };
 
     /// The first field that is out of range, with the reason.
@@ -147,6 +159,8 @@ impl TetherSpaceParams {
             || !nonneg(f64::from(self.anchor_match_m))
             || !nonneg(f64::from(self.anchor_cluster_m))
             || !nonneg(f64::from(self.max_tether_bend_rad))
+            || !nonneg(f64::from(self.fall_line_tilt_rad))
+            || !nonneg(f64::from(self.fall_line_yaw_spread_rad))
         {
             return Err(("tether_still_m/sample_perturbation_m/off_map_edge_m/anchor_match_m", "must be >= 0"));
         }
@@ -256,6 +270,18 @@ pub fn surface_point(map: &impl DistanceField, x: Real, y: Real, z_top: Real, z_
         z -= distance.max(SURFACE_MIN_STEP_M);
     }
     None
+}
+
+/// The tilt of the surface at `ground` (radians from level) and the settler yaw (`settle`'s `theta_m`) that faces
+/// straight downhill, from the footprint normal. `None` in unknown space or on level ground.
+pub fn fall_line_theta(map: &impl DistanceField, ground: &Vec3, rover: &RoverParams) -> Option<(Real, Real)> {
+    let n = crate::rover::footprint_normal(map, ground, rover)?;
+    let tilt = libm::acosf(n.z.clamp(-1.0, 1.0));
+    // the settler measures yaw about n from world x projected on the tangent plane (world y if x is parallel to n)
+    let project = |v: Vec3| crate::geom::normalize3(&(v - n * n.dot(&v)), 1e-4);
+    let x_t = project(Vec3::x()).or_else(|| project(Vec3::y()))?;
+    let downhill = project(-Vec3::z())?;
+    Some((tilt, libm::atan2f(x_t.cross(&downhill).dot(&n), x_t.dot(&downhill))))
 }
 
 /// Why a sample or an interpolated state could not be settled.
@@ -395,11 +421,19 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
         let p = self.params.sample_perturbation_m;
         let px = x + p * (2.0 * uniform01(rng) as Real - 1.0);
         let py = y + p * (2.0 * uniform01(rng) as Real - 1.0);
-        let theta = (core::f64::consts::TAU * uniform01(rng) - core::f64::consts::PI) as Real;
+        let u = uniform01(rng) as Real;
         self.count(|s| s.samples_drawn += 1);
         if !self.bounds.contains_xy(px, py) {
             return None;
         }
+        let b = self.bounds;
+        let ground = surface_point(self.map, px, py, b.max[2], b.min[2])?;
+        let theta = match fall_line_theta(self.map, &ground, &self.rover) {
+            Some((tilt, downhill)) if tilt > self.params.fall_line_tilt_rad => {
+                downhill + self.params.fall_line_yaw_spread_rad * (2.0 * u - 1.0)
+            }
+            _ => core::f32::consts::TAU * u - core::f32::consts::PI,
+        };
         let st = self.settle_state(px, py, theta).ok()?;
         self.count(|s| s.samples_settled += 1);
         Some(st)
@@ -788,5 +822,134 @@ impl<D: DistanceField> OptimizationObjective<TetherSpace<'_, D>> for TetherObjec
             }
             _ => InformedSample::Rejected,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tether::Anchor;
+
+    /// The plane z = 0 (exact signed distance).
+    struct Ground;
+    impl DistanceField for Ground {
+        fn query(&self, p: &Vec3) -> DistanceQuery {
+            DistanceQuery::Known { distance: p.z, gradient: Vec3::z() }
+        }
+    }
+    struct Nothing;
+    impl DistanceField for Nothing {
+        fn query(&self, _: &Vec3) -> DistanceQuery {
+            DistanceQuery::Unknown
+        }
+    }
+    const BOUNDS: PlanBounds = PlanBounds { min: [-10.0, -10.0, -1.0], max: [10.0, 10.0, 5.0] };
+
+    fn history(points: &[[Real; 3]]) -> AnchorHistory {
+        let mut h = AnchorHistory::default();
+        for p in points {
+            h.push(Anchor { point: Vec3::new(p[0], p[1], p[2]), gradient: Vec3::z() }).unwrap();
+        }
+        h
+    }
+
+    #[test]
+    fn surface_point_finds_the_plane_and_refuses_unknown_space() {
+        let p = surface_point(&Ground, 1.0, 2.0, 5.0, -1.0).unwrap();
+        assert!(p.z.abs() <= SURFACE_MIN_STEP_M * 0.5, "{p:?}");
+        assert_eq!((p.x, p.y), (1.0, 2.0));
+        assert_eq!(surface_point(&Nothing, 1.0, 2.0, 5.0, -1.0), None);
+        // the surface is below the search range
+        assert_eq!(surface_point(&Ground, 0.0, 0.0, 5.0, 1.0), None);
+    }
+
+    #[test]
+    fn tether_bend_is_the_sum_of_turning_angles() {
+        let straight = history(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]);
+        assert!(tether_bend(&straight, &Vec3::new(2.0, 0.0, 0.0)).abs() < 1e-5);
+        let right = history(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]);
+        let b = tether_bend(&right, &Vec3::new(1.0, 1.0, 0.0));
+        assert!((b - core::f32::consts::FRAC_PI_2).abs() < 1e-5, "{b}");
+        // two right angles in a row: a U-turn around a post
+        let u = history(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]]);
+        let b = tether_bend(&u, &Vec3::new(0.0, 1.0, 0.0));
+        assert!((b - core::f32::consts::PI).abs() < 1e-5, "{b}");
+    }
+
+    #[test]
+    fn wraps_merge_close_anchors_and_compatibility_follows_them() {
+        let space = TetherSpace::new(&Ground, BOUNDS, RoverParams::AXEL, TetherSpaceParams::DEFAULT).unwrap();
+        // root, then three anchors 0.1 m apart around a post, then a lip 3 m away
+        let fine = history(&[[9.0, 0.0, 6.0], [0.0, 0.25, 4.5], [-0.1, 0.2, 4.5], [-0.2, 0.1, 4.5], [3.0, -0.5, 4.0]]);
+        let coarse = history(&[[9.0, 0.0, 6.0], [0.0, 0.25, 4.5], [-0.18, 0.12, 4.5], [3.0, -0.5, 4.0]]);
+        let w = wraps(&fine, space.params().anchor_cluster_m);
+        assert_eq!(w.len(), 3);
+        assert_eq!(w[1], Vec3::new(-0.2, 0.1, 4.5));
+        assert!(space.histories_match(&fine, &coarse));
+        // the same post wrapped on its other side (last anchor 0.5 m away) is another history
+        let other_side = history(&[[9.0, 0.0, 6.0], [0.0, -0.25, 4.5], [-0.2, -0.3, 4.5], [3.0, -0.5, 4.0]]);
+        assert!(!space.histories_match(&fine, &other_side));
+        // one wrap more or less is another history
+        let root_only = history(&[[9.0, 0.0, 6.0]]);
+        assert!(!space.histories_match(&root_only, &coarse));
+        assert!(space.histories_match(&root_only, &root_only.clone()));
+    }
+
+    #[test]
+    fn motion_plan_turns_the_short_way_and_drives_backwards_when_cheaper() {
+        let space = TetherSpace::new(&Ground, BOUNDS, RoverParams::AXEL, TetherSpaceParams::DEFAULT).unwrap();
+        let a = space.settle_state(0.0, 0.0, 0.0).unwrap();
+        let b = space.settle_state(2.0, 0.0, 0.0).unwrap();
+        let p = MotionPlan::new(&a, &b, space.params());
+        assert_eq!((p.turn_a_rad, p.turn_b_rad), (0.0, 0.0));
+        // 2 m at 0.2 m: 10 drive states, the last of which is followed by the end state
+        assert_eq!(p.total_states(), 11);
+        assert_eq!(p.state(11), MotionPoint::End);
+        assert!(matches!(p.state(10), MotionPoint::Drive { x, .. } if (x - 2.0).abs() < 1e-5));
+        // facing away from the target: Axel reverses instead of turning around
+        let c = space.settle_state(-2.0, 0.0, 0.0).unwrap();
+        let p = MotionPlan::new(&a, &c, space.params());
+        assert!(p.turn_a_rad.abs() < 1e-5 && p.turn_b_rad.abs() < 1e-5, "{p:?}");
+        // a quarter turn at the end, in ceil((pi/2) / 0.5) = 4 steps
+        let d = space.settle_state(2.0, 0.0, core::f32::consts::FRAC_PI_2).unwrap();
+        let p = MotionPlan::new(&a, &d, space.params());
+        assert!((p.turn_b_rad.abs() - core::f32::consts::FRAC_PI_2).abs() < 1e-5);
+        assert_eq!(p.total_states(), 10 + 4);
+    }
+
+    #[test]
+    fn flat_ground_motion_is_valid_and_keeps_a_straight_tether() {
+        let space = TetherSpace::new(&Ground, BOUNDS, RoverParams::AXEL, TetherSpaceParams::DEFAULT).unwrap();
+        let a = space.settle_state(0.0, 0.0, 0.0).unwrap();
+        let b = space.settle_state(3.0, 1.0, 0.5).unwrap();
+        let root = history(&[[-6.0, 0.0, 2.0]]);
+        let h = space.check(&a, &root, &b).unwrap();
+        assert_eq!(h.len(), 1);
+        let s = space.stats();
+        assert_eq!((s.motions, s.motions_valid), (1, 1));
+        assert!(s.stability_checks as usize >= MotionPlan::new(&a, &b, space.params()).total_states() as usize);
+    }
+
+    #[test]
+    fn off_map_goal_connects_only_near_the_edge() {
+        let space = TetherSpace::new(&Ground, BOUNDS, RoverParams::AXEL, TetherSpaceParams::DEFAULT).unwrap();
+        let goal = space.goal_state(Vec3::new(30.0, 0.0, 0.35), 0.0).unwrap();
+        assert!(goal.off_map);
+        let root = history(&[[-6.0, 0.0, 2.0]]);
+        let near = space.settle_state(9.5, 0.0, 0.0).unwrap();
+        let far = space.settle_state(0.0, 0.0, 0.0).unwrap();
+        assert!(space.check(&near, &root, &goal).is_ok());
+        assert_eq!(space.check(&far, &root, &goal), Err(MotionFailure::OffMap));
+        assert_eq!(space.check(&goal, &root, &near), Err(MotionFailure::OffMap));
+    }
+
+    #[test]
+    fn bad_parameters_and_bounds_are_named() {
+        let mut p = TetherSpaceParams::DEFAULT;
+        p.drive_resolution_m = 0.0;
+        assert_eq!(TetherSpace::new(&Ground, BOUNDS, RoverParams::AXEL, p).err().map(|e| e.0), Some("drive_resolution_m/turn_resolution_rad"));
+        let mut b = BOUNDS;
+        b.max[2] = b.min[2];
+        assert_eq!(TetherSpace::new(&Ground, b, RoverParams::AXEL, TetherSpaceParams::DEFAULT).err().map(|e| e.0), Some("bounds"));
     }
 }

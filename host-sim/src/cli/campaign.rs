@@ -43,6 +43,12 @@ pub struct CampaignArgs {
     /// ABIT* rewire factor (default: OMPL's 1.1).
     #[arg(long)]
     pub rewire_factor: Option<f64>,
+    /// Fraction of new samples that copy a neighbour's anchor history (default `config::abit`'s 0.25).
+    #[arg(long)]
+    pub copy_fraction: Option<f64>,
+    /// Switch off the history twins of `plan::abit` (Paton et al.'s planner has none).
+    #[arg(long)]
+    pub no_twins: bool,
     /// Smallest stability margin of a planned state (default `config::tethered::defaults::MIN_STABILITY_MARGIN`).
     #[arg(long)]
     pub min_margin: Option<f64>,
@@ -101,6 +107,10 @@ pub fn spec_from(a: &CampaignArgs) -> Result<CampaignSpec, String> {
     if let Some(r) = a.rewire_factor {
         abit.rewire_factor = r;
     }
+    if let Some(f) = a.copy_fraction {
+        abit.attachment_copy_fraction = f;
+    }
+    abit.history_twins = !a.no_twins;
     let mut params = TetherSpaceParams::DEFAULT;
     if let Some(m) = a.min_margin {
         params.min_stability_margin = m;
