@@ -196,6 +196,9 @@ const F_FREE: u8 = 2;
 const F_START: u8 = 4;
 const F_GOAL: u8 = 8;
 const F_INCONSISTENT: u8 = 16;
+/// A history twin (see `twin_target`): reached through the chain of its state's original node, never listed as a
+/// neighbour itself (twins at one state would otherwise crowd the k nearest out of the neighbour lists).
+const F_TWIN: u8 = 32;
 
 /// A state of the implicit graph: a sample, or a vertex of the tree when `in_tree`.
 #[derive(Debug, Clone)]
@@ -902,7 +905,7 @@ where
         let cap = limit.min(cfg::NEIGHBOUR_CAPACITY);
         let mut truncated = limit > cfg::NEIGHBOUR_CAPACITY && limit != usize::MAX;
         for (i, n) in self.arena.nodes.iter().enumerate() {
-            if n.has(F_FREE) {
+            if n.has(F_FREE) || n.has(F_TWIN) {
                 continue;
             }
             let d = self.space.distance(&center, &n.state);
@@ -1022,11 +1025,13 @@ where
         S::NON_MARKOVIAN && self.params.history_twins
     }
 
-    /// Do `u` (the parent) and the tree vertex `w` hold incompatible attachments? (The parent's own attachment
-    /// stands in for the motion's result, which is only known after the motion check.)
+    /// Do `u` (the parent) and `w` — a tree vertex, or a sample that copied an attachment — hold incompatible
+    /// attachments? (The parent's own attachment stands in for the motion's result, which is only known after the
+    /// motion check.) A sample that copied one history must not lock out every other history: the edge goes to a
+    /// twin of undetermined history instead.
     fn histories_conflict(&self, u: u32, w: u32) -> bool {
         let (Some(un), Some(wn)) = (self.node(u), self.node(w)) else { return false };
-        if !wn.in_tree() || wn.has(F_START) {
+        if wn.has(F_START) {
             return false;
         }
         match (un.attachment.as_ref(), wn.attachment.as_ref()) {
@@ -1061,6 +1066,9 @@ where
                 i
             }?;
             self.counters.history_twins += 1;
+            if let Some(n) = self.node_mut(created) {
+                n.flags |= F_TWIN;
+            }
             let generation = self.node(created).map_or(0, |n| n.generation);
             if let Some(n) = self.node_mut(cur) {
                 n.twin = created;
