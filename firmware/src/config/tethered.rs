@@ -46,7 +46,7 @@ pub mod defaults {
     pub const OFF_MAP_EDGE_M: f32 = 1.0;
     /// Two anchor histories are compatible when their wraps' representative anchors are within this distance.
     /// Default 0.15 m (1.5 voxels of the campaign's map, 3 of the flight map).
-    pub const ANCHOR_MATCH_M: f32 = 0.15;
+    pub const ANCHOR_MATCH_M: f32 = 0.3;
     /// Consecutive anchors closer than this belong to one wrap (one obstacle the tether bends around). Default
     /// 0.6 m: more than the diameter of the ledge's 0.5 m pole, less than the distance between distinct obstacles.
     pub const ANCHOR_CLUSTER_M: f32 = 0.6;
