@@ -75,11 +75,39 @@ const DUAL_TOL_FACTOR: f64 = 1000.0;
 /// Accuracy accepted as [`LpStatus::AlmostOptimal`], as a multiple of `tol`.
 pub const ALMOST_FACTOR: f64 = 100.0;
 
-fn inf_norm<const K: usize>(v: &SVector<f64, K>) -> f64 {
+fn at<const R: usize, const C: usize>(m: &SMatrix<f64, R, C>, i: usize, j: usize) -> f64 {
+    m.get((i, j)).copied().unwrap_or(0.0)
+}
+
+fn at_mut<const R: usize, const C: usize>(m: &mut SMatrix<f64, R, C>, i: usize, j: usize) -> Option<&mut f64> {
+    m.get_mut((i, j))
+}
+
+fn el(v: &[f64], i: usize) -> f64 {
+    v.get(i).copied().unwrap_or(0.0)
+}
+
+fn put(v: &mut [f64], i: usize, x: f64) {
+    if let Some(e) = v.get_mut(i) {
+        *e = x;
+    }
+}
+
+fn add(v: &mut [f64], i: usize, x: f64) {
+    if let Some(e) = v.get_mut(i) {
+        *e += x;
+    }
+}
+
+fn inf_norm(v: &[f64]) -> f64 {
     v.iter().fold(0.0, |m, x| if x.abs() > m { x.abs() } else { m })
 }
 
-fn max_step<const K: usize>(v: &SVector<f64, K>, dv: &SVector<f64, K>) -> f64 {
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b.iter()).map(|(x, y)| x * y).sum()
+}
+
+fn max_step(v: &[f64], dv: &[f64]) -> f64 {
     let mut a: f64 = 1.0;
     for (vi, di) in v.iter().zip(dv.iter()) {
         if *di < 0.0 {
@@ -92,26 +120,11 @@ fn max_step<const K: usize>(v: &SVector<f64, K>, dv: &SVector<f64, K>) -> f64 {
     a
 }
 
-type Step<const N: usize, const P: usize, const M: usize> =
-    (SVector<f64, N>, SVector<f64, P>, SVector<f64, M>, SVector<f64, M>);
-
-fn at<const R: usize, const C: usize>(m: &SMatrix<f64, R, C>, i: usize, j: usize) -> f64 {
-    m.get((i, j)).copied().unwrap_or(0.0)
+fn u16_of(i: usize) -> u16 {
+    u16::try_from(i).unwrap_or(u16::MAX)
 }
 
-fn at_mut<const R: usize, const C: usize>(m: &mut SMatrix<f64, R, C>, i: usize, j: usize) -> Option<&mut f64> {
-    m.get_mut((i, j))
-}
-
-fn el<const K: usize>(v: &SVector<f64, K>, i: usize) -> f64 {
-    v.get(i).copied().unwrap_or(0.0)
-}
-
-fn el_mut<const K: usize>(v: &mut SVector<f64, K>, i: usize) -> Option<&mut f64> {
-    v.get_mut(i)
-}
-
-/// Indices of a sparsity pattern: a list of at most `K` column (or row) indices.
+/// Indices of a sparsity pattern: a list of at most `K` indices.
 #[derive(Clone, Copy)]
 struct Pattern<const K: usize> {
     idx: [u16; K],
@@ -126,27 +139,38 @@ impl<const K: usize> Pattern<K> {
             self.len += 1;
         }
     }
+    fn len(&self) -> usize {
+        usize::from(self.len)
+    }
     fn iter(&self) -> impl Iterator<Item = usize> + '_ {
-        self.idx.get(..usize::from(self.len)).unwrap_or(&[]).iter().map(|i| usize::from(*i))
+        self.prefix(self.len())
     }
     fn prefix(&self, n: usize) -> impl Iterator<Item = usize> + '_ {
-        self.idx.get(..n.min(usize::from(self.len))).unwrap_or(&[]).iter().map(|i| usize::from(*i))
+        self.idx.get(..n.min(self.len())).unwrap_or(&[]).iter().map(|i| usize::from(*i))
     }
 }
 
-/// The sparsity structure of a problem, computed once per solve: the nonzero columns of every row of `G` and `A`,
-/// the elimination order of `H = G' W G` (ascending degree in the graph of `G'G`) and the pattern of its Cholesky
-/// factor (symbolic elimination, fill included). The pattern of `H` does not depend on `W > 0`, so it holds for
-/// every iteration.
+/// The compacted problem, computed once per solve. Variables that no constraint mentions and that have no cost
+/// (`x_j = 0` throughout) and inequality rows `0 <= h_i` with `h_i >= 0` (always slack) are dropped; the rest is
+/// renumbered densely (`nv` variables, `nr` inequalities). Kept: the nonzero (compact) columns of every row of `G`
+/// and `A`, the elimination order of `H = G' W G` (ascending degree in the graph of `G'G`) and the pattern of its
+/// Cholesky factor (symbolic elimination, fill included). The pattern of `H` does not depend on `W > 0`, so it
+/// holds for every iteration.
 struct Structure<const N: usize, const P: usize, const M: usize> {
+    nv: usize,
+    /// Compact variable -> original column.
+    var: [u16; N],
+    nr: usize,
+    /// Compact inequality -> original row.
+    row: [u16; M],
     g_rows: [Pattern<N>; M],
     a_rows: [Pattern<N>; P],
-    /// `perm[k]`: the variable eliminated `k`-th; `pos[j]`: the elimination step of variable `j`.
+    /// `perm[k]`: the compact variable eliminated `k`-th; `pos[j]`: the elimination step of compact variable `j`.
     perm: [u16; N],
     pos: [u16; N],
     /// `l_cols[k]`: the steps `i > k` with `L[i, k]` structurally nonzero (ascending).
     l_cols: [Pattern<N>; N],
-    /// Per elimination step: the variable appears in no constraint (pinned by a unit diagonal).
+    /// Per elimination step: the variable appears in no constraint (kept for its cost; pinned by a unit diagonal).
     unused: [bool; N],
     /// Equation rows that are identically zero.
     zero_a_row: [bool; P],
@@ -154,62 +178,97 @@ struct Structure<const N: usize, const P: usize, const M: usize> {
 
 impl<const N: usize, const P: usize, const M: usize> Structure<N, P, M> {
     fn new(lp: &LinearProgram<N, P, M>) -> Self {
-        let mut g_rows = [Pattern::<N>::EMPTY; M];
-        for (i, pat) in g_rows.iter_mut().enumerate() {
-            for j in 0..N {
+        let mut used = [false; N];
+        let mut keep_row = [false; M];
+        for (i, k) in keep_row.iter_mut().enumerate() {
+            for (j, u) in used.iter_mut().enumerate() {
                 if at(&lp.g, i, j) != 0.0 {
-                    pat.push(j);
+                    *u = true;
+                    *k = true;
                 }
             }
+            // a zero row `0 <= h` stays unless it is violated (then the problem is infeasible: keep it so the
+            // solver cannot report an optimum)
+            let hi = lp.h.get(i).copied().unwrap_or(0.0);
+            if !(hi >= 0.0) {
+                *k = true;
+            }
+        }
+        let mut zero_a_row = [true; P];
+        for (i, z) in zero_a_row.iter_mut().enumerate() {
+            for (j, u) in used.iter_mut().enumerate() {
+                if at(&lp.a, i, j) != 0.0 {
+                    *u = true;
+                    *z = false;
+                }
+            }
+        }
+        let mut var = [0u16; N];
+        let mut compact = [u16::MAX; N];
+        let mut nv = 0;
+        let mut unused_c = [false; N];
+        for (j, u) in used.iter().enumerate() {
+            let cj = lp.c.get(j).copied().unwrap_or(0.0);
+            if *u || cj != 0.0 {
+                put_u16(&mut var, nv, u16_of(j));
+                put_u16(&mut compact, j, u16_of(nv));
+                if let Some(e) = unused_c.get_mut(nv) {
+                    *e = !*u;
+                }
+                nv += 1;
+            }
+        }
+        let mut row = [0u16; M];
+        let mut nr = 0;
+        let mut g_rows = [Pattern::<N>::EMPTY; M];
+        for (i, k) in keep_row.iter().enumerate() {
+            if !*k {
+                continue;
+            }
+            put_u16(&mut row, nr, u16_of(i));
+            if let Some(pat) = g_rows.get_mut(nr) {
+                for (j, cj) in compact.iter().enumerate() {
+                    if at(&lp.g, i, j) != 0.0 {
+                        pat.push(usize::from(*cj));
+                    }
+                }
+            }
+            nr += 1;
         }
         let mut a_rows = [Pattern::<N>::EMPTY; P];
-        let mut zero_a_row = [false; P];
-        for ((i, pat), z) in a_rows.iter_mut().enumerate().zip(zero_a_row.iter_mut()) {
-            for j in 0..N {
+        for (i, pat) in a_rows.iter_mut().enumerate() {
+            for (j, cj) in compact.iter().enumerate() {
                 if at(&lp.a, i, j) != 0.0 {
-                    pat.push(j);
+                    pat.push(usize::from(*cj));
                 }
             }
-            *z = pat.len == 0;
         }
-        // graph of G'G (original indices) and degrees
+        // graph of G'G (compact indices) and degrees
         let mut adj = [[false; N]; N];
-        let mut used = [false; N];
-        for pat in g_rows.iter() {
+        for pat in g_rows.iter().take(nr) {
             for a in pat.iter() {
                 for b in pat.iter() {
                     if let Some(e) = adj.get_mut(a).and_then(|r| r.get_mut(b)) {
                         *e = true;
                     }
                 }
-                if let Some(u) = used.get_mut(a) {
-                    *u = true;
-                }
-            }
-        }
-        for pat in a_rows.iter() {
-            for a in pat.iter() {
-                if let Some(u) = used.get_mut(a) {
-                    *u = true;
-                }
             }
         }
         let mut degree = [0usize; N];
-        for (d, row) in degree.iter_mut().zip(adj.iter()) {
-            *d = row.iter().filter(|x| **x).count();
+        for (d, r) in degree.iter_mut().zip(adj.iter()) {
+            *d = r.iter().filter(|x| **x).count();
         }
         // static minimum-degree order (stable insertion sort)
         let mut perm = [0u16; N];
         for (k, p) in perm.iter_mut().enumerate() {
-            *p = u16::try_from(k).unwrap_or(0);
+            *p = u16_of(k);
         }
-        for k in 1..N {
+        let deg = |p: u16| degree.get(usize::from(p)).copied().unwrap_or(0);
+        for k in 1..nv {
             let mut j = k;
             while j > 0 {
                 let (Some(&pa), Some(&pb)) = (perm.get(j - 1), perm.get(j)) else { break };
-                let (da, db) =
-                    (degree.get(usize::from(pa)).copied().unwrap_or(0), degree.get(usize::from(pb)).copied().unwrap_or(0));
-                if da <= db {
+                if deg(pa) <= deg(pb) {
                     break;
                 }
                 perm.swap(j - 1, j);
@@ -218,18 +277,16 @@ impl<const N: usize, const P: usize, const M: usize> Structure<N, P, M> {
         }
         let mut pos = [0u16; N];
         let mut unused = [false; N];
-        for (k, p) in perm.iter().enumerate() {
-            if let Some(e) = pos.get_mut(usize::from(*p)) {
-                *e = u16::try_from(k).unwrap_or(0);
-            }
+        for (k, p) in perm.iter().enumerate().take(nv) {
+            put_u16(&mut pos, usize::from(*p), u16_of(k));
             if let Some(u) = unused.get_mut(k) {
-                *u = !used.get(usize::from(*p)).copied().unwrap_or(true);
+                *u = unused_c.get(usize::from(*p)).copied().unwrap_or(false);
             }
         }
         // symbolic elimination in the permuted order
         let mut e = [[false; N]; N];
-        for (a, row) in adj.iter().enumerate() {
-            for (b, x) in row.iter().enumerate() {
+        for (a, r) in adj.iter().enumerate().take(nv) {
+            for (b, x) in r.iter().enumerate().take(nv) {
                 if *x {
                     let pa = pos.get(a).copied().map(usize::from).unwrap_or(0);
                     let pb = pos.get(b).copied().map(usize::from).unwrap_or(0);
@@ -240,8 +297,8 @@ impl<const N: usize, const P: usize, const M: usize> Structure<N, P, M> {
             }
         }
         let mut l_cols = [Pattern::<N>::EMPTY; N];
-        for (k, col) in l_cols.iter_mut().enumerate() {
-            for i in (k + 1)..N {
+        for (k, col) in l_cols.iter_mut().enumerate().take(nv) {
+            for i in (k + 1)..nv {
                 if e.get(i).and_then(|r| r.get(k)).copied().unwrap_or(false) {
                     col.push(i);
                 }
@@ -254,11 +311,27 @@ impl<const N: usize, const P: usize, const M: usize> Structure<N, P, M> {
                 }
             }
         }
-        Structure { g_rows, a_rows, perm, pos, l_cols, unused, zero_a_row }
+        Structure { nv, var, nr, row, g_rows, a_rows, perm, pos, l_cols, unused, zero_a_row }
     }
 
     fn pos(&self, j: usize) -> usize {
         self.pos.get(j).copied().map(usize::from).unwrap_or(0)
+    }
+    fn var(&self, j: usize) -> usize {
+        self.var.get(j).copied().map(usize::from).unwrap_or(0)
+    }
+    fn row(&self, i: usize) -> usize {
+        self.row.get(i).copied().map(usize::from).unwrap_or(0)
+    }
+    /// The compact inequality rows with their index.
+    fn g_rows(&self) -> impl Iterator<Item = (usize, &Pattern<N>)> + '_ {
+        self.g_rows.iter().enumerate().take(self.nr)
+    }
+}
+
+fn put_u16(v: &mut [u16], i: usize, x: u16) {
+    if let Some(e) = v.get_mut(i) {
+        *e = x;
     }
 }
 
@@ -266,9 +339,25 @@ impl<const N: usize, const P: usize, const M: usize> Structure<N, P, M> {
 struct Kkt<const N: usize, const P: usize> {
     /// Cholesky factor of `H` in elimination order (lower triangle; only the structural nonzeros are meaningful).
     l: SMatrix<f64, N, N>,
-    /// `H^-1 A'`.
+    /// `H^-1 A'` (compact rows).
     v: SMatrix<f64, N, P>,
     schur: Cholesky<f64, nalgebra::Const<P>>,
+}
+
+/// Residuals (or right-hand sides) of the Newton system, in compact numbering.
+struct Rhs<'a, const N: usize, const P: usize, const M: usize> {
+    d: &'a [f64; N],
+    p: &'a SVector<f64, P>,
+    g: &'a [f64; M],
+    c: &'a [f64; M],
+}
+
+/// A Newton step `(dx, dy, dz, ds)` in compact numbering.
+struct Step<const N: usize, const P: usize, const M: usize> {
+    dx: [f64; N],
+    dy: SVector<f64, P>,
+    dz: [f64; M],
+    ds: [f64; M],
 }
 
 impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
@@ -283,62 +372,60 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
         }
     }
 
+    /// `G` entry of compact row `r`, compact column `k`.
+    fn gv(&self, st: &Structure<N, P, M>, r: usize, k: usize) -> f64 {
+        at(&self.g, st.row(r), st.var(k))
+    }
+
+    /// `A` entry of equation `i`, compact column `k`.
+    fn av(&self, st: &Structure<N, P, M>, i: usize, k: usize) -> f64 {
+        at(&self.a, i, st.var(k))
+    }
+
     /// `G x` over the nonzeros of `G`.
-    fn g_mul(&self, st: &Structure<N, P, M>, x: &SVector<f64, N>) -> SVector<f64, M> {
-        let mut out = SVector::<f64, M>::zeros();
-        for ((i, pat), o) in st.g_rows.iter().enumerate().zip(out.iter_mut()) {
-            let mut acc = 0.0;
-            for j in pat.iter() {
-                acc += at(&self.g, i, j) * el(x, j);
-            }
-            *o = acc;
+    fn g_mul(&self, st: &Structure<N, P, M>, x: &[f64; N]) -> [f64; M] {
+        let mut out = [0.0; M];
+        for ((r, pat), o) in st.g_rows().zip(out.iter_mut()) {
+            *o = pat.iter().map(|k| self.gv(st, r, k) * el(x, k)).sum();
         }
         out
     }
 
     /// `G' z` over the nonzeros of `G`.
-    fn g_tr_mul(&self, st: &Structure<N, P, M>, z: &SVector<f64, M>) -> SVector<f64, N> {
-        let mut out = SVector::<f64, N>::zeros();
-        for ((i, pat), zi) in st.g_rows.iter().enumerate().zip(z.iter()) {
-            for j in pat.iter() {
-                if let Some(o) = el_mut(&mut out, j) {
-                    *o += at(&self.g, i, j) * zi;
-                }
+    fn g_tr_mul(&self, st: &Structure<N, P, M>, z: &[f64; M]) -> [f64; N] {
+        let mut out = [0.0; N];
+        for ((r, pat), zr) in st.g_rows().zip(z.iter()) {
+            for k in pat.iter() {
+                add(&mut out, k, self.gv(st, r, k) * zr);
             }
         }
         out
     }
 
     /// `A x` over the nonzeros of `A`.
-    fn a_mul(&self, st: &Structure<N, P, M>, x: &SVector<f64, N>) -> SVector<f64, P> {
+    fn a_mul(&self, st: &Structure<N, P, M>, x: &[f64; N]) -> SVector<f64, P> {
         let mut out = SVector::<f64, P>::zeros();
         for ((i, pat), o) in st.a_rows.iter().enumerate().zip(out.iter_mut()) {
-            let mut acc = 0.0;
-            for j in pat.iter() {
-                acc += at(&self.a, i, j) * el(x, j);
-            }
-            *o = acc;
+            *o = pat.iter().map(|k| self.av(st, i, k) * el(x, k)).sum();
         }
         out
     }
 
     /// `A' y` over the nonzeros of `A`.
-    fn a_tr_mul(&self, st: &Structure<N, P, M>, y: &SVector<f64, P>) -> SVector<f64, N> {
-        let mut out = SVector::<f64, N>::zeros();
+    fn a_tr_mul(&self, st: &Structure<N, P, M>, y: &SVector<f64, P>) -> [f64; N] {
+        let mut out = [0.0; N];
         for ((i, pat), yi) in st.a_rows.iter().enumerate().zip(y.iter()) {
-            for j in pat.iter() {
-                if let Some(o) = el_mut(&mut out, j) {
-                    *o += at(&self.a, i, j) * yi;
-                }
+            for k in pat.iter() {
+                add(&mut out, k, self.av(st, i, k) * yi);
             }
         }
         out
     }
 
-    /// Assemble `H = G' W G` (permuted, lower triangle, on the factor's pattern) into `l`, pin unused variables
-    /// with a unit diagonal and add `reg` to the diagonal of used ones. Returns the largest `|H_jj|` (at least 1).
-    fn assemble(&self, st: &Structure<N, P, M>, w: &SVector<f64, M>, l: &mut SMatrix<f64, N, N>, reg: f64) -> f64 {
-        for (k, col) in st.l_cols.iter().enumerate() {
+    /// Assemble `H = G' W G` (permuted, lower triangle, on the factor's pattern) into `l`, pin cost-only variables
+    /// with a unit diagonal and add `reg` to the diagonal of the others. Returns the largest `|H_jj|` (at least 1).
+    fn assemble(&self, st: &Structure<N, P, M>, w: &[f64; M], l: &mut SMatrix<f64, N, N>, reg: f64) -> f64 {
+        for (k, col) in st.l_cols.iter().enumerate().take(st.nv) {
             if let Some(e) = at_mut(l, k, k) {
                 *e = 0.0;
             }
@@ -348,22 +435,22 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
                 }
             }
         }
-        for ((r, pat), wi) in st.g_rows.iter().enumerate().zip(w.iter()) {
+        for ((r, pat), wr) in st.g_rows().zip(w.iter()) {
             for a in pat.iter() {
-                let wa = wi * at(&self.g, r, a);
+                let wa = wr * self.gv(st, r, a);
                 let pa = st.pos(a);
                 for b in pat.iter() {
                     let pb = st.pos(b);
                     if pb <= pa {
                         if let Some(e) = at_mut(l, pa, pb) {
-                            *e += wa * at(&self.g, r, b);
+                            *e += wa * self.gv(st, r, b);
                         }
                     }
                 }
             }
         }
         let mut scale = 1.0f64;
-        for (k, unused) in st.unused.iter().enumerate() {
+        for (k, unused) in st.unused.iter().enumerate().take(st.nv) {
             if let Some(e) = at_mut(l, k, k) {
                 scale = scale.max(e.abs());
                 *e += if *unused { 1.0 } else { reg };
@@ -374,7 +461,7 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
 
     /// In-place sparse Cholesky `H = L L'` on the symbolic pattern; false if a pivot is not positive.
     fn cholesky(st: &Structure<N, P, M>, l: &mut SMatrix<f64, N, N>) -> bool {
-        for (k, col) in st.l_cols.iter().enumerate() {
+        for (k, col) in st.l_cols.iter().enumerate().take(st.nv) {
             let d = at(l, k, k);
             if !(d > 0.0) {
                 return false;
@@ -401,42 +488,35 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
         true
     }
 
-    /// Solve `H x = b` with the sparse factor.
-    fn h_solve(st: &Structure<N, P, M>, l: &SMatrix<f64, N, N>, b: &SVector<f64, N>) -> SVector<f64, N> {
-        let mut y = SVector::<f64, N>::zeros();
-        for (yk, p) in y.iter_mut().zip(st.perm.iter()) {
+    /// Solve `H x = b` with the sparse factor (compact numbering).
+    fn h_solve(st: &Structure<N, P, M>, l: &SMatrix<f64, N, N>, b: &[f64; N]) -> [f64; N] {
+        let nv = st.nv;
+        let mut y = [0.0; N];
+        for (yk, p) in y.iter_mut().zip(st.perm.iter()).take(nv) {
             *yk = el(b, usize::from(*p));
         }
-        for (k, col) in st.l_cols.iter().enumerate() {
+        for (k, col) in st.l_cols.iter().enumerate().take(nv) {
             let yk = el(&y, k) / at(l, k, k);
-            if let Some(e) = el_mut(&mut y, k) {
-                *e = yk;
-            }
+            put(&mut y, k, yk);
             for i in col.iter() {
-                if let Some(e) = el_mut(&mut y, i) {
-                    *e -= at(l, i, k) * yk;
-                }
+                add(&mut y, i, -(at(l, i, k) * yk));
             }
         }
-        for (k, col) in st.l_cols.iter().enumerate().rev() {
+        for (k, col) in st.l_cols.iter().enumerate().take(nv).rev() {
             let mut v = el(&y, k);
             for i in col.iter() {
                 v -= at(l, i, k) * el(&y, i);
             }
-            if let Some(e) = el_mut(&mut y, k) {
-                *e = v / at(l, k, k);
-            }
+            put(&mut y, k, v / at(l, k, k));
         }
-        let mut out = SVector::<f64, N>::zeros();
-        for (yk, p) in y.iter().zip(st.perm.iter()) {
-            if let Some(e) = el_mut(&mut out, usize::from(*p)) {
-                *e = *yk;
-            }
+        let mut out = [0.0; N];
+        for (yk, p) in y.iter().zip(st.perm.iter()).take(nv) {
+            put(&mut out, usize::from(*p), *yk);
         }
         out
     }
 
-    fn factor(&self, st: &Structure<N, P, M>, w: &SVector<f64, M>) -> Option<Kkt<N, P>> {
+    fn factor(&self, st: &Structure<N, P, M>, w: &[f64; M]) -> Option<Kkt<N, P>> {
         // H = G' W G from the nonzeros of G (the stability LP has at most three per row).
         let mut l = SMatrix::<f64, N, N>::zeros();
         let scale = self.assemble(st, w, &mut l, 0.0);
@@ -449,22 +529,22 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
         }
         let mut v = SMatrix::<f64, N, P>::zeros();
         for (i, pat) in st.a_rows.iter().enumerate() {
-            let mut ai = SVector::<f64, N>::zeros();
-            for j in pat.iter() {
-                if let Some(e) = el_mut(&mut ai, j) {
-                    *e = at(&self.a, i, j);
+            let mut ai = [0.0; N];
+            for k in pat.iter() {
+                put(&mut ai, k, self.av(st, i, k));
+            }
+            let col = Self::h_solve(st, &l, &ai);
+            for (k, x) in col.iter().enumerate().take(st.nv) {
+                if let Some(e) = at_mut(&mut v, k, i) {
+                    *e = *x;
                 }
             }
-            v.set_column(i, &Self::h_solve(st, &l, &ai));
         }
         // Schur complement A H^-1 A' (symmetric: lower triangle computed, mirrored)
         let mut s = SMatrix::<f64, P, P>::zeros();
         for (i, pat) in st.a_rows.iter().enumerate() {
             for k in 0..=i {
-                let mut acc = 0.0;
-                for j in pat.iter() {
-                    acc += at(&self.a, i, j) * at(&v, j, k);
-                }
+                let acc: f64 = pat.iter().map(|j| self.av(st, i, j) * at(&v, j, k)).sum();
                 if let Some(e) = at_mut(&mut s, i, k) {
                     *e = acc;
                 }
@@ -495,85 +575,142 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
         Some(Kkt { l, v, schur })
     }
 
-    #[allow(clippy::too_many_arguments)]
     fn direction_once(
         &self,
         st: &Structure<N, P, M>,
         kkt: &Kkt<N, P>,
-        w: &SVector<f64, M>,
-        s: &SVector<f64, M>,
-        z: &SVector<f64, M>,
-        r_d: &SVector<f64, N>,
-        r_p: &SVector<f64, P>,
-        r_g: &SVector<f64, M>,
-        r_c: &SVector<f64, M>,
+        (w, s, z): (&[f64; M], &[f64; M], &[f64; M]),
+        r: &Rhs<'_, N, P, M>,
     ) -> Step<N, P, M> {
-        let t = w.component_mul(r_g) - r_c.component_div(s);
-        let q = -r_d - self.g_tr_mul(st, &t);
+        let (nv, nr) = (st.nv, st.nr);
+        // r_c / s, used twice
+        let mut cs = [0.0; M];
+        for ((o, rc), si) in cs.iter_mut().zip(r.c.iter()).zip(s.iter()).take(nr) {
+            *o = rc / si;
+        }
+        let mut t = [0.0; M];
+        for (((o, wi), rg), ci) in t.iter_mut().zip(w.iter()).zip(r.g.iter()).zip(cs.iter()).take(nr) {
+            *o = wi * rg - ci;
+        }
+        let mut q = self.g_tr_mul(st, &t);
+        for (qi, rd) in q.iter_mut().zip(r.d.iter()).take(nv) {
+            *qi = -rd - *qi;
+        }
         let u = Self::h_solve(st, &kkt.l, &q);
-        let dy = kkt.schur.solve(&(self.a_mul(st, &u) + r_p));
-        let dx = u - kkt.v * dy;
-        let dz = w.component_mul(&(self.g_mul(st, &dx) + r_g)) - r_c.component_div(s);
-        let ds = (-r_c - s.component_mul(&dz)).component_div(z);
-        (dx, dy, dz, ds)
+        let dy = kkt.schur.solve(&(self.a_mul(st, &u) + r.p));
+        let mut dx = u;
+        for (k, e) in dx.iter_mut().enumerate().take(nv) {
+            let vd: f64 = dy.iter().enumerate().map(|(i, d)| at(&kkt.v, k, i) * d).sum();
+            *e -= vd;
+        }
+        let gdx = self.g_mul(st, &dx);
+        let mut dz = [0.0; M];
+        let mut ds = [0.0; M];
+        for i in 0..nr {
+            let dzi = el(w, i) * (el(&gdx, i) + el(r.g, i)) - el(&cs, i);
+            put(&mut dz, i, dzi);
+            put(&mut ds, i, (-el(r.c, i) - el(s, i) * dzi) / el(z, i));
+        }
+        Step { dx, dy, dz, ds }
     }
 
     /// Newton direction with one step of iterative refinement on the full (unreduced) system: the reduced
     /// normal equations lose digits once `z / s` spans many orders of magnitude.
-    #[allow(clippy::too_many_arguments)]
     fn direction(
         &self,
         st: &Structure<N, P, M>,
         kkt: &Kkt<N, P>,
-        w: &SVector<f64, M>,
-        s: &SVector<f64, M>,
-        z: &SVector<f64, M>,
-        r_d: &SVector<f64, N>,
-        r_p: &SVector<f64, P>,
-        r_g: &SVector<f64, M>,
-        r_c: &SVector<f64, M>,
+        wsz: (&[f64; M], &[f64; M], &[f64; M]),
+        r: &Rhs<'_, N, P, M>,
     ) -> Step<N, P, M> {
-        let (dx, dy, dz, ds) = self.direction_once(st, kkt, w, s, z, r_d, r_p, r_g, r_c);
+        let (nv, nr) = (st.nv, st.nr);
+        let (_, s, z) = wsz;
+        let d = self.direction_once(st, kkt, wsz, r);
         // residuals of: A'dy + G'dz = -r_d; A dx = -r_p; G dx + ds = -r_g; Z ds + S dz = -r_c
-        let e1 = r_d + self.a_tr_mul(st, &dy) + self.g_tr_mul(st, &dz);
-        let e2 = r_p + self.a_mul(st, &dx);
-        let e3 = r_g + self.g_mul(st, &dx) + ds;
-        let e4 = r_c + z.component_mul(&ds) + s.component_mul(&dz);
-        let (cx, cy, cz, cs) = self.direction_once(st, kkt, w, s, z, &e1, &e2, &e3, &e4);
-        (dx + cx, dy + cy, dz + cz, ds + cs)
+        let mut e1 = self.a_tr_mul(st, &d.dy);
+        let gdz = self.g_tr_mul(st, &d.dz);
+        for ((e, g), rd) in e1.iter_mut().zip(gdz.iter()).zip(r.d.iter()).take(nv) {
+            *e = rd + *e + g;
+        }
+        let e2 = r.p + self.a_mul(st, &d.dx);
+        let mut e3 = self.g_mul(st, &d.dx);
+        let mut e4 = [0.0; M];
+        for i in 0..nr {
+            let v = el(r.g, i) + el(&e3, i) + el(&d.ds, i);
+            put(&mut e3, i, v);
+            put(&mut e4, i, el(r.c, i) + el(z, i) * el(&d.ds, i) + el(s, i) * el(&d.dz, i));
+        }
+        let c = self.direction_once(st, kkt, wsz, &Rhs { d: &e1, p: &e2, g: &e3, c: &e4 });
+        let mut out = d;
+        for (a, b) in out.dx.iter_mut().zip(c.dx.iter()).take(nv) {
+            *a += b;
+        }
+        out.dy += c.dy;
+        for (a, b) in out.dz.iter_mut().zip(c.dz.iter()).take(nr) {
+            *a += b;
+        }
+        for (a, b) in out.ds.iter_mut().zip(c.ds.iter()).take(nr) {
+            *a += b;
+        }
+        out
     }
 
     /// Solve with at most `max_iterations` interior-point iterations to relative tolerance `tol`.
     pub fn solve(&self, max_iterations: u32, tol: f64) -> LpSolution<N> {
         let st = Structure::new(self);
-        let mut x = SVector::<f64, N>::zeros();
+        let (nv, nr) = (st.nv, st.nr);
+        let mut c = [0.0; N];
+        for (k, ck) in c.iter_mut().enumerate().take(nv) {
+            *ck = self.c.get(st.var(k)).copied().unwrap_or(0.0);
+        }
+        let mut h = [0.0; M];
+        for (i, hi) in h.iter_mut().enumerate().take(nr) {
+            *hi = self.h.get(st.row(i)).copied().unwrap_or(0.0);
+        }
+        let mut x = [0.0; N];
         let mut y = SVector::<f64, P>::zeros();
-        let mut s = (self.h - self.g_mul(&st, &x)).map(|v| if v > 1.0 { v } else { 1.0 });
-        let mut z = SVector::<f64, M>::repeat(1.0);
-        let bn = 1.0 + inf_norm(&self.b);
-        let cn = 1.0 + inf_norm(&self.c);
-        let hn = 1.0 + inf_norm(&self.h);
+        // x = 0: s = max(h - G x, 1)
+        let mut s = [0.0; M];
+        let mut z = [0.0; M];
+        for ((si, zi), hi) in s.iter_mut().zip(z.iter_mut()).zip(h.iter()).take(nr) {
+            *si = if *hi > 1.0 { *hi } else { 1.0 };
+            *zi = 1.0;
+        }
+        let bn = 1.0 + inf_norm(self.b.as_slice());
+        let cn = 1.0 + inf_norm(self.c.as_slice());
+        let hn = 1.0 + inf_norm(self.h.as_slice());
+        let rows = nr.max(1) as f64;
         let mut it = 0;
         let mut best_x = x;
         let mut best_merit = f64::INFINITY;
-        let end = |x: SVector<f64, N>, merit: f64, it: u32, otherwise: LpStatus| {
+        let end = |xc: &[f64; N], merit: f64, it: u32, otherwise: LpStatus| {
             let status = if merit <= ALMOST_FACTOR * tol { LpStatus::AlmostOptimal } else { otherwise };
+            let x = self.expand(&st, xc);
             LpSolution { status, objective: self.c.dot(&x), x, iterations: it }
         };
         loop {
-            let r_d = self.c + self.a_tr_mul(&st, &y) + self.g_tr_mul(&st, &z);
+            let mut r_d = self.a_tr_mul(&st, &y);
+            let gz = self.g_tr_mul(&st, &z);
+            for ((r, g), ck) in r_d.iter_mut().zip(gz.iter()).zip(c.iter()).take(nv) {
+                *r = ck + *r + g;
+            }
             let r_p = self.a_mul(&st, &x) - self.b;
-            let r_g = self.g_mul(&st, &x) + s - self.h;
-            let mu = s.dot(&z) / (M.max(1) as f64);
-            let pobj = self.c.dot(&x);
-            let merit = (inf_norm(&r_p) / bn)
+            let mut r_g = self.g_mul(&st, &x);
+            for ((r, si), hi) in r_g.iter_mut().zip(s.iter()).zip(h.iter()).take(nr) {
+                *r = *r + si - hi;
+            }
+            let sz = dot(s.get(..nr).unwrap_or(&[]), z.get(..nr).unwrap_or(&[]));
+            let mu = sz / rows;
+            let pobj = dot(&c, &x);
+            let merit = (inf_norm(r_p.as_slice()) / bn)
                 .max(inf_norm(&r_g) / hn)
                 .max(inf_norm(&r_d) / (DUAL_TOL_FACTOR * cn))
-                .max(s.dot(&z) / (1.0 + pobj.abs()));
+                .max(sz / (1.0 + pobj.abs()));
             if !merit.is_finite() {
-                return end(best_x, best_merit, it, LpStatus::NumericalFailure);
+                return end(&best_x, best_merit, it, LpStatus::NumericalFailure);
             }
             if merit <= tol {
+                let x = self.expand(&st, &x);
                 return LpSolution { status: LpStatus::Optimal, objective: pobj, x, iterations: it };
             }
             if merit < best_merit {
@@ -581,34 +718,61 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
                 best_x = x;
             } else if merit > 1e4 * best_merit {
                 // round-off has taken over: stop with the best iterate
-                return end(best_x, best_merit, it, LpStatus::NumericalFailure);
+                return end(&best_x, best_merit, it, LpStatus::NumericalFailure);
             }
             if it >= max_iterations {
-                return end(best_x, best_merit, it, LpStatus::BudgetExhausted);
+                return end(&best_x, best_merit, it, LpStatus::BudgetExhausted);
             }
             it += 1;
-            let w = z.component_div(&s);
+            let mut w = [0.0; M];
+            let mut r_c = [0.0; M];
+            for i in 0..nr {
+                put(&mut w, i, el(&z, i) / el(&s, i));
+                put(&mut r_c, i, el(&s, i) * el(&z, i));
+            }
             let Some(kkt) = self.factor(&st, &w) else {
-                return end(best_x, best_merit, it, LpStatus::NumericalFailure);
+                return end(&best_x, best_merit, it, LpStatus::NumericalFailure);
             };
             // predictor (affine scaling)
-            let r_c = s.component_mul(&z);
-            let (_, _, dz_a, ds_a) = self.direction(&st, &kkt, &w, &s, &z, &r_d, &r_p, &r_g, &r_c);
-            let ap = max_step(&s, &ds_a);
-            let ad = max_step(&z, &dz_a);
-            let mu_aff = (s + ds_a * ap).dot(&(z + dz_a * ad)) / (M.max(1) as f64);
+            let aff = self.direction(&st, &kkt, (&w, &s, &z), &Rhs { d: &r_d, p: &r_p, g: &r_g, c: &r_c });
+            let ap = max_step(s.get(..nr).unwrap_or(&[]), aff.ds.get(..nr).unwrap_or(&[]));
+            let ad = max_step(z.get(..nr).unwrap_or(&[]), aff.dz.get(..nr).unwrap_or(&[]));
+            let mut mu_aff = 0.0;
+            for i in 0..nr {
+                mu_aff += (el(&s, i) + el(&aff.ds, i) * ap) * (el(&z, i) + el(&aff.dz, i) * ad);
+            }
+            let mu_aff = mu_aff / rows;
             let ratio = mu_aff / mu;
             let sigma = (ratio * ratio * ratio).clamp(0.0, 1.0);
             // corrector
-            let r_c = s.component_mul(&z) + ds_a.component_mul(&dz_a) - SVector::<f64, M>::repeat(sigma * mu);
-            let (dx, dy, dz, ds) = self.direction(&st, &kkt, &w, &s, &z, &r_d, &r_p, &r_g, &r_c);
-            let ap = (0.99 * max_step(&s, &ds)).min(1.0);
-            let ad = (0.99 * max_step(&z, &dz)).min(1.0);
-            x += dx * ap;
-            s += ds * ap;
-            y += dy * ad;
-            z += dz * ad;
+            for i in 0..nr {
+                put(&mut r_c, i, el(&s, i) * el(&z, i) + el(&aff.ds, i) * el(&aff.dz, i) - sigma * mu);
+            }
+            let d = self.direction(&st, &kkt, (&w, &s, &z), &Rhs { d: &r_d, p: &r_p, g: &r_g, c: &r_c });
+            let ap = (0.99 * max_step(s.get(..nr).unwrap_or(&[]), d.ds.get(..nr).unwrap_or(&[]))).min(1.0);
+            let ad = (0.99 * max_step(z.get(..nr).unwrap_or(&[]), d.dz.get(..nr).unwrap_or(&[]))).min(1.0);
+            for (xi, dxi) in x.iter_mut().zip(d.dx.iter()).take(nv) {
+                *xi += dxi * ap;
+            }
+            for (si, dsi) in s.iter_mut().zip(d.ds.iter()).take(nr) {
+                *si += dsi * ap;
+            }
+            y += d.dy * ad;
+            for (zi, dzi) in z.iter_mut().zip(d.dz.iter()).take(nr) {
+                *zi += dzi * ad;
+            }
         }
+    }
+
+    /// A compact primal vector in the original numbering (dropped variables are 0).
+    fn expand(&self, st: &Structure<N, P, M>, xc: &[f64; N]) -> SVector<f64, N> {
+        let mut x = SVector::<f64, N>::zeros();
+        for (k, v) in xc.iter().enumerate().take(st.nv) {
+            if let Some(e) = x.get_mut(st.var(k)) {
+                *e = *v;
+            }
+        }
+        x
     }
 }
 
