@@ -339,9 +339,20 @@ fn put_u16(v: &mut [u16], i: usize, x: u16) {
 struct Kkt<const N: usize, const P: usize> {
     /// Cholesky factor of `H` in elimination order (lower triangle; only the structural nonzeros are meaningful).
     l: SMatrix<f64, N, N>,
+    /// Reciprocals of the factor's diagonal (multiplications instead of divisions in the solves).
+    inv_diag: [f64; N],
     /// `H^-1 A'` (compact rows).
     v: SMatrix<f64, N, P>,
     schur: Cholesky<f64, nalgebra::Const<P>>,
+}
+
+/// The scaling of one iteration: slacks `s`, duals `z`, `w = z / s` and the reciprocals of `s` and `z`.
+struct Scaling<const M: usize> {
+    w: [f64; M],
+    s: [f64; M],
+    z: [f64; M],
+    inv_s: [f64; M],
+    inv_z: [f64; M],
 }
 
 /// Residuals (or right-hand sides) of the Newton system, in compact numbering.
@@ -489,14 +500,14 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
     }
 
     /// Solve `H x = b` with the sparse factor (compact numbering).
-    fn h_solve(st: &Structure<N, P, M>, l: &SMatrix<f64, N, N>, b: &[f64; N]) -> [f64; N] {
+    fn h_solve(st: &Structure<N, P, M>, l: &SMatrix<f64, N, N>, inv_diag: &[f64; N], b: &[f64; N]) -> [f64; N] {
         let nv = st.nv;
         let mut y = [0.0; N];
         for (yk, p) in y.iter_mut().zip(st.perm.iter()).take(nv) {
             *yk = el(b, usize::from(*p));
         }
         for (k, col) in st.l_cols.iter().enumerate().take(nv) {
-            let yk = el(&y, k) / at(l, k, k);
+            let yk = el(&y, k) * el(inv_diag, k);
             put(&mut y, k, yk);
             for i in col.iter() {
                 add(&mut y, i, -(at(l, i, k) * yk));
@@ -507,7 +518,7 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
             for i in col.iter() {
                 v -= at(l, i, k) * el(&y, i);
             }
-            put(&mut y, k, v / at(l, k, k));
+            put(&mut y, k, v * el(inv_diag, k));
         }
         let mut out = [0.0; N];
         for (yk, p) in y.iter().zip(st.perm.iter()).take(nv) {
@@ -527,13 +538,17 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
                 return None;
             }
         }
+        let mut inv_diag = [0.0; N];
+        for (k, e) in inv_diag.iter_mut().enumerate().take(st.nv) {
+            *e = 1.0 / at(&l, k, k);
+        }
         let mut v = SMatrix::<f64, N, P>::zeros();
         for (i, pat) in st.a_rows.iter().enumerate() {
             let mut ai = [0.0; N];
             for k in pat.iter() {
                 put(&mut ai, k, self.av(st, i, k));
             }
-            let col = Self::h_solve(st, &l, &ai);
+            let col = Self::h_solve(st, &l, &inv_diag, &ai);
             for (k, x) in col.iter().enumerate().take(st.nv) {
                 if let Some(e) = at_mut(&mut v, k, i) {
                     *e = *x;
@@ -572,21 +587,22 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
                 Cholesky::new(s)?
             }
         };
-        Some(Kkt { l, v, schur })
+        Some(Kkt { l, inv_diag, v, schur })
     }
 
     fn direction_once(
         &self,
         st: &Structure<N, P, M>,
         kkt: &Kkt<N, P>,
-        (w, s, z): (&[f64; M], &[f64; M], &[f64; M]),
+        sc: &Scaling<M>,
         r: &Rhs<'_, N, P, M>,
     ) -> Step<N, P, M> {
         let (nv, nr) = (st.nv, st.nr);
+        let w = &sc.w;
         // r_c / s, used twice
         let mut cs = [0.0; M];
-        for ((o, rc), si) in cs.iter_mut().zip(r.c.iter()).zip(s.iter()).take(nr) {
-            *o = rc / si;
+        for ((o, rc), si) in cs.iter_mut().zip(r.c.iter()).zip(sc.inv_s.iter()).take(nr) {
+            *o = rc * si;
         }
         let mut t = [0.0; M];
         for (((o, wi), rg), ci) in t.iter_mut().zip(w.iter()).zip(r.g.iter()).zip(cs.iter()).take(nr) {
@@ -596,7 +612,7 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
         for (qi, rd) in q.iter_mut().zip(r.d.iter()).take(nv) {
             *qi = -rd - *qi;
         }
-        let u = Self::h_solve(st, &kkt.l, &q);
+        let u = Self::h_solve(st, &kkt.l, &kkt.inv_diag, &q);
         let dy = kkt.schur.solve(&(self.a_mul(st, &u) + r.p));
         let mut dx = u;
         for (k, e) in dx.iter_mut().enumerate().take(nv) {
@@ -609,23 +625,27 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
         for i in 0..nr {
             let dzi = el(w, i) * (el(&gdx, i) + el(r.g, i)) - el(&cs, i);
             put(&mut dz, i, dzi);
-            put(&mut ds, i, (-el(r.c, i) - el(s, i) * dzi) / el(z, i));
+            put(&mut ds, i, (-el(r.c, i) - el(&sc.s, i) * dzi) * el(&sc.inv_z, i));
         }
         Step { dx, dy, dz, ds }
     }
 
-    /// Newton direction with one step of iterative refinement on the full (unreduced) system: the reduced
-    /// normal equations lose digits once `z / s` spans many orders of magnitude.
+    /// Newton direction, with one step of iterative refinement on the full (unreduced) system if `refine`: the
+    /// reduced normal equations lose digits once `z / s` spans many orders of magnitude.
     fn direction(
         &self,
         st: &Structure<N, P, M>,
         kkt: &Kkt<N, P>,
-        wsz: (&[f64; M], &[f64; M], &[f64; M]),
+        sc: &Scaling<M>,
         r: &Rhs<'_, N, P, M>,
+        refine: bool,
     ) -> Step<N, P, M> {
         let (nv, nr) = (st.nv, st.nr);
-        let (_, s, z) = wsz;
-        let d = self.direction_once(st, kkt, wsz, r);
+        let (s, z) = (&sc.s, &sc.z);
+        let d = self.direction_once(st, kkt, sc, r);
+        if !refine {
+            return d;
+        }
         // residuals of: A'dy + G'dz = -r_d; A dx = -r_p; G dx + ds = -r_g; Z ds + S dz = -r_c
         let mut e1 = self.a_tr_mul(st, &d.dy);
         let gdz = self.g_tr_mul(st, &d.dz);
@@ -640,7 +660,7 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
             put(&mut e3, i, v);
             put(&mut e4, i, el(r.c, i) + el(z, i) * el(&d.ds, i) + el(s, i) * el(&d.dz, i));
         }
-        let c = self.direction_once(st, kkt, wsz, &Rhs { d: &e1, p: &e2, g: &e3, c: &e4 });
+        let c = self.direction_once(st, kkt, sc, &Rhs { d: &e1, p: &e2, g: &e3, c: &e4 });
         let mut out = d;
         for (a, b) in out.dx.iter_mut().zip(c.dx.iter()).take(nv) {
             *a += b;
@@ -724,17 +744,22 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
                 return end(&best_x, best_merit, it, LpStatus::BudgetExhausted);
             }
             it += 1;
-            let mut w = [0.0; M];
+            let mut sc = Scaling { w: [0.0; M], s, z, inv_s: [0.0; M], inv_z: [0.0; M] };
             let mut r_c = [0.0; M];
             for i in 0..nr {
-                put(&mut w, i, el(&z, i) / el(&s, i));
-                put(&mut r_c, i, el(&s, i) * el(&z, i));
+                let (si, zi) = (el(&s, i), el(&z, i));
+                let inv_s = 1.0 / si;
+                put(&mut sc.inv_s, i, inv_s);
+                put(&mut sc.inv_z, i, 1.0 / zi);
+                put(&mut sc.w, i, zi * inv_s);
+                put(&mut r_c, i, si * zi);
             }
-            let Some(kkt) = self.factor(&st, &w) else {
+            let Some(kkt) = self.factor(&st, &sc.w) else {
                 return end(&best_x, best_merit, it, LpStatus::NumericalFailure);
             };
             // predictor (affine scaling)
-            let aff = self.direction(&st, &kkt, (&w, &s, &z), &Rhs { d: &r_d, p: &r_p, g: &r_g, c: &r_c });
+            // (its accuracy only steers the centring: no refinement)
+            let aff = self.direction(&st, &kkt, &sc, &Rhs { d: &r_d, p: &r_p, g: &r_g, c: &r_c }, false);
             let ap = max_step(s.get(..nr).unwrap_or(&[]), aff.ds.get(..nr).unwrap_or(&[]));
             let ad = max_step(z.get(..nr).unwrap_or(&[]), aff.dz.get(..nr).unwrap_or(&[]));
             let mut mu_aff = 0.0;
@@ -748,7 +773,7 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
             for i in 0..nr {
                 put(&mut r_c, i, el(&s, i) * el(&z, i) + el(&aff.ds, i) * el(&aff.dz, i) - sigma * mu);
             }
-            let d = self.direction(&st, &kkt, (&w, &s, &z), &Rhs { d: &r_d, p: &r_p, g: &r_g, c: &r_c });
+            let d = self.direction(&st, &kkt, &sc, &Rhs { d: &r_d, p: &r_p, g: &r_g, c: &r_c }, true);
             let ap = (0.99 * max_step(s.get(..nr).unwrap_or(&[]), d.ds.get(..nr).unwrap_or(&[]))).min(1.0);
             let ad = (0.99 * max_step(z.get(..nr).unwrap_or(&[]), d.dz.get(..nr).unwrap_or(&[]))).min(1.0);
             for (xi, dxi) in x.iter_mut().zip(d.dx.iter()).take(nv) {
