@@ -150,6 +150,38 @@ impl<const K: usize> Pattern<K> {
     }
 }
 
+/// A sparse row: at most `K` (index, value) entries.
+#[derive(Clone, Copy)]
+struct SparseRow<const K: usize> {
+    idx: [u16; K],
+    val: [f64; K],
+    len: u16,
+}
+
+impl<const K: usize> SparseRow<K> {
+    const EMPTY: Self = SparseRow { idx: [0; K], val: [0.0; K], len: 0 };
+    fn push(&mut self, i: usize, v: f64) {
+        let n = usize::from(self.len);
+        if let (Some(e), Some(x), Ok(i)) = (self.idx.get_mut(n), self.val.get_mut(n), u16::try_from(i)) {
+            *e = i;
+            *x = v;
+            self.len += 1;
+        }
+    }
+    fn iter(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
+        let n = usize::from(self.len);
+        self.idx.get(..n).unwrap_or(&[]).iter().zip(self.val.get(..n).unwrap_or(&[]).iter()).map(|(i, v)| (usize::from(*i), *v))
+    }
+    fn dot(&self, x: &[f64]) -> f64 {
+        self.iter().map(|(k, v)| v * el(x, k)).sum()
+    }
+    fn axpy(&self, a: f64, out: &mut [f64]) {
+        for (k, v) in self.iter() {
+            add(out, k, v * a);
+        }
+    }
+}
+
 /// The compacted problem, computed once per solve. Variables that no constraint mentions and that have no cost
 /// (`x_j = 0` throughout) and inequality rows `0 <= h_i` with `h_i >= 0` (always slack) are dropped; the rest is
 /// renumbered densely (`nv` variables, `nr` inequalities). Kept: the nonzero (compact) columns of every row of `G`
@@ -163,8 +195,9 @@ struct Structure<const N: usize, const P: usize, const M: usize> {
     nr: usize,
     /// Compact inequality -> original row.
     row: [u16; M],
-    g_rows: [Pattern<N>; M],
-    a_rows: [Pattern<N>; P],
+    /// Rows of `G` (compact rows and columns) and of `A` (compact columns), with their values.
+    g_rows: [SparseRow<N>; M],
+    a_rows: [SparseRow<N>; P],
     /// `perm[k]`: the compact variable eliminated `k`-th; `pos[j]`: the elimination step of compact variable `j`.
     perm: [u16; N],
     pos: [u16; N],
@@ -220,7 +253,7 @@ impl<const N: usize, const P: usize, const M: usize> Structure<N, P, M> {
         }
         let mut row = [0u16; M];
         let mut nr = 0;
-        let mut g_rows = [Pattern::<N>::EMPTY; M];
+        let mut g_rows = [SparseRow::<N>::EMPTY; M];
         for (i, k) in keep_row.iter().enumerate() {
             if !*k {
                 continue;
@@ -228,26 +261,28 @@ impl<const N: usize, const P: usize, const M: usize> Structure<N, P, M> {
             put_u16(&mut row, nr, u16_of(i));
             if let Some(pat) = g_rows.get_mut(nr) {
                 for (j, cj) in compact.iter().enumerate() {
-                    if at(&lp.g, i, j) != 0.0 {
-                        pat.push(usize::from(*cj));
+                    let v = at(&lp.g, i, j);
+                    if v != 0.0 {
+                        pat.push(usize::from(*cj), v);
                     }
                 }
             }
             nr += 1;
         }
-        let mut a_rows = [Pattern::<N>::EMPTY; P];
+        let mut a_rows = [SparseRow::<N>::EMPTY; P];
         for (i, pat) in a_rows.iter_mut().enumerate() {
             for (j, cj) in compact.iter().enumerate() {
-                if at(&lp.a, i, j) != 0.0 {
-                    pat.push(usize::from(*cj));
+                let v = at(&lp.a, i, j);
+                if v != 0.0 {
+                    pat.push(usize::from(*cj), v);
                 }
             }
         }
         // graph of G'G (compact indices) and degrees
         let mut adj = [[false; N]; N];
         for pat in g_rows.iter().take(nr) {
-            for a in pat.iter() {
-                for b in pat.iter() {
+            for (a, _) in pat.iter() {
+                for (b, _) in pat.iter() {
                     if let Some(e) = adj.get_mut(a).and_then(|r| r.get_mut(b)) {
                         *e = true;
                     }
@@ -324,8 +359,8 @@ impl<const N: usize, const P: usize, const M: usize> Structure<N, P, M> {
         self.row.get(i).copied().map(usize::from).unwrap_or(0)
     }
     /// The compact inequality rows with their index.
-    fn g_rows(&self) -> impl Iterator<Item = (usize, &Pattern<N>)> + '_ {
-        self.g_rows.iter().enumerate().take(self.nr)
+    fn g_rows(&self) -> impl Iterator<Item = &SparseRow<N>> + '_ {
+        self.g_rows.iter().take(self.nr)
     }
 }
 
@@ -343,7 +378,19 @@ struct Kkt<const N: usize, const P: usize> {
     inv_diag: [f64; N],
     /// `H^-1 A'` (compact rows).
     v: SMatrix<f64, N, P>,
-    schur: Cholesky<f64, nalgebra::Const<P>>,
+    schur: Option<Cholesky<f64, nalgebra::Const<P>>>,
+}
+
+impl<const N: usize, const P: usize> Kkt<N, P> {
+    fn new() -> Self {
+        Kkt { l: SMatrix::zeros(), inv_diag: [0.0; N], v: SMatrix::zeros(), schur: None }
+    }
+    fn schur_solve(&self, b: &SVector<f64, P>) -> SVector<f64, P> {
+        match &self.schur {
+            Some(c) => c.solve(b),
+            None => SVector::zeros(),
+        }
+    }
 }
 
 /// The scaling of one iteration: slacks `s`, duals `z`, `w = z / s` and the reciprocals of `s` and `z`.
@@ -383,52 +430,38 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
         }
     }
 
-    /// `G` entry of compact row `r`, compact column `k`.
-    fn gv(&self, st: &Structure<N, P, M>, r: usize, k: usize) -> f64 {
-        at(&self.g, st.row(r), st.var(k))
-    }
-
-    /// `A` entry of equation `i`, compact column `k`.
-    fn av(&self, st: &Structure<N, P, M>, i: usize, k: usize) -> f64 {
-        at(&self.a, i, st.var(k))
-    }
-
     /// `G x` over the nonzeros of `G`.
-    fn g_mul(&self, st: &Structure<N, P, M>, x: &[f64; N]) -> [f64; M] {
+    fn g_mul(st: &Structure<N, P, M>, x: &[f64; N]) -> [f64; M] {
         let mut out = [0.0; M];
-        for ((r, pat), o) in st.g_rows().zip(out.iter_mut()) {
-            *o = pat.iter().map(|k| self.gv(st, r, k) * el(x, k)).sum();
+        for (row, o) in st.g_rows().zip(out.iter_mut()) {
+            *o = row.dot(x);
         }
         out
     }
 
     /// `G' z` over the nonzeros of `G`.
-    fn g_tr_mul(&self, st: &Structure<N, P, M>, z: &[f64; M]) -> [f64; N] {
+    fn g_tr_mul(st: &Structure<N, P, M>, z: &[f64; M]) -> [f64; N] {
         let mut out = [0.0; N];
-        for ((r, pat), zr) in st.g_rows().zip(z.iter()) {
-            for k in pat.iter() {
-                add(&mut out, k, self.gv(st, r, k) * zr);
-            }
+        for (row, zr) in st.g_rows().zip(z.iter()) {
+            row.axpy(*zr, &mut out);
         }
         out
     }
 
     /// `A x` over the nonzeros of `A`.
-    fn a_mul(&self, st: &Structure<N, P, M>, x: &[f64; N]) -> SVector<f64, P> {
+    fn a_mul(st: &Structure<N, P, M>, x: &[f64; N]) -> SVector<f64, P> {
         let mut out = SVector::<f64, P>::zeros();
-        for ((i, pat), o) in st.a_rows.iter().enumerate().zip(out.iter_mut()) {
-            *o = pat.iter().map(|k| self.av(st, i, k) * el(x, k)).sum();
+        for (row, o) in st.a_rows.iter().zip(out.iter_mut()) {
+            *o = row.dot(x);
         }
         out
     }
 
     /// `A' y` over the nonzeros of `A`.
-    fn a_tr_mul(&self, st: &Structure<N, P, M>, y: &SVector<f64, P>) -> [f64; N] {
+    fn a_tr_mul(st: &Structure<N, P, M>, y: &SVector<f64, P>) -> [f64; N] {
         let mut out = [0.0; N];
-        for ((i, pat), yi) in st.a_rows.iter().enumerate().zip(y.iter()) {
-            for k in pat.iter() {
-                add(&mut out, k, self.av(st, i, k) * yi);
-            }
+        for (row, yi) in st.a_rows.iter().zip(y.iter()) {
+            row.axpy(*yi, &mut out);
         }
         out
     }
@@ -446,15 +479,15 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
                 }
             }
         }
-        for ((r, pat), wr) in st.g_rows().zip(w.iter()) {
-            for a in pat.iter() {
-                let wa = wr * self.gv(st, r, a);
+        for (row, wr) in st.g_rows().zip(w.iter()) {
+            for (a, va) in row.iter() {
+                let wa = wr * va;
                 let pa = st.pos(a);
-                for b in pat.iter() {
+                for (b, vb) in row.iter() {
                     let pb = st.pos(b);
                     if pb <= pa {
                         if let Some(e) = at_mut(l, pa, pb) {
-                            *e += wa * self.gv(st, r, b);
+                            *e += wa * vb;
                         }
                     }
                 }
@@ -527,30 +560,31 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
         out
     }
 
-    fn factor(&self, st: &Structure<N, P, M>, w: &[f64; M]) -> Option<Kkt<N, P>> {
+    /// Factorise the reduced KKT system for `w` into `kkt` (reused across iterations: no large copies); false if
+    /// a factorisation failed.
+    fn factor(&self, st: &Structure<N, P, M>, w: &[f64; M], kkt: &mut Kkt<N, P>) -> bool {
         // H = G' W G from the nonzeros of G (the stability LP has at most three per row).
-        let mut l = SMatrix::<f64, N, N>::zeros();
-        let scale = self.assemble(st, w, &mut l, 0.0);
+        let Kkt { l, inv_diag, v, schur: schur_out } = kkt;
+        *schur_out = None;
+        let scale = self.assemble(st, w, l, 0.0);
         // Unregularised first (exact Newton steps); a tiny diagonal only if that factorisation fails.
-        if !Self::cholesky(st, &mut l) {
-            self.assemble(st, w, &mut l, 1e-12 * scale);
-            if !Self::cholesky(st, &mut l) {
-                return None;
+        if !Self::cholesky(st, l) {
+            self.assemble(st, w, l, 1e-12 * scale);
+            if !Self::cholesky(st, l) {
+                return false;
             }
         }
-        let mut inv_diag = [0.0; N];
         for (k, e) in inv_diag.iter_mut().enumerate().take(st.nv) {
-            *e = 1.0 / at(&l, k, k);
+            *e = 1.0 / at(l, k, k);
         }
-        let mut v = SMatrix::<f64, N, P>::zeros();
         for (i, pat) in st.a_rows.iter().enumerate() {
             let mut ai = [0.0; N];
-            for k in pat.iter() {
-                put(&mut ai, k, self.av(st, i, k));
+            for (k, v) in pat.iter() {
+                put(&mut ai, k, v);
             }
-            let col = Self::h_solve(st, &l, &inv_diag, &ai);
+            let col = Self::h_solve(st, l, inv_diag, &ai);
             for (k, x) in col.iter().enumerate().take(st.nv) {
-                if let Some(e) = at_mut(&mut v, k, i) {
+                if let Some(e) = at_mut(v, k, i) {
                     *e = *x;
                 }
             }
@@ -559,7 +593,7 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
         let mut s = SMatrix::<f64, P, P>::zeros();
         for (i, pat) in st.a_rows.iter().enumerate() {
             for k in 0..=i {
-                let acc: f64 = pat.iter().map(|j| self.av(st, i, j) * at(&v, j, k)).sum();
+                let acc: f64 = pat.iter().map(|(j, a)| a * at(v, j, k)).sum();
                 if let Some(e) = at_mut(&mut s, i, k) {
                     *e = acc;
                 }
@@ -576,18 +610,18 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
                 }
             }
         }
-        let schur = match Cholesky::new(s) {
-            Some(c) => c,
+        *schur_out = match Cholesky::new(s) {
+            Some(c) => Some(c),
             None => {
                 for i in 0..P {
                     if let Some(e) = at_mut(&mut s, i, i) {
                         *e += 1e-13 * sscale;
                     }
                 }
-                Cholesky::new(s)?
+                Cholesky::new(s)
             }
         };
-        Some(Kkt { l, inv_diag, v, schur })
+        schur_out.is_some()
     }
 
     fn direction_once(
@@ -608,18 +642,18 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
         for (((o, wi), rg), ci) in t.iter_mut().zip(w.iter()).zip(r.g.iter()).zip(cs.iter()).take(nr) {
             *o = wi * rg - ci;
         }
-        let mut q = self.g_tr_mul(st, &t);
+        let mut q = Self::g_tr_mul(st, &t);
         for (qi, rd) in q.iter_mut().zip(r.d.iter()).take(nv) {
             *qi = -rd - *qi;
         }
         let u = Self::h_solve(st, &kkt.l, &kkt.inv_diag, &q);
-        let dy = kkt.schur.solve(&(self.a_mul(st, &u) + r.p));
+        let dy = kkt.schur_solve(&(Self::a_mul(st, &u) + r.p));
         let mut dx = u;
         for (k, e) in dx.iter_mut().enumerate().take(nv) {
             let vd: f64 = dy.iter().enumerate().map(|(i, d)| at(&kkt.v, k, i) * d).sum();
             *e -= vd;
         }
-        let gdx = self.g_mul(st, &dx);
+        let gdx = Self::g_mul(st, &dx);
         let mut dz = [0.0; M];
         let mut ds = [0.0; M];
         for i in 0..nr {
@@ -647,13 +681,13 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
             return d;
         }
         // residuals of: A'dy + G'dz = -r_d; A dx = -r_p; G dx + ds = -r_g; Z ds + S dz = -r_c
-        let mut e1 = self.a_tr_mul(st, &d.dy);
-        let gdz = self.g_tr_mul(st, &d.dz);
+        let mut e1 = Self::a_tr_mul(st, &d.dy);
+        let gdz = Self::g_tr_mul(st, &d.dz);
         for ((e, g), rd) in e1.iter_mut().zip(gdz.iter()).zip(r.d.iter()).take(nv) {
             *e = rd + *e + g;
         }
-        let e2 = r.p + self.a_mul(st, &d.dx);
-        let mut e3 = self.g_mul(st, &d.dx);
+        let e2 = r.p + Self::a_mul(st, &d.dx);
+        let mut e3 = Self::g_mul(st, &d.dx);
         let mut e4 = [0.0; M];
         for i in 0..nr {
             let v = el(r.g, i) + el(&e3, i) + el(&d.ds, i);
@@ -703,19 +737,20 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
         let mut it = 0;
         let mut best_x = x;
         let mut best_merit = f64::INFINITY;
+        let mut kkt = Kkt::<N, P>::new();
         let end = |xc: &[f64; N], merit: f64, it: u32, otherwise: LpStatus| {
             let status = if merit <= ALMOST_FACTOR * tol { LpStatus::AlmostOptimal } else { otherwise };
             let x = self.expand(&st, xc);
             LpSolution { status, objective: self.c.dot(&x), x, iterations: it }
         };
         loop {
-            let mut r_d = self.a_tr_mul(&st, &y);
-            let gz = self.g_tr_mul(&st, &z);
+            let mut r_d = Self::a_tr_mul(&st, &y);
+            let gz = Self::g_tr_mul(&st, &z);
             for ((r, g), ck) in r_d.iter_mut().zip(gz.iter()).zip(c.iter()).take(nv) {
                 *r = ck + *r + g;
             }
-            let r_p = self.a_mul(&st, &x) - self.b;
-            let mut r_g = self.g_mul(&st, &x);
+            let r_p = Self::a_mul(&st, &x) - self.b;
+            let mut r_g = Self::g_mul(&st, &x);
             for ((r, si), hi) in r_g.iter_mut().zip(s.iter()).zip(h.iter()).take(nr) {
                 *r = *r + si - hi;
             }
@@ -754,9 +789,9 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
                 put(&mut sc.w, i, zi * inv_s);
                 put(&mut r_c, i, si * zi);
             }
-            let Some(kkt) = self.factor(&st, &sc.w) else {
+            if !self.factor(&st, &sc.w, &mut kkt) {
                 return end(&best_x, best_merit, it, LpStatus::NumericalFailure);
-            };
+            }
             // predictor (affine scaling)
             // (its accuracy only steers the centring: no refinement)
             let aff = self.direction(&st, &kkt, &sc, &Rhs { d: &r_d, p: &r_p, g: &r_g, c: &r_c }, false);
