@@ -72,6 +72,9 @@ pub struct LpSolution<const N: usize> {
 /// of the dual residual once `z / s` spans many orders of magnitude (measured stalls at 4e-9 to 1.5e-8 with `tol = 1e-9`).
 const DUAL_TOL_FACTOR: f64 = 1000.0;
 
+/// The corrector direction is refined once `max w / min w` (`w = z / s`) exceeds this spread.
+const REFINE_SPREAD: f64 = 1e6;
+
 /// Accuracy accepted as [`LpStatus::AlmostOptimal`], as a multiple of `tol`.
 pub const ALMOST_FACTOR: f64 = 100.0;
 
@@ -103,8 +106,16 @@ fn inf_norm(v: &[f64]) -> f64 {
     v.iter().fold(0.0, |m, x| if x.abs() > m { x.abs() } else { m })
 }
 
+/// Sum starting from the first term (`Iterator::sum` starts from `-0.0`: one soft-float addition more per sum).
+fn sum(mut terms: impl Iterator<Item = f64>) -> f64 {
+    match terms.next() {
+        Some(first) => terms.fold(first, |a, b| a + b),
+        None => 0.0,
+    }
+}
+
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b.iter()).map(|(x, y)| x * y).sum()
+    sum(a.iter().zip(b.iter()).map(|(x, y)| x * y))
 }
 
 fn max_step(v: &[f64], dv: &[f64]) -> f64 {
@@ -173,7 +184,7 @@ impl<const K: usize> SparseRow<K> {
         self.idx.get(..n).unwrap_or(&[]).iter().zip(self.val.get(..n).unwrap_or(&[]).iter()).map(|(i, v)| (usize::from(*i), *v))
     }
     fn dot(&self, x: &[f64]) -> f64 {
-        self.iter().map(|(k, v)| v * el(x, k)).sum()
+        sum(self.iter().map(|(k, v)| v * el(x, k)))
     }
     fn axpy(&self, a: f64, out: &mut [f64]) {
         for (k, v) in self.iter() {
@@ -593,7 +604,7 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
         let mut s = SMatrix::<f64, P, P>::zeros();
         for (i, pat) in st.a_rows.iter().enumerate() {
             for k in 0..=i {
-                let acc: f64 = pat.iter().map(|(j, a)| a * at(v, j, k)).sum();
+                let acc = sum(pat.iter().map(|(j, a)| a * at(v, j, k)));
                 if let Some(e) = at_mut(&mut s, i, k) {
                     *e = acc;
                 }
@@ -650,7 +661,7 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
         let dy = kkt.schur_solve(&(Self::a_mul(st, &u) + r.p));
         let mut dx = u;
         for (k, e) in dx.iter_mut().enumerate().take(nv) {
-            let vd: f64 = dy.iter().enumerate().map(|(i, d)| at(&kkt.v, k, i) * d).sum();
+            let vd = sum(dy.iter().enumerate().map(|(i, d)| at(&kkt.v, k, i) * d));
             *e -= vd;
         }
         let gdx = Self::g_mul(st, &dx);
@@ -781,14 +792,25 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
             it += 1;
             let mut sc = Scaling { w: [0.0; M], s, z, inv_s: [0.0; M], inv_z: [0.0; M] };
             let mut r_c = [0.0; M];
+            let (mut w_min, mut w_max) = (f64::INFINITY, 0.0f64);
             for i in 0..nr {
                 let (si, zi) = (el(&s, i), el(&z, i));
                 let inv_s = 1.0 / si;
                 put(&mut sc.inv_s, i, inv_s);
                 put(&mut sc.inv_z, i, 1.0 / zi);
-                put(&mut sc.w, i, zi * inv_s);
+                let wi = zi * inv_s;
+                put(&mut sc.w, i, wi);
                 put(&mut r_c, i, si * zi);
+                if wi < w_min {
+                    w_min = wi;
+                }
+                if wi > w_max {
+                    w_max = wi;
+                }
             }
+            // refine the corrector only once the scaling is badly spread (or not finite): before that the normal
+            // equations keep enough digits
+            let refine = !(w_max <= REFINE_SPREAD * w_min);
             if !self.factor(&st, &sc.w, &mut kkt) {
                 return end(&best_x, best_merit, it, LpStatus::NumericalFailure);
             }
@@ -808,7 +830,7 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
             for i in 0..nr {
                 put(&mut r_c, i, el(&s, i) * el(&z, i) + el(&aff.ds, i) * el(&aff.dz, i) - sigma * mu);
             }
-            let d = self.direction(&st, &kkt, &sc, &Rhs { d: &r_d, p: &r_p, g: &r_g, c: &r_c }, true);
+            let d = self.direction(&st, &kkt, &sc, &Rhs { d: &r_d, p: &r_p, g: &r_g, c: &r_c }, refine);
             let ap = (0.99 * max_step(s.get(..nr).unwrap_or(&[]), d.ds.get(..nr).unwrap_or(&[]))).min(1.0);
             let ad = (0.99 * max_step(z.get(..nr).unwrap_or(&[]), d.dz.get(..nr).unwrap_or(&[]))).min(1.0);
             for (xi, dxi) in x.iter_mut().zip(d.dx.iter()).take(nv) {
