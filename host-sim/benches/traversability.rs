@@ -1,12 +1,15 @@
 //! Host timings of the traversability checks (Paton et al. IV): `settle`, `predict_anchors`, stability solves.
 //! Run: `cargo bench -p host-sim --bench traversability`. Problems: the analytic 55-degree ledge
-//! (`host_sim::world::ledge`), exact signed distance as the map.
+//! (`host_sim::world::ledge`), exact signed distance as the map. Measured numbers: see the `firmware::stability`
+//! module docs.
 
 use core::hint::black_box;
 use criterion::{criterion_group, criterion_main, Criterion};
 use firmware::config::rover::RoverParams;
 use firmware::geom::Vec3;
-use firmware::rover::{check_pose_stability, settle, stability_problem, boom_inline_angle, SettleOutcome};
+use firmware::rover::{
+    boom_in_contact, boom_inline_angle, check_pose_stability, settle, stability_problem, SettleOutcome,
+};
 use firmware::stability::check_stability;
 use firmware::tether::{predict_anchors, Anchor, AnchorHistory};
 use host_sim::world::ledge::{LedgeWorld, ROOT_ANCHOR_TEST1};
@@ -28,6 +31,11 @@ fn benches(c: &mut Criterion) {
     let beta = boom_inline_angle(&s, &lip);
     let prob = stability_problem(&s, beta, None, Some(&lip), &params);
     c.bench_function("stability/lp_solve_2_contacts", |b| b.iter(|| check_stability(black_box(&prob))));
+    // the boom resting on the slope: three contacts (two wheels with moments, the boom tip as a point contact)
+    if let Some(bc) = boom_in_contact(&w, &s, beta, &params) {
+        let prob3 = stability_problem(&s, bc.angle_rad, Some(&bc), Some(&lip), &params);
+        c.bench_function("stability/lp_solve_3_contacts", |b| b.iter(|| check_stability(black_box(&prob3))));
+    }
     c.bench_function("stability/check_pose_inline_and_contact", |b| {
         b.iter(|| check_pose_stability(&w, black_box(&s), Some(&lip), &params))
     });
