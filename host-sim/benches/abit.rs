@@ -11,7 +11,7 @@
 //! The side-by-side with OMPL 1.5.2 is `tetherbot abit-bench` (see `host-sim/doc/abit_bench.md`).
 //! Run: `cargo bench -p host-sim --bench abit`.
 
-use std::time::Duration;
+use core::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use firmware::plan::abit::{AbitArena, AbitParams, AbitStar};
