@@ -235,6 +235,36 @@ fn fmt_num(x: f64, prec: usize) -> String {
     }
 }
 
+/// Percentile-bootstrap 95 % interval of `median(a) / median(b)` (2000 resamples of each side, fixed seed, so
+/// the table is reproducible). `None` when either side is empty or the interval is not finite (too many
+/// unsolved runs).
+pub fn median_ratio_ci(a: &[f64], b: &[f64]) -> Option<(f64, f64)> {
+    use rand_core::{Rng, SeedableRng};
+    if a.is_empty() || b.is_empty() {
+        return None;
+    }
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(0);
+    let mut resample = |v: &[f64]| -> f64 {
+        let n = v.len() as u64;
+        median(
+            (0..v.len())
+                .map(|_| v[(rng.next_u64() % n) as usize])
+                .collect(),
+        )
+    };
+    let mut ratios: Vec<f64> = (0..2000).map(|_| resample(a) / resample(b)).collect();
+    ratios.sort_by(f64::total_cmp);
+    let (lo, hi) = (ratios[50], ratios[1949]);
+    (lo.is_finite() && hi.is_finite()).then_some((lo, hi))
+}
+
+fn ratio_ci(a: f64, b: f64, ci: Option<(f64, f64)>) -> String {
+    match ci {
+        Some((lo, hi)) => format!("{} [{lo:.3}, {hi:.3}]", ratio(a, b)),
+        None => ratio(a, b),
+    }
+}
+
 fn ratio(a: f64, b: f64) -> String {
     if a.is_finite() && b.is_finite() && b > 0.0 {
         format!("{:.3}", a / b)
@@ -390,14 +420,23 @@ fn run_budget(
             );
         }
         if let [(_, a), (_, b)] = rows.as_slice() {
+            let inf = f64::INFINITY;
+            let side = |ours: bool, f: &dyn Fn(&RunResult) -> f64| -> Vec<f64> {
+                all.iter()
+                    .filter(|r| (r.planner == "ABIT* (ours)") == ours)
+                    .map(f)
+                    .collect()
+            };
+            let t_first = |r: &RunResult| r.first_solution_time.map_or(inf, |t| t.as_secs_f64());
+            let cost = |r: &RunResult| r.final_cost.unwrap_or(inf);
             let _ = writeln!(
                 table,
-                "{:<7} {:<19} ratios ours/OMPL: t_first {}  it_first {}  final_cost {}  t_total {}",
+                "{:<7} {:<19} ratios ours/OMPL [95% bootstrap CI]: t_first {}  it_first {}  final_cost {}  t_total {}",
                 problem.name(),
                 "",
-                ratio(a.median_first_time, b.median_first_time),
+                ratio_ci(a.median_first_time, b.median_first_time, median_ratio_ci(&side(true, &t_first), &side(false, &t_first))),
                 ratio(a.median_first_iteration, b.median_first_iteration),
-                ratio(a.median_final_cost, b.median_final_cost),
+                ratio_ci(a.median_final_cost, b.median_final_cost, median_ratio_ci(&side(true, &cost), &side(false, &cost))),
                 ratio(a.median_total_time, b.median_total_time)
             );
         }
