@@ -252,7 +252,17 @@ pub fn median_ratio_ci(a: &[f64], b: &[f64]) -> Option<(f64, f64)> {
                 .collect(),
         )
     };
-    let mut ratios: Vec<f64> = (0..2000).map(|_| resample(a) / resample(b)).collect();
+    let mut ratios: Vec<f64> = (0..2000)
+        .map(|_| {
+            let (x, y) = (resample(a), resample(b));
+            // An infinite median (most runs unsolved) has no ratio; NaN sorts last and voids the interval.
+            if x.is_finite() && y.is_finite() && y > 0.0 {
+                x / y
+            } else {
+                f64::NAN
+            }
+        })
+        .collect();
     ratios.sort_by(f64::total_cmp);
     let (lo, hi) = (ratios[50], ratios[1949]);
     (lo.is_finite() && hi.is_finite()).then_some((lo, hi))
@@ -463,4 +473,41 @@ fn run_budget(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bootstrap_interval_of_constant_samples_is_the_exact_ratio() {
+        // Every resample of a constant sample has the same median, so the interval collapses to 3 / 2.
+        let (lo, hi) = median_ratio_ci(&[3.0; 40], &[2.0; 25]).unwrap();
+        assert_eq!((lo, hi), (1.5, 1.5));
+    }
+
+    #[test]
+    fn bootstrap_interval_brackets_the_median_ratio_and_shrinks_with_more_runs() {
+        // a = 1..=n, b = the same values doubled: the medians' ratio is 0.5.
+        let make = |n: usize| -> (Vec<f64>, Vec<f64>) {
+            let a: Vec<f64> = (1..=n).map(|i| i as f64).collect();
+            let b = a.iter().map(|x| 2.0 * x).collect();
+            (a, b)
+        };
+        let (a, b) = make(51);
+        let (lo, hi) = median_ratio_ci(&a, &b).unwrap();
+        assert!(lo < 0.5 && 0.5 < hi, "[{lo}, {hi}]");
+        let (a, b) = make(801);
+        let (lo2, hi2) = median_ratio_ci(&a, &b).unwrap();
+        assert!(lo2 < 0.5 && 0.5 < hi2, "[{lo2}, {hi2}]");
+        assert!(hi2 - lo2 < hi - lo);
+    }
+
+    #[test]
+    fn bootstrap_interval_is_none_when_most_runs_are_unsolved() {
+        let mut b = vec![f64::INFINITY; 30];
+        b.extend([1.0; 10]);
+        assert_eq!(median_ratio_ci(&[1.0; 40], &b), None);
+        assert_eq!(median_ratio_ci(&[], &[1.0]), None);
+    }
 }
