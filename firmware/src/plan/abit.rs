@@ -6,7 +6,8 @@
 //!   edge-implicit random geometric graph: k-nearest with `k = ceil(rewire_factor (e + e/d) ln q)` (OMPL's default,
 //!   "kABITstar"; the node itself counts among the k, as in OMPL) or r-disc with
 //!   `r = rewire_factor (2 (1 + 1/d) mu / zeta_d)^(1/d) (ln q / q)^(1/d)`. `q` = the number of states before the
-//!   batch (plus the batch size on the first batch).
+//!   batch, not counting the vertices the preceding pruning disconnected and kept as samples (OMPL adds those
+//!   "recycled" samples back after computing the terms), plus the batch size on the first batch.
 //! - **Informed sampling.** Once a solution of cost `c_best` exists, new samples are drawn from the informed set
 //!   `{x : h(start, x) + h(x, goal) < c_best}` — directly (the prolate hyperspheroid in R^n, through
 //!   [`OptimizationObjective::sample_informed`]) or, for general spaces, by rejection on the heuristic.
@@ -16,13 +17,18 @@
 //!   evaluates it (Paton et al. test 1: solution on the first iteration).
 //! - **Inflation and truncation.** Every batch starts a search with `eps = initial_inflation_factor` (1e6).
 //!   A search ends when the queue is empty or its front edge cannot improve the solution even after dividing by
-//!   the truncation factor `1 + truncation_scaling_parameter / q` (q = states generated + vertices connected
-//!   so far, as OMPL counts). With a solution, the batch then gets a final search with
-//!   `eps = 1 + inflation_scaling_parameter / q` that re-keys the queue and re-expands the inconsistent vertices
-//!   (vertices improved after their expansion, as in ARA*); then the next batch starts.
+//!   the truncation factor `1 + truncation_scaling_parameter / q`, with OMPL's `q = numSamples() + numVertices()`:
+//!   the live states (samples and vertices, after the batch is drawn) plus the tree vertices. With a solution,
+//!   the batch then gets a final search with `eps = 1 + inflation_scaling_parameter / q` (same `q`, counted
+//!   then) that re-keys the queue and re-expands the inconsistent vertices: as in OMPL's `addEdge`, a vertex
+//!   improved after its expansion in this search (its descendants only get their queued edges re-keyed).
+//!   Then the next batch starts.
 //! - **Lazy edge evaluation.** An edge is checked only when popped and only if it can still improve the tree
 //!   and the solution with its true cost; results are memoised (OMPL's black/white lists) in a fixed hash table.
-//! - **Pruning** before a batch when at least `prune_fraction` of the states cannot improve the solution:
+//!   As in OMPL, where the lists live in the vertex, a memo entry survives the pruning of its states (in
+//!   Markovian spaces), so a known-invalid edge from or to a recycled sample is never queued again.
+//! - **Pruning** before a batch when the states that cannot improve the solution (vertices included) are at
+//!   least `prune_fraction` of OMPL's `numSamples() + numVertices()`:
 //!   samples with `h(start,x) + h(x,goal) >= c_best` are dropped, vertices with `g(x) + h(x,goal) > c_best` are
 //!   disconnected (and kept as samples if they can still help).
 //! - **Anytime.** The best solution is kept at all times; [`AbitStar::write_path`] extracts it.
@@ -359,7 +365,7 @@ where
     final_search: bool,
     k: usize,
     r: f64,
-    generated: u32,
+    recycled: usize,
     approx_vertex: u32,
     approx_h: Cost,
     pending_full: Option<Arena>,
@@ -422,7 +428,7 @@ where
             final_search: false,
             k: 0,
             r: f64::INFINITY,
-            generated: 0,
+            recycled: 0,
             approx_vertex: NONE,
             approx_h: f64::INFINITY,
             pending_full: None,
@@ -465,7 +471,6 @@ where
             n.cost = 0.0;
         }
         self.add_goal_vertex(goal).ok_or(InvalidInput::ArenaTooSmall)?;
-        self.generated = 2;
         // OMPL: before the first batch, k = |starts| + |goals| and r = infinity, so the first queue holds the
         // start-goal edge only.
         self.k = 1 + self.goals.len();
@@ -1123,7 +1128,6 @@ where
 
     /// Propagate a cost change of `root` to its descendants (pre-order walk via parent links, bounded by NV).
     fn propagate_costs(&mut self, root: u32) {
-        let search = self.search_id;
         let mut cur = self.node(root).map_or(NONE, |n| n.first_child);
         for _ in 0..(2 * NV + 2) {
             if cur == NONE || cur == root {
@@ -1132,11 +1136,10 @@ where
             let (parent, edge_cost, first_child) =
                 self.node(cur).map_or((NONE, 0.0, NONE), |n| (n.parent, n.edge_cost, n.first_child));
             let g = self.g(parent) + edge_cost;
+            // Only the rewired vertex itself joins the inconsistent set (`add_edge`), as in OMPL
+            // (`BITstar::addEdge`): descendants get their queued edges re-keyed, not re-expanded.
             if let Some(n) = self.node_mut(cur) {
                 n.cost = g;
-                if n.expanded_search == search {
-                    n.flags |= F_INCONSISTENT;
-                }
             }
             self.update_out_edges(cur);
             if first_child != NONE {
@@ -1165,8 +1168,6 @@ where
         if was_in_tree {
             self.counters.rewirings += 1;
             self.unlink_from_parent(child);
-        } else {
-            self.generated = self.generated.saturating_add(1);
         }
         let g = self.g(parent) + edge_cost;
         let head = self.node(parent).map_or(NONE, |n| n.first_child);
@@ -1243,14 +1244,15 @@ where
             return;
         }
         let best = self.best_cost;
-        let total = self.live_nodes.max(1);
+        // OMPL: prunable states (vertices included) over `numSamples() + numVertices()`.
+        let total = self.ompl_graph_size();
         let prunable = self
             .arena
             .nodes
             .iter()
             .filter(|n| !n.has(F_FREE) && !n.has(F_START) && n.h_come + n.h_go >= best)
             .count();
-        if (prunable as f64) / (total as f64) < self.params.prune_fraction {
+        if (prunable as f64) / total < self.params.prune_fraction {
             return;
         }
         self.counters.prunings += 1;
@@ -1264,6 +1266,11 @@ where
             if n.in_tree() {
                 if i != self.best_goal && n.cost + n.h_go > best {
                     self.disconnect(i);
+                    // Kept as a sample: OMPL "recycles" it, i.e. it rejoins the samples only after the next
+                    // batch's RGG terms are computed.
+                    if self.node(i).is_some_and(|n| !n.has(F_FREE)) {
+                        self.recycled += 1;
+                    }
                 }
             } else if !n.has(F_GOAL) && n.h_come + n.h_go >= best {
                 self.free(i);
@@ -1310,7 +1317,12 @@ where
         n.flags &= !(F_IN_TREE | F_INCONSISTENT);
         n.cost = f64::INFINITY;
         n.attachment = None;
-        n.generation = n.generation.wrapping_add(1);
+        // The generation keys the memo (OMPL's per-vertex black/white lists, which survive pruning): a motion's
+        // result depends on the parent's attachment, which changes with a reconnection only in non-Markovian
+        // spaces; in Markovian ones the memo of a recycled state stays valid, as in OMPL.
+        if S::NON_MARKOVIAN {
+            n.generation = n.generation.wrapping_add(1);
+        }
         let keep = n.has(F_GOAL) || n.h_come + n.h_go < best;
         if !keep {
             self.free(i);
@@ -1390,7 +1402,10 @@ where
         self.counters.batches += 1;
         let batch = self.params.samples_per_batch as usize;
         // RGG terms for the number of states we have (OMPL: plus the batch on the very first batch).
-        let mut q = self.live_nodes;
+        // OMPL counts the states before the recycled ones (vertices disconnected by the last pruning and kept
+        // as samples) are added back.
+        let mut q = self.live_nodes.saturating_sub(self.recycled);
+        self.recycled = 0;
         if q == 1 + self.goals.len() {
             q += batch;
         }
@@ -1429,12 +1444,18 @@ where
             }
             added += 1;
             self.counters.samples_added += 1;
-            self.generated = self.generated.saturating_add(1);
         }
     }
 
     fn start_index(&self) -> u32 {
         0
+    }
+
+    /// OMPL's `numSamples() + numVertices()`: live states (samples and vertices) plus tree vertices, the `q` of
+    /// the truncation and final-search inflation factors. Bounded by the arena size.
+    fn ompl_graph_size(&self) -> f64 {
+        let vertices = self.arena.nodes.iter().filter(|n| n.in_tree() && !n.has(F_FREE)).count();
+        ((self.live_nodes + vertices).max(1)) as f64
     }
 
     /// High-water marks of the arenas so far.
@@ -1445,6 +1466,11 @@ where
     /// Current inflation factor.
     pub fn inflation_factor(&self) -> f64 {
         self.inflation
+    }
+
+    /// Current k of the k-nearest RGG (OMPL `getConnectivityK`).
+    pub fn connectivity_k(&self) -> usize {
+        self.k
     }
 
     /// Current truncation factor.
@@ -1533,7 +1559,7 @@ where
                 self.search_id = self.search_id.wrapping_add(1);
                 self.insert_outgoing_edges(self.start_index(), false);
                 self.final_search = false;
-                self.truncation = 1.0 + self.params.truncation_scaling_parameter / f64::from(self.generated.max(1));
+                self.truncation = 1.0 + self.params.truncation_scaling_parameter / self.ompl_graph_size();
                 self.search_done = false;
                 return match self.pending_full.take() {
                     Some(a) => StepOutcome::ArenaFull(a),
@@ -1541,7 +1567,7 @@ where
                 };
             }
             // Final search of this batch: less inflation, re-key, re-expand the inconsistent vertices.
-            self.inflation = 1.0 + self.params.inflation_scaling_parameter / f64::from(self.generated.max(1));
+            self.inflation = 1.0 + self.params.inflation_scaling_parameter / self.ompl_graph_size();
             self.queue_rebuild();
             for i in 0..self.arena.nodes.len() as u32 {
                 let inconsistent = self.node(i).is_some_and(|n| n.has(F_INCONSISTENT) && n.in_tree());
