@@ -268,6 +268,17 @@ fn anchors_of(h: &AnchorHistory) -> Vec<[f64; 3]> {
     h.as_slice().iter().map(|a| a3(&a.point)).collect()
 }
 
+/// The rover model the planner uses: Axel, with the body clearance grown by one voxel when planning on the map
+/// (the map's surfaces are off by up to about half a voxel, more at edges such as the pole; re-validation on the
+/// ground truth uses Axel's own clearance).
+pub fn planning_rover(spec: &CampaignSpec) -> RoverParams {
+    let mut r = RoverParams::AXEL;
+    if spec.field == PlanningField::Map {
+        r.body_clearance_m += spec.voxel_m as Real;
+    }
+    r
+}
+
 /// Start and goal states of a spec on a field.
 pub fn endpoints<D: DistanceField>(space: &TetherSpace<'_, D>, spec: &CampaignSpec) -> Result<(RoverState, RoverState), String> {
     let yaw = spec.start_yaw_deg.to_radians() as Real;
@@ -323,7 +334,7 @@ pub fn run_trial<D: DistanceField>(
     arena: &mut TrialArena,
 ) -> Result<TrialResult, String> {
     let seed = spec.first_seed + u64::from(trial);
-    let mut space = TetherSpace::new(field, spec.bounds, RoverParams::AXEL, spec.params).map_err(|(f, r)| format!("{f}: {r}"))?;
+    let mut space = TetherSpace::new(field, spec.bounds, planning_rover(spec), spec.params).map_err(|(f, r)| format!("{f}: {r}"))?;
     let (start, goal) = endpoints(&space, spec)?;
     let pdef = ProblemDefinition {
         start,

@@ -1,7 +1,8 @@
 //! Capacities and budgets for [`crate::tether`] (Paton et al. section IV-B, Alg. 1).
 
-/// Anchors in one anchor history (root anchor included). Default 16: a descent wraps a handful of terrain
-/// features; a longer history is reported as `TetherError::HistoryFull`.
+/// Anchors in one anchor history (root anchor included). Default 32: a tether wrapped half a turn around the 0.25 m
+/// pole of Paton et al.'s test 3 already takes 8-14 anchors (one per ~0.4 rad, see `PIVOT_EXCLUSION_M`), plus the
+/// lip; a longer history is reported as `TetherError::HistoryFull`.
 pub const ANCHOR_HISTORY_CAPACITY: usize = 32;
 /// Samples along the tether (from the anchor to the rover) per sweep line. Default 48.
 pub const SWEEP_SAMPLES_ALONG: u32 = 48;
@@ -9,9 +10,10 @@ pub const SWEEP_SAMPLES_ALONG: u32 = 48;
 pub const SWEEP_SAMPLES_ACROSS: u32 = 24;
 /// Bisection steps that refine the first blocked sweep line. Default 14 (1/16384 of the motion).
 pub const SWEEP_REFINE_STEPS: u32 = 14;
-/// Attachments found in one call of `attach_anchors` (the repeat loop of IV-B a). Default 8.
-pub const MAX_ATTACH_PER_SWEEP: usize = 8;
-/// Iterations of the detach loop of Alg. 1. Default 16.
+/// Attachments found in one call of `attach_anchors` (the repeat loop of IV-B a). Default 16 (a tether laid over
+/// the rounded crest of a real DEM ridge touches it at up to a dozen points in one step).
+pub const MAX_ATTACH_PER_SWEEP: usize = 16;
+/// Iterations of the detach loop of Alg. 1. Default 32 (one per anchor of a full history).
 pub const MAX_DETACH_ITERATIONS: u32 = 32;
 /// A sample closer than this to the terrain is an obstacle for the tether, metres. Default 0.005 m.
 pub const TETHER_CONTACT_DISTANCE_M: f32 = 0.005;
