@@ -14,7 +14,7 @@
 //! sd) plus batches, edges evaluated and states checked; `results.json` and `results.csv` (one row per trial);
 //! `paths.svg` (all paths with their anchors over a height-shaded top view and a side view, like Fig. 9).
 
-use std::sync::atomic::{AtomicUsize, Ordering};
+use core::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
 
