@@ -18,6 +18,9 @@ pub const MAX_MOTION_STATES: u32 = 256;
 /// closer than that, the inline boom tip ends at the edge the tether wraps).
 pub const BOOM_REACH_CLEARANCE_M: f32 = 0.35;
 
+/// Largest `refine_substeps` accepted (bounds the refinement loop). Default 16.
+pub const MAX_REFINE_SUBSTEPS: u32 = 16;
+
 /// Default parameters of the tether-aware space ([`crate::plan::tethered::TetherSpaceParams::DEFAULT`]).
 pub mod defaults {
     /// Weight of path length in the objective (per metre of axle travel). Default 1.0.
@@ -27,9 +30,16 @@ pub mod defaults {
     /// Weight of roll (per radian of roll per metre driven). Default 1.0: driving 1 m at 10 degrees of roll costs
     /// 0.17 m extra.
     pub const W_ROLL: f64 = 1.0;
-    /// Spacing of interpolated states along a straight drive, metres. Default 0.2 m (a fifth of the track width, so
-    /// the lip of a ledge cannot slip between two checked states unnoticed by the wheels).
+    /// Spacing of interpolated states along a straight drive, metres. Default 0.2 m (a fifth of the track width);
+    /// steps over an edge are refined (`REFINE_TILT_RAD`, `REFINE_SUBSTEPS`).
     pub const DRIVE_RESOLUTION_M: f32 = 0.2;
+    /// Two consecutive drive states whose rover frames' up axes differ by more than this are refined (the drive
+    /// step between them is checked at `REFINE_SUBSTEPS` points). Default 0.1 rad (6 degrees): flat ground and
+    /// uniform slopes are never refined, the lip of the 55-degree ledge always is (the margin of the pose that
+    /// straddles the lip dips to zero over ~0.1 m of ground, half a drive step; measured on the ledge world).
+    pub const REFINE_TILT_RAD: f32 = 0.1;
+    /// Sub-steps of a refined drive step. Default 4 (0.05 m at the default 0.2 m drive resolution).
+    pub const REFINE_SUBSTEPS: u32 = 4;
     /// Spacing of interpolated headings of an in-place turn, radians. Default 0.5 rad (29 degrees).
     pub const TURN_RESOLUTION_RAD: f32 = 0.5;
     /// The tether end moves less than this between two interpolated states: anchor prediction is skipped (the
@@ -45,7 +55,7 @@ pub mod defaults {
     /// VI-B). Default 1.0 m.
     pub const OFF_MAP_EDGE_M: f32 = 1.0;
     /// Two anchor histories are compatible when their wraps' representative anchors are within this distance.
-    /// Default 0.15 m (1.5 voxels of the campaign's map, 3 of the flight map).
+    /// Default 0.3 m (3 voxels of the campaign's map, 6 of the flight map).
     pub const ANCHOR_MATCH_M: f32 = 0.3;
     /// Consecutive anchors closer than this belong to one wrap (one obstacle the tether bends around). Default
     /// 0.6 m: more than the diameter of the ledge's 0.5 m pole, less than the distance between distinct obstacles.

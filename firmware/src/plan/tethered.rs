@@ -20,7 +20,9 @@
 //! `b.ground` (its `(x, y)` projection; the surface under each point found by the same trace), turn in place at
 //! `b` to `b`'s yaw. Axel drives either way, so the drive heading is the one of `{psi, psi + pi}` that needs less
 //! turning. Interpolated states are `drive_resolution_m` apart along the drive and `turn_resolution_rad` apart in
-//! the turns; each is settled (body collision included), its tether end (the axle centre) is moved from the
+//! the turns; where two consecutive drive states tilt more than `refine_tilt_rad` apart (an edge such as the lip of
+//! the ledge, over which the margin of the straddling pose dips to zero within ~0.1 m, less than a drive step),
+//! the step between them is also checked at `refine_substeps` evenly spaced points; each is settled (body collision included), its tether end (the axle centre) is moved from the
 //! previous state's with [`predict_anchors`] (skipped when it moved less than `tether_still_m`), and it must be
 //! statically stable ([`check_pose_stability`]) with a margin of at least `min_stability_margin`, the tether pulling
 //! towards the last anchor of the history that lies beyond the boom's reach ([`tether_pull_anchor`]: an anchor
@@ -60,11 +62,13 @@
 //! | `min_stability_margin` | 0.02 rover weights |
 //! | `sample_perturbation_m` | 0.05 m |
 //! | `off_map_edge_m` | 1.0 m |
-//! | `anchor_match_m` | 0.15 m |
+//! | `anchor_match_m` | 0.3 m |
 //! | `anchor_cluster_m` | 0.6 m |
 //! | `max_tether_bend_rad` | 4.71 rad (270 degrees) |
 //! | `fall_line_tilt_rad` | 0.35 rad (20 degrees) |
 //! | `fall_line_yaw_spread_rad` | 0.15 rad (8.6 degrees) |
+//! | `refine_tilt_rad` | 0.1 rad (6 degrees) |
+//! | `refine_substeps` | 4 (0.05 m sub-steps; at most `MAX_REFINE_SUBSTEPS = 16`) |
 //!
 //! Budgets (`config::tethered`): `SURFACE_TRACE_STEPS = 64` (minimum step `SURFACE_MIN_STEP_M = 0.05`),
 //! `MAX_MOTION_STATES = 256` interpolated states per motion.
@@ -76,7 +80,7 @@ use rand_core::Rng;
 use crate::config::rover::RoverParams;
 use crate::config::tether::ANCHOR_HISTORY_CAPACITY;
 use crate::config::tethered::{
-    defaults, BOOM_REACH_CLEARANCE_M, MAX_MOTION_STATES, SURFACE_MIN_STEP_M, SURFACE_TRACE_STEPS,
+    defaults, BOOM_REACH_CLEARANCE_M, MAX_MOTION_STATES, MAX_REFINE_SUBSTEPS, SURFACE_MIN_STEP_M, SURFACE_TRACE_STEPS,
 };
 use crate::geom::{norm3, Real, Vec3};
 use crate::map::{DistanceField, DistanceQuery};
@@ -119,6 +123,10 @@ pub struct TetherSpaceParams {
     pub fall_line_tilt_rad: Real,
     /// Half-width of the uniform yaw perturbation about the fall line, radians.
     pub fall_line_yaw_spread_rad: Real,
+    /// Two consecutive drive states whose rover frames tilt more than this apart are refined, radians.
+    pub refine_tilt_rad: Real,
+    /// Sub-steps a refined drive step is split into (1 = no refinement, at most `MAX_REFINE_SUBSTEPS`).
+    pub refine_substeps: u32,
 }
 
 impl TetherSpaceParams {
@@ -138,6 +146,8 @@ impl TetherSpaceParams {
         max_tether_bend_rad: defaults::MAX_TETHER_BEND_RAD,
         fall_line_tilt_rad: defaults::FALL_LINE_TILT_RAD,
         fall_line_yaw_spread_rad: defaults::FALL_LINE_YAW_SPREAD_RAD,
+        refine_tilt_rad: defaults::REFINE_TILT_RAD,
+        refine_substeps: defaults::REFINE_SUBSTEPS,
     };
 
     /// The first field that is out of range, with the reason.
@@ -166,6 +176,12 @@ impl TetherSpaceParams {
         }
         if !self.min_stability_margin.is_finite() {
             return Err(("min_stability_margin", "must be finite"));
+        }
+        if !pos(f64::from(self.refine_tilt_rad)) {
+            return Err(("refine_tilt_rad", "must be > 0 and finite"));
+        }
+        if self.refine_substeps == 0 || self.refine_substeps > MAX_REFINE_SUBSTEPS {
+            return Err(("refine_substeps", "must be in 1..=MAX_REFINE_SUBSTEPS (config::tethered)"));
         }
         Ok(())
     }
@@ -485,33 +501,52 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
         if plan.total_states() > MAX_MOTION_STATES {
             return Err(MotionFailure::TooLong);
         }
-        let mut hist = history.clone();
-        let mut scratch = AnchorHistory::default();
-        let mut tether_end = from.axle();
+        let mut walk = TetherWalk { hist: history.clone(), scratch: AnchorHistory::default(), tether_end: from.axle() };
+        let mut prev = *from;
         for k in 1..=plan.total_states() {
-            let st = match plan.state(k) {
+            let point = plan.state(k);
+            let st = match point {
                 MotionPoint::Turn { at_end, theta } => {
                     let base = if at_end { to } else { from };
                     self.settle_state(base.ground.x, base.ground.y, theta).map_err(MotionFailure::Settle)?
                 }
                 MotionPoint::Drive { x, y, theta } => {
-                    self.settle_state(x, y, theta).map_err(MotionFailure::Settle)?
+                    let st = self.settle_state(x, y, theta).map_err(MotionFailure::Settle)?;
+                    // Over an edge (the lip of a ledge) the margin can dip to zero within a few centimetres, less
+                    // than one drive step: where the rover frame tilts a lot between two drive states, the states
+                    // in between are checked too.
+                    if tilt_between(&prev.settled, &st.settled) > self.params.refine_tilt_rad {
+                        let n = self.params.refine_substeps.min(MAX_REFINE_SUBSTEPS);
+                        for j in 1..n {
+                            let t = j as Real / n as Real;
+                            let g = prev.ground + (st.ground - prev.ground) * t;
+                            let mid = self.settle_state(g.x, g.y, theta).map_err(MotionFailure::Settle)?;
+                            self.advance(&mut walk, &mid)?;
+                        }
+                    }
+                    st
                 }
                 MotionPoint::End => *to,
             };
-            let end = st.axle();
-            if norm3(&(end - tether_end)) >= self.params.tether_still_m {
-                self.count(|s| s.anchor_predictions += 1);
-                predict_anchors(self.map, &hist, &tether_end, &end, &mut scratch).map_err(MotionFailure::Tether)?;
-                core::mem::swap(&mut hist, &mut scratch);
-                tether_end = end;
-                if tether_bend(&hist, &end) > self.params.max_tether_bend_rad {
-                    return Err(MotionFailure::TetherBend);
-                }
-            }
-            self.stable_with(&st.settled, &hist)?;
+            self.advance(&mut walk, &st)?;
+            prev = st;
         }
-        Ok(hist)
+        Ok(walk.hist)
+    }
+
+    /// One interpolated state of a motion: predict the anchors up to it, bound the tether's bend, check stability.
+    fn advance(&self, walk: &mut TetherWalk, st: &RoverState) -> Result<(), MotionFailure> {
+        let end = st.axle();
+        if norm3(&(end - walk.tether_end)) >= self.params.tether_still_m {
+            self.count(|s| s.anchor_predictions += 1);
+            predict_anchors(self.map, &walk.hist, &walk.tether_end, &end, &mut walk.scratch).map_err(MotionFailure::Tether)?;
+            core::mem::swap(&mut walk.hist, &mut walk.scratch);
+            walk.tether_end = end;
+            if tether_bend(&walk.hist, &end) > self.params.max_tether_bend_rad {
+                return Err(MotionFailure::TetherBend);
+            }
+        }
+        self.stable_with(&st.settled, &walk.hist).map(|_| ())
     }
 
     /// Are two anchor histories compatible? Both are reduced to their **wraps** (runs of consecutive anchors less
@@ -523,6 +558,20 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
         let (wa, wb) = (wraps(a, self.params.anchor_cluster_m), wraps(b, self.params.anchor_cluster_m));
         wa.len() == wb.len() && wa.iter().zip(wb.iter()).all(|(p, q)| norm3(&(p - q)) <= self.params.anchor_match_m)
     }
+}
+
+/// The tether along a motion being checked: the anchor history so far and where the tether ended when it was
+/// last predicted.
+struct TetherWalk {
+    hist: AnchorHistory,
+    scratch: AnchorHistory,
+    tether_end: Vec3,
+}
+
+/// Angle between the up axes (rover z) of two settled poses, radians.
+fn tilt_between(a: &SettledPose, b: &SettledPose) -> Real {
+    let (ua, ub) = (a.pose.rotation * Vec3::z(), b.pose.rotation * Vec3::z());
+    libm::acosf(ua.dot(&ub).clamp(-1.0, 1.0))
 }
 
 /// The wraps of a history (see [`TetherSpace::histories_match`]): the last anchor of every run of consecutive
