@@ -1582,20 +1582,7 @@ where
                 None => StepOutcome::FinalSearch,
             };
         }
-        // BIT*'s edge-queue pruning (Gammell et al. 2020, Alg. 2: after a vertex improves, the queued edges into
-        // it that can no longer improve it are removed). Done lazily: such edges are dropped when they reach the
-        // front of the queue, so they cost no iteration. Bounded by the queue's capacity.
-        let mut popped = None;
-        for _ in 0..NQ {
-            let Some(edge) = self.heap_pop() else { break };
-            if self.edge_cannot_improve_child(&edge) {
-                self.counters.edges_dropped += 1;
-                continue;
-            }
-            popped = Some(edge);
-            break;
-        }
-        let Some(edge) = popped else {
+        let Some(edge) = self.heap_pop() else {
             return StepOutcome::ProcessedEdge;
         };
         self.counters.edges_popped += 1;
@@ -1605,17 +1592,6 @@ where
             Some(a) => StepOutcome::ArenaFull(a),
             None => outcome,
         }
-    }
-
-    /// A queued edge `(u, v)` whose child `v` already has a cost-to-come no worse than `g(u) + c_hat(u, v)`.
-    /// Not for edges that would go to a history twin of `v` (their target's cost is not `v`'s) nor for tree edges
-    /// (a freebie expands the child).
-    fn edge_cannot_improve_child(&self, e: &QueueEdge) -> bool {
-        let (Some(un), Some(vn)) = (self.node(e.parent), self.node(e.child)) else { return false };
-        if vn.parent == e.parent || (self.twins_enabled() && self.histories_conflict(e.parent, e.child)) {
-            return false;
-        }
-        un.cost + e.c_hat >= vn.cost
     }
 
     fn process_edge(&mut self, u: u32, v: u32, c_hat: Cost) -> StepOutcome {

@@ -365,11 +365,8 @@ pub struct Counters {
     pub edges_evaluated: u32,
     /// State validity checks run (samples, start, goal).
     pub states_checked: u32,
-    /// Edges popped from the queue and processed (each one iteration).
+    /// Edges popped from the queue.
     pub edges_popped: u32,
-    /// Queued edges dropped without an iteration because their child already had a cost-to-come no worse than
-    /// the edge could give (BIT*'s edge-queue pruning, done lazily).
-    pub edges_dropped: u32,
     /// Edge evaluations answered by the memo (OMPL's white/black lists).
     pub memo_hits: u32,
     /// Valid samples added.
