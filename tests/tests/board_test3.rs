@@ -229,3 +229,4 @@ fn arena_high_water_inner() {
     assert!(nodes <= TEST3_NODE_CAPACITY && queue <= TEST3_EDGE_QUEUE_CAPACITY);
     assert!(memo <= TEST3_EDGE_MEMO_CAPACITY && plen <= TEST3_PATH_CAPACITY);
 }
+

@@ -3,7 +3,7 @@
 //!
 //! Geometry (the same as host-sim's `ledge_pole` world, `host-sim/src/world/ledge.rs`, and computed with the same
 //! f64 operations in the same order so the two fields agree to the last bit wherever `libm` and the host's maths
-//! library agree; `host-sim/tests/board_test3.rs` checks them against each other at many points):
+//! library agree; `tests/tests/board_test3.rs` checks them against each other at many points):
 //! - flat ground `z = 0`, solid below;
 //! - the ledge: top `z = 4` over `x in [-5, 0]`, `y in [-5, 5]`; vertical back wall `x = -5` and side walls
 //!   `y = +-5`; the 55-degree slope from the lip `(0, *, 4)` down to the toe `x = 4 / tan 55 deg = 2.8008 m`;

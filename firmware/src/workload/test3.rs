@@ -11,7 +11,7 @@
 //! `run_trial` and [`plan_test3`] give the same trial.
 //!
 //! Parameters: [`TEST3_ITERATIONS`] = 750 (Table I), [`TEST3_SEED`] = 1 (the scenario's `seeds.planner`);
-//! capacities in `config::workload` (512 nodes, 2048 queued edges, 2048 memo entries, 64 path states).
+//! capacities in `config::workload` (512 nodes, 2048 queued edges, 1024 memo entries, 64 path states).
 //!
 //! It is opt-in on the board (it costs tens of billions of instructions under QEMU): run it with
 //! `cargo run -p host-sim --bin tetherbot -- board bench --build --workload tethered_test3 [--iterations N]`;
