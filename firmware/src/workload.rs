@@ -15,6 +15,15 @@
 //! | `homotopy_btm_build_c` | BTM of scenario C's plane (two triangular obstacles) | Tanner et al. IV |
 //! | `homotopy_preplan_c` | Alg. 1 pre-planning a0 -> g on scenario C | Tanner et al. Alg. 1 |
 //!
+//! Opt-in (not in [`run_all`]; tens of billions of instructions under QEMU):
+//!
+//! | name | what | paper |
+//! |---|---|---|
+//! | `tethered_test3` | [`test3::run_test3`]: ABIT* over the tether-aware space on the exact ledge + pole world ([`ledge::LedgePole`]), Table I test 3, 750 iterations, seed 1 | Paton et al. V, VI-A |
+//!
+//! Run it on the emulated board with `tetherbot board bench --build --workload tethered_test3` (see
+//! [`test3`] and `host-sim/doc/board_test3.md` for the measured instruction counts and arena sizes).
+//!
 //! Each workload's outcome is condensed into a one-line [`Summary`] whose floats are printed with `{}` (the
 //! shortest decimal that round-trips, so two summaries are equal exactly when the bits are). A [`Harness`] times
 //! the work (the board: SysTick under `-icount shift=0`; the host: nothing) and receives the summaries.
@@ -39,6 +48,9 @@ use crate::plan::team::DefaultLocalPlanner;
 use crate::rover::{check_pose_stability, settle, SettleOutcome};
 use crate::stability::StabilityOutcome;
 use crate::tether::{predict_anchors, Anchor, AnchorHistory};
+
+pub mod ledge;
+pub mod test3;
 
 /// One workload's result in one line (at most 240 bytes; longer text is cut).
 pub type Summary = heapless::String<240>;

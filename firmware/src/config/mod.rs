@@ -13,4 +13,5 @@ pub mod rover;
 pub mod stability;
 pub mod team;
 pub mod tethered;
+pub mod workload;
 pub mod tether;

@@ -5,7 +5,11 @@
 //!   executive buffer / arena.
 //! - `tetherbot board bench`: instruction counts of the fixed on-target workloads under `-icount shift=0`, and the
 //!   planning workloads of `firmware::workload` with their outcomes next to the host's (exit status 1 unless equal)
-//!   and the run's stack high-water mark.
+//!   and the run's stack high-water mark. `--workload tethered_test3 [--iterations N]` runs instead only the opt-in
+//!   test-3 planning workload (`firmware::workload::test3`: ABIT* over the tether-aware space, Paton et al.
+//!   Table I test 3, 750 iterations by default) on the board and on the host, compares the summaries and reports
+//!   instructions in total, per iteration, per settle and per stability LP, the wall time, the stack high-water
+//!   mark and the storage's bytes (see `host-sim/doc/board_test3.md`).
 //! - `tetherbot board perf`: boot-to-ready time, round-trip latency and sustained frame throughput over the
 //!   emulated UART (free-running board, host wall clock).
 //!
@@ -51,7 +55,18 @@ pub enum BoardCommand {
     /// Flash / RAM by section, on-target stack high-water mark and arena peaks.
     Report,
     /// On-target instruction counts of fixed workloads (-icount shift=0).
-    Bench,
+    Bench {
+        /// Run only this opt-in workload instead of the default set: `tethered_test3` (Table I test 3, ABIT*
+        /// over the tether-aware space; tens of billions of instructions, minutes of QEMU time).
+        #[arg(long)]
+        workload: Option<String>,
+        /// ABIT* iterations of `--workload tethered_test3` (default 750, Table I).
+        #[arg(long)]
+        iterations: Option<u32>,
+        /// Give up on the board after this many seconds (default 300; 3600 with `--workload`).
+        #[arg(long)]
+        timeout_s: Option<u64>,
+    },
     /// Boot-to-ready, round-trip latency and throughput over the emulated UART.
     Perf {
         /// Round trips to time.
@@ -151,8 +166,8 @@ fn report_cmd(elf: &std::path::Path) -> Result<(), Box<dyn core::error::Error>> 
     Ok(())
 }
 
-fn bench_cmd(elf: &std::path::Path) -> Result<(), Box<dyn core::error::Error>> {
-    let (results, text) = report::run_bench(elf, Duration::from_secs(300))?;
+fn bench_cmd(elf: &std::path::Path, timeout: Duration) -> Result<(), Box<dyn core::error::Error>> {
+    let (results, text) = report::run_bench(elf, timeout)?;
     println!(
         "on-target instruction counts (qemu-system-arm -icount shift=0, mps2-an500 Cortex-M7)"
     );
@@ -202,6 +217,98 @@ fn bench_cmd(elf: &std::path::Path) -> Result<(), Box<dyn core::error::Error>> {
     Ok(())
 }
 
+/// `board bench --workload NAME`: one opt-in workload on the board and on the host (concurrently).
+fn bench_workload_cmd(
+    elf: &std::path::Path,
+    workload: &str,
+    iterations: Option<u32>,
+    timeout: Duration,
+) -> Result<(), Box<dyn core::error::Error>> {
+    use firmware::workload::test3::{TEST3_ITERATIONS, TEST3_NAME};
+    if workload != TEST3_NAME {
+        return Err(format!("--workload {workload:?}: the opt-in workloads are: {TEST3_NAME}").into());
+    }
+    let iterations = iterations.unwrap_or(TEST3_ITERATIONS);
+    if iterations == 0 {
+        return Err("--iterations must be at least 1".into());
+    }
+    let words = format!(
+        "tetherbot.mode=bench tetherbot.workload={TEST3_NAME} tetherbot.iterations={iterations}"
+    );
+    println!(
+        "{TEST3_NAME}: {iterations} ABIT* iterations on the emulated board (qemu-system-arm -icount shift=0, \
+         mps2-an500 Cortex-M7) and on the host ..."
+    );
+    let host = std::thread::spawn(move || {
+        let t0 = std::time::Instant::now();
+        qemu::bench::host_test3_summary(iterations).map(|s| (s, t0.elapsed()))
+    });
+    let t0 = std::time::Instant::now();
+    let (results, text) = report::run_bench_with(elf, &words, timeout)?;
+    let wall = t0.elapsed();
+    let ((_, host_summary), host_wall) = host
+        .join()
+        .map_err(|_| "the host twin panicked")??;
+    let board = qemu::bench::board_summaries(&text);
+    let board_summary = board
+        .iter()
+        .find(|(n, _)| n == TEST3_NAME)
+        .map(|(_, s)| s.clone());
+    let ins = results
+        .iter()
+        .find(|r| r.name == TEST3_NAME)
+        .map(|r| r.instructions)
+        .ok_or("the board printed no instruction count for the workload")?;
+    let field = |s: &str, k: &str| -> Option<u64> {
+        s.split_whitespace()
+            .find_map(|w| w.strip_prefix(k)?.strip_prefix('=')?.parse().ok())
+    };
+    let summary = board_summary.clone().unwrap_or_default();
+    let per = |k: &str| {
+        field(&summary, k)
+            .filter(|&n| n > 0)
+            .map_or_else(|| "-".to_owned(), |n| (ins / n).to_string())
+    };
+    for line in text
+        .lines()
+        .filter(|l| l.contains("expected_instructions") || l.starts_with("bench: name=calibration"))
+    {
+        println!("{line}");
+    }
+    println!("board: {}", board_summary.as_deref().unwrap_or("(missing)"));
+    let same = board_summary.as_deref() == Some(host_summary.as_str());
+    if same {
+        println!("host:  same");
+    } else {
+        println!("host:  {host_summary}   <-- MISMATCH");
+    }
+    println!("instructions: {ins} total");
+    println!(
+        "  per iteration {} ({} iterations); per settle {}, per stability LP {}, per edge evaluated {} \
+         (amortised: all the work divided by the count)",
+        per("iterations"),
+        field(&summary, "iterations").unwrap_or(0),
+        per("settles"),
+        per("lps"),
+        per("edges"),
+    );
+    println!(
+        "wall time: board {:.1} s (QEMU, this machine), host twin {:.2} s",
+        wall.as_secs_f64(),
+        host_wall.as_secs_f64()
+    );
+    for line in text
+        .lines()
+        .filter(|l| l.starts_with("bench: stack_high") || l.starts_with("bench: test3_storage"))
+    {
+        println!("{line}");
+    }
+    if !same {
+        return Err(format!("{TEST3_NAME} differs between the board and the host").into());
+    }
+    Ok(())
+}
+
 /// `board` entry point.
 pub fn main(args: &BoardArgs) -> ExitCode {
     let elf = match board_elf(args.elf.as_ref(), args.build) {
@@ -210,7 +317,21 @@ pub fn main(args: &BoardArgs) -> ExitCode {
     };
     let result = match &args.command {
         BoardCommand::Report => report_cmd(&elf),
-        BoardCommand::Bench => bench_cmd(&elf),
+        BoardCommand::Bench {
+            workload: None,
+            timeout_s,
+            ..
+        } => bench_cmd(&elf, Duration::from_secs(timeout_s.unwrap_or(300))),
+        BoardCommand::Bench {
+            workload: Some(w),
+            iterations,
+            timeout_s,
+        } => bench_workload_cmd(
+            &elf,
+            w,
+            *iterations,
+            Duration::from_secs(timeout_s.unwrap_or(3600)),
+        ),
         BoardCommand::Perf { samples, burst } => perf::measure(&elf, *samples, (*burst).max(1))
             .map(|p| {
                 print!("{p}");

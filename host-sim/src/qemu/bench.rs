@@ -8,6 +8,7 @@ use firmware::geom::Vec3;
 use firmware::plan::homotopy::{Btm, Workspace};
 use firmware::plan::team::dstar_lite::DStarArena;
 use firmware::plan::team::DefaultLocalPlanner;
+use firmware::workload::test3::{run_test3, Test3Storage};
 use firmware::workload::{run_all, Arenas, Harness, WallGapArena, SCAN_POINTS};
 
 struct Collect(Vec<(String, String)>);
@@ -40,6 +41,23 @@ pub fn host_summaries() -> Vec<(String, String)> {
     let mut h = Collect(Vec::new());
     run_all(&mut arenas, &mut h);
     h.0
+}
+
+/// The opt-in `tethered_test3` workload on the host (`iterations` iterations): `(name, summary)`. Runs on a
+/// thread with a large stack (the storage is built before it is boxed, and the planner's recursion into the
+/// stability LP is deep at opt-level 1).
+pub fn host_test3_summary(iterations: u32) -> Result<(String, String), String> {
+    std::thread::Builder::new()
+        .stack_size(64 << 20)
+        .spawn(move || {
+            let mut storage: Box<Test3Storage> = Box::default();
+            let mut h = Collect(Vec::new());
+            run_test3(&mut storage, iterations, &mut h);
+            h.0.into_iter().next().unwrap_or_default()
+        })
+        .map_err(|e| format!("cannot start the host twin: {e}"))?
+        .join()
+        .map_err(|_| "the host twin panicked".to_string())
 }
 
 /// `(workload, summary)` from the board's bench output.

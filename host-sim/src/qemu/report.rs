@@ -165,9 +165,18 @@ pub struct BenchResult {
 
 /// Boots the board in benchmark mode under `-icount shift=0` and parses its `bench:` lines.
 pub fn run_bench(elf: &Path, timeout: Duration) -> Result<(Vec<BenchResult>, String), QemuError> {
+    run_bench_with(elf, "tetherbot.mode=bench", timeout)
+}
+
+/// [`run_bench`] with other boot words (e.g. `tetherbot.mode=bench tetherbot.workload=tethered_test3`).
+pub fn run_bench_with(
+    elf: &Path,
+    boot_words: &str,
+    timeout: Duration,
+) -> Result<(Vec<BenchResult>, String), QemuError> {
     let mut cfg = QemuConfig::new(elf.to_path_buf());
     cfg.icount = true;
-    cfg.boot_words = Some("tetherbot.mode=bench".into());
+    cfg.boot_words = Some(boot_words.into());
     let exit = run_to_exit(&cfg, timeout)?;
     let text = exit.output.both();
     if !exit.status.success() {

@@ -9,6 +9,9 @@
 //! Without `-icount` the figures are real-time based and vary; the host command always passes it.
 //! Then the planning workloads (`planning.rs`: `bench: result ...` lines) and the stack high-water mark of the run
 //! (`bench: stack_high_water_bytes=<B> stack_size_bytes=<S>`).
+//!
+//! Opt-in (boot words `tetherbot.mode=bench tetherbot.workload=tethered_test3 [tetherbot.iterations=N]`): only the
+//! calibration and the test-3 planning workload ([`run_test3`]).
 
 use cortex_m_semihosting::hprintln;
 
@@ -57,6 +60,24 @@ pub fn run(clock: &mut SysTickClock) {
     });
     crate::flight::bench_workloads(clock);
     crate::planning::run(clock);
+    let stack = crate::stack::usage();
+    hprintln!(
+        "bench: stack_high_water_bytes={} stack_size_bytes={}",
+        stack.high_water_bytes,
+        stack.size_bytes
+    );
+}
+
+/// The opt-in test-3 planning workload (`planning::run_test3`) after the calibration loop.
+pub fn run_test3(clock: &mut SysTickClock, iterations: u32) {
+    hprintln!(
+        "bench: calibration expected_instructions={}",
+        2 * u64::from(CALIBRATION_LOOPS) + 1
+    );
+    measure(clock, "calibration", CALIBRATION_LOOPS, || {
+        calibration_loop(CALIBRATION_LOOPS)
+    });
+    crate::planning::run_test3(clock, iterations);
     let stack = crate::stack::usage();
     hprintln!(
         "bench: stack_high_water_bytes={} stack_size_bytes={}",

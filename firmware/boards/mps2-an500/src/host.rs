@@ -3,6 +3,8 @@
 //!
 //! Boot words recognised on the command line (QEMU passes `<kernel path> <append string>`):
 //! - `tetherbot.mode=bench`: run the on-target benchmark workloads (`bench.rs`), print them, exit 0;
+//!   with `tetherbot.workload=tethered_test3` instead only the opt-in test-3 planning workload
+//!   (`firmware::workload::test3`), for `tetherbot.iterations=N` iterations (default 750, Table I);
 //! - `tetherbot.probe=panic` / `hardfault` / `watchdog`: force that fault at boot, to test that faults end the run
 //!   with a failure status and a report (used by the host's tests; harmless in flight: no semihosting host, no
 //!   command line).
@@ -25,6 +27,11 @@ pub enum BootMode {
     },
     /// The benchmark workloads.
     Bench,
+    /// Only the opt-in test-3 planning workload, this many ABIT* iterations.
+    BenchTest3 {
+        /// Planner iterations.
+        iterations: u32,
+    },
     /// Panic at boot.
     ProbePanic,
     /// Execute an undefined instruction at boot (UsageFault escalated to HardFault).
@@ -47,7 +54,12 @@ pub fn boot_mode() -> BootMode {
     let len = block[1].min(buf.len());
     let line = buf.get(..len).unwrap_or(&[]);
     let has = |word: &[u8]| line.windows(word.len()).any(|w| w == word);
-    if has(b"tetherbot.mode=bench") {
+    if has(b"tetherbot.mode=bench") && has(b"tetherbot.workload=tethered_test3") {
+        BootMode::BenchTest3 {
+            iterations: number_after(line, b"tetherbot.iterations=")
+                .unwrap_or(firmware::workload::test3::TEST3_ITERATIONS),
+        }
+    } else if has(b"tetherbot.mode=bench") {
         BootMode::Bench
     } else if has(b"tetherbot.probe=panic") {
         BootMode::ProbePanic
@@ -60,4 +72,17 @@ pub fn boot_mode() -> BootMode {
             lockstep: has(b"tetherbot.clock=lockstep"),
         }
     }
+}
+
+/// The decimal number right after `key` in `line` (`None` when absent, empty or over `u32::MAX`).
+fn number_after(line: &[u8], key: &[u8]) -> Option<u32> {
+    let at = line.windows(key.len()).position(|w| w == key)?;
+    let digits = line.get(at + key.len()..)?;
+    let mut n: u32 = 0;
+    let mut any = false;
+    for &c in digits.iter().take_while(|c| c.is_ascii_digit()) {
+        n = n.checked_mul(10)?.checked_add(u32::from(c - b'0'))?;
+        any = true;
+    }
+    any.then_some(n)
 }

@@ -45,6 +45,11 @@ fn main() -> ! {
             debug::exit(debug::EXIT_SUCCESS);
             fault::fail()
         }
+        BootMode::BenchTest3 { iterations } => {
+            bench::run_test3(&mut clock, iterations);
+            debug::exit(debug::EXIT_SUCCESS);
+            fault::fail()
+        }
         BootMode::ProbePanic => panic!("fault probe: panic requested on the boot command line"),
         BootMode::ProbeHardFault => cortex_m::asm::udf(),
         BootMode::ProbeWatchdog => {

@@ -106,3 +106,47 @@ pub fn zero_psram() {
         }
     }
 }
+
+/// A type whose all-zero bit pattern is a valid (empty) value: empty `heapless` containers and the arenas made of
+/// them. Implementing it is a promise that [`ZeroedSlot::take`] may zero the bytes and use them as a `T`.
+///
+/// # Safety
+/// Every field of the type (recursively) must accept all-zero bytes as a valid value.
+pub unsafe trait ZeroIsEmpty {}
+
+/// A static in SRAM's `.uninit` section (NOLOAD: neither loaded nor zeroed at boot, so the flight mode's boot does
+/// not pay for it) for an arena too big for what `.psram` has left. [`ZeroedSlot::take`] zeroes it in place with a
+/// bounded word loop (no stack temporary, no flash image) and lends it once, like [`Lent`].
+pub struct ZeroedSlot<T> {
+    taken: AtomicBool,
+    value: UnsafeCell<MaybeUninit<T>>,
+}
+
+// SAFETY: as for `Lent`: the value is reachable only through the single `&'static mut` handed out by `take`.
+unsafe impl<T: Send> Sync for ZeroedSlot<T> {}
+
+impl<T: ZeroIsEmpty> ZeroedSlot<T> {
+    /// An unused slot.
+    pub const fn new() -> Self {
+        Self {
+            taken: AtomicBool::new(false),
+            value: UnsafeCell::new(MaybeUninit::uninit()),
+        }
+    }
+
+    /// The one mutable borrow, zeroed (the empty `T`); `None` if it was already taken.
+    #[allow(clippy::mut_from_ref)]
+    pub fn take(&'static self) -> Option<&'static mut T> {
+        if self.taken.swap(true, Ordering::AcqRel) {
+            return None;
+        }
+        // SAFETY: the flag was false, so no reference to the value exists, and none will be created later except
+        // the one returned here. The slot is valid, aligned memory for a `T`; `write_bytes` zeroes all of it, and
+        // `T: ZeroIsEmpty` promises that all-zero bytes are a valid `T`.
+        unsafe {
+            let slot = &mut *self.value.get();
+            core::ptr::write_bytes(slot.as_mut_ptr(), 0, 1);
+            Some(slot.assume_init_mut())
+        }
+    }
+}

@@ -1,0 +1,232 @@
+//! The on-target test-3 workload (`firmware::workload::test3`, `tetherbot board bench --workload tethered_test3`)
+//! against the host: its analytic ledge + pole field against host-sim's `ledge_pole` world, its PCG-64 against
+//! `rand_pcg`, and its trial against the campaign's `run_trial` on the same seed.
+//!
+//! The full 750-iteration comparison and the arena sizing runs are `#[ignore]`d (seconds to minutes at the test
+//! profile's opt-level 1): `cargo test --release -p tests --test board_test3 -- --ignored --nocapture`.
+
+use firmware::geom::{Real, Vec3};
+use firmware::map::{DistanceField, DistanceQuery};
+use firmware::plan::abit::AbitArena;
+use firmware::plan::tethered::{RoverState, TetherSpaceParams};
+use firmware::tether::AnchorHistory;
+use firmware::workload::ledge::LedgePole;
+use firmware::workload::test3::{self, plan_test3, Pcg64, Test3Outcome, Test3Storage};
+use host_sim::campaign::{self, CampaignSpec, TrialArena, Truth};
+use host_sim::cli::campaign::{spec_from, CampaignArgs};
+use host_sim::world::ledge::LedgeWorld;
+use rand_core::{Rng, SeedableRng};
+
+fn unif(r: &mut rand_pcg::Pcg64, lo: f64, hi: f64) -> f64 {
+    lo + (hi - lo) * (r.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// The scenario's world, built the way the campaign builds it (by the scenario file's `world.kind`).
+fn scenario_spec(iterations: u32) -> CampaignSpec {
+    spec_from(&CampaignArgs {
+        scenario: "ledge_test3".into(),
+        trials: Some(1),
+        iterations: Some(iterations),
+        seed: None,
+        threads: Some(1),
+        voxel: 0.1,
+        field: "truth".into(),
+        out: None,
+        samples_per_batch: None,
+        rewire_factor: None,
+        copy_fraction: None,
+        no_twins: false,
+        min_margin: None,
+        require_stable: None,
+    })
+    .unwrap()
+}
+
+#[test]
+fn analytic_field_equals_the_host_world_at_many_points() {
+    let spec = scenario_spec(1);
+    let world = Truth(spec.world.as_ref());
+    let exact = LedgeWorld::with_pole();
+    let field = LedgePole::new();
+    let mut r = rand_pcg::Pcg64::seed_from_u64(7);
+    let (mut n, mut bit_equal, mut near) = (0usize, 0usize, 0usize);
+    // Uniform points over the planning box and beyond, then points within 5 cm of the surface (lip, toe, pole,
+    // walls), where the nearest face changes.
+    let surface = [
+        [0.0, 0.0, 4.0],
+        [2.8, 0.0, 0.0],
+        [-2.5, 0.25, 6.0],
+        [-2.5, 0.0, 10.0],
+        [-5.0, 3.0, 2.0],
+        [-1.0, 5.0, 3.0],
+        [1.4, -5.0, 2.0],
+        [-2.75, 0.0, 4.0],
+    ];
+    for i in 0..40_000 {
+        let q = if i % 2 == 0 {
+            [unif(&mut r, -9.0, 11.0), unif(&mut r, -8.0, 8.0), unif(&mut r, -1.5, 12.0)]
+        } else {
+            let c = surface[(i / 2) % surface.len()];
+            [c[0] + unif(&mut r, -0.05, 0.05), c[1] + unif(&mut r, -0.05, 0.05), c[2] + unif(&mut r, -0.05, 0.05)]
+        };
+        let (d_host, g_host) = exact.sdf(q);
+        let (d_fw, g_fw) = field.sdf(q);
+        assert!((d_host - d_fw).abs() <= 1e-12, "f64 distance at {q:?}: host {d_host} firmware {d_fw}");
+        for k in 0..3 {
+            assert!((g_host[k] - g_fw[k]).abs() <= 1e-9, "f64 gradient at {q:?}: {g_host:?} vs {g_fw:?}");
+        }
+        // What the planner sees: the f32 queries of the scenario's world and of the fixture.
+        let p = Vec3::new(q[0] as Real, q[1] as Real, q[2] as Real);
+        match (world.query(&p), field.query(&p)) {
+            (
+                DistanceQuery::Known { distance: a, gradient: ga },
+                DistanceQuery::Known { distance: b, gradient: gb },
+            ) => {
+                assert!((a - b).abs() <= 1e-6, "f32 distance at {p:?}: {a} vs {b}");
+                assert!((ga - gb).norm() <= 1e-5, "f32 gradient at {p:?}: {ga:?} vs {gb:?}");
+                if a.to_bits() == b.to_bits() && ga == gb {
+                    bit_equal += 1;
+                }
+            }
+            other => panic!("unknown distance at {p:?}: {other:?}"),
+        }
+        if d_host.abs() < 0.1 {
+            near += 1;
+        }
+        n += 1;
+    }
+    assert!(near > 5_000, "too few points near the surface: {near}");
+    eprintln!("{bit_equal} of {n} f32 queries bit-identical");
+    // Same operations in the same order: the fields agree to the bit (if libm's tan(55 deg) ever differed from
+    // the host's by an ulp, the tolerance checks above would still hold and this would name it).
+    assert_eq!(bit_equal, n, "the fixture computes with the same f64 operations as the host world");
+}
+
+#[test]
+fn pcg64_draws_what_rand_pcg_draws() {
+    for seed in [0u64, 1, 2, 99, u64::MAX] {
+        let mut a = Pcg64::seed_from_u64(seed);
+        let mut b = rand_pcg::Pcg64::seed_from_u64(seed);
+        for _ in 0..1000 {
+            assert_eq!(a.next_u64(), b.next_u64());
+            assert_eq!(a.next_u32(), b.next_u32());
+        }
+        let (mut x, mut y) = ([0u8; 37], [0u8; 37]);
+        a.fill_bytes(&mut x);
+        b.fill_bytes(&mut y);
+        assert_eq!(x, y);
+    }
+}
+
+#[test]
+fn workload_problem_is_the_scenario_file() {
+    let spec = scenario_spec(test3::TEST3_ITERATIONS);
+    assert_eq!(spec.root, test3::ROOT_ANCHOR);
+    assert_eq!(spec.start, test3::START);
+    assert_eq!(spec.start_yaw_deg, test3::START_YAW_DEG);
+    assert_eq!(spec.goal, test3::GOAL);
+    assert_eq!(spec.goal_tolerance_m, test3::GOAL_TOLERANCE_M);
+    assert_eq!(spec.bounds.min, test3::bounds().min);
+    assert_eq!(spec.bounds.max, test3::bounds().max);
+    assert_eq!(spec.iterations, test3::TEST3_ITERATIONS);
+    assert_eq!(spec.first_seed, test3::TEST3_SEED);
+    assert_eq!(spec.abit, test3::abit_params());
+    assert_eq!(spec.params, TetherSpaceParams::DEFAULT);
+    assert_eq!(campaign::planning_rover(&spec), firmware::config::rover::RoverParams::AXEL);
+}
+
+/// The campaign's trial (its own construction code, `run_trial`) and the workload's, compared field by field.
+fn assert_same_trial(c: &campaign::TrialResult, w: &Test3Outcome) {
+    assert_eq!(c.found, w.found);
+    assert_eq!(c.first_iteration.unwrap_or(0), w.counters.first_solution_iteration);
+    assert_eq!(c.final_cost.map(f64::to_bits), w.cost.map(f64::to_bits));
+    assert_eq!(c.iterations, w.counters.iterations);
+    assert_eq!(c.batches, w.counters.batches);
+    assert_eq!(c.edges_evaluated, w.counters.edges_evaluated);
+    assert_eq!(c.states_checked, w.counters.states_checked);
+    assert_eq!(c.settles, w.stats.settles);
+    assert_eq!(c.stability_checks, w.stats.stability_checks);
+    assert_eq!(c.anchor_predictions, w.stats.anchor_predictions);
+    assert_eq!(c.arena_nodes, w.arena.nodes);
+    assert_eq!(c.arena_queue, w.arena.queue);
+    assert_eq!(c.path.len(), w.path_states);
+}
+
+/// Runs `f` on a thread with a 256 MiB stack (the arenas are built on the stack before they are boxed, as in
+/// the campaign's workers).
+fn on_big_stack<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> T {
+    std::thread::Builder::new().stack_size(256 << 20).spawn(f).unwrap().join().unwrap()
+}
+
+fn compare_with_campaign(iterations: u32) -> Test3Outcome {
+    on_big_stack(move || compare_with_campaign_inner(iterations))
+}
+
+fn compare_with_campaign_inner(iterations: u32) -> Test3Outcome {
+    let spec = scenario_spec(iterations);
+    let field = LedgePole::new();
+    let mut trial_arena: Box<TrialArena> = Box::default();
+    // The campaign planning on the scenario's own world (--field truth) ...
+    let on_world = campaign::run_trial(&Truth(spec.world.as_ref()), &spec, 0, &mut trial_arena).unwrap();
+    // ... and on the fixture: the same trial.
+    let on_fixture = campaign::run_trial(&field, &spec, 0, &mut trial_arena).unwrap();
+    // The workload, with the board's capacities.
+    let mut storage: Box<Test3Storage> = Box::default();
+    let Test3Storage { arena, path } = &mut *storage;
+    let w = plan_test3(&field, arena, path, iterations, spec.first_seed).unwrap();
+    eprintln!("{}", test3::summary(&Ok(w)));
+    assert_same_trial(&on_world, &w);
+    assert_same_trial(&on_fixture, &w);
+    // the paths too
+    for (p, (s, h)) in on_world.path.iter().zip(path.iter()) {
+        let axle = s.axle();
+        assert_eq!(p.axle, [f64::from(axle.x), f64::from(axle.y), f64::from(axle.z)]);
+        assert_eq!(p.anchors.len(), h.len());
+    }
+    w
+}
+
+/// 120 iterations: the problem set-up, the first batch and ~100 edge evaluations (a few seconds).
+#[test]
+fn workload_trial_equals_the_campaign_trial_short() {
+    let w = compare_with_campaign(120);
+    assert_eq!(w.counters.iterations, 120);
+    assert!(w.stats.stability_checks > 0 && w.counters.edges_evaluated > 0, "{w:?}");
+}
+
+/// The full Table I budget (750 iterations).
+#[test]
+#[ignore = "slow at opt-level 1; run with --release -- --ignored"]
+fn workload_trial_equals_the_campaign_trial_750() {
+    let w = compare_with_campaign(test3::TEST3_ITERATIONS);
+    assert_eq!(w.counters.iterations, test3::TEST3_ITERATIONS);
+}
+
+/// Arena high-water marks over seeds 1-`TETHERBOT_TEST3_SEEDS` (default 20) with the campaign's big arena, for
+/// sizing `config::workload`; fails if a seed exceeds the workload's capacities.
+#[test]
+#[ignore = "sizing run; --release -- --ignored --nocapture"]
+fn arena_high_water_over_seeds() {
+    on_big_stack(arena_high_water_inner)
+}
+
+fn arena_high_water_inner() {
+    use firmware::config::workload::*;
+    let seeds: u64 = std::env::var("TETHERBOT_TEST3_SEEDS").ok().and_then(|s| s.parse().ok()).unwrap_or(20);
+    let field = LedgePole::new();
+    let mut arena: Box<AbitArena<RoverState, AnchorHistory, 4096, 32768, 16384>> = Box::default();
+    let mut path: Box<heapless::Vec<(RoverState, AnchorHistory), 256>> = Box::default();
+    let (mut nodes, mut queue, mut memo, mut plen) = (0, 0, 0, 0);
+    for seed in 1..=seeds {
+        let w = plan_test3(&field, &mut arena, &mut path, test3::TEST3_ITERATIONS, seed).unwrap();
+        eprintln!("seed {seed}: {}", test3::summary(&Ok(w)));
+        nodes = nodes.max(w.arena.nodes);
+        queue = queue.max(w.arena.queue);
+        memo = memo.max(w.arena.memo);
+        plen = plen.max(w.path_states);
+    }
+    eprintln!("high water over seeds 1-{seeds}: nodes {nodes} queue {queue} memo {memo} path {plen}");
+    assert!(nodes <= TEST3_NODE_CAPACITY && queue <= TEST3_EDGE_QUEUE_CAPACITY);
+    assert!(memo <= TEST3_EDGE_MEMO_CAPACITY && plen <= TEST3_PATH_CAPACITY);
+}
+
