@@ -279,6 +279,16 @@ pub fn planning_rover(spec: &CampaignSpec) -> RoverParams {
     r
 }
 
+/// The tethered space's parameters the planner uses: the spec's, with a surface uncertainty of half a voxel when
+/// planning on the map (re-validation on the ground truth uses the spec's own, exact-field parameters).
+pub fn planning_params(spec: &CampaignSpec) -> TetherSpaceParams {
+    let mut p = spec.params;
+    if spec.field == PlanningField::Map {
+        p.surface_uncertainty_m = p.surface_uncertainty_m.max(0.5 * spec.voxel_m as Real);
+    }
+    p
+}
+
 /// Start and goal states of a spec on a field.
 pub fn endpoints<D: DistanceField>(space: &TetherSpace<'_, D>, spec: &CampaignSpec) -> Result<(RoverState, RoverState), String> {
     let yaw = spec.start_yaw_deg.to_radians() as Real;
@@ -334,7 +344,7 @@ pub fn run_trial<D: DistanceField>(
     arena: &mut TrialArena,
 ) -> Result<TrialResult, String> {
     let seed = spec.first_seed + u64::from(trial);
-    let mut space = TetherSpace::new(field, spec.bounds, planning_rover(spec), spec.params).map_err(|(f, r)| format!("{f}: {r}"))?;
+    let mut space = TetherSpace::new(field, spec.bounds, planning_rover(spec), planning_params(spec)).map_err(|(f, r)| format!("{f}: {r}"))?;
     let (start, goal) = endpoints(&space, spec)?;
     let pdef = ProblemDefinition {
         start,

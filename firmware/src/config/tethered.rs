@@ -40,6 +40,10 @@ pub mod defaults {
     pub const REFINE_TILT_RAD: f32 = 0.1;
     /// Sub-steps of a refined drive step. Default 4 (0.05 m at the default 0.2 m drive resolution).
     pub const REFINE_SUBSTEPS: u32 = 4;
+    /// Distance between the field's surfaces and the true terrain that the states over an edge must tolerate
+    /// (`plan::tethered` settles them this far ahead and behind too). Default 0 m: an exact field. A planner on a
+    /// map sets about half a voxel (the campaign does).
+    pub const SURFACE_UNCERTAINTY_M: f32 = 0.0;
     /// Spacing of interpolated headings of an in-place turn, radians. Default 0.5 rad (29 degrees).
     pub const TURN_RESOLUTION_RAD: f32 = 0.5;
     /// The tether end moves less than this between two interpolated states: anchor prediction is skipped (the

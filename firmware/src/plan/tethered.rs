@@ -22,7 +22,9 @@
 //! turning. Interpolated states are `drive_resolution_m` apart along the drive and `turn_resolution_rad` apart in
 //! the turns; where two consecutive drive states tilt more than `refine_tilt_rad` apart (an edge such as the lip of
 //! the ledge, over which the margin of the straddling pose dips to zero within ~0.1 m, less than a drive step),
-//! the step between them is also checked at `refine_substeps` evenly spaced points; each is settled (body collision included), its tether end (the axle centre) is moved from the
+//! the step between them is also checked at `refine_substeps` evenly spaced points, and each of these states must
+//! also be stable settled `surface_uncertainty_m` ahead and behind along the drive (the map's edge is not where the
+//! true edge is); each is settled (body collision included), its tether end (the axle centre) is moved from the
 //! previous state's with [`predict_anchors`] (skipped when it moved less than `tether_still_m`), and it must be
 //! statically stable ([`check_pose_stability`]) with a margin of at least `min_stability_margin`, the tether pulling
 //! towards the last anchor of the history that lies beyond the boom's reach ([`tether_pull_anchor`]: an anchor
@@ -69,6 +71,7 @@
 //! | `fall_line_yaw_spread_rad` | 0.15 rad (8.6 degrees) |
 //! | `refine_tilt_rad` | 0.1 rad (6 degrees) |
 //! | `refine_substeps` | 4 (0.05 m sub-steps; at most `MAX_REFINE_SUBSTEPS = 16`) |
+//! | `surface_uncertainty_m` | 0 m (exact field; the campaign sets half a voxel when planning on the map) |
 //!
 //! Budgets (`config::tethered`): `SURFACE_TRACE_STEPS = 64` (minimum step `SURFACE_MIN_STEP_M = 0.05`),
 //! `MAX_MOTION_STATES = 256` interpolated states per motion.
@@ -127,6 +130,10 @@ pub struct TetherSpaceParams {
     pub refine_tilt_rad: Real,
     /// Sub-steps a refined drive step is split into (1 = no refinement, at most `MAX_REFINE_SUBSTEPS`).
     pub refine_substeps: u32,
+    /// How far the field's surfaces may be from the true terrain, metres (0 for an exact field; half a voxel for
+    /// a map). Every state of a refined drive step must also be stable settled this far ahead and behind along
+    /// the drive, with the same anchor history.
+    pub surface_uncertainty_m: Real,
 }
 
 impl TetherSpaceParams {
@@ -148,6 +155,7 @@ impl TetherSpaceParams {
         fall_line_yaw_spread_rad: defaults::FALL_LINE_YAW_SPREAD_RAD,
         refine_tilt_rad: defaults::REFINE_TILT_RAD,
         refine_substeps: defaults::REFINE_SUBSTEPS,
+        surface_uncertainty_m: defaults::SURFACE_UNCERTAINTY_M,
     };
 
     /// The first field that is out of range, with the reason.
@@ -179,6 +187,9 @@ impl TetherSpaceParams {
         }
         if !pos(f64::from(self.refine_tilt_rad)) {
             return Err(("refine_tilt_rad", "must be > 0 and finite"));
+        }
+        if !nonneg(f64::from(self.surface_uncertainty_m)) {
+            return Err(("surface_uncertainty_m", "must be >= 0 and finite"));
         }
         if self.refine_substeps == 0 || self.refine_substeps > MAX_REFINE_SUBSTEPS {
             return Err(("refine_substeps", "must be in 1..=MAX_REFINE_SUBSTEPS (config::tethered)"));
@@ -505,6 +516,7 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
         let mut prev = *from;
         for k in 1..=plan.total_states() {
             let point = plan.state(k);
+            let mut refined = false;
             let st = match point {
                 MotionPoint::Turn { at_end, theta } => {
                     let base = if at_end { to } else { from };
@@ -522,16 +534,38 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
                             let g = prev.ground + (st.ground - prev.ground) * t;
                             let mid = self.settle_state(g.x, g.y, theta).map_err(MotionFailure::Settle)?;
                             self.advance(&mut walk, &mid)?;
+                            self.stable_nearby(&mid, &(st.ground - prev.ground), &walk.hist)?;
                         }
+                        refined = true;
                     }
                     st
                 }
                 MotionPoint::End => *to,
             };
             self.advance(&mut walk, &st)?;
+            if refined {
+                self.stable_nearby(&st, &(st.ground - prev.ground), &walk.hist)?;
+            }
             prev = st;
         }
         Ok(walk.hist)
+    }
+
+    /// A state on an edge must also be stable where the true terrain may put it: settled `surface_uncertainty_m`
+    /// ahead and behind along the drive direction `along`, with the same anchor history (the map's rounded edge sits
+    /// up to half a voxel from the true one, and the margin over an edge changes within centimetres).
+    fn stable_nearby(&self, st: &RoverState, along: &Vec3, hist: &AnchorHistory) -> Result<(), MotionFailure> {
+        let u = self.params.surface_uncertainty_m;
+        let len = libm::sqrtf(along.x * along.x + along.y * along.y);
+        if u <= 0.0 || len <= 1e-6 {
+            return Ok(());
+        }
+        for sign in [-1.0, 1.0] {
+            let (dx, dy) = (sign * u * along.x / len, sign * u * along.y / len);
+            let near = self.settle_state(st.ground.x + dx, st.ground.y + dy, st.theta).map_err(MotionFailure::Settle)?;
+            self.stable_with(&near.settled, hist)?;
+        }
+        Ok(())
     }
 
     /// One interpolated state of a motion: predict the anchors up to it, bound the tether's bend, check stability.
