@@ -1,0 +1,545 @@
+//! Goal planning on board: the tethered ABIT* problem on the onboard map, replayed per executive step.
+//! See the module docs of [`crate::nav`] for the design.
+
+use core::borrow::BorrowMut;
+
+use hal::Instant;
+
+use crate::config::nav as cfg;
+use crate::config::protocol::MAX_ANCHORS_PER_WAYPOINT;
+use crate::config::rover::RoverParams;
+use crate::config::tether::ANCHOR_HISTORY_CAPACITY;
+use crate::exec::{PlanBuffer, PlanProgress};
+use crate::geom::{norm3, Real, Vec3};
+use crate::map::{DistanceField, DistanceQuery, Map};
+use crate::plan::abit::{AbitArena, AbitParams, AbitStar};
+use crate::plan::space::{
+    Budget, GoalState, MotionCheck, MotionValidator, Planner, PlannerStatus, ProblemDefinition, Termination,
+};
+use crate::plan::tethered::{
+    MotionPlan, MotionStats, PlanBounds, RoverState, TetherMotionValidator, TetherObjective, TetherSpace, TetherSpaceParams,
+    TetherValidity,
+};
+use crate::protocol::{Configure, Motion, PlanState, Point3, Pose, Quat, Waypoint};
+use crate::tether::{Anchor, AnchorHistory};
+use crate::workload::SplitMix64;
+
+/// The on-board ABIT* arena (capacities of `config::nav`).
+pub type NavArena = AbitArena<
+    RoverState,
+    AnchorHistory,
+    { cfg::NODE_CAPACITY },
+    { cfg::EDGE_QUEUE_CAPACITY },
+    { cfg::EDGE_MEMO_CAPACITY },
+>;
+
+/// One remembered motion check: the exact end states, a fingerprint of the start's anchor history, the answer.
+#[derive(Debug, Clone)]
+pub struct CachedMotion {
+    key: u64,
+    from: [u32; 5],
+    to: [u32; 5],
+    history_len: u8,
+    result: Option<AnchorHistory>,
+}
+
+/// The navigator's planning storage, lent like the map's (a `Box` on the host, a `static` on the board). Its empty
+/// state is all zero bytes (empty `heapless` vectors), so the board keeps it in `.bss`.
+pub struct NavPlanStorage {
+    /// The ABIT* arena (nodes, edge queue, ABIT*'s own edge memo).
+    pub arena: NavArena,
+    cache: heapless::Vec<CachedMotion, { cfg::MOTION_CACHE_CAPACITY }>,
+    path: heapless::Vec<(RoverState, AnchorHistory), { cfg::PATH_CAPACITY }>,
+    motions: heapless::Vec<Motion, { cfg::MOTION_CAPACITY }>,
+}
+
+impl NavPlanStorage {
+    /// Empty storage (const, so it can be a `static`).
+    pub const fn new() -> Self {
+        Self { arena: AbitArena::new(), cache: heapless::Vec::new(), path: heapless::Vec::new(), motions: heapless::Vec::new() }
+    }
+    /// Bytes of the storage (for the board's memory report).
+    pub const fn bytes() -> usize {
+        core::mem::size_of::<Self>()
+    }
+}
+
+impl Default for NavPlanStorage {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Why a goal request was refused (`InvalidInput`), or why planning stopped without a plan. Counted per reason in
+/// [`NavPlanStats::refusals`] (indexed by the discriminant) and logged.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GoalRefusal {
+    /// No `Configure` reached the navigator (no root anchor, no rover model).
+    NotConfigured,
+    /// No scan has arrived yet, so the rover's pose is unknown.
+    NoPose,
+    /// The onboard map holds no blocks.
+    MapEmpty,
+    /// The rover does not settle on the map at its pose (unobserved ground, collision, no ground).
+    StartNotSettled,
+    /// The goal lies inside the mapped area but the rover does not settle there.
+    GoalNotSettled,
+    /// The planner rejected the problem (a parameter or the arena); see the log.
+    PlannerRejected,
+}
+
+impl GoalRefusal {
+    /// Number of reasons.
+    pub const COUNT: usize = 6;
+    /// A sentence a person can act on.
+    pub fn reason(self) -> &'static str {
+        match self {
+            Self::NotConfigured => "no Configure received: root anchor and rover unknown",
+            Self::NoPose => "no scan received yet: the rover's pose is unknown",
+            Self::MapEmpty => "the onboard map is empty: send scans first",
+            Self::StartNotSettled => "the rover does not settle on the map at its pose (ground under it unobserved?)",
+            Self::GoalNotSettled => "the goal is inside the mapped area but the rover does not settle there",
+            Self::PlannerRejected => "the planner rejected the problem (parameters or arena)",
+        }
+    }
+}
+
+/// Counters of on-board planning (for tests and logs).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct NavPlanStats {
+    /// Goals accepted.
+    pub goals_accepted: u32,
+    /// Goals refused, by [`GoalRefusal`] discriminant.
+    pub refusals: [u32; GoalRefusal::COUNT],
+    /// `plan_step` calls.
+    pub steps: u32,
+    /// Planner iterations run, replays included (the work actually done).
+    pub iterations_run: u64,
+    /// Motion checks answered by the navigator's cache.
+    pub cache_hits: u32,
+    /// Motion checks computed.
+    pub cache_misses: u32,
+    /// Motion checks not cached because the cache was full.
+    pub cache_full: u32,
+    /// The space's work and motion-failure counters of the last replay (samples, settles, stability checks,
+    /// motions invalid by reason; cached motion checks are not counted again).
+    pub last_replay: MotionStats,
+    /// Waypoints whose anchor history was shortened to `MAX_ANCHORS_PER_WAYPOINT` (root and most recent kept).
+    pub anchors_truncated: u32,
+}
+
+/// What the navigator keeps from `Configure` for planning.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct PlanSetup {
+    pub root: Vec3,
+    pub rover: RoverParams,
+    pub seed: u64,
+    pub samples_per_batch: u32,
+}
+
+impl PlanSetup {
+    /// The planning setup of a validated `Configure`: the Axel model with the configured wheel radius, track, boom,
+    /// mass (split body / boom by `BOOM_MASS_FRACTION`), friction and tension limit.
+    pub fn from_configure(c: &Configure) -> Self {
+        let mut rover = RoverParams::AXEL;
+        rover.wheel_radius_m = c.rover.wheel_radius_m;
+        rover.track_m = c.rover.axle_length_m;
+        rover.boom_length_m = c.rover.boom_length_m;
+        rover.boom_mass_kg = c.rover.mass_kg * cfg::BOOM_MASS_FRACTION;
+        rover.body_mass_kg = c.rover.mass_kg - rover.boom_mass_kg;
+        rover.wheel_mu = c.rover.friction_coefficient;
+        rover.tether_max_tension_n = c.tether.max_tension_n;
+        let r = c.tether.root_anchor;
+        PlanSetup {
+            root: Vec3::new(r.x, r.y, r.z),
+            rover,
+            seed: c.planner.rng_seed,
+            samples_per_batch: c.planner.batch_size.clamp(1, cfg::SAMPLES_PER_BATCH),
+        }
+    }
+}
+
+/// A goal being planned.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Problem {
+    pub start: RoverState,
+    pub goal: Vec3,
+    pub tolerance: f64,
+    pub root: Vec3,
+    pub bounds: PlanBounds,
+    pub rover: RoverParams,
+    pub seed: u64,
+    pub abit: AbitParams,
+    pub budget: u32,
+    pub deadline: Option<Instant>,
+    pub done: u32,
+    pub best_cost: Option<f32>,
+    pub finished: Option<PlanState>,
+}
+
+/// The planning bounds of the map: the extent of its **surface blocks** (blocks whose centre is known to lie
+/// within half a block diagonal of the surface: blocks of carved free space high above the terrain are left out),
+/// plus `BOUNDS_Z_MARGIN_M` in z, grown to contain `start` in `(x, y)`. The surface search of a sample starts at
+/// the top of the bounds, so the top must lie in observed space: a block's worth above the highest surface.
+/// `None` when the map has no surface block.
+pub(crate) fn map_bounds(map: &Map<'_>, start: &Vec3) -> Option<PlanBounds> {
+    let edge = map.config().voxel_size * crate::config::map::BLOCK_EDGE as Real;
+    let near = 0.5 * edge * libm::sqrtf(3.0);
+    let mut lo = [Real::INFINITY; 3];
+    let mut hi = [Real::NEG_INFINITY; 3];
+    for slot in 0..map.blocks_used() {
+        let Some(c) = map.block_coord(slot) else { break };
+        let centre = Vec3::new((c[0] as Real + 0.5) * edge, (c[1] as Real + 0.5) * edge, (c[2] as Real + 0.5) * edge);
+        match map.query(&centre) {
+            DistanceQuery::Known { distance, .. } if libm::fabsf(distance) <= near => {}
+            _ => continue,
+        }
+        for ((l, h), ci) in lo.iter_mut().zip(hi.iter_mut()).zip(c) {
+            *l = l.min(ci as Real * edge);
+            *h = h.max((ci + 1) as Real * edge);
+        }
+    }
+    let [lx, ly, lz] = lo;
+    let [hx, hy, hz] = hi;
+    let b = PlanBounds {
+        min: [lx.min(start.x), ly.min(start.y), lz - cfg::BOUNDS_Z_MARGIN_M],
+        max: [hx.max(start.x), hy.max(start.y), hz + cfg::BOUNDS_Z_MARGIN_M],
+    };
+    b.is_valid().then_some(b)
+}
+
+/// Yaw of a pose's x axis projected on the horizontal plane.
+fn heading(p: &Pose) -> Real {
+    let q = nalgebra::Quaternion::new(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
+    let x = crate::geom::Rot3::from_quaternion(q) * Vec3::x();
+    libm::atan2f(x.y, x.x)
+}
+
+/// Set up a goal: settle the start under the last known pose, check the goal, and return the problem.
+pub(crate) fn set_up(
+    map: &Map<'_>,
+    setup: &PlanSetup,
+    pose: &Pose,
+    goal: &crate::protocol::GoalRequest,
+    budget: u32,
+    now: Instant,
+) -> Result<Problem, GoalRefusal> {
+    if map.blocks_used() == 0 {
+        return Err(GoalRefusal::MapEmpty);
+    }
+    let p = pose.position;
+    let start_xy = Vec3::new(p.x, p.y, p.z);
+    let bounds = map_bounds(map, &start_xy).ok_or(GoalRefusal::MapEmpty)?;
+    let mut rover = setup.rover;
+    // As the campaign does on a map: one voxel of extra body clearance for the map's discretisation.
+    rover.body_clearance_m += map.config().voxel_size;
+    let space =
+        TetherSpace::new(map, bounds, rover, TetherSpaceParams::DEFAULT).map_err(|_| GoalRefusal::PlannerRejected)?;
+    let start = space.settle_state(p.x, p.y, heading(pose)).map_err(|_| GoalRefusal::StartNotSettled)?;
+    let g = Vec3::new(goal.position.x, goal.position.y, goal.position.z);
+    space.goal_state(g, 0.0).map_err(|_| GoalRefusal::GoalNotSettled)?;
+    let mut abit = AbitParams::ompl_defaults();
+    abit.samples_per_batch = setup.samples_per_batch;
+    abit.track_approximate = cfg::TRACK_APPROXIMATE;
+    let deadline = (goal.time_budget_ms > 0)
+        .then(|| Instant::from_micros(now.micros.saturating_add(u64::from(goal.time_budget_ms) * 1000)));
+    Ok(Problem {
+        start,
+        goal: g,
+        tolerance: f64::from(goal.tolerance_m),
+        root: setup.root,
+        bounds,
+        rover,
+        seed: setup.seed ^ u64::from(goal.goal_id).wrapping_mul(0x9E37_79B9_7F4A_7C15),
+        abit,
+        budget,
+        deadline,
+        done: 0,
+        best_cost: None,
+        finished: None,
+    })
+}
+
+const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+const FNV_PRIME: u64 = 0x0000_0100_0000_01b3;
+
+fn fnv(mut h: u64, word: u32) -> u64 {
+    for b in word.to_le_bytes() {
+        h = (h ^ u64::from(b)).wrapping_mul(FNV_PRIME);
+    }
+    h
+}
+
+fn state_bits(s: &RoverState) -> [u32; 5] {
+    [s.ground.x.to_bits(), s.ground.y.to_bits(), s.ground.z.to_bits(), s.theta.to_bits(), u32::from(s.off_map)]
+}
+
+/// The motion validator of the replays: answers from the cache, or checks with [`TetherMotionValidator`] and
+/// remembers. A motion's validity and resulting history are a function of the two states (each a function of its
+/// ground point and yaw on the map), the start's anchor history and the map, which is fixed while the cache lives
+/// (the navigator clears it whenever a scan changes the map).
+struct CachedMotions<'c> {
+    cache: &'c mut heapless::Vec<CachedMotion, { cfg::MOTION_CACHE_CAPACITY }>,
+    hits: u32,
+    misses: u32,
+    full: u32,
+}
+
+impl<D: DistanceField> MotionValidator<TetherSpace<'_, D>> for CachedMotions<'_> {
+    fn check_motion(
+        &mut self,
+        space: &TetherSpace<'_, D>,
+        from: &RoverState,
+        from_attachment: &AnchorHistory,
+        to: &RoverState,
+    ) -> MotionCheck<AnchorHistory> {
+        let (fb, tb) = (state_bits(from), state_bits(to));
+        let mut key = FNV_OFFSET;
+        for w in fb.iter().chain(tb.iter()) {
+            key = fnv(key, *w);
+        }
+        for a in from_attachment.as_slice() {
+            for v in [a.point.x, a.point.y, a.point.z, a.gradient.x, a.gradient.y, a.gradient.z] {
+                key = fnv(key, v.to_bits());
+            }
+        }
+        let len = u8::try_from(from_attachment.len()).unwrap_or(u8::MAX);
+        let found = self.cache.iter().find(|c| c.key == key && c.from == fb && c.to == tb && c.history_len == len);
+        let result = match found {
+            Some(c) => {
+                self.hits = self.hits.saturating_add(1);
+                c.result.clone()
+            }
+            None => {
+                self.misses = self.misses.saturating_add(1);
+                let r = match TetherMotionValidator.check_motion(space, from, from_attachment, to) {
+                    MotionCheck::Valid { attachment } => Some(attachment),
+                    MotionCheck::Invalid => None,
+                };
+                let entry = CachedMotion { key, from: fb, to: tb, history_len: len, result: r.clone() };
+                if self.cache.push(entry).is_err() {
+                    self.full = self.full.saturating_add(1);
+                }
+                r
+            }
+        };
+        match result {
+            Some(attachment) => MotionCheck::Valid { attachment },
+            None => MotionCheck::Invalid,
+        }
+    }
+}
+
+/// `a - b` wrapped to `(-pi, pi]`.
+fn wrap_angle(a: Real) -> Real {
+    let tau = core::f32::consts::TAU;
+    let mut d = libm::fmodf(a, tau);
+    if d > core::f32::consts::PI {
+        d -= tau;
+    } else if d <= -core::f32::consts::PI {
+        d += tau;
+    }
+    d
+}
+
+/// The motion primitives of one path segment `a -> b` (Paton et al. V: turn in place to the drive heading, drive
+/// straight, turn in place to `b`'s yaw), as [`MotionPlan`] interpolates and the validator checked them. A drive
+/// along the reverse heading (Axel drives either way) is a negative distance. Tiny turns and drives are left out.
+pub fn segment_motions(a: &RoverState, b: &RoverState, params: &TetherSpaceParams) -> [Option<Motion>; 3] {
+    let plan = MotionPlan::new(a, b, params);
+    let d = b.ground - a.ground;
+    let len_xy = libm::sqrtf(d.x * d.x + d.y * d.y);
+    let drive = if len_xy > 1e-6 {
+        let psi = libm::atan2f(d.y, d.x);
+        let heading = a.theta + plan.turn_a_rad;
+        let forward = libm::fabsf(wrap_angle(heading - psi)) < core::f32::consts::FRAC_PI_2;
+        let dist = norm3(&d);
+        Some(if forward { dist } else { -dist })
+    } else {
+        None
+    };
+    let turn = |r: Real| (libm::fabsf(r) >= cfg::MIN_TURN_RAD).then_some(Motion::Turn { yaw_rad: r });
+    [
+        turn(plan.turn_a_rad),
+        drive.filter(|s| libm::fabsf(*s) >= cfg::MIN_DRIVE_M).map(|distance_m| Motion::Straight { distance_m }),
+        turn(plan.turn_b_rad),
+    ]
+}
+
+/// The protocol waypoint of a path state (anchors: the root and the most recent ones that fit).
+fn waypoint(s: &RoverState, h: &AnchorHistory, margin: f32, truncated: &mut u32) -> Waypoint {
+    let t = s.settled.pose.translation.vector;
+    let q = s.settled.pose.rotation.quaternion();
+    let mut anchors = heapless::Vec::new();
+    let all = h.as_slice();
+    let skip = all.len().saturating_sub(MAX_ANCHORS_PER_WAYPOINT);
+    if skip > 0 {
+        *truncated = truncated.saturating_add(1);
+    }
+    let keep = all.first().into_iter().chain(all.iter().skip(skip.saturating_add(usize::from(skip > 0))));
+    for a in keep.take(MAX_ANCHORS_PER_WAYPOINT) {
+        let _ = anchors.push(Point3 { x: a.point.x, y: a.point.y, z: a.point.z });
+    }
+    Waypoint {
+        pose: Pose { position: Point3 { x: t.x, y: t.y, z: t.z }, orientation: Quat { x: q.i, y: q.j, z: q.k, w: q.w } },
+        anchors,
+        stability_margin: margin,
+    }
+}
+
+/// Run the problem for at most `iterations` new iterations (see the module docs: the planner is rebuilt and
+/// replayed). Fills `plan` and the storage's motions when planning finishes with a path.
+pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
+    map: &Map<'_>,
+    problem: &mut Problem,
+    storage: &mut P,
+    stats: &mut NavPlanStats,
+    now: Instant,
+    iterations: u32,
+    plan: &mut PlanBuffer,
+) -> PlanProgress {
+    let store = storage.borrow_mut();
+    stats.steps = stats.steps.saturating_add(1);
+    let out_of_time = problem.deadline.is_some_and(|d| now >= d);
+    // With no time left, the replay only restores the best solution so far (no new iterations).
+    let target = if out_of_time { problem.done } else { problem.done.saturating_add(iterations).min(problem.budget) };
+    let Ok(mut space) = TetherSpace::new(map, problem.bounds, problem.rover, TetherSpaceParams::DEFAULT) else {
+        problem.finished = Some(PlanState::InvalidInput);
+        return finished(problem, PlanState::InvalidInput);
+    };
+    let goal_state = match space.goal_state(problem.goal, 0.0) {
+        Ok(g) => g,
+        Err(_) => {
+            // The map changed under the goal since it was accepted.
+            log::warn!("nav: {}", GoalRefusal::GoalNotSettled.reason());
+            problem.finished = Some(PlanState::InvalidInput);
+            return finished(problem, PlanState::InvalidInput);
+        }
+    };
+    let pdef = ProblemDefinition {
+        start: problem.start,
+        start_attachment: AnchorHistory::new(Anchor::root(problem.root)),
+        goal: GoalState { state: goal_state, tolerance: problem.tolerance },
+        objective: TetherObjective,
+    };
+    let mut validity = TetherValidity;
+    let mut motions = CachedMotions { cache: &mut store.cache, hits: 0, misses: 0, full: 0 };
+    let mut rng = SplitMix64(problem.seed);
+    let mut planner =
+        AbitStar::new(&mut store.arena, &mut space, &mut validity, &mut motions, &pdef, &mut rng, problem.abit);
+    let report = planner.solve(&Budget::iterations(target));
+    let c = report.counters;
+    stats.iterations_run = stats.iterations_run.saturating_add(u64::from(c.iterations));
+    problem.done = c.iterations;
+    problem.best_cost = match report.status {
+        PlannerStatus::ExactSolution { cost } => Some(cost as f32),
+        _ => None,
+    };
+    let done = out_of_time
+        || c.iterations >= problem.budget
+        || matches!(
+            report.termination,
+            Termination::Converged | Termination::ArenaFull(_) | Termination::ObjectiveSatisfied | Termination::InvalidInput
+        );
+    let state = match report.status {
+        PlannerStatus::ExactSolution { .. } => PlanState::ExactSolution,
+        PlannerStatus::ApproximateSolution { .. } => PlanState::ApproximateSolution,
+        PlannerStatus::NoSolutionWithinBudget => PlanState::NoSolutionWithinBudget,
+        PlannerStatus::InvalidInput(e) => {
+            log::warn!("nav: planner rejected the problem: {e:?}");
+            PlanState::InvalidInput
+        }
+    };
+    let mut state = state;
+    let solved = done && matches!(state, PlanState::ExactSolution | PlanState::ApproximateSolution);
+    let written = if solved { planner.write_path(&mut store.path).is_ok() } else { false };
+    drop(planner);
+    stats.last_replay = space.stats();
+    stats.cache_hits = stats.cache_hits.saturating_add(motions.hits);
+    stats.cache_misses = stats.cache_misses.saturating_add(motions.misses);
+    stats.cache_full = stats.cache_full.saturating_add(motions.full);
+    if solved {
+        if !written || store.path.len() < 2 {
+            // No path (TooLong: more states than PATH_CAPACITY; or an approximate "path" of the start alone).
+            state = PlanState::NoSolutionWithinBudget;
+            store.path.clear();
+        } else {
+            fill_plan(&space, &store.path, &mut store.motions, stats, plan);
+        }
+    }
+    if done {
+        problem.finished = Some(state);
+        finished(problem, state)
+    } else {
+        PlanProgress::Searching { iterations: problem.done, best_cost: problem.best_cost }
+    }
+}
+
+fn finished(problem: &Problem, state: PlanState) -> PlanProgress {
+    PlanProgress::Finished {
+        state,
+        iterations: problem.done,
+        best_cost: if matches!(state, PlanState::ExactSolution) { problem.best_cost } else { None },
+    }
+}
+
+/// Waypoints (with stability margins from the map) and motion primitives of the stored path.
+fn fill_plan<D: DistanceField>(
+    space: &TetherSpace<'_, D>,
+    path: &[(RoverState, AnchorHistory)],
+    motions: &mut heapless::Vec<Motion, { cfg::MOTION_CAPACITY }>,
+    stats: &mut NavPlanStats,
+    plan: &mut PlanBuffer,
+) {
+    plan.clear();
+    motions.clear();
+    let on_map = || path.iter().filter(|(s, _)| !s.off_map);
+    for (s, h) in on_map() {
+        let margin = match space.stable_with(&s.settled, h) {
+            Ok(m) => m as f32,
+            Err(e) => {
+                log::warn!("nav: plan state not stable by the margin check: {e:?}");
+                -1.0
+            }
+        };
+        if plan.push(waypoint(s, h, margin, &mut stats.anchors_truncated)).is_err() {
+            break;
+        }
+    }
+    let mut prev: Option<&RoverState> = None;
+    for (s, _) in on_map() {
+        if let Some(a) = prev {
+            for m in segment_motions(a, s, space.params()).into_iter().flatten() {
+                if motions.push(m).is_err() {
+                    break;
+                }
+            }
+        }
+        prev = Some(s);
+    }
+}
+
+/// The motion primitive at `index` of the last plan.
+pub(crate) fn motion_at<P: BorrowMut<NavPlanStorage>>(storage: &mut P, index: usize) -> Option<Motion> {
+    storage.borrow_mut().motions.get(index).copied()
+}
+
+/// Forget the cached motion checks (the map changed) and the last plan's path.
+pub(crate) fn clear_cache<P: BorrowMut<NavPlanStorage>>(storage: &mut P) {
+    storage.borrow_mut().cache.clear();
+}
+
+/// Forget the last plan (a new goal).
+pub(crate) fn clear_plan<P: BorrowMut<NavPlanStorage>>(storage: &mut P) {
+    let s = storage.borrow_mut();
+    s.cache.clear();
+    s.path.clear();
+    s.motions.clear();
+}
+
+/// The states and anchor histories of the last plan (start first), for tests and pictures.
+pub(crate) fn path<P: BorrowMut<NavPlanStorage>>(storage: &mut P) -> &[(RoverState, AnchorHistory)] {
+    &storage.borrow_mut().path
+}
+
+const _: () = assert!(ANCHOR_HISTORY_CAPACITY <= u8::MAX as usize);
