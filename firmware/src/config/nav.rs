@@ -2,7 +2,7 @@
 //! section V ([`crate::plan::abit`] over [`crate::plan::tethered`]) run on the onboard map.
 //!
 //! The flight computer (mps2-an500) holds these arenas in SRAM `.bss` (the map's block pool fills the PSRAM); the
-//! sizes below keep the navigator's planning storage at about 1.5 MiB (`NavPlanStorage`, see `crate::nav`).
+//! sizes below keep the navigator's planning storage at about 2 MiB (`NavPlanStorage`, see `crate::nav`).
 
 /// Nodes of the on-board ABIT* arena (start, goals, samples and tree vertices). Default 512: five batches of
 /// [`SAMPLES_PER_BATCH`] with room for goals and history twins. A tethered node carries its anchor history
@@ -18,6 +18,10 @@ pub const EDGE_MEMO_CAPACITY: usize = 256;
 /// 512: more than the edges evaluated in a 750-iteration plan on the test-3 ledge; a full cache only costs
 /// repeated checks, never a different answer.
 pub const MOTION_CACHE_CAPACITY: usize = 512;
+/// Entries of the navigator's sample tape, which records the sampler calls of a replay so the next replay gets
+/// them without settling again (see `crate::nav`). Default 4096 (~0.6 MiB): a 750-iteration plan on the test worlds
+/// makes a few thousand sampler calls (informed sampling rejects most draws); a full tape only costs sampling.
+pub const SAMPLE_TAPE_CAPACITY: usize = 4096;
 /// Samples per ABIT* batch on board when `Configure.planner.batch_size` asks for more. Default 100 (OMPL's).
 pub const SAMPLES_PER_BATCH: u32 = 100;
 /// Largest iteration budget of one goal (the goal request's `max_iterations` is capped to it). Default 750 (the

@@ -21,7 +21,7 @@
 //!   within `off_map_edge_m` of the bounds, and the plan ends at that state;
 //! - **goal region**: within `tolerance_m` (axle distance) of the rover settled under the goal position;
 //! - **budget**: `min(goal.max_iterations, MAX_PLAN_ITERATIONS)` iterations, and `time_budget_ms` of flight time
-//!   when non-zero; the sampler is [`SplitMix64`] seeded from `Configure.planner.rng_seed` and the goal id;
+//!   when non-zero; the sampler is SplitMix64 (as [`SplitMix64`]) seeded from `Configure.planner.rng_seed` and the goal id;
 //!   `batch_size` is the samples per batch (at most `SAMPLES_PER_BATCH`); `goal_bias` has no meaning for ABIT*
 //!   (it samples no goal states) and is ignored.
 //!
@@ -46,22 +46,32 @@
 //! `AbitStar` has no way to hand its borrows back for the next goal. So every `plan_step` rebuilds the map view,
 //! the space and the planner on the lent arena and **replays** the search from the same seed to `done + iterations`
 //! iterations. The replay is exact (the search is deterministic, the map is the same), so the result equals one
-//! uninterrupted `solve`, and the best solution so far is always the replayed planner's. The expensive part of an
-//! iteration, the motion check (tens of settles, anchor predictions and stability LPs), is answered during the
-//! replay from the navigator's **motion cache** in the lent storage (`MOTION_CACHE_CAPACITY` entries, keyed by the
-//! exact bits of both end states and a 64-bit FNV-1a fingerprint of the start's anchor history; cleared whenever a
-//! scan changes the map or a goal arrives). What a replay repeats is sampling (a surface trace and a settle per
-//! sample) and queue work: measured in `nav::tests` (`replay_cost`). A planner that could suspend into plain data
-//! and resume on lent borrows (`AbitStar::suspend` / `resume`, proposed to the owner of `plan::abit`) would make
-//! the replay unnecessary; the navigator's interface would not change.
+//! uninterrupted `solve`, and the best solution so far is always the replayed planner's. What makes an iteration
+//! expensive is answered during a replay from two records in the lent storage:
+//! - the **motion cache** (`MOTION_CACHE_CAPACITY` entries): a motion check (tens of settles, anchor predictions
+//!   and stability LPs) keyed by the exact bits of both end states and a 64-bit FNV-1a fingerprint of the start's
+//!   anchor history;
+//! - the **sample tape** (`SAMPLE_TAPE_CAPACITY` entries): the sampler calls (surface trace and settle) in call
+//!   order, each with the generator state before and after it. The generator is SplitMix64 with its state in a
+//!   shared cell (`nav::planning::CellRng`), so a replayed call whose state matches the tape's entry jumps to
+//!   the recorded state and returns the recorded sample.
+//!
+//! Both are cleared whenever a scan changes the map or a goal arrives. Measured (`--release`, unit-test worlds,
+//! 96-iteration budget): with 8 iterations per step a plan ran 624 replayed iterations for 96 new ones, yet the same
+//! 160 stability problems and 276 + 11 settles (one goal settle per replay) as one uninterrupted run, in the same
+//! 0.34 s; on the 12-degree slope 3870 vs 3867 settles and 21 vs 21 stability problems. What a replay still repeats
+//! is queue and arena work (no geometry). A planner that could suspend into plain data and resume on lent borrows
+//! (`AbitStar::suspend` / `resume`, proposed to the owner of `plan::abit`) would remove that too; the navigator's
+//! interface would not change.
 //!
 //! Scans keep arriving while planning; each one changes the map, so the cache is cleared and the next replay plans
 //! on the new map (the start state settled at goal time is kept).
 //!
 //! ## Storage
 //! The block pool and the block index are owned by the caller and lent to the navigator for good (`Vec`s on the
-//! host, `&'static mut` slices in the board's PSRAM). So is the planning storage ([`NavPlanStorage`]: the ABIT*
-//! arena, the motion cache, the best path and its motions; a `Box` on the host, a `static` in the board's SRAM).
+//! host, `&'static mut` slices in the board's PSRAM). So is the planning storage ([`NavPlanStorage`], ~2 MiB: the
+//! ABIT* arena, the motion cache, the sample tape, the best path and its motions; a `Box` on the host, a `static`
+//! in the board's SRAM).
 //! The navigator builds a short-lived [`Map`] view per call ([`Map::reattach`]), so it holds no borrow between
 //! calls.
 //!
@@ -70,7 +80,7 @@
 //! - [`NAV_POINT_BATCH`](crate::config::map::NAV_POINT_BATCH): points converted and integrated per batch
 //!   (default 256), the only stack buffer;
 //! - planning (`config::nav`): `NODE_CAPACITY` 512, `EDGE_QUEUE_CAPACITY` 4096, `EDGE_MEMO_CAPACITY` 256,
-//!   `MOTION_CACHE_CAPACITY` 512, `SAMPLES_PER_BATCH` 100, `MAX_PLAN_ITERATIONS` 750, `PATH_CAPACITY` 64,
+//!   `MOTION_CACHE_CAPACITY` 512, `SAMPLE_TAPE_CAPACITY` 4096, `SAMPLES_PER_BATCH` 100, `MAX_PLAN_ITERATIONS` 750, `PATH_CAPACITY` 64,
 //!   `MOTION_CAPACITY` 189, `MIN_TURN_RAD` 1e-3, `MIN_DRIVE_M` 1e-3, `BOUNDS_Z_MARGIN_M` 0.5,
 //!   `TRACK_APPROXIMATE` true, `BOOM_MASS_FRACTION` 0.2; the space's parameters are
 //!   [`TetherSpaceParams::DEFAULT`](crate::plan::tethered::TetherSpaceParams::DEFAULT) and ABIT*'s

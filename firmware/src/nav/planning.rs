@@ -2,6 +2,8 @@
 //! See the module docs of [`crate::nav`] for the design.
 
 use core::borrow::BorrowMut;
+use core::cell::Cell;
+use core::convert::Infallible;
 
 use hal::Instant;
 
@@ -14,7 +16,8 @@ use crate::geom::{norm3, Real, Vec3};
 use crate::map::{DistanceField, DistanceQuery, Map};
 use crate::plan::abit::{AbitArena, AbitParams, AbitStar};
 use crate::plan::space::{
-    Budget, GoalState, MotionCheck, MotionValidator, Planner, PlannerStatus, ProblemDefinition, Termination,
+    Budget, Cost, GoalState, InformedSample, MotionCheck, MotionValidator, OptimizationObjective, Planner,
+    PlannerStatus, ProblemDefinition, StateSpace, StateValidityChecker, Termination,
 };
 use crate::plan::tethered::{
     MotionPlan, MotionStats, PlanBounds, RoverState, TetherMotionValidator, TetherObjective, TetherSpace, TetherSpaceParams,
@@ -22,7 +25,7 @@ use crate::plan::tethered::{
 };
 use crate::protocol::{Configure, Motion, PlanState, Point3, Pose, Quat, Waypoint};
 use crate::tether::{Anchor, AnchorHistory};
-use crate::workload::SplitMix64;
+use rand_core::{Rng, TryRng};
 
 /// The on-board ABIT* arena (capacities of `config::nav`).
 pub type NavArena = AbitArena<
@@ -43,12 +46,25 @@ pub struct CachedMotion {
     result: Option<AnchorHistory>,
 }
 
+/// One recorded sampler call of a replay (see [`TapedSpace`]).
+#[derive(Debug, Clone)]
+pub struct TapedSample {
+    /// Generator state before the call.
+    before: u64,
+    /// Generator state after the call.
+    after: u64,
+    /// 0 for a uniform sample; a fingerprint of (start, goal, max_cost) for an informed one.
+    request: u64,
+    result: InformedSample<RoverState>,
+}
+
 /// The navigator's planning storage, lent like the map's (a `Box` on the host, a `static` on the board). Its empty
 /// state is all zero bytes (empty `heapless` vectors), so the board keeps it in `.bss`.
 pub struct NavPlanStorage {
     /// The ABIT* arena (nodes, edge queue, ABIT*'s own edge memo).
     pub arena: NavArena,
     cache: heapless::Vec<CachedMotion, { cfg::MOTION_CACHE_CAPACITY }>,
+    tape: heapless::Vec<TapedSample, { cfg::SAMPLE_TAPE_CAPACITY }>,
     path: heapless::Vec<(RoverState, AnchorHistory), { cfg::PATH_CAPACITY }>,
     motions: heapless::Vec<Motion, { cfg::MOTION_CAPACITY }>,
 }
@@ -56,7 +72,13 @@ pub struct NavPlanStorage {
 impl NavPlanStorage {
     /// Empty storage (const, so it can be a `static`).
     pub const fn new() -> Self {
-        Self { arena: AbitArena::new(), cache: heapless::Vec::new(), path: heapless::Vec::new(), motions: heapless::Vec::new() }
+        Self {
+            arena: AbitArena::new(),
+            cache: heapless::Vec::new(),
+            tape: heapless::Vec::new(),
+            path: heapless::Vec::new(),
+            motions: heapless::Vec::new(),
+        }
     }
     /// Bytes of the storage (for the board's memory report).
     pub const fn bytes() -> usize {
@@ -115,6 +137,14 @@ pub struct NavPlanStats {
     pub steps: u32,
     /// Planner iterations run, replays included (the work actually done).
     pub iterations_run: u64,
+    /// Settles run, replays included (samples, interpolated states of motion checks).
+    pub settles_run: u64,
+    /// Static-stability problems solved, replays included (motion checks and the plan's margins).
+    pub stability_checks_run: u64,
+    /// Sampler calls answered from the sample tape.
+    pub tape_hits: u32,
+    /// Sampler calls run (and recorded while the tape has room).
+    pub tape_misses: u32,
     /// Motion checks answered by the navigator's cache.
     pub cache_hits: u32,
     /// Motion checks computed.
@@ -285,10 +315,10 @@ struct CachedMotions<'c> {
     full: u32,
 }
 
-impl<D: DistanceField> MotionValidator<TetherSpace<'_, D>> for CachedMotions<'_> {
+impl<D: DistanceField> MotionValidator<TapedSpace<'_, '_, D>> for CachedMotions<'_> {
     fn check_motion(
         &mut self,
-        space: &TetherSpace<'_, D>,
+        space: &TapedSpace<'_, '_, D>,
         from: &RoverState,
         from_attachment: &AnchorHistory,
         to: &RoverState,
@@ -312,7 +342,7 @@ impl<D: DistanceField> MotionValidator<TetherSpace<'_, D>> for CachedMotions<'_>
             }
             None => {
                 self.misses = self.misses.saturating_add(1);
-                let r = match TetherMotionValidator.check_motion(space, from, from_attachment, to) {
+                let r = match TetherMotionValidator.check_motion(&space.inner, from, from_attachment, to) {
                     MotionCheck::Valid { attachment } => Some(attachment),
                     MotionCheck::Invalid => None,
                 };
@@ -327,6 +357,137 @@ impl<D: DistanceField> MotionValidator<TetherSpace<'_, D>> for CachedMotions<'_>
             Some(attachment) => MotionCheck::Valid { attachment },
             None => MotionCheck::Invalid,
         }
+    }
+}
+
+/// SplitMix64 (Steele, Lea, Flood 2014) with its state in a shared cell, so the [`TapedSpace`] can read and set
+/// the state around a sampler call while the planner owns the generator.
+pub(crate) struct CellRng<'c>(pub &'c Cell<u64>);
+
+impl TryRng for CellRng<'_> {
+    type Error = Infallible;
+    fn try_next_u32(&mut self) -> Result<u32, Infallible> {
+        self.try_next_u64().map(|x| (x >> 32) as u32)
+    }
+    fn try_next_u64(&mut self) -> Result<u64, Infallible> {
+        let s = self.0.get().wrapping_add(0x9E37_79B9_7F4A_7C15);
+        self.0.set(s);
+        let mut z = s;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        Ok(z ^ (z >> 31))
+    }
+    fn try_fill_bytes(&mut self, dst: &mut [u8]) -> Result<(), Infallible> {
+        for chunk in dst.chunks_mut(8) {
+            let bytes = self.try_next_u64()?.to_le_bytes();
+            for (d, s) in chunk.iter_mut().zip(bytes) {
+                *d = s;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The tethered space of the replays, with a **sample tape**: a replay makes the same sampler calls in the same
+/// order with the same generator states, so call `k` is answered from entry `k` of the tape when the generator
+/// state before it (and, for informed samples, the request) matches, and the generator jumps to the recorded
+/// state after it. A sample is a function of the generator's draws and the map only, so the answer is the one the
+/// call would compute. A mismatch (the map changed) truncates the tape there; a full tape only costs sampling.
+pub(crate) struct TapedSpace<'c, 'm, D> {
+    pub inner: TetherSpace<'m, D>,
+    rng: &'c Cell<u64>,
+    tape: &'c mut heapless::Vec<TapedSample, { cfg::SAMPLE_TAPE_CAPACITY }>,
+    cursor: usize,
+    hits: u32,
+    misses: u32,
+}
+
+impl<D: DistanceField> TapedSpace<'_, '_, D> {
+    fn taped(
+        &mut self,
+        request: u64,
+        run: impl FnOnce(&mut TetherSpace<'_, D>) -> InformedSample<RoverState>,
+    ) -> InformedSample<RoverState> {
+        let before = self.rng.get();
+        let recorded = self.tape.get(self.cursor).filter(|e| e.before == before && e.request == request);
+        if let Some(e) = recorded {
+            self.rng.set(e.after);
+            self.cursor = self.cursor.saturating_add(1);
+            self.hits = self.hits.saturating_add(1);
+            return e.result.clone();
+        }
+        self.tape.truncate(self.cursor);
+        self.misses = self.misses.saturating_add(1);
+        let result = run(&mut self.inner);
+        let entry = TapedSample { before, after: self.rng.get(), request, result: result.clone() };
+        if self.tape.push(entry).is_ok() {
+            self.cursor = self.cursor.saturating_add(1);
+        }
+        result
+    }
+}
+
+impl<D: DistanceField> StateSpace for TapedSpace<'_, '_, D> {
+    type State = RoverState;
+    type Attachment = AnchorHistory;
+    const NON_MARKOVIAN: bool = true;
+    fn dimension(&self) -> usize {
+        self.inner.dimension()
+    }
+    fn measure(&self) -> f64 {
+        self.inner.measure()
+    }
+    fn distance(&self, a: &RoverState, b: &RoverState) -> f64 {
+        self.inner.distance(a, b)
+    }
+    fn interpolate(&self, a: &RoverState, b: &RoverState, t: f64) -> RoverState {
+        self.inner.interpolate(a, b, t)
+    }
+    fn sample_uniform<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Option<RoverState> {
+        match self.taped(0, |inner| inner.sample_uniform(rng).map_or(InformedSample::Rejected, InformedSample::Sampled)) {
+            InformedSample::Sampled(s) => Some(s),
+            _ => None,
+        }
+    }
+    fn attachments_compatible(&self, resulting: &AnchorHistory, existing: &AnchorHistory) -> bool {
+        self.inner.attachments_compatible(resulting, existing)
+    }
+}
+
+/// [`TetherValidity`] on the taped space.
+struct TapedValidity;
+
+impl<D: DistanceField> StateValidityChecker<TapedSpace<'_, '_, D>> for TapedValidity {
+    fn is_valid(&mut self, state: &RoverState) -> bool {
+        StateValidityChecker::<TetherSpace<'_, D>>::is_valid(&mut TetherValidity, state)
+    }
+}
+
+/// [`TetherObjective`] on the taped space (informed samples go through the tape).
+struct TapedObjective;
+
+impl<D: DistanceField> OptimizationObjective<TapedSpace<'_, '_, D>> for TapedObjective {
+    fn motion_cost(&self, space: &TapedSpace<'_, '_, D>, from: &RoverState, h: &AnchorHistory, to: &RoverState) -> Cost {
+        TetherObjective.motion_cost(&space.inner, from, h, to)
+    }
+    fn motion_cost_heuristic(&self, space: &TapedSpace<'_, '_, D>, from: &RoverState, to: &RoverState) -> Cost {
+        TetherObjective.motion_cost_heuristic(&space.inner, from, to)
+    }
+    fn sample_informed<R: Rng + ?Sized>(
+        &self,
+        space: &mut TapedSpace<'_, '_, D>,
+        rng: &mut R,
+        start: &RoverState,
+        goal: &RoverState,
+        max_cost: Cost,
+    ) -> InformedSample<RoverState> {
+        let mut request = FNV_OFFSET;
+        for w in state_bits(start).iter().chain(state_bits(goal).iter()) {
+            request = fnv(request, *w);
+        }
+        let c = max_cost.to_bits();
+        request = fnv(fnv(request, c as u32), (c >> 32) as u32) | 1;
+        space.taped(request, |inner| TetherObjective.sample_informed(inner, rng, start, goal, max_cost))
     }
 }
 
@@ -403,11 +564,11 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
     let out_of_time = problem.deadline.is_some_and(|d| now >= d);
     // With no time left, the replay only restores the best solution so far (no new iterations).
     let target = if out_of_time { problem.done } else { problem.done.saturating_add(iterations).min(problem.budget) };
-    let Ok(mut space) = TetherSpace::new(map, problem.bounds, problem.rover, TetherSpaceParams::DEFAULT) else {
+    let Ok(inner) = TetherSpace::new(map, problem.bounds, problem.rover, TetherSpaceParams::DEFAULT) else {
         problem.finished = Some(PlanState::InvalidInput);
         return finished(problem, PlanState::InvalidInput);
     };
-    let goal_state = match space.goal_state(problem.goal, 0.0) {
+    let goal_state = match inner.goal_state(problem.goal, 0.0) {
         Ok(g) => g,
         Err(_) => {
             // The map changed under the goal since it was accepted.
@@ -420,11 +581,13 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
         start: problem.start,
         start_attachment: AnchorHistory::new(Anchor::root(problem.root)),
         goal: GoalState { state: goal_state, tolerance: problem.tolerance },
-        objective: TetherObjective,
+        objective: TapedObjective,
     };
-    let mut validity = TetherValidity;
+    let rng_state = Cell::new(problem.seed);
+    let mut space = TapedSpace { inner, rng: &rng_state, tape: &mut store.tape, cursor: 0, hits: 0, misses: 0 };
+    let mut validity = TapedValidity;
     let mut motions = CachedMotions { cache: &mut store.cache, hits: 0, misses: 0, full: 0 };
-    let mut rng = SplitMix64(problem.seed);
+    let mut rng = CellRng(&rng_state);
     let mut planner =
         AbitStar::new(&mut store.arena, &mut space, &mut validity, &mut motions, &pdef, &mut rng, problem.abit);
     let report = planner.solve(&Budget::iterations(target));
@@ -454,7 +617,6 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
     let solved = done && matches!(state, PlanState::ExactSolution | PlanState::ApproximateSolution);
     let written = if solved { planner.write_path(&mut store.path).is_ok() } else { false };
     drop(planner);
-    stats.last_replay = space.stats();
     stats.cache_hits = stats.cache_hits.saturating_add(motions.hits);
     stats.cache_misses = stats.cache_misses.saturating_add(motions.misses);
     stats.cache_full = stats.cache_full.saturating_add(motions.full);
@@ -464,9 +626,15 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
             state = PlanState::NoSolutionWithinBudget;
             store.path.clear();
         } else {
-            fill_plan(&space, &store.path, &mut store.motions, stats, plan);
+            fill_plan(&space.inner, &store.path, &mut store.motions, stats, plan);
         }
     }
+    stats.last_replay = space.inner.stats();
+    stats.tape_hits = stats.tape_hits.saturating_add(space.hits);
+    stats.tape_misses = stats.tape_misses.saturating_add(space.misses);
+    stats.settles_run = stats.settles_run.saturating_add(u64::from(stats.last_replay.settles));
+    stats.stability_checks_run =
+        stats.stability_checks_run.saturating_add(u64::from(stats.last_replay.stability_checks));
     if done {
         problem.finished = Some(state);
         finished(problem, state)
@@ -524,15 +692,18 @@ pub(crate) fn motion_at<P: BorrowMut<NavPlanStorage>>(storage: &mut P, index: us
     storage.borrow_mut().motions.get(index).copied()
 }
 
-/// Forget the cached motion checks (the map changed) and the last plan's path.
+/// Forget the cached motion checks and the sample tape (the map changed).
 pub(crate) fn clear_cache<P: BorrowMut<NavPlanStorage>>(storage: &mut P) {
-    storage.borrow_mut().cache.clear();
+    let s = storage.borrow_mut();
+    s.cache.clear();
+    s.tape.clear();
 }
 
 /// Forget the last plan (a new goal).
 pub(crate) fn clear_plan<P: BorrowMut<NavPlanStorage>>(storage: &mut P) {
     let s = storage.borrow_mut();
     s.cache.clear();
+    s.tape.clear();
     s.path.clear();
     s.motions.clear();
 }

@@ -344,8 +344,14 @@ mod planning {
         let (ma, mb, mc) = (motions(&mut a), motions(&mut b), motions(&mut c));
         assert_eq!(ma, mb);
         assert_eq!(ma, mc);
-        // the replays were answered from the cache
-        assert!(a.plan_stats().cache_hits > 0, "{:?}", a.plan_stats());
-        assert_eq!(a.plan_stats().cache_misses, c.plan_stats().cache_misses);
+        // the replays were answered from the cache: every motion checked once, no stability problem solved twice
+        let (sa, sc) = (a.plan_stats(), c.plan_stats());
+        assert!(sa.cache_hits > 0, "{sa:?}");
+        assert_eq!(sa.cache_misses, sc.cache_misses);
+        assert_eq!(sa.stability_checks_run, sc.stability_checks_run, "{sa:?}\n{sc:?}");
+        // and no sample settled twice: the only extra settle of a replay is the goal state's
+        assert_eq!(sa.settles_run, sc.settles_run + u64::from(sa.steps - sc.steps), "{sa:?}\n{sc:?}");
+        assert!(sa.tape_hits > 0);
+        assert!(sa.steps > sc.steps);
     }
 }
