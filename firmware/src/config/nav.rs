@@ -22,6 +22,11 @@ pub const MOTION_CACHE_CAPACITY: usize = 512;
 /// them without settling again (see `crate::nav`). Default 4096 (~0.6 MiB): a 750-iteration plan on the test worlds
 /// makes a few thousand sampler calls (informed sampling rejects most draws); a full tape only costs sampling.
 pub const SAMPLE_TAPE_CAPACITY: usize = 4096;
+/// New motion checks after which a `plan_step` call stops (after at least one new iteration), whatever its
+/// iteration allowance. Default 1: a motion check is tens of settles, anchor predictions and stability LPs (~8 M
+/// instructions each on the emulated Cortex-M7), so one per executive step keeps a step well inside the board's
+/// 2 s watchdog; replayed checks come from the motion cache and do not count.
+pub const MOTION_CHECKS_PER_STEP: u32 = 1;
 /// Samples per ABIT* batch on board when `Configure.planner.batch_size` asks for more. Default 100 (OMPL's).
 pub const SAMPLES_PER_BATCH: u32 = 100;
 /// Largest iteration budget of one goal (the goal request's `max_iterations` is capped to it). Default 750 (the

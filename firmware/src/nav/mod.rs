@@ -29,7 +29,9 @@
 //! `Configure`, no scan yet, an empty map, a start or an on-map goal that does not settle. Another planner choice
 //! is answered `PlannerUnavailable`.
 //!
-//! [`Autonomy::plan_step`] runs at most `iterations` new ABIT* iterations. When the budget is spent (or the
+//! [`Autonomy::plan_step`] runs at most `iterations` new ABIT* iterations, and stops earlier (after at least one)
+//! once `MOTION_CHECKS_PER_STEP` new motion checks were computed, so one executive step does a bounded amount of
+//! geometry (on the emulated board a motion check costs ~0.2-0.5 s against the 2 s watchdog). When the budget is spent (or the
 //! planner converges, fills its arena, or the time budget passes) it reports the final state: `ExactSolution`,
 //! `ApproximateSolution` (the tree vertex closest to the goal, `TRACK_APPROXIMATE`), `NoSolutionWithinBudget`, and
 //! fills the plan buffer with the path's settled states (their anchor histories, root and most recent anchors up
@@ -80,7 +82,7 @@
 //! - [`NAV_POINT_BATCH`](crate::config::map::NAV_POINT_BATCH): points converted and integrated per batch
 //!   (default 256), the only stack buffer;
 //! - planning (`config::nav`): `NODE_CAPACITY` 512, `EDGE_QUEUE_CAPACITY` 4096, `EDGE_MEMO_CAPACITY` 256,
-//!   `MOTION_CACHE_CAPACITY` 512, `SAMPLE_TAPE_CAPACITY` 4096, `SAMPLES_PER_BATCH` 100, `MAX_PLAN_ITERATIONS` 750, `PATH_CAPACITY` 64,
+//!   `MOTION_CACHE_CAPACITY` 512, `SAMPLE_TAPE_CAPACITY` 4096, `MOTION_CHECKS_PER_STEP` 1, `SAMPLES_PER_BATCH` 100, `MAX_PLAN_ITERATIONS` 750, `PATH_CAPACITY` 64,
 //!   `MOTION_CAPACITY` 189, `MIN_TURN_RAD` 1e-3, `MIN_DRIVE_M` 1e-3, `BOUNDS_Z_MARGIN_M` 0.5,
 //!   `TRACK_APPROXIMATE` true, `BOOM_MASS_FRACTION` 0.2; the space's parameters are
 //!   [`TetherSpaceParams::DEFAULT`](crate::plan::tethered::TetherSpaceParams::DEFAULT) and ABIT*'s

@@ -311,7 +311,8 @@ fn state_bits(s: &RoverState) -> [u32; 5] {
 struct CachedMotions<'c> {
     cache: &'c mut heapless::Vec<CachedMotion, { cfg::MOTION_CACHE_CAPACITY }>,
     hits: u32,
-    misses: u32,
+    /// Motion checks computed in this call (shared with the step's stop predicate).
+    misses: &'c Cell<u32>,
     full: u32,
 }
 
@@ -341,7 +342,7 @@ impl<D: DistanceField> MotionValidator<TapedSpace<'_, '_, D>> for CachedMotions<
                 c.result.clone()
             }
             None => {
-                self.misses = self.misses.saturating_add(1);
+                self.misses.set(self.misses.get().saturating_add(1));
                 let r = match TetherMotionValidator.check_motion(&space.inner, from, from_attachment, to) {
                     MotionCheck::Valid { attachment } => Some(attachment),
                     MotionCheck::Invalid => None,
@@ -586,11 +587,17 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
     let rng_state = Cell::new(problem.seed);
     let mut space = TapedSpace { inner, rng: &rng_state, tape: &mut store.tape, cursor: 0, hits: 0, misses: 0 };
     let mut validity = TapedValidity;
-    let mut motions = CachedMotions { cache: &mut store.cache, hits: 0, misses: 0, full: 0 };
+    let new_checks = Cell::new(0u32);
+    let mut motions = CachedMotions { cache: &mut store.cache, hits: 0, misses: &new_checks, full: 0 };
     let mut rng = CellRng(&rng_state);
     let mut planner =
         AbitStar::new(&mut store.arena, &mut space, &mut validity, &mut motions, &pdef, &mut rng, problem.abit);
-    let report = planner.solve(&Budget::iterations(target));
+    // At least one new iteration, then stop after MOTION_CHECKS_PER_STEP new motion checks: the geometric work
+    // of one call stays bounded whatever the iteration count (replayed checks come from the cache).
+    let first_new = problem.done;
+    let report = planner.solve_until(&Budget::iterations(target), |c| {
+        c.iterations > first_new && new_checks.get() >= cfg::MOTION_CHECKS_PER_STEP
+    });
     let c = report.counters;
     stats.iterations_run = stats.iterations_run.saturating_add(u64::from(c.iterations));
     problem.done = c.iterations;
@@ -618,7 +625,7 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
     let written = if solved { planner.write_path(&mut store.path).is_ok() } else { false };
     drop(planner);
     stats.cache_hits = stats.cache_hits.saturating_add(motions.hits);
-    stats.cache_misses = stats.cache_misses.saturating_add(motions.misses);
+    stats.cache_misses = stats.cache_misses.saturating_add(new_checks.get());
     stats.cache_full = stats.cache_full.saturating_add(motions.full);
     if solved {
         if !written || store.path.len() < 2 {

@@ -300,14 +300,32 @@ mod planning {
 
     #[test]
     fn planning_stops_within_the_iteration_budget() {
-        // per-step iterations never exceeded, the goal's budget never exceeded, capped by MAX_PLAN_ITERATIONS
+        // every call: at least one new iteration, at most the allowance, at most MOTION_CHECKS_PER_STEP new motion
+        // checks; the goal's budget is never exceeded and is capped by MAX_PLAN_ITERATIONS
         let gap = |x: f32, _: f32| (!(1.2..=2.4).contains(&x)).then_some(Z0);
-        let (nav, p, _, its) = plan_on(&gap, 3.5, 4, 13, 5);
-        let PlanProgress::Finished { iterations, .. } = p else { unreachable!() };
-        assert_eq!(iterations, 13);
-        assert_eq!(its, vec![5, 10, 13]);
-        assert_eq!(nav.plan_stats().steps, 3);
-        let mut n = nav;
+        let mut n = nav();
+        n.configure(&configure(4)).unwrap();
+        map_world(&mut n, -1.0, 5.0, 0.0, &gap);
+        assert_eq!(n.goal(&goal(3.5, 0.0, 13), Instant::from_micros(0)), PlanState::Accepted);
+        let mut plan = PlanBuffer::new();
+        let (mut last_its, mut last_checks) = (0, 0);
+        let mut final_its = None;
+        for k in 0..20u64 {
+            let p = n.plan_step(Instant::from_micros(k * 1000), 5, &mut plan);
+            let (its, done) = match p {
+                PlanProgress::Searching { iterations, .. } => (iterations, false),
+                PlanProgress::Finished { iterations, .. } => (iterations, true),
+            };
+            let checks = n.plan_stats().cache_misses;
+            assert!(its > last_its && its - last_its <= 5, "call {k}: {last_its} -> {its}");
+            assert!(checks - last_checks <= crate::config::nav::MOTION_CHECKS_PER_STEP, "call {k}: {checks}");
+            (last_its, last_checks) = (its, checks);
+            if done {
+                final_its = Some(its);
+                break;
+            }
+        }
+        assert_eq!(final_its, Some(13));
         let mut g = goal(3.5, 0.0, u32::MAX);
         g.goal_id = 2;
         assert_eq!(n.goal(&g, Instant::from_micros(0)), PlanState::Accepted);
@@ -324,10 +342,13 @@ mod planning {
         assert_eq!(n.goal(&g, Instant::from_micros(1_000)), PlanState::Accepted);
         let mut plan = PlanBuffer::new();
         let p = n.plan_step(Instant::from_micros(2_000), 4, &mut plan);
-        assert!(matches!(p, PlanProgress::Searching { iterations: 4, .. }), "{p:?}");
+        let PlanProgress::Searching { iterations: before, best_cost } = p else { panic!("{p:?}") };
+        assert!(before >= 1 && best_cost.is_some(), "{p:?}");
         let p = n.plan_step(Instant::from_micros(3_000), 4, &mut plan);
-        let PlanProgress::Finished { iterations, .. } = p else { panic!("{p:?}") };
-        assert_eq!(iterations, 4, "no iterations after the deadline");
+        let PlanProgress::Finished { state, iterations, .. } = p else { panic!("{p:?}") };
+        assert_eq!(iterations, before, "no iterations after the deadline");
+        assert_eq!(state, PlanState::ExactSolution, "the best solution so far is kept");
+        assert!(!plan.is_empty());
     }
 
     /// The same inputs give the same plan, and stepping in small pieces (replays) gives the plan of one
