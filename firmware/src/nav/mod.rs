@@ -88,6 +88,24 @@
 //!   [`TetherSpaceParams::DEFAULT`](crate::plan::tethered::TetherSpaceParams::DEFAULT) and ABIT*'s
 //!   [`AbitParams::ompl_defaults`](crate::plan::abit::AbitParams::ompl_defaults).
 //!
+//! ## What the onboard map must hold (limits found while testing)
+//! - The tether sweep of anchor prediction ([`crate::tether::predict_anchors`]) fails in unknown space, so the
+//!   **root anchor must lie in observed space** (e.g. mapped from the rover's own scans): a root above an unmapped
+//!   crater rim makes every motion invalid (`NoSolutionWithinBudget`). The `protocol` scenario's root is such a case.
+//! - The surface search of a sample starts at the top of the planning bounds and fails in unknown space, so the
+//!   **space above the terrain up to the bounds' top must be observed** (rays crossing it, e.g. from a high or
+//!   overlapping sensor); the ground under the rover's own pose must be observed for the start to settle.
+//! - The executive integrates a whole scan in one step: on the emulated board an 8000-point scan at the flight
+//!   map's 5 cm voxels outlasts the 2 s watchdog (a 2000-point scan does not).
+//!
+//! ## Verified
+//! Unit tests (`nav::tests`): plans on mapped flat and 12-degree worlds whose motions, dead-reckoned, end in the goal
+//! region; a goal behind an unobserved gap ends approximate or unsolved; every refusal; per-step and goal budgets;
+//! the time budget; the same plan for the same inputs whatever the step size (replays), with no motion check or
+//! sample computed twice. `tests/tests/nav_planning.rs`: the same end to end over the link, and on the emulated
+//! board (QEMU mps2-an500) with identical output; there the planning storage is 2,013,976 bytes of SRAM `.bss`
+//! (`.bss` 2.15 MB of 4 MiB) and the stack high-water mark 102.5 KiB of 256 KiB.
+//!
 //! Work per scan is bounded by `points * max_ray_voxels` voxel updates plus `esdf_max_sweeps` ESDF sweeps; an
 //! ESDF that runs out of sweeps is counted and continues with the next scan. Work per `plan_step` is bounded by
 //! the replayed iterations (at most `MAX_PLAN_ITERATIONS`), each bounded by the planner's own budgets.
