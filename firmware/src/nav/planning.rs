@@ -529,7 +529,7 @@ pub fn segment_motions(a: &RoverState, b: &RoverState, params: &TetherSpaceParam
 }
 
 /// The protocol waypoint of a path state (anchors: the root and the most recent ones that fit).
-fn waypoint(s: &RoverState, h: &AnchorHistory, margin: f32, truncated: &mut u32) -> Waypoint {
+pub(crate) fn waypoint(s: &RoverState, h: &AnchorHistory, margin: f32, truncated: &mut u32) -> Waypoint {
     let t = s.settled.pose.translation.vector;
     let q = s.settled.pose.rotation.quaternion();
     let mut anchors = heapless::Vec::new();
@@ -538,7 +538,8 @@ fn waypoint(s: &RoverState, h: &AnchorHistory, margin: f32, truncated: &mut u32)
     if skip > 0 {
         *truncated = truncated.saturating_add(1);
     }
-    let keep = all.first().into_iter().chain(all.iter().skip(skip.saturating_add(usize::from(skip > 0))));
+    // the root, then the most recent anchors that fit (all of them when nothing is cut)
+    let keep = all.first().into_iter().chain(all.iter().skip(skip.saturating_add(1)));
     for a in keep.take(MAX_ANCHORS_PER_WAYPOINT) {
         let _ = anchors.push(Point3 { x: a.point.x, y: a.point.y, z: a.point.z });
     }

@@ -376,3 +376,74 @@ mod planning {
         assert!(sa.steps > sc.steps);
     }
 }
+
+/// Waypoint anchors: the whole history when it fits, else the root and the most recent ones (regression: the root
+/// was listed twice and the last anchor dropped).
+#[test]
+fn waypoint_anchors_keep_root_and_most_recent() {
+    use crate::config::protocol::MAX_ANCHORS_PER_WAYPOINT;
+    use crate::plan::tethered::RoverState;
+    use crate::tether::{Anchor, AnchorHistory};
+    let st = RoverState::off_map_goal(Vec3::new(1.0, 2.0, 3.0));
+    for n in [1usize, 3, MAX_ANCHORS_PER_WAYPOINT, MAX_ANCHORS_PER_WAYPOINT + 5] {
+        let mut h = AnchorHistory::new(Anchor::root(Vec3::new(0.0, 0.0, 0.0)));
+        for k in 1..n {
+            h.push(Anchor::root(Vec3::new(k as f32, 0.0, 0.0))).unwrap();
+        }
+        let mut truncated = 0;
+        let w = super::planning::waypoint(&st, &h, 0.5, &mut truncated);
+        let xs: std::vec::Vec<f32> = w.anchors.iter().map(|a| a.x).collect();
+        let expect: std::vec::Vec<f32> = if n <= MAX_ANCHORS_PER_WAYPOINT {
+            (0..n).map(|k| k as f32).collect()
+        } else {
+            core::iter::once(0.0).chain((n - MAX_ANCHORS_PER_WAYPOINT + 1..n).map(|k| k as f32)).collect()
+        };
+        assert_eq!(xs, expect, "n = {n}");
+        assert_eq!(truncated, u32::from(n > MAX_ANCHORS_PER_WAYPOINT));
+        assert_eq!((w.pose.position.x, w.stability_margin), (1.0, 0.5));
+    }
+}
+
+/// The motion primitives of a segment, executed from `a` on level ground (turns add yaw, drives move along the
+/// heading), end at `b`'s ground point with `b`'s yaw: for segments in every direction and both drive senses.
+#[test]
+fn segment_motions_end_at_the_next_state() {
+    use crate::map::{DistanceField, DistanceQuery};
+    use crate::plan::tethered::{PlanBounds, TetherSpace, TetherSpaceParams};
+    struct Level;
+    impl DistanceField for Level {
+        fn query(&self, p: &Vec3) -> DistanceQuery {
+            DistanceQuery::Known { distance: p.z, gradient: Vec3::z() }
+        }
+    }
+    let bounds = PlanBounds { min: [-10.0, -10.0, -1.0], max: [10.0, 10.0, 2.0] };
+    let space = TetherSpace::new(&Level, bounds, crate::config::rover::RoverParams::AXEL, TetherSpaceParams::DEFAULT)
+        .unwrap();
+    let mut cases = 0;
+    for (ax, ay, at) in [(0.0f32, 0.0f32, 0.0f32), (1.0, -2.0, 2.5), (-3.0, 1.0, -1.2)] {
+        for k in 0..8 {
+            let ang = k as f32 * core::f32::consts::FRAC_PI_4 + 0.1;
+            let (bx, by) = (ax + 2.0 * libm::cosf(ang), ay + 2.0 * libm::sinf(ang));
+            for bt in [0.0f32, 1.0, -2.8] {
+                let a = space.settle_state(ax, ay, at).unwrap();
+                let b = space.settle_state(bx, by, bt).unwrap();
+                let (mut x, mut y, mut yaw) = (a.ground.x, a.ground.y, a.theta);
+                for m in super::segment_motions(&a, &b, space.params()).into_iter().flatten() {
+                    match m {
+                        Motion::Turn { yaw_rad } => yaw += yaw_rad,
+                        Motion::Straight { distance_m } => {
+                            x += distance_m * libm::cosf(yaw);
+                            y += distance_m * libm::sinf(yaw);
+                        }
+                        Motion::Stop => panic!("no stop in a segment"),
+                    }
+                }
+                let dyaw = libm::remainderf(yaw - b.theta, core::f32::consts::TAU);
+                assert!((x - b.ground.x).abs() < 1e-3 && (y - b.ground.y).abs() < 1e-3, "{a:?} -> {b:?}: ({x}, {y})");
+                assert!(dyaw.abs() < 1e-3, "yaw {yaw} vs {}", b.theta);
+                cases += 1;
+            }
+        }
+    }
+    assert_eq!(cases, 72);
+}
