@@ -26,7 +26,8 @@
 //!   (it samples no goal states) and is ignored.
 //!
 //! Refusals are `InvalidInput` with a [`GoalRefusal`] reason, logged and counted ([`NavPlanStats::refusals`]): no
-//! `Configure`, no scan yet, an empty map, a start or an on-map goal that does not settle. Another planner choice
+//! `Configure`, no scan yet, an empty map, a map without an observed surface block, a start or an on-map goal that
+//! does not settle. Another planner choice
 //! is answered `PlannerUnavailable`.
 //!
 //! [`Autonomy::plan_step`] runs at most `iterations` new ABIT* iterations, and stops earlier (after at least one)

@@ -102,6 +102,8 @@ pub enum GoalRefusal {
     NoPose,
     /// The onboard map holds no blocks.
     MapEmpty,
+    /// No block of the map is known to contain the surface (e.g. scattered returns): no planning bounds.
+    NoSurface,
     /// The rover does not settle on the map at its pose (unobserved ground, collision, no ground).
     StartNotSettled,
     /// The goal lies inside the mapped area but the rover does not settle there.
@@ -112,13 +114,14 @@ pub enum GoalRefusal {
 
 impl GoalRefusal {
     /// Number of reasons.
-    pub const COUNT: usize = 6;
+    pub const COUNT: usize = 7;
     /// A sentence a person can act on.
     pub fn reason(self) -> &'static str {
         match self {
             Self::NotConfigured => "no Configure received: root anchor and rover unknown",
             Self::NoPose => "no scan received yet: the rover's pose is unknown",
             Self::MapEmpty => "the onboard map is empty: send scans first",
+            Self::NoSurface => "no observed surface in the map to plan on: scan the terrain around the rover densely",
             Self::StartNotSettled => "the rover does not settle on the map at its pose (ground under it unobserved?)",
             Self::GoalNotSettled => "the goal is inside the mapped area but the rover does not settle there",
             Self::PlannerRejected => "the planner rejected the problem (parameters or arena)",
@@ -259,7 +262,7 @@ pub(crate) fn set_up(
     }
     let p = pose.position;
     let start_xy = Vec3::new(p.x, p.y, p.z);
-    let bounds = map_bounds(map, &start_xy).ok_or(GoalRefusal::MapEmpty)?;
+    let bounds = map_bounds(map, &start_xy).ok_or(GoalRefusal::NoSurface)?;
     let mut rover = setup.rover;
     // As the campaign does on a map: one voxel of extra body clearance for the map's discretisation.
     rover.body_clearance_m += map.config().voxel_size;

@@ -271,6 +271,10 @@ mod planning {
         // a pose but an empty map (a scan without returns)
         scan_down(&mut n, 1, 0.0, 0.5, 0.5, &|_, _| None);
         assert_eq!(n.goal(&goal(3.0, 0.0, 10), now), PlanState::InvalidInput);
+        // a single return: blocks, but no block known to hold the surface
+        scan_down(&mut n, 2, 0.0, 0.5, 0.5, &|x, y| (x.abs() < 1e-3 && y.abs() < 1e-3).then_some(Z0));
+        assert!(n.map_status().blocks_used > 0);
+        assert_eq!(n.goal(&goal(3.0, 0.0, 10), now), PlanState::InvalidInput);
         // the last scan came from above the gap: the rover's ground is unobserved
         let gap = |x: f32, _: f32| (!(1.2..=2.4).contains(&x)).then_some(Z0);
         map_world(&mut n, -1.0, 5.0, 1.8, &gap);
@@ -287,6 +291,7 @@ mod planning {
             GoalRefusal::NotConfigured,
             GoalRefusal::NoPose,
             GoalRefusal::MapEmpty,
+            GoalRefusal::NoSurface,
             GoalRefusal::StartNotSettled,
             GoalRefusal::GoalNotSettled,
         ] {
