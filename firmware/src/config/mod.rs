@@ -8,6 +8,7 @@ pub mod abit;
 pub mod exec;
 pub mod homotopy;
 pub mod map;
+pub mod nav;
 pub mod protocol;
 pub mod rover;
 pub mod stability;

@@ -11,7 +11,7 @@ use std::collections::VecDeque;
 use firmware::config::map::{MapConfig, FLIGHT_BLOCKS, FLIGHT_INDEX};
 use firmware::exec::{Autonomy, ExecStorage, Executive, StepReport};
 use firmware::map::Block;
-use firmware::nav::Navigator;
+use firmware::nav::{NavPlanStorage, Navigator};
 use hal::{ByteLink, Instant, MonotonicClock, Watchdog};
 
 use super::{FlightLink, LinkError};
@@ -81,12 +81,14 @@ impl Watchdog for SimWatchdog {
 pub type InProcExecutive<A> = Executive<QueueByteLink, SimClock, SimWatchdog, A, Box<ExecStorage>>;
 
 /// The flight software's autonomy as it flies: the [`Navigator`] over a map pool of the flight computer's size
-/// ([`FLIGHT_BLOCKS`] blocks, ~14 MiB, the board's PSRAM), here on the heap.
-pub type FlightAutonomy = Navigator<Vec<Block>, Vec<u32>>;
+/// ([`FLIGHT_BLOCKS`] blocks, ~14 MiB, the board's PSRAM) and the on-board planning storage ([`NavPlanStorage`],
+/// ~1.5 MiB, the board's SRAM), here on the heap.
+pub type FlightAutonomy = Navigator<Vec<Block>, Vec<u32>, Box<NavPlanStorage>>;
 
 /// A fresh [`FlightAutonomy`] with the flight defaults ([`MapConfig::DEFAULT`]); the board builds the same.
 pub fn flight_autonomy() -> FlightAutonomy {
-    match Navigator::new(MapConfig::DEFAULT, vec![Block::EMPTY; FLIGHT_BLOCKS], vec![0u32; FLIGHT_INDEX]) {
+    let planning: Box<NavPlanStorage> = Box::default();
+    match Navigator::new(MapConfig::DEFAULT, vec![Block::EMPTY; FLIGHT_BLOCKS], vec![0u32; FLIGHT_INDEX], planning) {
         Ok(nav) => nav,
         // The defaults and the storage sizes are constants checked by the firmware's own tests.
         Err(e) => unreachable!("flight map defaults rejected: {e:?}"),

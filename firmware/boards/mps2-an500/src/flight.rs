@@ -29,7 +29,7 @@ use cortex_m_semihosting::{debug, heprintln, hprintln};
 use firmware::config::map::{MapConfig, FLIGHT_BLOCKS, FLIGHT_INDEX};
 use firmware::exec::{ExecStorage, Executive, NoAutonomy};
 use firmware::map::Block;
-use firmware::nav::Navigator;
+use firmware::nav::{NavPlanStorage, Navigator};
 use hal::{ByteLink, Instant, MonotonicClock};
 
 use crate::clock::SysTickClock;
@@ -47,8 +47,13 @@ static MAP_BLOCKS: Lent<[Block; FLIGHT_BLOCKS]> = Lent::new([Block::ZEROED; FLIG
 #[link_section = ".psram"]
 static MAP_INDEX: Lent<[u32; FLIGHT_INDEX]> = Lent::new([0; FLIGHT_INDEX]);
 
+/// The navigator's planning storage (the ABIT* arena, the motion cache, the best path; `NavPlanStorage::bytes()`,
+/// ~1.5 MiB) in SRAM `.bss`: the PSRAM is nearly full with the map's pool and the bench's arenas. Its empty state is
+/// all zero bytes (empty `heapless` vectors), which the runtime's `.bss` zeroing provides.
+static NAV_PLAN: Lent<NavPlanStorage> = Lent::new(NavPlanStorage::new());
+
 /// The flight software's autonomy, the same as the host's in-process `FlightAutonomy` (so outputs are equal).
-type BoardAutonomy = Navigator<&'static mut [Block], &'static mut [u32]>;
+type BoardAutonomy = Navigator<&'static mut [Block], &'static mut [u32], &'static mut NavPlanStorage>;
 
 /// Bytes of an `R` command after its tag.
 const RUN_LEN: usize = 21;
@@ -191,8 +196,8 @@ fn quit(exec: &BoardExecutive) -> ! {
     hprintln!(
         "board: stack_high_water_bytes={} stack_size_bytes={} exec_storage_bytes={} scan_points_peak={} \
          scan_points_capacity={} tx_queue_peak={} tx_queue_capacity={} rx_staging_peak={} frame_len_peak={} \
-         log_queue_peak={} map_blocks_peak={} map_blocks_capacity={} map_storage_bytes={} steps={} frames_accepted={} \
-         frames_sent={}",
+         log_queue_peak={} map_blocks_peak={} map_blocks_capacity={} map_storage_bytes={} nav_plan_storage_bytes={} \
+         steps={} frames_accepted={} frames_sent={}",
         stack.high_water_bytes,
         stack.size_bytes,
         core::mem::size_of::<ExecStorage>(),
@@ -206,6 +211,7 @@ fn quit(exec: &BoardExecutive) -> ! {
         t.map.blocks_used, // blocks are never freed: in use = peak
         t.map.blocks_capacity,
         core::mem::size_of::<[Block; FLIGHT_BLOCKS]>() + core::mem::size_of::<[u32; FLIGHT_INDEX]>(),
+        NavPlanStorage::bytes(),
         t.steps,
         t.frames_accepted,
         t.frames_sent
@@ -254,7 +260,11 @@ pub fn run(systick: SysTickClock, lockstep: bool) -> ! {
         heprintln!("board: map storage lent twice");
         crate::fault::fail()
     };
-    let autonomy = match Navigator::new(MapConfig::DEFAULT, &mut blocks[..], &mut index[..]) {
+    let Some(planning) = NAV_PLAN.take() else {
+        heprintln!("board: planning storage lent twice");
+        crate::fault::fail()
+    };
+    let autonomy = match Navigator::new(MapConfig::DEFAULT, &mut blocks[..], &mut index[..], planning) {
         Ok(nav) => nav,
         Err(e) => {
             heprintln!("board: onboard map refused its storage: {:?}", e);

@@ -1,0 +1,52 @@
+//! Capacities and budgets of on-board goal planning in [`crate::nav`]: the tether-aware ABIT* of Paton et al.
+//! section V ([`crate::plan::abit`] over [`crate::plan::tethered`]) run on the onboard map.
+//!
+//! The flight computer (mps2-an500) holds these arenas in SRAM `.bss` (the map's block pool fills the PSRAM); the
+//! sizes below keep the navigator's planning storage at about 2 MiB (`NavPlanStorage`, see `crate::nav`).
+
+/// Nodes of the on-board ABIT* arena (start, goals, samples and tree vertices). Default 512: five batches of
+/// [`SAMPLES_PER_BATCH`] with room for goals and history twins. A tethered node carries its anchor history
+/// (~0.8 KiB), so the 4096 of `config::abit` would need 4 MiB.
+pub const NODE_CAPACITY: usize = 512;
+/// Queued edges of the on-board ABIT* arena. Default 4096 (k-nearest with k ~ 15-20 at a few hundred states).
+pub const EDGE_QUEUE_CAPACITY: usize = 4096;
+/// ABIT*'s own edge memo (OMPL's white/black lists) on board. Default 256 entries (each carries an anchor
+/// history); a full memo only costs repeated edge checks.
+pub const EDGE_MEMO_CAPACITY: usize = 256;
+/// Entries of the navigator's motion-check cache, which survives between `plan_step` calls (see `crate::nav`:
+/// the planner is rebuilt and replayed every call, and the cache answers the replayed motion checks). Default
+/// 512: more than the edges evaluated in a 750-iteration plan on the test-3 ledge; a full cache only costs
+/// repeated checks, never a different answer.
+pub const MOTION_CACHE_CAPACITY: usize = 512;
+/// Entries of the navigator's sample tape, which records the sampler calls of a replay so the next replay gets
+/// them without settling again (see `crate::nav`). Default 4096 (~0.6 MiB): a 750-iteration plan on the test worlds
+/// makes a few thousand sampler calls (informed sampling rejects most draws); a full tape only costs sampling.
+pub const SAMPLE_TAPE_CAPACITY: usize = 4096;
+/// New motion checks after which a `plan_step` call stops (after at least one new iteration), whatever its
+/// iteration allowance. Default 1: a motion check is tens of settles, anchor predictions and stability LPs (~8 M
+/// instructions each on the emulated Cortex-M7), so one per executive step keeps a step well inside the board's
+/// 2 s watchdog; replayed checks come from the motion cache and do not count.
+pub const MOTION_CHECKS_PER_STEP: u32 = 1;
+/// Samples per ABIT* batch on board when `Configure.planner.batch_size` asks for more. Default 100 (OMPL's).
+pub const SAMPLES_PER_BATCH: u32 = 100;
+/// Largest iteration budget of one goal (the goal request's `max_iterations` is capped to it). Default 750 (the
+/// budget of Paton et al.'s Table I).
+pub const MAX_PLAN_ITERATIONS: u32 = 750;
+/// States of the kept best path (start to goal). Default 64: a path of 64 states of up to a few metres each.
+pub const PATH_CAPACITY: usize = 64;
+/// Motion primitives of a plan: a turn, a drive and a turn per path segment. Default `3 * (PATH_CAPACITY - 1)`.
+pub const MOTION_CAPACITY: usize = 3 * (PATH_CAPACITY - 1);
+/// Turns smaller than this are not commanded, radians. Default 1e-3 rad (0.06 degrees).
+pub const MIN_TURN_RAD: f32 = 1e-3;
+/// Drives shorter than this are not commanded, metres. Default 1e-3 m.
+pub const MIN_DRIVE_M: f32 = 1e-3;
+/// Margin added around the observed map's extent in `z` for the planning bounds, metres. Default 0.5 m, so the
+/// surface trace starts above the highest observed block.
+pub const BOUNDS_Z_MARGIN_M: f32 = 0.5;
+/// Report the tree vertex closest to the goal as an approximate solution when no exact one exists (OMPL's
+/// approximate solutions). Default true: a goal behind an unpassable ledge yields the best reachable plan,
+/// reported as `ApproximateSolution`, never as exact.
+pub const TRACK_APPROXIMATE: bool = true;
+/// Mass fraction of the rover's `Configure.rover.mass_kg` carried by the boom (the rest is the body at the axle).
+/// Default 0.2 (`config::rover::RoverParams::AXEL`: 10 of 50 kg).
+pub const BOOM_MASS_FRACTION: f32 = 0.2;

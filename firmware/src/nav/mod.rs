@@ -1,0 +1,329 @@
+//! The navigator: the flight executive's [`Autonomy`] implementation.
+//!
+//! Paton et al. (section IV) plan on a map the rover builds itself from its own range sensor. The navigator is
+//! where that happens on board: every complete scan the executive reassembles from the link is integrated into
+//! the onboard TSDF ([`Map::integrate_points`]) and the ESDF is brought up to date ([`Map::update_esdf`]) within the
+//! map's own budgets; the map's state goes out in every `Telemetry` frame ([`MapStatus`]).
+//!
+//! ## Goals: tethered ABIT* on the onboard map (Paton et al. V)
+//! A `GoalRequest` for [`PlannerChoice::Abit`] sets up the problem of [`crate::plan::tethered`] on the onboard map
+//! ([`Autonomy::goal`]):
+//! - **start**: the rover settled ([`crate::rover::settle`]) on the map under the last scan's sensor position,
+//!   with the sensor's heading as yaw (the flight software knows no other pose; the sensor mount's horizontal
+//!   offset from the axle is not known on board and is ignored);
+//! - **anchor history**: the root anchor of the last `Configure` (`tether.root_anchor`) alone, i.e. a straight
+//!   tether from the root (the encoder readings carry no anchor positions);
+//! - **rover**: the Axel model ([`crate::config::rover::RoverParams::AXEL`]) with `Configure.rover`'s wheel radius,
+//!   track (`axle_length_m`), boom length, mass (split body / boom by `BOOM_MASS_FRACTION`), friction and the
+//!   tether's tension limit; one voxel of extra body clearance, as the campaign plans on a map;
+//! - **bounds** ([`PlanBounds`]): the extent of the map's blocks (grown to contain the start, plus
+//!   `BOUNDS_Z_MARGIN_M` in z). A goal outside it is an **off-map goal** (section VI-B): it connects from any state
+//!   within `off_map_edge_m` of the bounds, and the plan ends at that state;
+//! - **goal region**: within `tolerance_m` (axle distance) of the rover settled under the goal position;
+//! - **budget**: `min(goal.max_iterations, MAX_PLAN_ITERATIONS)` iterations, and `time_budget_ms` of flight time
+//!   when non-zero; the sampler is SplitMix64 (as [`SplitMix64`]) seeded from `Configure.planner.rng_seed` and the goal id;
+//!   `batch_size` is the samples per batch (at most `SAMPLES_PER_BATCH`); `goal_bias` has no meaning for ABIT*
+//!   (it samples no goal states) and is ignored.
+//!
+//! Refusals are `InvalidInput` with a [`GoalRefusal`] reason, logged and counted ([`NavPlanStats::refusals`]): no
+//! `Configure`, no scan yet, an empty map, a map without an observed surface block, a start or an on-map goal that
+//! does not settle. Another planner choice
+//! is answered `PlannerUnavailable`.
+//!
+//! [`Autonomy::plan_step`] runs at most `iterations` new ABIT* iterations, and stops earlier (after at least one)
+//! once `MOTION_CHECKS_PER_STEP` new motion checks were computed, so one executive step does a bounded amount of
+//! geometry (on the emulated board a motion check costs ~0.2-0.5 s against the 2 s watchdog). When the budget is spent (or the
+//! planner converges, fills its arena, or the time budget passes) it reports the final state: `ExactSolution`,
+//! `ApproximateSolution` (the tree vertex closest to the goal, `TRACK_APPROXIMATE`), `NoSolutionWithinBudget`, and
+//! fills the plan buffer with the path's settled states (their anchor histories, root and most recent anchors up
+//! to `MAX_ANCHORS_PER_WAYPOINT`, and their stability margins on the map); [`Autonomy::next_motion`] then hands out
+//! its motion primitives in order: per path segment an in-place turn to the drive heading, a straight drive (negative
+//! when Axel drives the segment backwards) and a turn to the next state's yaw ([`segment_motions`], exactly the
+//! motions [`crate::plan::tethered::MotionPlan`] interpolated and the validator checked).
+//!
+//! ## Why the planner is replayed every step (no heap, no `unsafe`)
+//! [`AbitStar`](crate::plan::abit::AbitStar) borrows its arena, the space (which borrows the map), the validators,
+//! the problem and the generator for its whole life, and keeps its search state (inflation, goals, best solution)
+//! in itself, not in the arena. The navigator cannot keep it between executive steps: that would be a
+//! self-referential struct (the map view borrows the navigator's own storage, which scans must also mutate), and
+//! `AbitStar` has no way to hand its borrows back for the next goal. So every `plan_step` rebuilds the map view,
+//! the space and the planner on the lent arena and **replays** the search from the same seed to `done + iterations`
+//! iterations. The replay is exact (the search is deterministic, the map is the same), so the result equals one
+//! uninterrupted `solve`, and the best solution so far is always the replayed planner's. What makes an iteration
+//! expensive is answered during a replay from two records in the lent storage:
+//! - the **motion cache** (`MOTION_CACHE_CAPACITY` entries): a motion check (tens of settles, anchor predictions
+//!   and stability LPs) keyed by the exact bits of both end states and a 64-bit FNV-1a fingerprint of the start's
+//!   anchor history;
+//! - the **sample tape** (`SAMPLE_TAPE_CAPACITY` entries): the sampler calls (surface trace and settle) in call
+//!   order, each with the generator state before and after it. The generator is SplitMix64 with its state in a
+//!   shared cell (`nav::planning::CellRng`), so a replayed call whose state matches the tape's entry jumps to
+//!   the recorded state and returns the recorded sample.
+//!
+//! Both are cleared whenever a scan changes the map or a goal arrives. Measured (`--release`, unit-test worlds,
+//! 96-iteration budget): with 8 iterations per step a plan ran 624 replayed iterations for 96 new ones, yet the same
+//! 160 stability problems and 276 + 11 settles (one goal settle per replay) as one uninterrupted run, in the same
+//! 0.34 s; on the 12-degree slope 3870 vs 3867 settles and 21 vs 21 stability problems. What a replay still repeats
+//! is queue and arena work (no geometry). A planner that could suspend into plain data and resume on lent borrows
+//! (`AbitStar::suspend` / `resume`, proposed to the owner of `plan::abit`) would remove that too; the navigator's
+//! interface would not change.
+//!
+//! Scans keep arriving while planning; each one changes the map, so the cache is cleared and the next replay plans
+//! on the new map (the start state settled at goal time is kept).
+//!
+//! ## Storage
+//! The block pool and the block index are owned by the caller and lent to the navigator for good (`Vec`s on the
+//! host, `&'static mut` slices in the board's PSRAM). So is the planning storage ([`NavPlanStorage`], ~2 MiB: the
+//! ABIT* arena, the motion cache, the sample tape, the best path and its motions; a `Box` on the host, a `static`
+//! in the board's SRAM).
+//! The navigator builds a short-lived [`Map`] view per call ([`Map::reattach`]), so it holds no borrow between
+//! calls.
+//!
+//! ## Parameters
+//! - the map: [`MapConfig`] (default [`MapConfig::DEFAULT`]: 5 cm voxels, 15 cm truncation, 32 ESDF sweeps);
+//! - [`NAV_POINT_BATCH`](crate::config::map::NAV_POINT_BATCH): points converted and integrated per batch
+//!   (default 256), the only stack buffer;
+//! - planning (`config::nav`): `NODE_CAPACITY` 512, `EDGE_QUEUE_CAPACITY` 4096, `EDGE_MEMO_CAPACITY` 256,
+//!   `MOTION_CACHE_CAPACITY` 512, `SAMPLE_TAPE_CAPACITY` 4096, `MOTION_CHECKS_PER_STEP` 1, `SAMPLES_PER_BATCH` 100, `MAX_PLAN_ITERATIONS` 750, `PATH_CAPACITY` 64,
+//!   `MOTION_CAPACITY` 189, `MIN_TURN_RAD` 1e-3, `MIN_DRIVE_M` 1e-3, `BOUNDS_Z_MARGIN_M` 0.5,
+//!   `TRACK_APPROXIMATE` true, `BOOM_MASS_FRACTION` 0.2; the space's parameters are
+//!   [`TetherSpaceParams::DEFAULT`](crate::plan::tethered::TetherSpaceParams::DEFAULT) and ABIT*'s
+//!   [`AbitParams::ompl_defaults`](crate::plan::abit::AbitParams::ompl_defaults).
+//!
+//! ## What the onboard map must hold (limits found while testing)
+//! - The tether sweep of anchor prediction ([`crate::tether::predict_anchors`]) fails in unknown space, so the
+//!   **root anchor must lie in observed space** (e.g. mapped from the rover's own scans): a root above an unmapped
+//!   crater rim makes every motion invalid (`NoSolutionWithinBudget`). The `protocol` scenario's root is such a case.
+//! - The surface search of a sample starts at the top of the planning bounds and fails in unknown space, so the
+//!   **space above the terrain up to the bounds' top must be observed** (rays crossing it, e.g. from a high or
+//!   overlapping sensor); the ground under the rover's own pose must be observed for the start to settle.
+//! - The executive integrates a whole scan in one step: on the emulated board an 8000-point scan at the flight
+//!   map's 5 cm voxels outlasts the 2 s watchdog (a 2000-point scan does not).
+//!
+//! ## Verified
+//! Unit tests (`nav::tests`): plans on mapped flat and 12-degree worlds whose motions, dead-reckoned, end in the goal
+//! region; a goal behind an unobserved gap ends approximate or unsolved; every refusal; per-step and goal budgets;
+//! the time budget; the same plan for the same inputs whatever the step size (replays), with no motion check or
+//! sample computed twice. `tests/tests/nav_planning.rs`: the same end to end over the link, and on the emulated
+//! board (QEMU mps2-an500) with identical output; there the planning storage is 2,013,976 bytes of SRAM `.bss`
+//! (`.bss` 2.15 MB of 4 MiB) and the stack high-water mark 102.5 KiB of 256 KiB.
+//!
+//! Work per scan is bounded by `points * max_ray_voxels` voxel updates plus `esdf_max_sweeps` ESDF sweeps; an
+//! ESDF that runs out of sweeps is counted and continues with the next scan. Work per `plan_step` is bounded by
+//! the replayed iterations (at most `MAX_PLAN_ITERATIONS`), each bounded by the planner's own budgets.
+
+mod planning;
+#[cfg(test)]
+mod tests;
+
+pub use planning::{segment_motions, CachedMotion, GoalRefusal, NavArena, NavPlanStats, NavPlanStorage};
+
+use core::borrow::BorrowMut;
+
+use hal::Instant;
+
+use crate::config::map::{MapConfig, NAV_POINT_BATCH};
+use crate::config::nav::MAX_PLAN_ITERATIONS;
+use crate::exec::{Autonomy, PlanBuffer, PlanProgress, Refused, Scan};
+use crate::geom::{Pose3, Rot3, Vec3};
+use crate::map::{Block, Map, MapError};
+use crate::plan::tethered::{PlanBounds, RoverState};
+use crate::protocol::{Configure, GoalRequest, MapStatus, Motion, PlanState, PlannerChoice, Pose};
+use crate::tether::AnchorHistory;
+#[cfg(doc)]
+use crate::workload::SplitMix64;
+
+use planning::{PlanSetup, Problem};
+
+/// The executive's autonomy: builds the onboard map from scans and plans goals on it (see the module docs).
+pub struct Navigator<B, I, P> {
+    cfg: MapConfig,
+    blocks: B,
+    index: I,
+    used: usize,
+    status: MapStatus,
+    storage: P,
+    setup: Option<PlanSetup>,
+    pose: Option<Pose>,
+    problem: Option<Problem>,
+    next_motion: usize,
+    stats: NavPlanStats,
+}
+
+impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> Navigator<B, I, P> {
+    /// A navigator over lent map and planning storage, which are cleared. Errors as [`Map::from_slices`].
+    pub fn new(cfg: MapConfig, mut blocks: B, mut index: I, mut storage: P) -> Result<Self, MapError> {
+        let capacity = Map::from_slices(cfg, blocks.borrow_mut(), index.borrow_mut())?.blocks_capacity();
+        let status = MapStatus {
+            blocks_capacity: u32::try_from(capacity).unwrap_or(u32::MAX),
+            ..MapStatus::default()
+        };
+        planning::clear_plan(&mut storage);
+        Ok(Self {
+            cfg,
+            blocks,
+            index,
+            used: 0,
+            status,
+            storage,
+            setup: None,
+            pose: None,
+            problem: None,
+            next_motion: 0,
+            stats: NavPlanStats::default(),
+        })
+    }
+
+    /// The onboard map (a view over the navigator's storage), for planners, tests and pictures.
+    pub fn map(&mut self) -> Option<Map<'_>> {
+        Map::reattach(self.cfg, self.blocks.borrow_mut(), self.index.borrow_mut(), self.used).ok()
+    }
+
+    /// Counters of on-board planning.
+    pub fn plan_stats(&self) -> NavPlanStats {
+        self.stats
+    }
+
+    /// The planning bounds of the goal being (or last) planned.
+    pub fn plan_bounds(&self) -> Option<PlanBounds> {
+        self.problem.map(|p| p.bounds)
+    }
+
+    /// The start state of the goal being (or last) planned.
+    pub fn plan_start(&self) -> Option<RoverState> {
+        self.problem.map(|p| p.start)
+    }
+
+    /// The last plan's states with their anchor histories (start first; empty without a plan).
+    pub fn plan_path(&mut self) -> &[(RoverState, AnchorHistory)] {
+        planning::path(&mut self.storage)
+    }
+
+    fn refuse(&mut self, why: GoalRefusal) -> PlanState {
+        if let Some(n) = self.stats.refusals.get_mut(why as usize) {
+            *n = n.saturating_add(1);
+        }
+        log::warn!("nav: goal refused: {}", why.reason());
+        PlanState::InvalidInput
+    }
+}
+
+/// The protocol's pose as a rigid transform (the protocol validated it: finite, unit quaternion within tolerance).
+fn pose3(p: &Pose) -> Pose3 {
+    let q = nalgebra::Quaternion::new(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
+    Pose3::from_parts(
+        nalgebra::Translation3::new(p.position.x, p.position.y, p.position.z),
+        Rot3::from_quaternion(q),
+    )
+}
+
+fn add(counter: &mut u32, n: u32) {
+    *counter = counter.saturating_add(n);
+}
+
+impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> Autonomy for Navigator<B, I, P> {
+    fn configure(&mut self, cfg: &Configure) -> Result<(), Refused> {
+        self.setup = Some(PlanSetup::from_configure(cfg));
+        Ok(())
+    }
+
+    fn scan(&mut self, scan: &Scan<'_>, _now: Instant) {
+        self.pose = Some(scan.sensor_pose);
+        // The map changes: cached motion checks no longer hold.
+        planning::clear_cache(&mut self.storage);
+        let sensor_pose = pose3(&scan.sensor_pose);
+        let mut status = self.status;
+        let Some(mut map) = self.map() else {
+            // Unreachable with storage that `new` accepted; counted rather than ignored.
+            add(&mut status.pool_errors, 1);
+            self.status = status;
+            return;
+        };
+        let mut batch = [Vec3::zeros(); NAV_POINT_BATCH];
+        let mut pool_error = false;
+        for chunk in scan.points.chunks(NAV_POINT_BATCH) {
+            for (dst, p) in batch.iter_mut().zip(chunk) {
+                *dst = Vec3::new(p.x, p.y, p.z);
+            }
+            let out = map.integrate_points(&sensor_pose, batch.get(..chunk.len()).unwrap_or(&[]));
+            add(&mut status.points_integrated, out.points_integrated);
+            add(&mut status.points_rejected, out.points_rejected);
+            add(&mut status.voxels_dropped, out.voxels_dropped);
+            pool_error |= out.pool_error.is_some();
+        }
+        if pool_error {
+            add(&mut status.pool_errors, 1);
+            log::warn!("map: pool full or index probe exhausted during scan {}", scan.scan_id);
+        }
+        if !map.update_esdf().converged {
+            add(&mut status.esdf_budget_exhausted, 1);
+        }
+        let used = map.blocks_used();
+        status.blocks_used = u32::try_from(used).unwrap_or(u32::MAX);
+        add(&mut status.scans_integrated, 1);
+        self.used = used;
+        self.status = status;
+    }
+
+    fn goal(&mut self, goal: &GoalRequest, now: Instant) -> PlanState {
+        self.problem = None;
+        self.next_motion = 0;
+        planning::clear_plan(&mut self.storage);
+        if goal.planner != PlannerChoice::Abit {
+            return PlanState::PlannerUnavailable;
+        }
+        let Some(setup) = self.setup else { return self.refuse(GoalRefusal::NotConfigured) };
+        let Some(pose) = self.pose else { return self.refuse(GoalRefusal::NoPose) };
+        let budget = goal.max_iterations.min(MAX_PLAN_ITERATIONS);
+        let (cfg, used) = (self.cfg, self.used);
+        let set_up = match Map::reattach(cfg, self.blocks.borrow_mut(), self.index.borrow_mut(), used) {
+            Ok(map) => planning::set_up(&map, &setup, &pose, goal, budget, now),
+            Err(_) => Err(GoalRefusal::MapEmpty),
+        };
+        match set_up {
+            Ok(problem) => {
+                self.problem = Some(problem);
+                self.stats.goals_accepted = self.stats.goals_accepted.saturating_add(1);
+                PlanState::Accepted
+            }
+            Err(why) => self.refuse(why),
+        }
+    }
+
+    fn plan_step(&mut self, now: Instant, iterations: u32, plan: &mut PlanBuffer) -> PlanProgress {
+        let Some(mut problem) = self.problem else {
+            return PlanProgress::Finished { state: PlanState::NoGoal, iterations: 0, best_cost: None };
+        };
+        if let Some(state) = problem.finished {
+            return PlanProgress::Finished { state, iterations: problem.done, best_cost: problem.best_cost };
+        }
+        let (cfg, used) = (self.cfg, self.used);
+        let progress = match Map::reattach(cfg, self.blocks.borrow_mut(), self.index.borrow_mut(), used) {
+            Ok(map) => planning::step(&map, &mut problem, &mut self.storage, &mut self.stats, now, iterations, plan),
+            Err(_) => {
+                problem.finished = Some(PlanState::InvalidInput);
+                PlanProgress::Finished { state: PlanState::InvalidInput, iterations: problem.done, best_cost: None }
+            }
+        };
+        self.problem = Some(problem);
+        progress
+    }
+
+    fn next_motion(&mut self, _now: Instant) -> Option<Motion> {
+        let m = planning::motion_at(&mut self.storage, self.next_motion)?;
+        self.next_motion = self.next_motion.saturating_add(1);
+        Some(m)
+    }
+
+    fn abort(&mut self) {
+        if let Some(p) = self.problem.as_mut() {
+            if p.finished.is_none() {
+                p.finished = Some(PlanState::Aborted);
+            }
+        }
+        self.next_motion = usize::MAX;
+    }
+
+    fn map_status(&self) -> MapStatus {
+        self.status
+    }
+}

@@ -1,0 +1,727 @@
+//! Goal planning on board: the tethered ABIT* problem on the onboard map, replayed per executive step.
+//! See the module docs of [`crate::nav`] for the design.
+
+use core::borrow::BorrowMut;
+use core::cell::Cell;
+use core::convert::Infallible;
+
+use hal::Instant;
+
+use crate::config::nav as cfg;
+use crate::config::protocol::MAX_ANCHORS_PER_WAYPOINT;
+use crate::config::rover::RoverParams;
+use crate::config::tether::ANCHOR_HISTORY_CAPACITY;
+use crate::exec::{PlanBuffer, PlanProgress};
+use crate::geom::{norm3, Real, Vec3};
+use crate::map::{DistanceField, DistanceQuery, Map};
+use crate::plan::abit::{AbitArena, AbitParams, AbitStar};
+use crate::plan::space::{
+    Budget, Cost, GoalState, InformedSample, MotionCheck, MotionValidator, OptimizationObjective, Planner,
+    PlannerStatus, ProblemDefinition, StateSpace, StateValidityChecker, Termination,
+};
+use crate::plan::tethered::{
+    MotionPlan, MotionStats, PlanBounds, RoverState, TetherMotionValidator, TetherObjective, TetherSpace, TetherSpaceParams,
+    TetherValidity,
+};
+use crate::protocol::{Configure, Motion, PlanState, Point3, Pose, Quat, Waypoint};
+use crate::tether::{Anchor, AnchorHistory};
+use rand_core::{Rng, TryRng};
+
+/// The on-board ABIT* arena (capacities of `config::nav`).
+pub type NavArena = AbitArena<
+    RoverState,
+    AnchorHistory,
+    { cfg::NODE_CAPACITY },
+    { cfg::EDGE_QUEUE_CAPACITY },
+    { cfg::EDGE_MEMO_CAPACITY },
+>;
+
+/// One remembered motion check: the exact end states, a fingerprint of the start's anchor history, the answer.
+#[derive(Debug, Clone)]
+pub struct CachedMotion {
+    key: u64,
+    from: [u32; 5],
+    to: [u32; 5],
+    history_len: u8,
+    result: Option<AnchorHistory>,
+}
+
+/// One recorded sampler call of a replay (see [`TapedSpace`]).
+#[derive(Debug, Clone)]
+pub struct TapedSample {
+    /// Generator state before the call.
+    before: u64,
+    /// Generator state after the call.
+    after: u64,
+    /// 0 for a uniform sample; a fingerprint of (start, goal, max_cost) for an informed one.
+    request: u64,
+    result: InformedSample<RoverState>,
+}
+
+/// The navigator's planning storage, lent like the map's (a `Box` on the host, a `static` on the board). Its empty
+/// state is all zero bytes (empty `heapless` vectors), so the board keeps it in `.bss`.
+pub struct NavPlanStorage {
+    /// The ABIT* arena (nodes, edge queue, ABIT*'s own edge memo).
+    pub arena: NavArena,
+    cache: heapless::Vec<CachedMotion, { cfg::MOTION_CACHE_CAPACITY }>,
+    tape: heapless::Vec<TapedSample, { cfg::SAMPLE_TAPE_CAPACITY }>,
+    path: heapless::Vec<(RoverState, AnchorHistory), { cfg::PATH_CAPACITY }>,
+    motions: heapless::Vec<Motion, { cfg::MOTION_CAPACITY }>,
+}
+
+impl NavPlanStorage {
+    /// Empty storage (const, so it can be a `static`).
+    pub const fn new() -> Self {
+        Self {
+            arena: AbitArena::new(),
+            cache: heapless::Vec::new(),
+            tape: heapless::Vec::new(),
+            path: heapless::Vec::new(),
+            motions: heapless::Vec::new(),
+        }
+    }
+    /// Bytes of the storage (for the board's memory report).
+    pub const fn bytes() -> usize {
+        core::mem::size_of::<Self>()
+    }
+}
+
+impl Default for NavPlanStorage {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Why a goal request was refused (`InvalidInput`), or why planning stopped without a plan. Counted per reason in
+/// [`NavPlanStats::refusals`] (indexed by the discriminant) and logged.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GoalRefusal {
+    /// No `Configure` reached the navigator (no root anchor, no rover model).
+    NotConfigured,
+    /// No scan has arrived yet, so the rover's pose is unknown.
+    NoPose,
+    /// The onboard map holds no blocks.
+    MapEmpty,
+    /// No block of the map is known to contain the surface (e.g. scattered returns): no planning bounds.
+    NoSurface,
+    /// The rover does not settle on the map at its pose (unobserved ground, collision, no ground).
+    StartNotSettled,
+    /// The goal lies inside the mapped area but the rover does not settle there.
+    GoalNotSettled,
+    /// The planner rejected the problem (a parameter or the arena); see the log.
+    PlannerRejected,
+}
+
+impl GoalRefusal {
+    /// Number of reasons.
+    pub const COUNT: usize = 7;
+    /// A sentence a person can act on.
+    pub fn reason(self) -> &'static str {
+        match self {
+            Self::NotConfigured => "no Configure received: root anchor and rover unknown",
+            Self::NoPose => "no scan received yet: the rover's pose is unknown",
+            Self::MapEmpty => "the onboard map is empty: send scans first",
+            Self::NoSurface => "no observed surface in the map to plan on: scan the terrain around the rover densely",
+            Self::StartNotSettled => "the rover does not settle on the map at its pose (ground under it unobserved?)",
+            Self::GoalNotSettled => "the goal is inside the mapped area but the rover does not settle there",
+            Self::PlannerRejected => "the planner rejected the problem (parameters or arena)",
+        }
+    }
+}
+
+/// Counters of on-board planning (for tests and logs).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct NavPlanStats {
+    /// Goals accepted.
+    pub goals_accepted: u32,
+    /// Goals refused, by [`GoalRefusal`] discriminant.
+    pub refusals: [u32; GoalRefusal::COUNT],
+    /// `plan_step` calls.
+    pub steps: u32,
+    /// Planner iterations run, replays included (the work actually done).
+    pub iterations_run: u64,
+    /// Settles run, replays included (samples, interpolated states of motion checks).
+    pub settles_run: u64,
+    /// Static-stability problems solved, replays included (motion checks and the plan's margins).
+    pub stability_checks_run: u64,
+    /// Sampler calls answered from the sample tape.
+    pub tape_hits: u32,
+    /// Sampler calls run (and recorded while the tape has room).
+    pub tape_misses: u32,
+    /// Motion checks answered by the navigator's cache.
+    pub cache_hits: u32,
+    /// Motion checks computed.
+    pub cache_misses: u32,
+    /// Motion checks not cached because the cache was full.
+    pub cache_full: u32,
+    /// The space's work and motion-failure counters of the last replay (samples, settles, stability checks,
+    /// motions invalid by reason; cached motion checks are not counted again).
+    pub last_replay: MotionStats,
+    /// Waypoints whose anchor history was shortened to `MAX_ANCHORS_PER_WAYPOINT` (root and most recent kept).
+    pub anchors_truncated: u32,
+}
+
+/// What the navigator keeps from `Configure` for planning.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct PlanSetup {
+    pub root: Vec3,
+    pub rover: RoverParams,
+    pub seed: u64,
+    pub samples_per_batch: u32,
+}
+
+impl PlanSetup {
+    /// The planning setup of a validated `Configure`: the Axel model with the configured wheel radius, track, boom,
+    /// mass (split body / boom by `BOOM_MASS_FRACTION`), friction and tension limit.
+    pub fn from_configure(c: &Configure) -> Self {
+        let mut rover = RoverParams::AXEL;
+        rover.wheel_radius_m = c.rover.wheel_radius_m;
+        rover.track_m = c.rover.axle_length_m;
+        rover.boom_length_m = c.rover.boom_length_m;
+        rover.boom_mass_kg = c.rover.mass_kg * cfg::BOOM_MASS_FRACTION;
+        rover.body_mass_kg = c.rover.mass_kg - rover.boom_mass_kg;
+        rover.wheel_mu = c.rover.friction_coefficient;
+        rover.tether_max_tension_n = c.tether.max_tension_n;
+        let r = c.tether.root_anchor;
+        PlanSetup {
+            root: Vec3::new(r.x, r.y, r.z),
+            rover,
+            seed: c.planner.rng_seed,
+            samples_per_batch: c.planner.batch_size.clamp(1, cfg::SAMPLES_PER_BATCH),
+        }
+    }
+}
+
+/// A goal being planned.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Problem {
+    pub start: RoverState,
+    pub goal: Vec3,
+    pub tolerance: f64,
+    pub root: Vec3,
+    pub bounds: PlanBounds,
+    pub rover: RoverParams,
+    pub seed: u64,
+    pub abit: AbitParams,
+    pub budget: u32,
+    pub deadline: Option<Instant>,
+    pub done: u32,
+    pub best_cost: Option<f32>,
+    pub finished: Option<PlanState>,
+}
+
+/// The planning bounds of the map: the extent of its **surface blocks** (blocks whose centre is known to lie
+/// within half a block diagonal of the surface: blocks of carved free space high above the terrain are left out),
+/// plus `BOUNDS_Z_MARGIN_M` in z, grown to contain `start` in `(x, y)`. The surface search of a sample starts at
+/// the top of the bounds, so the top must lie in observed space: a block's worth above the highest surface.
+/// `None` when the map has no surface block.
+pub(crate) fn map_bounds(map: &Map<'_>, start: &Vec3) -> Option<PlanBounds> {
+    let edge = map.config().voxel_size * crate::config::map::BLOCK_EDGE as Real;
+    let near = 0.5 * edge * libm::sqrtf(3.0);
+    let mut lo = [Real::INFINITY; 3];
+    let mut hi = [Real::NEG_INFINITY; 3];
+    for slot in 0..map.blocks_used() {
+        let Some(c) = map.block_coord(slot) else { break };
+        let centre = Vec3::new((c[0] as Real + 0.5) * edge, (c[1] as Real + 0.5) * edge, (c[2] as Real + 0.5) * edge);
+        match map.query(&centre) {
+            DistanceQuery::Known { distance, .. } if libm::fabsf(distance) <= near => {}
+            _ => continue,
+        }
+        for ((l, h), ci) in lo.iter_mut().zip(hi.iter_mut()).zip(c) {
+            *l = l.min(ci as Real * edge);
+            *h = h.max((ci + 1) as Real * edge);
+        }
+    }
+    let [lx, ly, lz] = lo;
+    let [hx, hy, hz] = hi;
+    let b = PlanBounds {
+        min: [lx.min(start.x), ly.min(start.y), lz - cfg::BOUNDS_Z_MARGIN_M],
+        max: [hx.max(start.x), hy.max(start.y), hz + cfg::BOUNDS_Z_MARGIN_M],
+    };
+    b.is_valid().then_some(b)
+}
+
+/// Yaw of a pose's x axis projected on the horizontal plane.
+fn heading(p: &Pose) -> Real {
+    let q = nalgebra::Quaternion::new(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
+    let x = crate::geom::Rot3::from_quaternion(q) * Vec3::x();
+    libm::atan2f(x.y, x.x)
+}
+
+/// Set up a goal: settle the start under the last known pose, check the goal, and return the problem.
+pub(crate) fn set_up(
+    map: &Map<'_>,
+    setup: &PlanSetup,
+    pose: &Pose,
+    goal: &crate::protocol::GoalRequest,
+    budget: u32,
+    now: Instant,
+) -> Result<Problem, GoalRefusal> {
+    if map.blocks_used() == 0 {
+        return Err(GoalRefusal::MapEmpty);
+    }
+    let p = pose.position;
+    let start_xy = Vec3::new(p.x, p.y, p.z);
+    let bounds = map_bounds(map, &start_xy).ok_or(GoalRefusal::NoSurface)?;
+    let mut rover = setup.rover;
+    // As the campaign does on a map: one voxel of extra body clearance for the map's discretisation.
+    rover.body_clearance_m += map.config().voxel_size;
+    let space =
+        TetherSpace::new(map, bounds, rover, TetherSpaceParams::DEFAULT).map_err(|_| GoalRefusal::PlannerRejected)?;
+    let start = space.settle_state(p.x, p.y, heading(pose)).map_err(|_| GoalRefusal::StartNotSettled)?;
+    let g = Vec3::new(goal.position.x, goal.position.y, goal.position.z);
+    space.goal_state(g, 0.0).map_err(|_| GoalRefusal::GoalNotSettled)?;
+    let mut abit = AbitParams::ompl_defaults();
+    abit.samples_per_batch = setup.samples_per_batch;
+    abit.track_approximate = cfg::TRACK_APPROXIMATE;
+    let deadline = (goal.time_budget_ms > 0)
+        .then(|| Instant::from_micros(now.micros.saturating_add(u64::from(goal.time_budget_ms) * 1000)));
+    Ok(Problem {
+        start,
+        goal: g,
+        tolerance: f64::from(goal.tolerance_m),
+        root: setup.root,
+        bounds,
+        rover,
+        seed: setup.seed ^ u64::from(goal.goal_id).wrapping_mul(0x9E37_79B9_7F4A_7C15),
+        abit,
+        budget,
+        deadline,
+        done: 0,
+        best_cost: None,
+        finished: None,
+    })
+}
+
+const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+const FNV_PRIME: u64 = 0x0000_0100_0000_01b3;
+
+fn fnv(mut h: u64, word: u32) -> u64 {
+    for b in word.to_le_bytes() {
+        h = (h ^ u64::from(b)).wrapping_mul(FNV_PRIME);
+    }
+    h
+}
+
+fn state_bits(s: &RoverState) -> [u32; 5] {
+    [s.ground.x.to_bits(), s.ground.y.to_bits(), s.ground.z.to_bits(), s.theta.to_bits(), u32::from(s.off_map)]
+}
+
+/// The motion validator of the replays: answers from the cache, or checks with [`TetherMotionValidator`] and
+/// remembers. A motion's validity and resulting history are a function of the two states (each a function of its
+/// ground point and yaw on the map), the start's anchor history and the map, which is fixed while the cache lives
+/// (the navigator clears it whenever a scan changes the map).
+struct CachedMotions<'c> {
+    cache: &'c mut heapless::Vec<CachedMotion, { cfg::MOTION_CACHE_CAPACITY }>,
+    hits: u32,
+    /// Motion checks computed in this call (shared with the step's stop predicate).
+    misses: &'c Cell<u32>,
+    full: u32,
+}
+
+impl<D: DistanceField> MotionValidator<TapedSpace<'_, '_, D>> for CachedMotions<'_> {
+    fn check_motion(
+        &mut self,
+        space: &TapedSpace<'_, '_, D>,
+        from: &RoverState,
+        from_attachment: &AnchorHistory,
+        to: &RoverState,
+    ) -> MotionCheck<AnchorHistory> {
+        let (fb, tb) = (state_bits(from), state_bits(to));
+        let mut key = FNV_OFFSET;
+        for w in fb.iter().chain(tb.iter()) {
+            key = fnv(key, *w);
+        }
+        for a in from_attachment.as_slice() {
+            for v in [a.point.x, a.point.y, a.point.z, a.gradient.x, a.gradient.y, a.gradient.z] {
+                key = fnv(key, v.to_bits());
+            }
+        }
+        let len = u8::try_from(from_attachment.len()).unwrap_or(u8::MAX);
+        let found = self.cache.iter().find(|c| c.key == key && c.from == fb && c.to == tb && c.history_len == len);
+        let result = match found {
+            Some(c) => {
+                self.hits = self.hits.saturating_add(1);
+                c.result.clone()
+            }
+            None => {
+                self.misses.set(self.misses.get().saturating_add(1));
+                let r = match TetherMotionValidator.check_motion(&space.inner, from, from_attachment, to) {
+                    MotionCheck::Valid { attachment } => Some(attachment),
+                    MotionCheck::Invalid => None,
+                };
+                let entry = CachedMotion { key, from: fb, to: tb, history_len: len, result: r.clone() };
+                if self.cache.push(entry).is_err() {
+                    self.full = self.full.saturating_add(1);
+                }
+                r
+            }
+        };
+        match result {
+            Some(attachment) => MotionCheck::Valid { attachment },
+            None => MotionCheck::Invalid,
+        }
+    }
+}
+
+/// SplitMix64 (Steele, Lea, Flood 2014) with its state in a shared cell, so the [`TapedSpace`] can read and set
+/// the state around a sampler call while the planner owns the generator.
+pub(crate) struct CellRng<'c>(pub &'c Cell<u64>);
+
+impl TryRng for CellRng<'_> {
+    type Error = Infallible;
+    fn try_next_u32(&mut self) -> Result<u32, Infallible> {
+        self.try_next_u64().map(|x| (x >> 32) as u32)
+    }
+    fn try_next_u64(&mut self) -> Result<u64, Infallible> {
+        let s = self.0.get().wrapping_add(0x9E37_79B9_7F4A_7C15);
+        self.0.set(s);
+        let mut z = s;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        Ok(z ^ (z >> 31))
+    }
+    fn try_fill_bytes(&mut self, dst: &mut [u8]) -> Result<(), Infallible> {
+        for chunk in dst.chunks_mut(8) {
+            let bytes = self.try_next_u64()?.to_le_bytes();
+            for (d, s) in chunk.iter_mut().zip(bytes) {
+                *d = s;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The tethered space of the replays, with a **sample tape**: a replay makes the same sampler calls in the same
+/// order with the same generator states, so call `k` is answered from entry `k` of the tape when the generator
+/// state before it (and, for informed samples, the request) matches, and the generator jumps to the recorded
+/// state after it. A sample is a function of the generator's draws and the map only, so the answer is the one the
+/// call would compute. A mismatch (the map changed) truncates the tape there; a full tape only costs sampling.
+pub(crate) struct TapedSpace<'c, 'm, D> {
+    pub inner: TetherSpace<'m, D>,
+    rng: &'c Cell<u64>,
+    tape: &'c mut heapless::Vec<TapedSample, { cfg::SAMPLE_TAPE_CAPACITY }>,
+    cursor: usize,
+    hits: u32,
+    misses: u32,
+}
+
+impl<D: DistanceField> TapedSpace<'_, '_, D> {
+    fn taped(
+        &mut self,
+        request: u64,
+        run: impl FnOnce(&mut TetherSpace<'_, D>) -> InformedSample<RoverState>,
+    ) -> InformedSample<RoverState> {
+        let before = self.rng.get();
+        let recorded = self.tape.get(self.cursor).filter(|e| e.before == before && e.request == request);
+        if let Some(e) = recorded {
+            self.rng.set(e.after);
+            self.cursor = self.cursor.saturating_add(1);
+            self.hits = self.hits.saturating_add(1);
+            return e.result.clone();
+        }
+        self.tape.truncate(self.cursor);
+        self.misses = self.misses.saturating_add(1);
+        let result = run(&mut self.inner);
+        let entry = TapedSample { before, after: self.rng.get(), request, result: result.clone() };
+        if self.tape.push(entry).is_ok() {
+            self.cursor = self.cursor.saturating_add(1);
+        }
+        result
+    }
+}
+
+impl<D: DistanceField> StateSpace for TapedSpace<'_, '_, D> {
+    type State = RoverState;
+    type Attachment = AnchorHistory;
+    const NON_MARKOVIAN: bool = true;
+    fn dimension(&self) -> usize {
+        self.inner.dimension()
+    }
+    fn measure(&self) -> f64 {
+        self.inner.measure()
+    }
+    fn distance(&self, a: &RoverState, b: &RoverState) -> f64 {
+        self.inner.distance(a, b)
+    }
+    fn interpolate(&self, a: &RoverState, b: &RoverState, t: f64) -> RoverState {
+        self.inner.interpolate(a, b, t)
+    }
+    fn sample_uniform<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Option<RoverState> {
+        match self.taped(0, |inner| inner.sample_uniform(rng).map_or(InformedSample::Rejected, InformedSample::Sampled)) {
+            InformedSample::Sampled(s) => Some(s),
+            _ => None,
+        }
+    }
+    fn attachments_compatible(&self, resulting: &AnchorHistory, existing: &AnchorHistory) -> bool {
+        self.inner.attachments_compatible(resulting, existing)
+    }
+}
+
+/// [`TetherValidity`] on the taped space.
+struct TapedValidity;
+
+impl<D: DistanceField> StateValidityChecker<TapedSpace<'_, '_, D>> for TapedValidity {
+    fn is_valid(&mut self, state: &RoverState) -> bool {
+        StateValidityChecker::<TetherSpace<'_, D>>::is_valid(&mut TetherValidity, state)
+    }
+}
+
+/// [`TetherObjective`] on the taped space (informed samples go through the tape).
+struct TapedObjective;
+
+impl<D: DistanceField> OptimizationObjective<TapedSpace<'_, '_, D>> for TapedObjective {
+    fn motion_cost(&self, space: &TapedSpace<'_, '_, D>, from: &RoverState, h: &AnchorHistory, to: &RoverState) -> Cost {
+        TetherObjective.motion_cost(&space.inner, from, h, to)
+    }
+    fn motion_cost_heuristic(&self, space: &TapedSpace<'_, '_, D>, from: &RoverState, to: &RoverState) -> Cost {
+        TetherObjective.motion_cost_heuristic(&space.inner, from, to)
+    }
+    fn sample_informed<R: Rng + ?Sized>(
+        &self,
+        space: &mut TapedSpace<'_, '_, D>,
+        rng: &mut R,
+        start: &RoverState,
+        goal: &RoverState,
+        max_cost: Cost,
+    ) -> InformedSample<RoverState> {
+        let mut request = FNV_OFFSET;
+        for w in state_bits(start).iter().chain(state_bits(goal).iter()) {
+            request = fnv(request, *w);
+        }
+        let c = max_cost.to_bits();
+        request = fnv(fnv(request, c as u32), (c >> 32) as u32) | 1;
+        space.taped(request, |inner| TetherObjective.sample_informed(inner, rng, start, goal, max_cost))
+    }
+}
+
+/// `a - b` wrapped to `(-pi, pi]`.
+fn wrap_angle(a: Real) -> Real {
+    let tau = core::f32::consts::TAU;
+    let mut d = libm::fmodf(a, tau);
+    if d > core::f32::consts::PI {
+        d -= tau;
+    } else if d <= -core::f32::consts::PI {
+        d += tau;
+    }
+    d
+}
+
+/// The motion primitives of one path segment `a -> b` (Paton et al. V: turn in place to the drive heading, drive
+/// straight, turn in place to `b`'s yaw), as [`MotionPlan`] interpolates and the validator checked them. A drive
+/// along the reverse heading (Axel drives either way) is a negative distance. Tiny turns and drives are left out.
+pub fn segment_motions(a: &RoverState, b: &RoverState, params: &TetherSpaceParams) -> [Option<Motion>; 3] {
+    let plan = MotionPlan::new(a, b, params);
+    let d = b.ground - a.ground;
+    let len_xy = libm::sqrtf(d.x * d.x + d.y * d.y);
+    let drive = if len_xy > 1e-6 {
+        let psi = libm::atan2f(d.y, d.x);
+        let heading = a.theta + plan.turn_a_rad;
+        let forward = libm::fabsf(wrap_angle(heading - psi)) < core::f32::consts::FRAC_PI_2;
+        let dist = norm3(&d);
+        Some(if forward { dist } else { -dist })
+    } else {
+        None
+    };
+    let turn = |r: Real| (libm::fabsf(r) >= cfg::MIN_TURN_RAD).then_some(Motion::Turn { yaw_rad: r });
+    [
+        turn(plan.turn_a_rad),
+        drive.filter(|s| libm::fabsf(*s) >= cfg::MIN_DRIVE_M).map(|distance_m| Motion::Straight { distance_m }),
+        turn(plan.turn_b_rad),
+    ]
+}
+
+/// The protocol waypoint of a path state (anchors: the root and the most recent ones that fit).
+pub(crate) fn waypoint(s: &RoverState, h: &AnchorHistory, margin: f32, truncated: &mut u32) -> Waypoint {
+    let t = s.settled.pose.translation.vector;
+    let q = s.settled.pose.rotation.quaternion();
+    let mut anchors = heapless::Vec::new();
+    let all = h.as_slice();
+    let skip = all.len().saturating_sub(MAX_ANCHORS_PER_WAYPOINT);
+    if skip > 0 {
+        *truncated = truncated.saturating_add(1);
+    }
+    // the root, then the most recent anchors that fit (all of them when nothing is cut)
+    let keep = all.first().into_iter().chain(all.iter().skip(skip.saturating_add(1)));
+    for a in keep.take(MAX_ANCHORS_PER_WAYPOINT) {
+        let _ = anchors.push(Point3 { x: a.point.x, y: a.point.y, z: a.point.z });
+    }
+    Waypoint {
+        pose: Pose { position: Point3 { x: t.x, y: t.y, z: t.z }, orientation: Quat { x: q.i, y: q.j, z: q.k, w: q.w } },
+        anchors,
+        stability_margin: margin,
+    }
+}
+
+/// Run the problem for at most `iterations` new iterations (see the module docs: the planner is rebuilt and
+/// replayed). Fills `plan` and the storage's motions when planning finishes with a path.
+pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
+    map: &Map<'_>,
+    problem: &mut Problem,
+    storage: &mut P,
+    stats: &mut NavPlanStats,
+    now: Instant,
+    iterations: u32,
+    plan: &mut PlanBuffer,
+) -> PlanProgress {
+    let store = storage.borrow_mut();
+    stats.steps = stats.steps.saturating_add(1);
+    let out_of_time = problem.deadline.is_some_and(|d| now >= d);
+    // With no time left, the replay only restores the best solution so far (no new iterations).
+    let target = if out_of_time { problem.done } else { problem.done.saturating_add(iterations).min(problem.budget) };
+    let Ok(inner) = TetherSpace::new(map, problem.bounds, problem.rover, TetherSpaceParams::DEFAULT) else {
+        problem.finished = Some(PlanState::InvalidInput);
+        return finished(problem, PlanState::InvalidInput);
+    };
+    let goal_state = match inner.goal_state(problem.goal, 0.0) {
+        Ok(g) => g,
+        Err(_) => {
+            // The map changed under the goal since it was accepted.
+            log::warn!("nav: {}", GoalRefusal::GoalNotSettled.reason());
+            problem.finished = Some(PlanState::InvalidInput);
+            return finished(problem, PlanState::InvalidInput);
+        }
+    };
+    let pdef = ProblemDefinition {
+        start: problem.start,
+        start_attachment: AnchorHistory::new(Anchor::root(problem.root)),
+        goal: GoalState { state: goal_state, tolerance: problem.tolerance },
+        objective: TapedObjective,
+    };
+    let rng_state = Cell::new(problem.seed);
+    let mut space = TapedSpace { inner, rng: &rng_state, tape: &mut store.tape, cursor: 0, hits: 0, misses: 0 };
+    let mut validity = TapedValidity;
+    let new_checks = Cell::new(0u32);
+    let mut motions = CachedMotions { cache: &mut store.cache, hits: 0, misses: &new_checks, full: 0 };
+    let mut rng = CellRng(&rng_state);
+    let mut planner =
+        AbitStar::new(&mut store.arena, &mut space, &mut validity, &mut motions, &pdef, &mut rng, problem.abit);
+    // At least one new iteration, then stop after MOTION_CHECKS_PER_STEP new motion checks: the geometric work
+    // of one call stays bounded whatever the iteration count (replayed checks come from the cache).
+    let first_new = problem.done;
+    let report = planner.solve_until(&Budget::iterations(target), |c| {
+        c.iterations > first_new && new_checks.get() >= cfg::MOTION_CHECKS_PER_STEP
+    });
+    let c = report.counters;
+    stats.iterations_run = stats.iterations_run.saturating_add(u64::from(c.iterations));
+    problem.done = c.iterations;
+    problem.best_cost = match report.status {
+        PlannerStatus::ExactSolution { cost } => Some(cost as f32),
+        _ => None,
+    };
+    let done = out_of_time
+        || c.iterations >= problem.budget
+        || matches!(
+            report.termination,
+            Termination::Converged | Termination::ArenaFull(_) | Termination::ObjectiveSatisfied | Termination::InvalidInput
+        );
+    let state = match report.status {
+        PlannerStatus::ExactSolution { .. } => PlanState::ExactSolution,
+        PlannerStatus::ApproximateSolution { .. } => PlanState::ApproximateSolution,
+        PlannerStatus::NoSolutionWithinBudget => PlanState::NoSolutionWithinBudget,
+        PlannerStatus::InvalidInput(e) => {
+            log::warn!("nav: planner rejected the problem: {e:?}");
+            PlanState::InvalidInput
+        }
+    };
+    let mut state = state;
+    let solved = done && matches!(state, PlanState::ExactSolution | PlanState::ApproximateSolution);
+    let written = if solved { planner.write_path(&mut store.path).is_ok() } else { false };
+    drop(planner);
+    stats.cache_hits = stats.cache_hits.saturating_add(motions.hits);
+    stats.cache_misses = stats.cache_misses.saturating_add(new_checks.get());
+    stats.cache_full = stats.cache_full.saturating_add(motions.full);
+    if solved {
+        if !written || store.path.len() < 2 {
+            // No path (TooLong: more states than PATH_CAPACITY; or an approximate "path" of the start alone).
+            state = PlanState::NoSolutionWithinBudget;
+            store.path.clear();
+        } else {
+            fill_plan(&space.inner, &store.path, &mut store.motions, stats, plan);
+        }
+    }
+    stats.last_replay = space.inner.stats();
+    stats.tape_hits = stats.tape_hits.saturating_add(space.hits);
+    stats.tape_misses = stats.tape_misses.saturating_add(space.misses);
+    stats.settles_run = stats.settles_run.saturating_add(u64::from(stats.last_replay.settles));
+    stats.stability_checks_run =
+        stats.stability_checks_run.saturating_add(u64::from(stats.last_replay.stability_checks));
+    if done {
+        problem.finished = Some(state);
+        finished(problem, state)
+    } else {
+        PlanProgress::Searching { iterations: problem.done, best_cost: problem.best_cost }
+    }
+}
+
+fn finished(problem: &Problem, state: PlanState) -> PlanProgress {
+    PlanProgress::Finished {
+        state,
+        iterations: problem.done,
+        best_cost: if matches!(state, PlanState::ExactSolution) { problem.best_cost } else { None },
+    }
+}
+
+/// Waypoints (with stability margins from the map) and motion primitives of the stored path.
+fn fill_plan<D: DistanceField>(
+    space: &TetherSpace<'_, D>,
+    path: &[(RoverState, AnchorHistory)],
+    motions: &mut heapless::Vec<Motion, { cfg::MOTION_CAPACITY }>,
+    stats: &mut NavPlanStats,
+    plan: &mut PlanBuffer,
+) {
+    plan.clear();
+    motions.clear();
+    let on_map = || path.iter().filter(|(s, _)| !s.off_map);
+    for (s, h) in on_map() {
+        let margin = match space.stable_with(&s.settled, h) {
+            Ok(m) => m as f32,
+            Err(e) => {
+                log::warn!("nav: plan state not stable by the margin check: {e:?}");
+                -1.0
+            }
+        };
+        if plan.push(waypoint(s, h, margin, &mut stats.anchors_truncated)).is_err() {
+            break;
+        }
+    }
+    let mut prev: Option<&RoverState> = None;
+    for (s, _) in on_map() {
+        if let Some(a) = prev {
+            for m in segment_motions(a, s, space.params()).into_iter().flatten() {
+                if motions.push(m).is_err() {
+                    break;
+                }
+            }
+        }
+        prev = Some(s);
+    }
+}
+
+/// The motion primitive at `index` of the last plan.
+pub(crate) fn motion_at<P: BorrowMut<NavPlanStorage>>(storage: &mut P, index: usize) -> Option<Motion> {
+    storage.borrow_mut().motions.get(index).copied()
+}
+
+/// Forget the cached motion checks and the sample tape (the map changed).
+pub(crate) fn clear_cache<P: BorrowMut<NavPlanStorage>>(storage: &mut P) {
+    let s = storage.borrow_mut();
+    s.cache.clear();
+    s.tape.clear();
+}
+
+/// Forget the last plan (a new goal).
+pub(crate) fn clear_plan<P: BorrowMut<NavPlanStorage>>(storage: &mut P) {
+    let s = storage.borrow_mut();
+    s.cache.clear();
+    s.tape.clear();
+    s.path.clear();
+    s.motions.clear();
+}
+
+/// The states and anchor histories of the last plan (start first), for tests and pictures.
+pub(crate) fn path<P: BorrowMut<NavPlanStorage>>(storage: &mut P) -> &[(RoverState, AnchorHistory)] {
+    &storage.borrow_mut().path
+}
+
+const _: () = assert!(ANCHOR_HISTORY_CAPACITY <= u8::MAX as usize);
