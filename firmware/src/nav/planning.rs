@@ -25,6 +25,7 @@ use crate::plan::tethered::{
 };
 use crate::protocol::{Configure, Motion, PlanState, Point3, Pose, Quat, Waypoint};
 use crate::tether::{Anchor, AnchorHistory};
+use crate::workload::SplitMix64;
 use rand_core::{Rng, TryRng};
 
 /// The on-board ABIT* arena (capacities of `config::nav`).
@@ -374,20 +375,15 @@ impl TryRng for CellRng<'_> {
         self.try_next_u64().map(|x| (x >> 32) as u32)
     }
     fn try_next_u64(&mut self) -> Result<u64, Infallible> {
-        let s = self.0.get().wrapping_add(0x9E37_79B9_7F4A_7C15);
-        self.0.set(s);
-        let mut z = s;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        Ok(z ^ (z >> 31))
+        let mut g = SplitMix64(self.0.get());
+        let x = g.try_next_u64()?;
+        self.0.set(g.0);
+        Ok(x)
     }
     fn try_fill_bytes(&mut self, dst: &mut [u8]) -> Result<(), Infallible> {
-        for chunk in dst.chunks_mut(8) {
-            let bytes = self.try_next_u64()?.to_le_bytes();
-            for (d, s) in chunk.iter_mut().zip(bytes) {
-                *d = s;
-            }
-        }
+        let mut g = SplitMix64(self.0.get());
+        g.try_fill_bytes(dst)?;
+        self.0.set(g.0);
         Ok(())
     }
 }
