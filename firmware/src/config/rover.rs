@@ -7,6 +7,9 @@
 
 /// Contact points per wheel circle. Default 12 (Paton et al. IV-A: "a circle of 12 contact points").
 pub const WHEEL_CONTACT_POINTS: usize = 12;
+/// Steps of the rim search either side of a wheel's lowest contact point, over half a point spacing, for the rim
+/// point nearest the surface (`rover` module docs, step 5). Default 8 (1.9 degree steps over +-15 degrees).
+pub const RIM_REFINE_STEPS: u32 = 8;
 /// Body collision points along the axle (rover Y axis) between the wheels. Default 9 (assumption: one every
 /// ~10 cm over the 0.8 m between the wheels' inner faces).
 pub const BODY_COLLISION_POINTS: usize = 9;
