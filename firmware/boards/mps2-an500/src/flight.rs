@@ -7,7 +7,8 @@
 //! - **Lockstep** (boot word `tetherbot.clock=lockstep`): the host steps the executive over the control port on
 //!   the host's simulated clock, the way the in-process link does (one `step` per period, bytes delivered at step
 //!   boundaries). Output bytes then depend only on input bytes and step times, so the same run gives the same
-//!   bytes in-process and on the board: the equivalence test.
+//!   bytes in-process and on the board: the equivalence test. The watchdog allows 30 s instead of 2 s here
+//!   (`watchdog::LOCKSTEP_TIMEOUT_TICKS`: the emulator's clock follows a possibly loaded host's wall clock).
 //!
 //! ## Control port (UART1; test harness only, never the flight protocol). All integers little-endian.
 //! - board -> host at boot: `H` (hello, 1 byte): the handshake; the host sends nothing before it.
@@ -35,7 +36,7 @@ use hal::{ByteLink, Instant, MonotonicClock};
 use crate::clock::SysTickClock;
 use crate::storage::Lent;
 use crate::uart::{Uart, UART0_BASE, UART1_BASE, UART_IRQS};
-use crate::watchdog::{CmsdkWatchdog, TIMEOUT_TICKS};
+use crate::watchdog::{CmsdkWatchdog, LOCKSTEP_TIMEOUT_TICKS, TIMEOUT_TICKS};
 
 /// The executive's large buffers (scan reassembly, plan), lent once. ~130 KiB of `.bss` in SRAM.
 static EXEC_STORAGE: Lent<ExecStorage> = Lent::new(ExecStorage::new());
@@ -235,7 +236,7 @@ pub fn run(systick: SysTickClock, lockstep: bool) -> ! {
         (
             Uart::take(UART0_BASE),
             Uart::take(UART1_BASE),
-            CmsdkWatchdog::start(TIMEOUT_TICKS),
+            CmsdkWatchdog::start(if lockstep { LOCKSTEP_TIMEOUT_TICKS } else { TIMEOUT_TICKS }),
         )
     };
     for irq in UART_IRQS {

@@ -28,6 +28,10 @@ pub const WDOGCLK_HZ: u32 = 25_000_000;
 /// Default timeout: 2 s. The flight loop kicks every iteration and wakes at least every SysTick wrap (1 ms),
 /// so only a loop stuck for more than 2 s (a missing budget, a livelock) bites.
 pub const TIMEOUT_TICKS: u32 = 2 * WDOGCLK_HZ;
+/// Timeout in lockstep (the host steps the executive): 30 s. Without `-icount` QEMU's virtual clock follows the
+/// host's wall clock, so on a loaded 2-core CI host one bounded step (a scan integration) can take more than 2 s of
+/// it; in lockstep the watchdog only has to catch a wedged board, before the host's 60 s reply timeout does.
+pub const LOCKSTEP_TIMEOUT_TICKS: u32 = 30 * WDOGCLK_HZ;
 
 /// The timeout in force, for the NMI report.
 static ACTIVE_TIMEOUT_TICKS: AtomicU32 = AtomicU32::new(0);
