@@ -48,14 +48,13 @@
 //! 60 roll steps, 180 boom steps, 8 footprint points).
 
 use crate::config::rover::{
-    RoverParams, BODY_COLLISION_POINTS, BOOM_SWEEP_STEPS, FOOTPRINT_POINTS, RIM_REFINE_STEPS,
-    SETTLE_MAX_DROP_STEPS, SETTLE_MAX_ITERATIONS, SETTLE_ROLL_STEPS, WHEEL_CONTACT_POINTS,
+    RoverParams, BODY_COLLISION_POINTS, BOOM_SWEEP_STEPS, FOOTPRINT_POINTS, SETTLE_MAX_DROP_STEPS,
+    RIM_REFINE_STEPS, SETTLE_MAX_ITERATIONS, SETTLE_ROLL_STEPS, WHEEL_CONTACT_POINTS,
 };
 use crate::geom::{normalize3, Pose3, Real, Rot3, Vec3};
 use crate::map::{DistanceField, DistanceQuery};
 use crate::stability::{
-    check_stability, BodyMass, Contact, StabilityError, StabilityOutcome, StabilityProblem,
-    TetherForce,
+    check_stability, BodyMass, Contact, StabilityError, StabilityOutcome, StabilityProblem, TetherForce,
 };
 use nalgebra::{Matrix3, Translation3, UnitVector3};
 
@@ -111,9 +110,7 @@ pub enum SettleOutcome {
 
 fn query(map: &impl DistanceField, p: &Vec3) -> Option<(Real, Vec3)> {
     match map.query(p) {
-        DistanceQuery::Known { distance, gradient }
-            if distance.is_finite() && crate::geom::is_finite3(&gradient) =>
-        {
+        DistanceQuery::Known { distance, gradient } if distance.is_finite() && crate::geom::is_finite3(&gradient) => {
             Some((distance, gradient))
         }
         _ => None,
@@ -195,10 +192,7 @@ fn wheel_contact_normal(surface: &Vec3, point: &Vec3, centre: &Vec3, axle: &Vec3
     let c = centre - point;
     let in_plane = normalize3(&(c - axle * c.dot(axle)), 1e-6)?;
     let lateral = surface.dot(axle).clamp(-1.0, 1.0);
-    normalize3(
-        &(in_plane * libm::sqrtf(1.0 - lateral * lateral) + axle * lateral),
-        1e-6,
-    )
+    normalize3(&(in_plane * libm::sqrtf(1.0 - lateral * lateral) + axle * lateral), 1e-6)
 }
 
 fn roll_matrix(base: &Matrix3<Real>, roll: Real) -> Matrix3<Real> {
@@ -213,11 +207,7 @@ pub fn footprint_normal(map: &impl DistanceField, p: &Vec3, params: &RoverParams
     let mut sum = g0;
     // ring in the plane perpendicular to the first gradient
     let n0 = normalize3(&g0, 1e-6)?;
-    let alt = if libm::fabsf(n0.x) < 0.9 {
-        Vec3::x()
-    } else {
-        Vec3::y()
-    };
+    let alt = if libm::fabsf(n0.x) < 0.9 { Vec3::x() } else { Vec3::y() };
     let u = normalize3(&(alt - n0 * n0.dot(&alt)), 1e-6)?;
     let v = n0.cross(&u);
     let r = 0.5 * params.track_m;
@@ -234,12 +224,7 @@ pub fn footprint_normal(map: &impl DistanceField, p: &Vec3, params: &RoverParams
 }
 
 /// Settle the rover at query point `p_m` with yaw `theta_m` about the surface normal (Paton et al. IV-A).
-pub fn settle(
-    map: &impl DistanceField,
-    p_m: &Vec3,
-    theta_m: Real,
-    params: &RoverParams,
-) -> SettleOutcome {
+pub fn settle(map: &impl DistanceField, p_m: &Vec3, theta_m: Real, params: &RoverParams) -> SettleOutcome {
     if !(crate::geom::is_finite3(p_m) && theta_m.is_finite()) {
         return SettleOutcome::InvalidInput;
     }
@@ -250,11 +235,7 @@ pub fn settle(
             None => return SettleOutcome::UnknownSpace,
         },
     };
-    let reference = if libm::fabsf(n.x) < 0.95 {
-        Vec3::x()
-    } else {
-        Vec3::y()
-    };
+    let reference = if libm::fabsf(n.x) < 0.95 { Vec3::x() } else { Vec3::y() };
     let Some(t0) = normalize3(&(reference - n * n.dot(&reference)), 1e-6) else {
         return SettleOutcome::InvalidInput;
     };
@@ -327,35 +308,21 @@ pub fn settle(
         return SettleOutcome::UnknownSpace;
     };
     let axle = rot * Vec3::y();
-    let mut wheels = [WheelContact {
-        point: Vec3::zeros(),
-        normal: n,
-        gap_m: 0.0,
-    }; 2];
+    let mut wheels = [WheelContact { point: Vec3::zeros(), normal: n, gap_m: 0.0 }; 2];
     for ((w, lowest), rim) in wheels.iter_mut().zip(g).zip(pts.iter()) {
         let centre = origin + rot * wheel_centre(rim);
-        let Some((d, q, grad)) =
-            nearest_rim_point(map, lowest, &centre, &rot, params.wheel_radius_m)
-        else {
+        let Some((d, q, grad)) = nearest_rim_point(map, lowest, &centre, &rot, params.wheel_radius_m) else {
             return SettleOutcome::UnknownSpace;
         };
         let point = q - grad * d;
         let surface = normalize3(&grad, 1e-6).unwrap_or(n);
         let normal = wheel_contact_normal(&surface, &point, &centre, &axle).unwrap_or(surface);
-        *w = WheelContact {
-            point,
-            normal,
-            gap_m: d,
-        };
+        *w = WheelContact { point, normal, gap_m: d };
     }
     // body collision points along the axle between the wheels
     let half = 0.5 * params.track_m - 0.1;
     for k in 0..BODY_COLLISION_POINTS {
-        let t = if BODY_COLLISION_POINTS > 1 {
-            k as Real / (BODY_COLLISION_POINTS - 1) as Real
-        } else {
-            0.5
-        };
+        let t = if BODY_COLLISION_POINTS > 1 { k as Real / (BODY_COLLISION_POINTS - 1) as Real } else { 0.5 };
         let q = origin + rot * Vec3::new(0.0, -half + 2.0 * half * t, 0.0);
         let Some((d, _)) = query(map, &q) else {
             return SettleOutcome::UnknownSpace;
@@ -364,12 +331,7 @@ pub fn settle(
             return SettleOutcome::Collision { pose, point: q };
         }
     }
-    SettleOutcome::Settled(SettledPose {
-        pose,
-        roll_rad: roll,
-        wheels,
-        iterations,
-    })
+    SettleOutcome::Settled(SettledPose { pose, roll_rad: roll, wheels, iterations })
 }
 
 fn pose_from(origin: &Vec3, rot: &Matrix3<Real>) -> Pose3 {
@@ -379,9 +341,7 @@ fn pose_from(origin: &Vec3, rot: &Matrix3<Real>) -> Pose3 {
 
 /// Boom angle (rover frame, see the module docs) that points the boom at `anchor`: the *inline* configuration.
 pub fn boom_inline_angle(settled: &SettledPose, anchor: &Vec3) -> Real {
-    let v = settled
-        .pose
-        .inverse_transform_vector(&(anchor - settled.pose.translation.vector));
+    let v = settled.pose.inverse_transform_vector(&(anchor - settled.pose.translation.vector));
     libm::atan2f(v.z, v.x)
 }
 
@@ -450,44 +410,24 @@ pub fn stability_problem(
     let forward = settled.pose.rotation * Vec3::x();
     let mut contacts = heapless::Vec::new();
     for w in &settled.wheels {
-        let _ = contacts.push(Contact::new(
-            w.point,
-            w.normal,
-            forward,
-            params.wheel_mu,
-            params.wheel_mu_m,
-        ));
+        let _ = contacts.push(Contact::new(w.point, w.normal, forward, params.wheel_mu, params.wheel_mu_m));
     }
     if let Some(b) = boom_contact {
-        let _ = contacts.push(Contact::new(
-            b.point,
-            b.normal,
-            forward,
-            params.boom_mu,
-            0.0,
-        ));
+        let _ = contacts.push(Contact::new(b.point, b.normal, forward, params.boom_mu, 0.0));
     }
     let tip = boom_tip(settled, boom_angle, params);
     let origin = settled.pose.translation.vector;
     let tether = match last_anchor.and_then(|a| normalize3(&(a - tip), 1e-4)) {
-        Some(direction) => TetherForce::Taut {
-            exit: tip,
-            direction,
-            max_tension_n: params.tether_max_tension_n,
-        },
+        Some(direction) => {
+            TetherForce::Taut { exit: tip, direction, max_tension_n: params.tether_max_tension_n }
+        }
         None => TetherForce::Slack,
     };
     StabilityProblem {
         contacts,
         masses: [
-            BodyMass {
-                mass_kg: params.body_mass_kg,
-                com: origin,
-            },
-            BodyMass {
-                mass_kg: params.boom_mass_kg,
-                com: (origin + tip) * 0.5,
-            },
+            BodyMass { mass_kg: params.body_mass_kg, com: origin },
+            BodyMass { mass_kg: params.boom_mass_kg, com: (origin + tip) * 0.5 },
         ],
         gravity: Vec3::new(0.0, 0.0, -params.gravity_mps2),
         tether,
@@ -565,17 +505,12 @@ mod tests {
     }
     impl Plane {
         fn new(alpha: Real) -> Self {
-            Plane {
-                n: Vec3::new(libm::sinf(alpha), 0.0, libm::cosf(alpha)),
-            }
+            Plane { n: Vec3::new(libm::sinf(alpha), 0.0, libm::cosf(alpha)) }
         }
     }
     impl DistanceField for Plane {
         fn query(&self, p: &Vec3) -> DistanceQuery {
-            DistanceQuery::Known {
-                distance: p.dot(&self.n),
-                gradient: self.n,
-            }
+            DistanceQuery::Known { distance: p.dot(&self.n), gradient: self.n }
         }
     }
     struct Nothing;
@@ -591,17 +526,12 @@ mod tests {
         for alpha_deg in [0.0f32, 20.0, 40.0] {
             for yaw in [0.0f32, 0.7, 1.57, 2.5] {
                 let plane = Plane::new(alpha_deg.to_radians());
-                let SettleOutcome::Settled(s) =
-                    settle(&plane, &Vec3::new(0.3, 0.2, 0.0), yaw, &params)
-                else {
+                let SettleOutcome::Settled(s) = settle(&plane, &Vec3::new(0.3, 0.2, 0.0), yaw, &params) else {
                     panic!("no settle at {alpha_deg} {yaw}");
                 };
                 // exact: the axle centre sits one wheel radius above the plane, the rover's up axis is the normal
                 let h = s.pose.translation.vector.dot(&plane.n);
-                assert!(
-                    (h - params.wheel_radius_m).abs() < 2.0 * params.contact_threshold_m,
-                    "height {h}"
-                );
+                assert!((h - params.wheel_radius_m).abs() < 2.0 * params.contact_threshold_m, "height {h}");
                 assert!(rover_up(&s).dot(&plane.n) > 0.9995, "up {:?}", rover_up(&s));
                 for w in &s.wheels {
                     assert!(w.point.dot(&plane.n).abs() < 1e-3);
@@ -615,20 +545,11 @@ mod tests {
     #[test]
     fn unknown_space_and_no_ground_are_outcomes() {
         let params = RoverParams::AXEL;
-        assert_eq!(
-            settle(&Nothing, &Vec3::zeros(), 0.0, &params),
-            SettleOutcome::UnknownSpace
-        );
+        assert_eq!(settle(&Nothing, &Vec3::zeros(), 0.0, &params), SettleOutcome::UnknownSpace);
         // query 3 m above a plane: more than max_drop below the start
         let plane = Plane::new(0.0);
-        assert_eq!(
-            settle(&plane, &Vec3::new(0.0, 0.0, 3.0), 0.0, &params),
-            SettleOutcome::NoGround
-        );
-        assert_eq!(
-            settle(&plane, &Vec3::new(Real::NAN, 0.0, 0.0), 0.0, &params),
-            SettleOutcome::InvalidInput
-        );
+        assert_eq!(settle(&plane, &Vec3::new(0.0, 0.0, 3.0), 0.0, &params), SettleOutcome::NoGround);
+        assert_eq!(settle(&plane, &Vec3::new(Real::NAN, 0.0, 0.0), 0.0, &params), SettleOutcome::InvalidInput);
     }
 
     /// Flat ground plus a thin vertical fin (|x| <= 0.05, |y| <= 0.05, 0 <= z <= 0.6) between the wheels.
@@ -636,22 +557,11 @@ mod tests {
     impl DistanceField for Fin {
         fn query(&self, p: &Vec3) -> DistanceQuery {
             // exact box SDF, centre (0, 0, 0.3), half extents (0.05, 0.05, 0.3)
-            let q = Vec3::new(
-                libm::fabsf(p.x) - 0.05,
-                libm::fabsf(p.y) - 0.05,
-                libm::fabsf(p.z - 0.3) - 0.3,
-            );
+            let q = Vec3::new(libm::fabsf(p.x) - 0.05, libm::fabsf(p.y) - 0.05, libm::fabsf(p.z - 0.3) - 0.3);
             let outside = Vec3::new(q.x.max(0.0), q.y.max(0.0), q.z.max(0.0));
             let dbox = crate::geom::norm3(&outside) + q.x.max(q.y).max(q.z).min(0.0);
-            let (d, g) = if dbox < p.z {
-                (dbox, Vec3::z())
-            } else {
-                (p.z, Vec3::z())
-            };
-            DistanceQuery::Known {
-                distance: d,
-                gradient: g,
-            }
+            let (d, g) = if dbox < p.z { (dbox, Vec3::z()) } else { (p.z, Vec3::z()) };
+            DistanceQuery::Known { distance: d, gradient: g }
         }
     }
 
@@ -662,18 +572,12 @@ mod tests {
         match settle(&Fin, &Vec3::new(0.0, 0.0, 0.0), 0.0, &params) {
             // the reported body point lies within body radius + clearance of the fin's face at |y| = 0.05
             SettleOutcome::Collision { point, .. } => {
-                assert!(
-                    libm::fabsf(point.y) - 0.05 < params.body_radius_m + params.body_clearance_m,
-                    "{point:?}"
-                )
+                assert!(libm::fabsf(point.y) - 0.05 < params.body_radius_m + params.body_clearance_m, "{point:?}")
             }
             other => panic!("expected a collision, got {other:?}"),
         }
         // 2 m away the ground is clear
-        assert!(matches!(
-            settle(&Fin, &Vec3::new(2.0, 0.0, 0.0), 0.0, &params),
-            SettleOutcome::Settled(_)
-        ));
+        assert!(matches!(settle(&Fin, &Vec3::new(2.0, 0.0, 0.0), 0.0, &params), SettleOutcome::Settled(_)));
     }
 
     /// The lip of the 55-degree ledge: flat top `z = 0` for `x <= 0`, slope `z = -tan(55 deg) x` beyond; the solid
@@ -697,11 +601,7 @@ mod tests {
             let t2 = Vec3::new(libm::cosf(Self::SLOPE), 0.0, -libm::sinf(Self::SLOPE));
             let on_top = Vec3::new(p.x.min(0.0), p.y, 0.0);
             let on_slope = t2 * p.dot(&t2).max(0.0) + Vec3::new(0.0, p.y, 0.0);
-            let nearest = if (p - on_top).norm() <= (p - on_slope).norm() {
-                on_top
-            } else {
-                on_slope
-            };
+            let nearest = if (p - on_top).norm() <= (p - on_slope).norm() { on_top } else { on_slope };
             let distance = (p - nearest).norm();
             let gradient = normalize3(&(p - nearest), 1e-9).unwrap_or(Vec3::z());
             DistanceQuery::Known { distance, gradient }
@@ -715,8 +615,7 @@ mod tests {
         // Axle just past the lip (facing down the slope): each wheel rests on the edge, not on either face.
         let mut on_edge = 0;
         for x in [0.05f32, 0.1, 0.15, 0.2] {
-            let SettleOutcome::Settled(s) = settle(&Lip, &Vec3::new(x, 0.0, 0.0), 0.0, &params)
-            else {
+            let SettleOutcome::Settled(s) = settle(&Lip, &Vec3::new(x, 0.0, 0.0), 0.0, &params) else {
                 panic!("no settle at x {x}");
             };
             let axle_centre = s.pose.translation.vector;
@@ -727,42 +626,23 @@ mod tests {
                 on_edge += 1;
                 // pushed along edge -> wheel centre (in the wheel plane), strictly between the two faces' normals:
                 // the ESDF gradient there would be one face's normal
-                let to_centre =
-                    Vec3::new(axle_centre.x - w.point.x, 0.0, axle_centre.z - w.point.z)
-                        .normalize();
-                assert!(
-                    w.normal.dot(&to_centre) > 0.999,
-                    "x {x}: normal {:?} vs {to_centre:?}",
-                    w.normal
-                );
-                assert!(
-                    w.normal.dot(&Vec3::z()) < 0.995 && w.normal.dot(&n2) < 0.995,
-                    "x {x}: {:?}",
-                    w.normal
-                );
+                let to_centre = Vec3::new(axle_centre.x - w.point.x, 0.0, axle_centre.z - w.point.z).normalize();
+                assert!(w.normal.dot(&to_centre) > 0.999, "x {x}: normal {:?} vs {to_centre:?}", w.normal);
+                assert!(w.normal.dot(&Vec3::z()) < 0.995 && w.normal.dot(&n2) < 0.995, "x {x}: {:?}", w.normal);
                 // the wheel centre is one radius from the edge
                 let r = (axle_centre.xz() - w.point.xz()).norm();
-                assert!(
-                    (r - params.wheel_radius_m).abs() < 0.02,
-                    "x {x}: radius {r}"
-                );
+                assert!((r - params.wheel_radius_m).abs() < 0.02, "x {x}: radius {r}");
             }
         }
-        assert!(
-            on_edge >= 4,
-            "only {on_edge} wheels rested on the edge; the test no longer exercises it"
-        );
+        assert!(on_edge >= 4, "only {on_edge} wheels rested on the edge; the test no longer exercises it");
     }
 
     #[test]
     fn flat_ground_slack_tether_is_stable() {
         let params = RoverParams::AXEL;
         let plane = Plane::new(0.0);
-        let SettleOutcome::Settled(s) = settle(&plane, &Vec3::zeros(), 0.3, &params) else {
-            panic!()
-        };
-        let (o, _) =
-            check_pose_stability(&plane, &s, None, &params).unwrap_or_else(|e| panic!("{e:?}"));
+        let SettleOutcome::Settled(s) = settle(&plane, &Vec3::zeros(), 0.3, &params) else { panic!() };
+        let (o, _) = check_pose_stability(&plane, &s, None, &params).unwrap_or_else(|e| panic!("{e:?}"));
         assert!(o.is_stable(), "{o:?}");
     }
 }

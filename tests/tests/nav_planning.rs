@@ -6,10 +6,12 @@
 //! same exchange on the emulated board (QEMU mps2-an500, lockstep) gives the same messages: planning is
 //! equivalent in-process and on the flight computer.
 
-use firmware::config::protocol::MAX_POINTS_PER_CHUNK;
 use firmware::protocol::{
-    DriveCommand, GoalRequest, Message, Mode, Motion, PlanState, PlanStatus, PlannerChoice, Point3,
-    Pose, Quat, SensorChunk,
+    DriveCommand, GoalRequest, Message, Mode, Motion, PlanState, PlanStatus, PlannerChoice, Point3, Pose, Quat,
+    SensorChunk,
+};
+use firmware::config::protocol::{
+    MAX_POINTS_PER_CHUNK,
 };
 use host_sim::link::inproc::{InProcLink, DEFAULT_STEP_US};
 use host_sim::link::FlightLink;
@@ -32,15 +34,7 @@ fn scan(id: u32, cx: f32) -> Vec<SensorChunk> {
             pts.push(Point3::new(i as f32 * STEP, j as f32 * STEP, Z0 - SENSOR_H));
         }
     }
-    let pose = Pose {
-        position: Point3::new(cx, 0.0, SENSOR_H),
-        orientation: Quat {
-            x: 0.0,
-            y: 0.0,
-            z: 0.0,
-            w: 1.0,
-        },
-    };
+    let pose = Pose { position: Point3::new(cx, 0.0, SENSOR_H), orientation: Quat { x: 0.0, y: 0.0, z: 0.0, w: 1.0 } };
     let chunks: Vec<&[Point3]> = pts.chunks(MAX_POINTS_PER_CHUNK).collect();
     chunks
         .iter()
@@ -95,9 +89,7 @@ fn goal(x: f32, max_iterations: u32) -> GoalRequest {
 }
 
 /// Scans every 0.4 m along x in [-1.2, 4].
-const XS: [f32; 14] = [
-    -1.2, -0.8, -0.4, 0.0, 0.4, 0.8, 1.2, 1.6, 2.0, 2.4, 2.8, 3.2, 3.6, 4.0,
-];
+const XS: [f32; 14] = [-1.2, -0.8, -0.4, 0.0, 0.4, 0.8, 1.2, 1.6, 2.0, 2.4, 2.8, 3.2, 3.6, 4.0];
 
 /// Sends `goal` and lets the flight software plan and drive; returns everything it sent from the goal on.
 fn plan_goal<L: FlightLink>(s: &mut HostSession<L>, goal: GoalRequest) -> Vec<Message> {
@@ -106,9 +98,7 @@ fn plan_goal<L: FlightLink>(s: &mut HostSession<L>, goal: GoalRequest) -> Vec<Me
     for _ in 0..200 {
         let t = s.link().now_us() + 10_000;
         got.extend(s.advance_to(t).expect("advance"));
-        if got.iter().any(|m| matches!(m, Message::DriveCommand(_)))
-            && s.telemetry().expect("t").mode == Mode::Mapping
-        {
+        if got.iter().any(|m| matches!(m, Message::DriveCommand(_))) && s.telemetry().expect("t").mode == Mode::Mapping {
             break;
         }
     }
@@ -121,39 +111,19 @@ fn goal_over_the_link_is_planned_on_board_and_driven() {
     let got = plan_goal(&mut s, goal(3.0, 40));
     let finals: Vec<&PlanStatus> = got
         .iter()
-        .filter_map(|m| {
-            if let Message::PlanStatus(p) = m {
-                Some(p)
-            } else {
-                None
-            }
-        })
+        .filter_map(|m| if let Message::PlanStatus(p) = m { Some(p) } else { None })
         .filter(|p| !matches!(p.state, PlanState::Accepted | PlanState::Searching))
         .collect();
     assert_eq!(finals.len(), 1, "{got:?}");
-    assert_eq!(
-        finals[0].state,
-        PlanState::ExactSolution,
-        "{:?}",
-        s.link().executive().autonomy().plan_stats()
-    );
+    assert_eq!(finals[0].state, PlanState::ExactSolution, "{:?}", s.link().executive().autonomy().plan_stats());
     assert!(finals[0].iterations <= 40);
     let waypoints: Vec<_> = got
         .iter()
-        .filter_map(|m| {
-            if let Message::Plan(p) = m {
-                Some(p.waypoints.clone())
-            } else {
-                None
-            }
-        })
+        .filter_map(|m| if let Message::Plan(p) = m { Some(p.waypoints.clone()) } else { None })
         .flatten()
         .collect();
     assert!(waypoints.len() >= 2);
-    let (first, last) = (
-        waypoints[0].pose.position,
-        waypoints[waypoints.len() - 1].pose.position,
-    );
+    let (first, last) = (waypoints[0].pose.position, waypoints[waypoints.len() - 1].pose.position);
     assert!(first.x.abs() < 0.1 && first.y.abs() < 0.1, "{first:?}");
     let d = ((last.x - 3.0).powi(2) + last.y.powi(2)).sqrt();
     assert!(d <= 0.5 + 0.02, "last waypoint {last:?}");
@@ -177,10 +147,7 @@ fn goal_over_the_link_is_planned_on_board_and_driven() {
     }
     assert!(drives >= 1);
     let d = ((x - 3.0).powi(2) + y * y).sqrt();
-    assert!(
-        d <= 0.5 + 0.05,
-        "drive commands end at ({x}, {y}), {d} m from the goal"
-    );
+    assert!(d <= 0.5 + 0.05, "drive commands end at ({x}, {y}), {d} m from the goal");
     assert_eq!(s.telemetry().expect("t").mode, Mode::Mapping);
 }
 
@@ -188,30 +155,15 @@ fn goal_over_the_link_is_planned_on_board_and_driven() {
 fn goal_before_any_scan_is_refused_over_the_link() {
     let mut s = HostSession::new(InProcLink::new(DEFAULT_STEP_US));
     s.recv().expect("boot");
-    s.exchange(&Message::Configure(default_configure(1)))
-        .expect("configure");
+    s.exchange(&Message::Configure(default_configure(1))).expect("configure");
     // no scan yet: the executive takes goals in Idle, the navigator knows no pose
-    let r = s
-        .exchange(&Message::GoalRequest(goal(3.0, 10)))
-        .expect("goal");
-    let state = r.iter().find_map(|m| {
-        if let Message::PlanStatus(p) = m {
-            Some(p.state)
-        } else {
-            None
-        }
-    });
+    let r = s.exchange(&Message::GoalRequest(goal(3.0, 10))).expect("goal");
+    let state = r.iter().find_map(|m| if let Message::PlanStatus(p) = m { Some(p.state) } else { None });
     assert_eq!(state, Some(PlanState::InvalidInput), "{r:?}");
     let mut g = goal(3.0, 10);
     g.planner = PlannerChoice::Team;
     let r = s.exchange(&Message::GoalRequest(g)).expect("goal");
-    let state = r.iter().find_map(|m| {
-        if let Message::PlanStatus(p) = m {
-            Some(p.state)
-        } else {
-            None
-        }
-    });
+    let state = r.iter().find_map(|m| if let Message::PlanStatus(p) = m { Some(p.state) } else { None });
     assert_eq!(state, Some(PlanState::PlannerUnavailable), "{r:?}");
 }
 
@@ -219,8 +171,7 @@ fn goal_before_any_scan_is_refused_over_the_link() {
 /// stability LPs at ~8 M instructions each).
 #[test]
 fn goal_is_planned_identically_on_the_board() {
-    let Some(elf) = host_sim::qemu::board_for_tests("on-board planning equivalence")
-        .unwrap_or_else(|e| panic!("{e}"))
+    let Some(elf) = host_sim::qemu::board_for_tests("on-board planning equivalence").unwrap_or_else(|e| panic!("{e}"))
     else {
         return;
     };
@@ -228,45 +179,21 @@ fn goal_is_planned_identically_on_the_board() {
     let g = goal(1.0, 16);
     let mut inproc = session_with_map(InProcLink::new(DEFAULT_STEP_US), &xs);
     let a = plan_goal(&mut inproc, g);
-    let link = host_sim::qemu::link::QemuLink::start(&elf, DEFAULT_STEP_US)
-        .unwrap_or_else(|e| panic!("{e}"));
+    let link = host_sim::qemu::link::QemuLink::start(&elf, DEFAULT_STEP_US).unwrap_or_else(|e| panic!("{e}"));
     let t0 = std::time::Instant::now();
     let mut board = session_with_map(link, &xs);
     let t1 = std::time::Instant::now();
     let b = plan_goal(&mut board, g);
     println!("board: mapping {:?}, planning {:?}", t1 - t0, t1.elapsed());
     let state = |m: &[Message]| {
-        m.iter().rev().find_map(|m| {
-            if let Message::PlanStatus(p) = m {
-                Some(p.state)
-            } else {
-                None
-            }
-        })
+        m.iter().rev().find_map(|m| if let Message::PlanStatus(p) = m { Some(p.state) } else { None })
     };
     assert_eq!(state(&a), Some(PlanState::ExactSolution), "{a:?}");
     assert_eq!(a, b, "in-process and board outputs differ");
-    let exit = board
-        .into_link()
-        .quit(core::time::Duration::from_secs(30))
-        .unwrap_or_else(|e| panic!("{e}"));
-    assert!(
-        exit.status.success(),
-        "board exit: {:?}\n{}",
-        exit.status,
-        exit.output.both()
-    );
-    let value = |k: &str| -> usize {
-        exit.output
-            .value(k)
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(0)
-    };
+    let exit = board.into_link().quit(core::time::Duration::from_secs(30)).unwrap_or_else(|e| panic!("{e}"));
+    assert!(exit.status.success(), "board exit: {:?}\n{}", exit.status, exit.output.both());
+    let value = |k: &str| -> usize { exit.output.value(k).and_then(|v| v.parse().ok()).unwrap_or(0) };
     let (hw, size) = (value("stack_high_water_bytes"), value("stack_size_bytes"));
-    assert!(
-        hw > 0 && hw < size,
-        "stack high-water {hw} of {size}: {}",
-        exit.output.both()
-    );
+    assert!(hw > 0 && hw < size, "stack high-water {hw} of {size}: {}", exit.output.both());
     println!("board: {}", exit.output.both());
 }
