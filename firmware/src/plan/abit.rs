@@ -39,9 +39,11 @@
 //! ## Non-Markovian attachments (Paton et al. V-A)
 //! - The attachment of a vertex is set when it is first connected (from the motion validator's result).
 //! - A fraction `attachment_copy_fraction` of new samples gets a predetermined attachment copied from a
-//!   neighbour: one of the distinct attachments among its k nearest tree vertices, chosen uniformly (so a rare
-//!   history, e.g. the one anchored on the column of Fig. 7d, is copied as often as the common one). Such a
-//!   sample only connects through a motion yielding a compatible attachment.
+//!   neighbour: one of the distinct attachments (compatibility classes, [`StateSpace::attachments_compatible`])
+//!   among its k nearest tree vertices, chosen uniformly (so a rare history, e.g. the one anchored on the column of
+//!   Fig. 7d, is copied as often as the common one). Such a sample is checked with its attachment at once
+//!   ([`StateSpace::valid_with_attachment`]: on the ledge, a slope sample that copied the root-only history is
+//!   unstable) and dropped if invalid; a kept one only connects through a motion yielding a compatible attachment.
 //! - No rewiring to a parent whose motion gives an incompatible attachment
 //!   ([`StateSpace::attachments_compatible`]).
 //! - After each improvement a fresh goal state with undetermined attachment is added (up to
@@ -1333,9 +1335,9 @@ where
         }
     }
 
-    /// The attachment a new sample copies (Paton et al. V-A): one of the distinct attachments among the k
-    /// nearest tree vertices, chosen uniformly, so rare histories (the one anchored on the column, Fig. 7d) are
-    /// copied as often as the common one. Bounded by the arena size and `NEIGHBOUR_CAPACITY`.
+    /// The attachment a new sample copies (Paton et al. V-A): one of the distinct (mutually incompatible)
+    /// attachments among the k nearest tree vertices, chosen uniformly, so rare histories (the one anchored on the
+    /// column, Fig. 7d) are copied as often as the common one. Bounded by the arena size and `NEIGHBOUR_CAPACITY`.
     fn copied_attachment(&mut self, state: &S::State) -> Option<S::Attachment> {
         let cap = self.k.clamp(1, cfg::NEIGHBOUR_CAPACITY);
         let mut near: Vec<(f64, u32), { cfg::NEIGHBOUR_CAPACITY }> = Vec::new();
@@ -1361,7 +1363,10 @@ where
             let Some(att) = self.node(i).and_then(|n| n.attachment.as_ref()) else { continue };
             let seen = distinct
                 .iter()
-                .any(|&j| self.node(j).and_then(|n| n.attachment.as_ref()).is_some_and(|b| b == att));
+                .any(|&j| {
+                    let other = self.node(j).and_then(|n| n.attachment.as_ref());
+                    other.is_some_and(|b| self.space.attachments_compatible(att, b))
+                });
             if !seen {
                 let _ = distinct.push(i);
             }
@@ -1438,6 +1443,13 @@ where
             } else {
                 None
             };
+            // A copied attachment makes the sample's attachment-dependent validity checkable now (Paton V-A).
+            if let Some(a) = attachment.as_ref() {
+                if !self.space.valid_with_attachment(&x, a) {
+                    self.counters.samples_invalid_with_copy += 1;
+                    continue;
+                }
+            }
             if self.alloc(x, attachment, 0).is_none() {
                 self.pending_full = Some(Arena::Nodes);
                 break;
@@ -1973,6 +1985,10 @@ mod tests {
         fn sample_uniform<R2: Rng + ?Sized>(&mut self, rng: &mut R2) -> Option<[f64; 2]> {
             self.inner.sample_uniform(rng)
         }
+        /// Only an anchored state may stand on the slope.
+        fn valid_with_attachment(&self, x: &[f64; 2], anchored: &bool) -> bool {
+            *anchored || x[0] <= 0.5
+        }
     }
     struct AnchoredRules;
     impl StateValidityChecker<Anchored> for AnchoredRules {
@@ -2059,6 +2075,63 @@ mod tests {
         assert_eq!(report.counters.edges_evaluated, 1);
         assert_eq!(report.status, PlannerStatus::ExactSolution { cost: 1.1 });
         assert_eq!(report.termination, Termination::Converged);
+    }
+
+    #[test]
+    fn a_sample_that_copied_an_attachment_is_checked_with_it() {
+        // Every sample copies (fraction 1): those on the slope that copied the unanchored history are dropped when
+        // drawn, so no sample holding it stands on the slope; the anchored ones there are kept.
+        let mut space = Anchored {
+            inner: RealVectorSpace::cube(-1.0, 1.0),
+        };
+        let pd = ProblemDefinition {
+            start: [-0.8, -0.5],
+            start_attachment: false,
+            goal: GoalState {
+                state: [0.8, -0.5],
+                tolerance: 0.0,
+            },
+            objective: PathLength::new(),
+        };
+        let params = AbitParams {
+            attachment_copy_fraction: 1.0,
+            ..AbitParams::ompl_defaults()
+        };
+        let mut arena: Box<AbitArena<[f64; 2], bool, 4096, 16384, 4096>> = Box::default();
+        let (mut v, mut m) = (AnchoredRules, AnchoredRules);
+        let mut rng = Pcg64::seed_from_u64(3);
+        let mut planner = AbitStar::new(
+            &mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, params,
+        );
+        let report = planner.solve(&Budget::iterations(3000));
+        assert!(
+            report.counters.samples_invalid_with_copy > 0,
+            "{:?}",
+            report.counters
+        );
+        // Samples not (yet) connected, by where they stand and the history they copied.
+        let (mut slope_unanchored, mut elsewhere_unanchored) = (0, 0);
+        for n in planner.arena.nodes.iter() {
+            if n.in_tree()
+                || n.has(F_FREE)
+                || n.has(F_GOAL)
+                || n.has(F_START)
+                || n.attachment != Some(false)
+            {
+                continue;
+            }
+            if n.state[0] > 0.5 {
+                slope_unanchored += 1;
+            } else {
+                elsewhere_unanchored += 1;
+            }
+        }
+        assert_eq!(
+            slope_unanchored, 0,
+            "slope samples holding the unanchored history"
+        );
+        // ...and the check is not a blanket rejection: off the slope that history is kept.
+        assert!(elsewhere_unanchored > 0);
     }
 
     #[test]

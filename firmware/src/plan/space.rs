@@ -109,6 +109,13 @@ pub trait StateSpace {
     fn attachments_compatible(&self, resulting: &Self::Attachment, existing: &Self::Attachment) -> bool {
         resulting == existing
     }
+    /// Is `state` valid when it holds `attachment`? The attachment-dependent part of state validity (the tethered
+    /// rover: statically stable with the tether pulling towards the history's last anchor), checked for a new
+    /// sample that copied an attachment from a neighbour (Paton et al. V-A); a sample that fails is not added.
+    /// Default: valid.
+    fn valid_with_attachment(&self, _state: &Self::State, _attachment: &Self::Attachment) -> bool {
+        true
+    }
 }
 
 /// State validity (OMPL `StateValidityChecker`): attachment-independent checks of one state (bounds, collision,
@@ -371,6 +378,8 @@ pub struct Counters {
     pub memo_hits: u32,
     /// Valid samples added.
     pub samples_added: u32,
+    /// Samples dropped because they were invalid with the attachment they copied (non-Markovian spaces).
+    pub samples_invalid_with_copy: u32,
     /// Rewirings (parent replaced).
     pub rewirings: u32,
     /// Graph prunings.

@@ -12,8 +12,10 @@
 //! plus a uniform perturbation of up to `fall_line_yaw_spread_rad` ([`fall_line_theta`]). Axel holds a steep slope
 //! only along the fall line (on the 55-degree slope of Paton et al. VI-A a pose turned 15 degrees off it is already
 //! unstable), so a uniformly drawn yaw would waste eleven samples in twelve there; and facing downhill loses nothing,
-//! because the rover is symmetric and drives either way. A failed settle (no ground, body collision, unknown space, budget) is a failed draw. The planner only
-//! ever sees settled states, so state validity is settledness; attachment-dependent checks belong to the motion.
+//! because the rover is symmetric and drives either way. A failed settle (no ground, body collision, unknown space,
+//! budget) is a failed draw. The planner only ever sees settled states, so state validity is settledness; the
+//! attachment-dependent checks belong to the motion, except for a sample that copied a neighbour's anchor history
+//! (Paton et al. V-A), which must be stable with it (`StateSpace::valid_with_attachment`).
 //!
 //! # Motions ([`TetherMotionValidator`])
 //! From `a` to `b`: turn in place at `a` to the drive heading, drive the straight line from `a.ground` to
@@ -822,6 +824,11 @@ impl<D: DistanceField> StateSpace for TetherSpace<'_, D> {
     }
     fn attachments_compatible(&self, resulting: &AnchorHistory, existing: &AnchorHistory) -> bool {
         self.histories_match(resulting, existing)
+    }
+    /// Statically stable with the tether pulling towards the history's pull anchor, margin at least
+    /// `min_stability_margin` (the end-state check of a motion that keeps this history).
+    fn valid_with_attachment(&self, state: &RoverState, attachment: &AnchorHistory) -> bool {
+        self.stable_with(&state.settled, attachment).is_ok()
     }
 }
 
