@@ -90,6 +90,8 @@ pub struct CampaignSpec {
     pub field: PlanningField,
     /// Space parameters.
     pub params: TetherSpaceParams,
+    /// The rover, for planning (plus the map's clearance, [`planning_rover`]) and re-validation.
+    pub rover: RoverParams,
     /// Planner parameters.
     pub abit: AbitParams,
 }
@@ -272,7 +274,7 @@ fn anchors_of(h: &AnchorHistory) -> Vec<[f64; 3]> {
 /// (the map's surfaces are off by up to about half a voxel, more at edges such as the pole; re-validation on the
 /// ground truth uses Axel's own clearance).
 pub fn planning_rover(spec: &CampaignSpec) -> RoverParams {
-    let mut r = RoverParams::AXEL;
+    let mut r = spec.rover;
     if spec.field == PlanningField::Map {
         r.body_clearance_m += spec.voxel_m as Real;
     }
@@ -306,7 +308,7 @@ pub fn revalidate(world: &dyn World, spec: &CampaignSpec, path: &[RoverState]) -
     params.min_stability_margin = params.min_stability_margin.min(0.0);
     let fail = |failure: String, h: &AnchorHistory| Revalidation { stable: false, failure: Some(failure), final_anchors: anchors_of(h) };
     let root = AnchorHistory::new(Anchor::root(v3(spec.root)));
-    let space = match TetherSpace::new(&truth, spec.bounds, RoverParams::AXEL, params) {
+    let space = match TetherSpace::new(&truth, spec.bounds, spec.rover, params) {
         Ok(s) => s,
         Err((f, r)) => return fail(format!("{f}: {r}"), &root),
     };
@@ -429,6 +431,8 @@ pub struct CampaignResult {
     pub wall_s: f64,
     /// Worker threads.
     pub threads: usize,
+    /// The rover's wheel-terrain friction coefficient.
+    pub wheel_mu: f32,
 }
 
 /// Mean and sample standard deviation.
@@ -461,7 +465,7 @@ impl CampaignResult {
         let all = &self.trials;
         let mut s = String::new();
         s += &format!(
-            "campaign {}: {} trials x {} iterations, planning on {}, {} threads, {:.1} s wall\n",
+            "campaign {}: {} trials x {} iterations, planning on {}, wheel mu {:.2}, {} threads, {:.1} s wall\n",
             self.name,
             all.len(),
             self.iterations,
@@ -469,6 +473,7 @@ impl CampaignResult {
                 PlanningField::Map => format!("the onboard map ({:.2} m voxels, {} blocks, built in {:.1} s)", self.voxel_m, self.map_blocks, self.map_build_s),
                 PlanningField::Truth => "the exact world".to_string(),
             },
+            self.wheel_mu,
             self.threads,
             self.wall_s
         );
@@ -575,6 +580,7 @@ pub fn run(spec: &CampaignSpec, progress: &(dyn Fn(usize, usize) + Sync)) -> Res
         trials,
         wall_s: t0.elapsed().as_secs_f64(),
         threads: spec.threads,
+        wheel_mu: spec.rover.wheel_mu,
     })
 }
 

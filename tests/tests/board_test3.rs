@@ -24,20 +24,11 @@ fn unif(r: &mut rand_pcg::Pcg64, lo: f64, hi: f64) -> f64 {
 /// The scenario's world, built the way the campaign builds it (by the scenario file's `world.kind`).
 fn scenario_spec(iterations: u32) -> CampaignSpec {
     spec_from(&CampaignArgs {
-        scenario: "ledge_test3".into(),
         trials: Some(1),
         iterations: Some(iterations),
-        seed: None,
         threads: Some(1),
-        voxel: 0.1,
         field: "truth".into(),
-        out: None,
-        samples_per_batch: None,
-        rewire_factor: None,
-        copy_fraction: None,
-        no_twins: false,
-        min_margin: None,
-        require_stable: None,
+        ..CampaignArgs::new("ledge_test3")
     })
     .unwrap()
 }

@@ -10,22 +10,7 @@ use host_sim::campaign::{self, revalidate, CampaignResult, Truth};
 use host_sim::cli::campaign::{spec_from, CampaignArgs};
 
 fn args(scenario: &str, trials: u32, iterations: u32) -> CampaignArgs {
-    CampaignArgs {
-        scenario: scenario.into(),
-        trials: Some(trials),
-        iterations: Some(iterations),
-        seed: None,
-        threads: Some(2),
-        voxel: 0.1,
-        field: "map".into(),
-        out: None,
-        samples_per_batch: None,
-        rewire_factor: None,
-        copy_fraction: None,
-        no_twins: false,
-        min_margin: None,
-        require_stable: None,
-    }
+    CampaignArgs { trials: Some(trials), iterations: Some(iterations), threads: Some(2), ..CampaignArgs::new(scenario) }
 }
 
 fn run(a: &CampaignArgs) -> CampaignResult {

@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+use firmware::config::rover::RoverParams;
 use firmware::geom::Real;
 use firmware::plan::abit::AbitParams;
 use firmware::plan::tethered::{PlanBounds, TetherSpaceParams};
@@ -52,9 +53,36 @@ pub struct CampaignArgs {
     /// Smallest stability margin of a planned state (default `config::tethered::defaults::MIN_STABILITY_MARGIN`).
     #[arg(long)]
     pub min_margin: Option<f64>,
+    /// Wheel-terrain friction coefficient of the rover, for planning and re-validation alike (default
+    /// `RoverParams::AXEL`'s 0.6); a sensitivity knob: the width of test 3's stable corridor depends on it.
+    #[arg(long)]
+    pub wheel_mu: Option<f32>,
     /// Exit with status 1 unless at least this many trials are found stable.
     #[arg(long)]
     pub require_stable: Option<usize>,
+}
+
+impl CampaignArgs {
+    /// `scenario` with every option at its default.
+    pub fn new(scenario: &str) -> Self {
+        Self {
+            scenario: scenario.into(),
+            trials: None,
+            iterations: None,
+            seed: None,
+            threads: None,
+            voxel: 0.1,
+            field: "map".into(),
+            out: None,
+            samples_per_batch: None,
+            rewire_factor: None,
+            copy_fraction: None,
+            no_twins: false,
+            min_margin: None,
+            wheel_mu: None,
+            require_stable: None,
+        }
+    }
 }
 
 /// Resolve a scenario argument to a file.
@@ -116,6 +144,13 @@ pub fn spec_from(a: &CampaignArgs) -> Result<CampaignSpec, String> {
         params.min_stability_margin = m;
     }
     params.validate().map_err(|(f, r)| format!("{f}: {r}"))?;
+    let mut rover = RoverParams::AXEL;
+    if let Some(mu) = a.wheel_mu {
+        if !(mu > 0.0 && mu.is_finite()) {
+            return Err(format!("--wheel-mu {mu}: must be > 0"));
+        }
+        rover.wheel_mu = mu;
+    }
     let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())).max(1);
     Ok(CampaignSpec {
         name: sc.name.clone(),
@@ -133,6 +168,7 @@ pub fn spec_from(a: &CampaignArgs) -> Result<CampaignSpec, String> {
         threads,
         field,
         params,
+        rover,
         abit,
     })
 }
