@@ -433,6 +433,8 @@ pub struct CampaignResult {
     pub threads: usize,
     /// The rover's wheel-terrain friction coefficient.
     pub wheel_mu: f32,
+    /// Whether dead edges left the queue without an iteration (`AbitParams::drop_dead_edges`).
+    pub drop_dead_edges: bool,
 }
 
 /// Mean and sample standard deviation.
@@ -477,6 +479,9 @@ impl CampaignResult {
             self.threads,
             self.wall_s
         );
+        if self.drop_dead_edges {
+            s += "iterations with BIT*'s edge-queue pruning (--drop-dead-edges): not OMPL's (or the paper's) count\n";
+        }
         s += "| found stable | found unstable | not found | time to first solution [s] mean (sd) | iterations to first solution mean (sd) |\n|---|---|---|---|---|\n";
         s += &format!(
             "| {} | {} | {} | {} | {} |\n",
@@ -581,6 +586,7 @@ pub fn run(spec: &CampaignSpec, progress: &(dyn Fn(usize, usize) + Sync)) -> Res
         wall_s: t0.elapsed().as_secs_f64(),
         threads: spec.threads,
         wheel_mu: spec.rover.wheel_mu,
+        drop_dead_edges: spec.abit.drop_dead_edges,
     })
 }
 

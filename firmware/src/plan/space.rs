@@ -374,6 +374,8 @@ pub struct Counters {
     pub states_checked: u32,
     /// Edges popped from the queue.
     pub edges_popped: u32,
+    /// Queued edges dropped without an iteration (`AbitParams::drop_dead_edges`).
+    pub edges_dropped: u32,
     /// Edge evaluations answered by the memo (OMPL's white/black lists).
     pub memo_hits: u32,
     /// Valid samples added.

@@ -53,6 +53,10 @@ pub struct CampaignArgs {
     /// Smallest stability margin of a planned state (default `config::tethered::defaults::MIN_STABILITY_MARGIN`).
     #[arg(long)]
     pub min_margin: Option<f64>,
+    /// BIT*'s edge-queue pruning as the paper states it: edges that can no longer improve their child leave the
+    /// queue without an iteration (OMPL discards them at the front, one iteration each). Not OMPL's count.
+    #[arg(long)]
+    pub drop_dead_edges: bool,
     /// Wheel-terrain friction coefficient of the rover, for planning and re-validation alike (default
     /// `RoverParams::AXEL`'s 0.6); a sensitivity knob: the width of test 3's stable corridor depends on it.
     #[arg(long)]
@@ -79,6 +83,7 @@ impl CampaignArgs {
             copy_fraction: None,
             no_twins: false,
             min_margin: None,
+            drop_dead_edges: false,
             wheel_mu: None,
             require_stable: None,
         }
@@ -139,6 +144,7 @@ pub fn spec_from(a: &CampaignArgs) -> Result<CampaignSpec, String> {
         abit.attachment_copy_fraction = f;
     }
     abit.history_twins = !a.no_twins;
+    abit.drop_dead_edges = a.drop_dead_edges;
     let mut params = TetherSpaceParams::DEFAULT;
     if let Some(m) = a.min_margin {
         params.min_stability_margin = m;
