@@ -51,37 +51,53 @@ pub trait ConstInit: Sized {
 /// Unlike a `Lent` in `.data`, the initial image is not copied to SRAM at every boot (the flight mode never pays
 /// for the benchmark's arenas); it is copied from flash (`.rodata`) when the slot is first taken. The copy is a
 /// `memcpy` from the constant's image, not a stack temporary (checked by the bench run's stack high-water mark).
-pub struct PsramSlot<T> {
-    taken: AtomicBool,
-    value: UnsafeCell<MaybeUninit<T>>,
-}
-
-// SAFETY: as for `Lent`: the value is reachable only through the single `&'static mut` handed out by `take`.
-unsafe impl<T: Send> Sync for PsramSlot<T> {}
+pub struct PsramSlot<T>(OnceUninit<T>);
 
 impl<T: ConstInit> PsramSlot<T> {
     /// An empty slot (all-zero bytes, as `.psram` requires).
     pub const fn new() -> Self {
+        Self(OnceUninit::new())
+    }
+
+    /// The one mutable borrow, initialised to `T::INIT`; `None` if it was already taken.
+    #[allow(clippy::mut_from_ref)] // unique: `OnceUninit::claim`
+    pub fn take(&'static self) -> Option<&'static mut T> {
+        let slot = self.0.claim()?;
+        // SAFETY: the slot is valid, aligned memory for a `T` (a static of `MaybeUninit<T>`); after the write it
+        // holds an initialised `T`. (A raw write of the constant: no stack temporary of a large `T`.)
+        unsafe {
+            slot.as_mut_ptr().write(T::INIT);
+            Some(slot.assume_init_mut())
+        }
+    }
+}
+
+/// A static that starts uninitialised and is lent once: the part [`PsramSlot`] and [`ZeroedSlot`] share.
+struct OnceUninit<T> {
+    taken: AtomicBool,
+    value: UnsafeCell<MaybeUninit<T>>,
+}
+
+// SAFETY: as for `Lent`: the memory is reachable only through the single `&'static mut` handed out by `claim`.
+unsafe impl<T: Send> Sync for OnceUninit<T> {}
+
+impl<T> OnceUninit<T> {
+    const fn new() -> Self {
         Self {
             taken: AtomicBool::new(false),
             value: UnsafeCell::new(MaybeUninit::uninit()),
         }
     }
 
-    /// The one mutable borrow, initialised to `T::INIT`; `None` if it was already taken.
+    /// The slot's memory, once; `None` if it was already claimed.
     #[allow(clippy::mut_from_ref)]
-    pub fn take(&'static self) -> Option<&'static mut T> {
+    fn claim(&'static self) -> Option<&'static mut MaybeUninit<T>> {
         if self.taken.swap(true, Ordering::AcqRel) {
             return None;
         }
-        // SAFETY: the flag was false, so no reference to the value exists, and none will be created later except
-        // the one returned here. The slot is valid, aligned memory for a `T` (a static of `MaybeUninit<T>`);
-        // after the write it holds an initialised `T`.
-        unsafe {
-            let slot = &mut *self.value.get();
-            slot.as_mut_ptr().write(T::INIT);
-            Some(slot.assume_init_mut())
-        }
+        // SAFETY: the flag was false, so no reference to the memory exists, and it is now true forever, so none
+        // will be created later. The static lives for the whole program.
+        Some(unsafe { &mut *self.value.get() })
     }
 }
 
@@ -115,36 +131,23 @@ pub fn zero_psram() {
 pub unsafe trait ZeroIsEmpty {}
 
 /// A static in SRAM's `.uninit` section (NOLOAD: neither loaded nor zeroed at boot, so the flight mode's boot does
-/// not pay for it) for an arena too big for what `.psram` has left. [`ZeroedSlot::take`] zeroes it in place with a
-/// bounded word loop (no stack temporary, no flash image) and lends it once, like [`Lent`].
-pub struct ZeroedSlot<T> {
-    taken: AtomicBool,
-    value: UnsafeCell<MaybeUninit<T>>,
-}
-
-// SAFETY: as for `Lent`: the value is reachable only through the single `&'static mut` handed out by `take`.
-unsafe impl<T: Send> Sync for ZeroedSlot<T> {}
+/// not pay for it) for an arena too big for what `.psram` has left. [`ZeroedSlot::take`] zeroes it in place
+/// (`write_bytes`: no stack temporary, no flash image) and lends it once, like [`Lent`].
+pub struct ZeroedSlot<T>(OnceUninit<T>);
 
 impl<T: ZeroIsEmpty> ZeroedSlot<T> {
     /// An unused slot.
     pub const fn new() -> Self {
-        Self {
-            taken: AtomicBool::new(false),
-            value: UnsafeCell::new(MaybeUninit::uninit()),
-        }
+        Self(OnceUninit::new())
     }
 
     /// The one mutable borrow, zeroed (the empty `T`); `None` if it was already taken.
-    #[allow(clippy::mut_from_ref)]
+    #[allow(clippy::mut_from_ref)] // unique: `OnceUninit::claim`
     pub fn take(&'static self) -> Option<&'static mut T> {
-        if self.taken.swap(true, Ordering::AcqRel) {
-            return None;
-        }
-        // SAFETY: the flag was false, so no reference to the value exists, and none will be created later except
-        // the one returned here. The slot is valid, aligned memory for a `T`; `write_bytes` zeroes all of it, and
+        let slot = self.0.claim()?;
+        // SAFETY: the slot is valid, aligned memory for a `T`; `write_bytes` zeroes all of it, and
         // `T: ZeroIsEmpty` promises that all-zero bytes are a valid `T`.
         unsafe {
-            let slot = &mut *self.value.get();
             core::ptr::write_bytes(slot.as_mut_ptr(), 0, 1);
             Some(slot.assume_init_mut())
         }
