@@ -9,7 +9,7 @@
 //! in SRAM's `.uninit` (NOLOAD, not zeroed at boot; zeroed when taken), because the flight map leaves too little
 //! `.psram`. The ABIT* arena (~1.7 MiB) and the scan start all-zero (`Lent`);
 //! the local planner, D* Lite arena, BTM and homotopy workspace have non-zero empty states and are initialised in
-//! place from their `const` images in flash when the bench takes them (`PsramSlot`).
+//! place from their `const` images in flash when the bench takes them (`UninitSlot::take_init`).
 
 use cortex_m_semihosting::hprintln;
 use firmware::config::team::GLOBAL_GRID_MAX_CELLS;
@@ -22,7 +22,7 @@ use firmware::workload::test3::{Test3Arena, Test3Path, Test3Storage};
 use firmware::workload::{Arenas, Harness, WallGapArena, SCAN_POINTS};
 
 use crate::clock::SysTickClock;
-use crate::storage::{ConstInit, Lent, PsramSlot, ZeroIsEmpty, ZeroedSlot};
+use crate::storage::{ConstInit, Lent, UninitSlot, ZeroIsEmpty};
 
 impl ConstInit for DefaultLocalPlanner {
     const INIT: Self = DefaultLocalPlanner::new();
@@ -51,17 +51,17 @@ unsafe impl ZeroIsEmpty for Test3Storage {}
 // The opt-in test-3 workload's arena and path (~1.5 MB): in SRAM's `.uninit` (not zeroed at boot), because the
 // flight map's blocks leave under 1 MiB of `.psram`; zeroed when the workload takes it.
 #[link_section = ".uninit.TEST3"]
-static TEST3: ZeroedSlot<Test3Storage> = ZeroedSlot::new();
+static TEST3: UninitSlot<Test3Storage> = UninitSlot::new();
 #[link_section = ".psram"]
 static SCAN: Lent<[Vec3; SCAN_POINTS]> = Lent::new([Vec3::new(0.0, 0.0, 0.0); SCAN_POINTS]);
 #[link_section = ".psram"]
-static LOCAL: PsramSlot<DefaultLocalPlanner> = PsramSlot::new();
+static LOCAL: UninitSlot<DefaultLocalPlanner> = UninitSlot::new();
 #[link_section = ".psram"]
-static DSTAR: PsramSlot<DStarArena<GLOBAL_GRID_MAX_CELLS>> = PsramSlot::new();
+static DSTAR: UninitSlot<DStarArena<GLOBAL_GRID_MAX_CELLS>> = UninitSlot::new();
 #[link_section = ".psram"]
-static BTM: PsramSlot<Btm> = PsramSlot::new();
+static BTM: UninitSlot<Btm> = UninitSlot::new();
 #[link_section = ".psram"]
-static HOMOTOPY: PsramSlot<Workspace> = PsramSlot::new();
+static HOMOTOPY: UninitSlot<Workspace> = UninitSlot::new();
 
 struct Board<'a> {
     clock: &'a mut SysTickClock,
@@ -87,11 +87,11 @@ impl Harness for Board<'_> {
 pub fn run(clock: &mut SysTickClock) {
     let (Some(abit), Some(local), Some(scan), Some(dstar), Some(btm), Some(homotopy)) = (
         ABIT.take(),
-        LOCAL.take(),
+        LOCAL.take_init(),
         SCAN.take(),
-        DSTAR.take(),
-        BTM.take(),
-        HOMOTOPY.take(),
+        DSTAR.take_init(),
+        BTM.take_init(),
+        HOMOTOPY.take_init(),
     ) else {
         return;
     };
@@ -115,7 +115,7 @@ pub fn run(clock: &mut SysTickClock) {
 /// Runs the opt-in test-3 workload (`iterations` ABIT* iterations) on its `.psram` storage and prints the
 /// storage's size: `bench: test3_storage_bytes=<B> arena_bytes=<A> path_bytes=<P>`.
 pub fn run_test3(clock: &mut SysTickClock, iterations: u32) {
-    let Some(storage) = TEST3.take() else {
+    let Some(storage) = TEST3.take_zeroed() else {
         return;
     };
     hprintln!(

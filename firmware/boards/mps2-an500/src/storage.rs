@@ -40,49 +40,30 @@ impl<T> Lent<T> {
     }
 }
 
-/// A value with a compile-time initial state (the empty arena), copied into a [`PsramSlot`] on first use.
+/// A value with a compile-time initial state (the empty arena), copied into an [`UninitSlot`] on first use.
 pub trait ConstInit: Sized {
     /// The initial value.
     const INIT: Self;
 }
 
-/// A static in `.psram` (NOLOAD, zeroed at boot) for a value whose initial state is not all zero bytes: it starts
-/// uninitialised and [`PsramSlot::take`] writes `T::INIT` into it in place, once, then lends it like [`Lent`].
-/// Unlike a `Lent` in `.data`, the initial image is not copied to SRAM at every boot (the flight mode never pays
-/// for the benchmark's arenas); it is copied from flash (`.rodata`) when the slot is first taken. The copy is a
-/// `memcpy` from the constant's image, not a stack temporary (checked by the bench run's stack high-water mark).
-pub struct PsramSlot<T>(OnceUninit<T>);
-
-impl<T: ConstInit> PsramSlot<T> {
-    /// An empty slot (all-zero bytes, as `.psram` requires).
-    pub const fn new() -> Self {
-        Self(OnceUninit::new())
-    }
-
-    /// The one mutable borrow, initialised to `T::INIT`; `None` if it was already taken.
-    #[allow(clippy::mut_from_ref)] // unique: `OnceUninit::claim`
-    pub fn take(&'static self) -> Option<&'static mut T> {
-        let slot = self.0.claim()?;
-        // SAFETY: the slot is valid, aligned memory for a `T` (a static of `MaybeUninit<T>`); after the write it
-        // holds an initialised `T`. (A raw write of the constant: no stack temporary of a large `T`.)
-        unsafe {
-            slot.as_mut_ptr().write(T::INIT);
-            Some(slot.assume_init_mut())
-        }
-    }
-}
-
-/// A static that starts uninitialised and is lent once: the part [`PsramSlot`] and [`ZeroedSlot`] share.
-struct OnceUninit<T> {
+/// A static that starts uninitialised and is lent once, initialised in place when taken, so the flight mode's boot
+/// never pays for the benchmark's arenas:
+/// - in `.psram` (NOLOAD, zeroed at boot) for a value whose initial state is not all zero bytes:
+///   [`UninitSlot::take_init`] writes `T::INIT` into it from its `const` image in flash (`.rodata`) — a `memcpy`,
+///   not a stack temporary (checked by the bench run's stack high-water mark);
+/// - in SRAM's `.uninit` (NOLOAD: neither loaded nor zeroed at boot) for an arena too big for what `.psram` has
+///   left: [`UninitSlot::take_zeroed`] zeroes it in place (`write_bytes`: no stack temporary, no flash image).
+pub struct UninitSlot<T> {
     taken: AtomicBool,
     value: UnsafeCell<MaybeUninit<T>>,
 }
 
 // SAFETY: as for `Lent`: the memory is reachable only through the single `&'static mut` handed out by `claim`.
-unsafe impl<T: Send> Sync for OnceUninit<T> {}
+unsafe impl<T: Send> Sync for UninitSlot<T> {}
 
-impl<T> OnceUninit<T> {
-    const fn new() -> Self {
+impl<T> UninitSlot<T> {
+    /// An unused slot (all-zero bytes, as `.psram` requires).
+    pub const fn new() -> Self {
         Self {
             taken: AtomicBool::new(false),
             value: UnsafeCell::new(MaybeUninit::uninit()),
@@ -99,6 +80,36 @@ impl<T> OnceUninit<T> {
         // will be created later. The static lives for the whole program.
         Some(unsafe { &mut *self.value.get() })
     }
+
+    /// The one mutable borrow, initialised to `T::INIT`; `None` if it was already taken.
+    #[allow(clippy::mut_from_ref)] // unique: `claim`
+    pub fn take_init(&'static self) -> Option<&'static mut T>
+    where
+        T: ConstInit,
+    {
+        let slot = self.claim()?;
+        // SAFETY: the slot is valid, aligned memory for a `T` (a static of `MaybeUninit<T>`); after the write it
+        // holds an initialised `T`. (A raw write of the constant: no stack temporary of a large `T`.)
+        unsafe {
+            slot.as_mut_ptr().write(T::INIT);
+            Some(slot.assume_init_mut())
+        }
+    }
+
+    /// The one mutable borrow, zeroed (the empty `T`); `None` if it was already taken.
+    #[allow(clippy::mut_from_ref)] // unique: `claim`
+    pub fn take_zeroed(&'static self) -> Option<&'static mut T>
+    where
+        T: ZeroIsEmpty,
+    {
+        let slot = self.claim()?;
+        // SAFETY: the slot is valid, aligned memory for a `T`; `write_bytes` zeroes all of it, and
+        // `T: ZeroIsEmpty` promises that all-zero bytes are a valid `T`.
+        unsafe {
+            core::ptr::write_bytes(slot.as_mut_ptr(), 0, 1);
+            Some(slot.assume_init_mut())
+        }
+    }
 }
 
 extern "C" {
@@ -107,7 +118,7 @@ extern "C" {
 }
 
 /// Zeroes the `.psram` section (see `memory.x`): statics placed there with `#[link_section = ".psram"]` must have
-/// an all-zero initial value (or be a [`PsramSlot`]). Called once at boot, before anything in `.psram` is used.
+/// an all-zero initial value (or be an [`UninitSlot`]). Called once at boot, before anything in `.psram` is used.
 /// Holds the benchmark's planning arenas (`planning.rs`); the executive's storage (132 KiB) stays in SRAM.
 pub fn zero_psram() {
     let start = core::ptr::addr_of_mut!(__spsram);
@@ -124,32 +135,8 @@ pub fn zero_psram() {
 }
 
 /// A type whose all-zero bit pattern is a valid (empty) value: empty `heapless` containers and the arenas made of
-/// them. Implementing it is a promise that [`ZeroedSlot::take`] may zero the bytes and use them as a `T`.
+/// them. Implementing it is a promise that [`UninitSlot::take_zeroed`] may zero the bytes and use them as a `T`.
 ///
 /// # Safety
 /// Every field of the type (recursively) must accept all-zero bytes as a valid value.
 pub unsafe trait ZeroIsEmpty {}
-
-/// A static in SRAM's `.uninit` section (NOLOAD: neither loaded nor zeroed at boot, so the flight mode's boot does
-/// not pay for it) for an arena too big for what `.psram` has left. [`ZeroedSlot::take`] zeroes it in place
-/// (`write_bytes`: no stack temporary, no flash image) and lends it once, like [`Lent`].
-pub struct ZeroedSlot<T>(OnceUninit<T>);
-
-impl<T: ZeroIsEmpty> ZeroedSlot<T> {
-    /// An unused slot.
-    pub const fn new() -> Self {
-        Self(OnceUninit::new())
-    }
-
-    /// The one mutable borrow, zeroed (the empty `T`); `None` if it was already taken.
-    #[allow(clippy::mut_from_ref)] // unique: `OnceUninit::claim`
-    pub fn take(&'static self) -> Option<&'static mut T> {
-        let slot = self.0.claim()?;
-        // SAFETY: the slot is valid, aligned memory for a `T`; `write_bytes` zeroes all of it, and
-        // `T: ZeroIsEmpty` promises that all-zero bytes are a valid `T`.
-        unsafe {
-            core::ptr::write_bytes(slot.as_mut_ptr(), 0, 1);
-            Some(slot.assume_init_mut())
-        }
-    }
-}
