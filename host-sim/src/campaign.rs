@@ -120,8 +120,8 @@ pub struct PlanningMap {
 }
 
 impl PlanningMap {
-    /// Fill a map of voxel `voxel_m` from `world`'s signed distance over the box `[lo, hi]`, then converge the
-    /// ESDF.
+    /// Fill a map of voxel `voxel_m` from `world`'s signed distance over the box `[lo, hi]` (exact up to the TSDF
+    /// truncation, [`World::query_up_to`]), then converge the ESDF.
     pub fn from_world(world: &dyn World, lo: [f64; 3], hi: [f64; 3], voxel_m: f64) -> Result<PlanningMap, String> {
         let t0 = Instant::now();
         let cfg = MapConfig::with_voxel_size(voxel_m as Real);
@@ -143,7 +143,10 @@ impl PlanningMap {
                     for k in 0..nz as i32 {
                         let g = [g0[0] + i, g0[1] + j, g0[2] + k];
                         let c = map.voxel_center(g);
-                        let DistanceQuery::Known { distance, .. } = world.query(&c) else { continue };
+                        // The TSDF keeps distances up to the truncation only: nothing farther needs to be exact.
+                        let DistanceQuery::Known { distance, .. } = world.query_up_to(&c, cfg.truncation) else {
+                            continue;
+                        };
                         map.set_voxel(g, distance, 1.0).map_err(|e| format!("planning map: {e:?}"))?;
                         voxels += 1;
                     }

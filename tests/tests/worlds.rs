@@ -258,3 +258,36 @@ fn shipped_npy_and_mesh_scenarios_load_and_validate() {
     assert!(((b.max.x - b.min.x) as f64 - 69.0 * 1.01).abs() < 1e-3, "{b:?}");
     assert!(((b.max.y - b.min.y) as f64 - 119.0 * 1.01).abs() < 1e-3, "{b:?}");
 }
+
+/// The truncated query that fills planning maps (`World::query_up_to`) on the Mars Yard DEM, over the box of the
+/// `marsyard_descent` scenario (a 4 m wall at 40-50 degrees): exact wherever the true distance is within the limit,
+/// of the right sign and beyond the limit elsewhere, so a TSDF truncated at the limit is the same either way.
+#[test]
+fn marsyard_truncated_query_is_exact_within_its_limit() {
+    let sc = scenario::load(&scenarios().join("marsyard_descent.toml")).unwrap_or_else(|e| panic!("{e}"));
+    let w = sc.build_world().unwrap();
+    let (Some(lo), Some(hi)) = (sc.plan.bounds_min, sc.plan.bounds_max) else { panic!("marsyard_descent has [plan] bounds") };
+    let mut u = Uni(7);
+    let (mut near, mut far) = (0, 0);
+    for i in 0..3000 {
+        // Half the points within 0.5 m of the ground, where the limit matters; the rest anywhere in the box.
+        let mut p = u.point(lo, hi, 0.0);
+        if i % 2 == 0 {
+            let h = w.height_at(p[0] as Real, p[1] as Real).unwrap() as f64;
+            p[2] = h + u.range(-0.5, 0.5);
+        }
+        let exact = sd(w.as_ref(), p);
+        for limit in [0.15f32, 0.3] {
+            let DistanceQuery::Known { distance, .. } = w.query_up_to(&v3(p), limit) else { panic!("{p:?}: unknown") };
+            let (d, l) = (distance as f64, limit as f64);
+            if exact.abs() <= l {
+                assert_eq!(distance, exact as f32, "{p:?} limit {limit}: {d} vs exact {exact}");
+                near += 1;
+            } else {
+                assert!(d.signum() == exact.signum() && d.abs() > l, "{p:?} limit {limit}: {d} vs exact {exact}");
+                far += 1;
+            }
+        }
+    }
+    assert!(near > 1000 && far > 1000, "near {near}, far {far}");
+}

@@ -137,13 +137,20 @@ impl HeightmapWorld {
     /// Signed distance and closest surface point (f64). `None` only if the grid has no triangle at all nearby
     /// within `exact_radius_m` rings.
     pub fn sdf_closest(&self, p: P3) -> Option<(f64, P3)> {
+        self.sdf_closest_within(p, self.exact_radius_m)
+    }
+
+    /// [`Self::sdf_closest`] with the search stopped at `radius` instead of `exact_radius_m`: exact when the true
+    /// distance is at most `radius`; otherwise an upper bound of it that exceeds `radius`, or `None` when no
+    /// triangle lies within the rings searched.
+    pub fn sdf_closest_within(&self, p: P3, radius: f64) -> Option<(f64, P3)> {
         let ci = (((p[0] - self.x0) / self.spacing).floor() as i64).clamp(0, self.nx as i64 - 2);
         let cj = (((p[1] - self.y0) / self.spacing).floor() as i64).clamp(0, self.ny as i64 - 2);
         // Horizontal distance from p to the clamped cell (p may be outside the grid).
         let gx = (self.x0 + ci as f64 * self.spacing - p[0]).max(p[0] - (self.x0 + (ci + 1) as f64 * self.spacing)).max(0.0);
         let gy = (self.y0 + cj as f64 * self.spacing - p[1]).max(p[1] - (self.y0 + (cj + 1) as f64 * self.spacing)).max(0.0);
         let outside = (gx * gx + gy * gy).sqrt();
-        let max_ring = ((self.exact_radius_m + outside) / self.spacing).ceil() as i64 + 1;
+        let max_ring = ((radius + outside) / self.spacing).ceil() as i64 + 1;
         let mut best: Option<(f64, P3, [P3; 3])> = None;
         for k in 0..=max_ring.min(self.nx.max(self.ny) as i64) {
             if let Some((d, _, _)) = best {
@@ -183,23 +190,25 @@ impl HeightmapWorld {
     }
 }
 
+impl HeightmapWorld {
+    fn distance_query(q: P3, closest: Option<(f64, P3)>) -> DistanceQuery {
+        let Some((d, c)) = closest else { return DistanceQuery::Unknown };
+        let v = sub(q, c);
+        let n = norm(v);
+        let s = if d >= 0.0 { 1.0 } else { -1.0 };
+        let gradient = if n > 1e-12 {
+            Vec3::new((s * v[0] / n) as Real, (s * v[1] / n) as Real, (s * v[2] / n) as Real)
+        } else {
+            Vec3::zeros()
+        };
+        DistanceQuery::Known { distance: d as Real, gradient }
+    }
+}
+
 impl DistanceField for HeightmapWorld {
     fn query(&self, p: &Vec3) -> DistanceQuery {
         let q = [p.x as f64, p.y as f64, p.z as f64];
-        match self.sdf_closest(q) {
-            Some((d, c)) => {
-                let v = sub(q, c);
-                let n = norm(v);
-                let s = if d >= 0.0 { 1.0 } else { -1.0 };
-                let gradient = if n > 1e-12 {
-                    Vec3::new((s * v[0] / n) as Real, (s * v[1] / n) as Real, (s * v[2] / n) as Real)
-                } else {
-                    Vec3::zeros()
-                };
-                DistanceQuery::Known { distance: d as Real, gradient }
-            }
-            None => DistanceQuery::Unknown,
-        }
+        Self::distance_query(q, self.sdf_closest(q))
     }
 }
 
@@ -249,6 +258,16 @@ impl World for HeightmapWorld {
 
     fn height_at(&self, x: Real, y: Real) -> Option<Real> {
         self.height(x as f64, y as f64).map(|h| h as Real)
+    }
+
+    /// The ring search stopped at `limit`: a voxel far from the surface costs a few rings instead of
+    /// `(distance / spacing)^2` cells. No triangle within `limit` (a hole): the full search.
+    fn query_up_to(&self, p: &Vec3, limit: Real) -> DistanceQuery {
+        let q = [p.x as f64, p.y as f64, p.z as f64];
+        match self.sdf_closest_within(q, f64::from(limit).min(self.exact_radius_m)) {
+            Some(found) => Self::distance_query(q, Some(found)),
+            None => self.query(p),
+        }
     }
 }
 

@@ -12,7 +12,7 @@ pub mod ledge;
 pub mod mesh;
 
 use firmware::geom::{Real, Vec3};
-use firmware::map::DistanceField;
+use firmware::map::{DistanceField, DistanceQuery};
 
 /// Axis-aligned bounds of a world, metres.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -33,4 +33,11 @@ pub trait World: DistanceField + Send + Sync {
     fn raycast(&self, origin: &Vec3, dir: &Vec3, max_range: Real) -> Option<Real>;
     /// Terrain height under (x, y) if the world is a height field (top surface), else `None`.
     fn height_at(&self, x: Real, y: Real) -> Option<Real>;
+    /// The signed distance where only values up to `limit` matter (a TSDF truncated at `limit`): exact when the
+    /// true distance is at most `limit`, otherwise of the right sign and larger than `limit` in magnitude. The
+    /// default is the exact [`DistanceField::query`]; worlds whose exact query slows with the distance override it.
+    fn query_up_to(&self, p: &Vec3, limit: Real) -> DistanceQuery {
+        let _ = limit;
+        self.query(p)
+    }
 }
