@@ -335,7 +335,10 @@ pub fn settle(map: &impl DistanceField, p_m: &Vec3, theta_m: Real, params: &Rove
 }
 
 fn pose_from(origin: &Vec3, rot: &Matrix3<Real>) -> Pose3 {
-    let r = Rot3::from_matrix_eps(rot, 1e-6, 8, Rot3::identity());
+    // `rot` is orthonormal by construction (an orthonormal frame times a rotation about x): take it as it is, up to
+    // f32 rounding. (An iterative nearest-rotation fit started from the identity, as this once was, stops short
+    // of yaws far from 0 and left the pose several degrees off the frame the wheels were settled in.)
+    let r = Rot3::from_rotation_matrix(&nalgebra::Rotation3::from_matrix_unchecked(*rot));
     Pose3::from_parts(Translation3::new(origin.x, origin.y, origin.z), r)
 }
 
@@ -517,6 +520,29 @@ mod tests {
     impl DistanceField for Nothing {
         fn query(&self, _: &Vec3) -> DistanceQuery {
             DistanceQuery::Unknown
+        }
+    }
+
+    /// The pose is the frame the wheels were settled in: x along the requested yaw about the normal (measured from
+    /// world x projected on the plane), z along the normal, for every yaw (yaws near pi once came out ~10 degrees
+    /// off).
+    #[test]
+    fn the_pose_is_the_settled_frame_at_every_yaw() {
+        let params = RoverParams::AXEL;
+        for alpha_deg in [0.0f32, 30.0, 45.0] {
+            let plane = Plane::new(alpha_deg.to_radians());
+            let n = plane.n;
+            let t0 = normalize3(&(Vec3::x() - n * n.x), 1e-6).unwrap();
+            for k in 0..24 {
+                let yaw = -core::f32::consts::PI + k as Real * core::f32::consts::PI / 12.0 + 0.01;
+                let SettleOutcome::Settled(s) = settle(&plane, &Vec3::new(0.3, 0.2, 0.0), yaw, &params) else {
+                    panic!("no settle at {alpha_deg} {yaw}");
+                };
+                let want_x = t0 * libm::cosf(yaw) + n.cross(&t0) * libm::sinf(yaw);
+                let x = s.pose.rotation * Vec3::x();
+                assert!(x.dot(&want_x) > 0.99995, "slope {alpha_deg} yaw {yaw}: x {x:?}, want {want_x:?}");
+                assert!(rover_up(&s).dot(&n) > 0.99995, "slope {alpha_deg} yaw {yaw}: up {:?}", rover_up(&s));
+            }
         }
     }
 
