@@ -61,6 +61,10 @@ pub struct CampaignArgs {
     /// `RoverParams::AXEL`'s 0.6); a sensitivity knob: the width of test 3's stable corridor depends on it.
     #[arg(long)]
     pub wheel_mu: Option<f32>,
+    /// Half-width of the yaw perturbation about the fall line for samples on steep ground, degrees (default
+    /// `config::tethered::defaults::FALL_LINE_YAW_SPREAD_RAD`); 180 draws the yaw uniformly, as Paton et al. do.
+    #[arg(long)]
+    pub yaw_spread_deg: Option<f32>,
     /// Exit with status 1 unless at least this many trials are found stable.
     #[arg(long)]
     pub require_stable: Option<usize>,
@@ -85,6 +89,7 @@ impl CampaignArgs {
             min_margin: None,
             drop_dead_edges: false,
             wheel_mu: None,
+            yaw_spread_deg: None,
             require_stable: None,
         }
     }
@@ -148,6 +153,9 @@ pub fn spec_from(a: &CampaignArgs) -> Result<CampaignSpec, String> {
     let mut params = TetherSpaceParams::DEFAULT;
     if let Some(m) = a.min_margin {
         params.min_stability_margin = m;
+    }
+    if let Some(d) = a.yaw_spread_deg {
+        params.fall_line_yaw_spread_rad = d.to_radians();
     }
     params.validate().map_err(|(f, r)| format!("{f}: {r}"))?;
     let mut rover = RoverParams::AXEL;
