@@ -2,7 +2,7 @@
 //! section V ([`crate::plan::abit`] over [`crate::plan::tethered`]) run on the onboard map.
 //!
 //! The flight computer (mps2-an500) holds these arenas in SRAM `.bss` (the map's block pool fills the PSRAM); the
-//! sizes below keep the navigator's planning storage at about 2 MiB (`NavPlanStorage`, see `crate::nav`).
+//! sizes below keep the navigator's planning storage at about 1 MiB (`NavPlanStorage`, see `crate::nav`).
 
 /// Nodes of the on-board ABIT* arena (start, goals, samples and tree vertices). Default 512: five batches of
 /// [`SAMPLES_PER_BATCH`] with room for goals and history twins. A tethered node carries its anchor history
@@ -13,19 +13,10 @@ pub const EDGE_QUEUE_CAPACITY: usize = 4096;
 /// ABIT*'s own edge memo (OMPL's white/black lists) on board. Default 256 entries (each carries an anchor
 /// history); a full memo only costs repeated edge checks.
 pub const EDGE_MEMO_CAPACITY: usize = 256;
-/// Entries of the navigator's motion-check cache, which survives between `plan_step` calls (see `crate::nav`:
-/// the planner is rebuilt and replayed every call, and the cache answers the replayed motion checks). Default
-/// 512: more than the edges evaluated in a 750-iteration plan on the test-3 ledge; a full cache only costs
-/// repeated checks, never a different answer.
-pub const MOTION_CACHE_CAPACITY: usize = 512;
-/// Entries of the navigator's sample tape, which records the sampler calls of a replay so the next replay gets
-/// them without settling again (see `crate::nav`). Default 4096 (~0.6 MiB): a 750-iteration plan on the test worlds
-/// makes a few thousand sampler calls (informed sampling rejects most draws); a full tape only costs sampling.
-pub const SAMPLE_TAPE_CAPACITY: usize = 4096;
 /// New motion checks after which a `plan_step` call stops (after at least one new iteration), whatever its
 /// iteration allowance. Default 1: a motion check is tens of settles, anchor predictions and stability LPs (~8 M
 /// instructions each on the emulated Cortex-M7), so one per executive step keeps a step well inside the board's
-/// 2 s watchdog; replayed checks come from the motion cache and do not count.
+/// 2 s watchdog (a step that replays the search after a map change also redoes the checks before it).
 pub const MOTION_CHECKS_PER_STEP: u32 = 1;
 /// Samples per ABIT* batch on board when `Configure.planner.batch_size` asks for more. Default 100 (OMPL's).
 pub const SAMPLES_PER_BATCH: u32 = 100;

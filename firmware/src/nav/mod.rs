@@ -41,40 +41,29 @@
 //! when Axel drives the segment backwards) and a turn to the next state's yaw ([`segment_motions`], exactly the
 //! motions [`crate::plan::tethered::MotionPlan`] interpolated and the validator checked).
 //!
-//! ## Why the planner is replayed every step (no heap, no `unsafe`)
+//! ## Suspended between steps, replayed after a map change (no heap, no `unsafe`)
 //! [`AbitStar`](crate::plan::abit::AbitStar) borrows its arena, the space (which borrows the map), the validators,
-//! the problem and the generator for its whole life, and keeps its search state (inflation, goals, best solution)
-//! in itself, not in the arena. The navigator cannot keep it between executive steps: that would be a
-//! self-referential struct (the map view borrows the navigator's own storage, which scans must also mutate), and
-//! `AbitStar` has no way to hand its borrows back for the next goal. So every `plan_step` rebuilds the map view,
-//! the space and the planner on the lent arena and **replays** the search from the same seed to `done + iterations`
-//! iterations. The replay is exact (the search is deterministic, the map is the same), so the result equals one
-//! uninterrupted `solve`, and the best solution so far is always the replayed planner's. What makes an iteration
-//! expensive is answered during a replay from two records in the lent storage:
-//! - the **motion cache** (`MOTION_CACHE_CAPACITY` entries): a motion check (tens of settles, anchor predictions
-//!   and stability LPs) keyed by the exact bits of both end states and a 64-bit FNV-1a fingerprint of the start's
-//!   anchor history;
-//! - the **sample tape** (`SAMPLE_TAPE_CAPACITY` entries): the sampler calls (surface trace and settle) in call
-//!   order, each with the generator state before and after it. The generator is SplitMix64 with its state in a
-//!   shared cell (`nav::planning::CellRng`), so a replayed call whose state matches the tape's entry jumps to
-//!   the recorded state and returns the recorded sample.
+//! the problem and the generator for its whole life. The navigator cannot keep it between executive steps: that
+//! would be a self-referential struct (the map view borrows the navigator's own storage, which scans must also
+//! mutate). So every `plan_step` rebuilds the map view, the space and the problem, and
+//! - **resumes** the search the previous step suspended ([`AbitStar::suspend`](crate::plan::abit::AbitStar::suspend)
+//!   keeps the graph, queue and memo in the lent arena and returns the rest as plain data, held in
+//!   [`NavPlanStorage`] with the SplitMix64 generator's state; `resume` continues exactly where it stopped), or
+//! - after a scan (the map changed: the suspended search's motion checks no longer hold) **replays** it from the
+//!   goal's seed to `done + iterations` iterations on the new map (the start state settled at goal time is kept).
 //!
-//! Both are cleared whenever a scan changes the map or a goal arrives. Measured (`--release`, unit-test worlds,
-//! 96-iteration budget): with 8 iterations per step a plan ran 624 replayed iterations for 96 new ones, yet the same
-//! 160 stability problems and 276 + 11 settles (one goal settle per replay) as one uninterrupted run, in the same
-//! 0.34 s; on the 12-degree slope 3870 vs 3867 settles and 21 vs 21 stability problems. What a replay still repeats
-//! is queue and arena work (no geometry). A planner that could suspend into plain data and resume on lent borrows
-//! (`AbitStar::suspend` / `resume`, proposed to the owner of `plan::abit`) would remove that too; the navigator's
-//! interface would not change.
-//!
-//! Scans keep arriving while planning; each one changes the map, so the cache is cleared and the next replay plans
-//! on the new map (the start state settled at goal time is kept).
+//! A resumed search equals one uninterrupted `solve` (`plan::abit`'s
+//! `a_suspended_and_resumed_search_is_the_uninterrupted_search`; here `same_inputs_same_plan_whatever_the_step_size`:
+//! with 3 iterations per step, the same plan, iterations, motion checks and stability problems as in one step, and
+//! one extra settle per step, the goal state's). Until session 5 every step replayed the search, answering the
+//! replayed motion checks and samples from a motion cache and a sample tape (~1 MB of the storage, now gone); the
+//! replays still repeated the queue and arena work (624 replayed iterations for 96 new ones at 8 per step).
 //!
 //! ## Storage
 //! The block pool and the block index are owned by the caller and lent to the navigator for good (`Vec`s on the
-//! host, `&'static mut` slices in the board's PSRAM). So is the planning storage ([`NavPlanStorage`], ~2 MiB: the
-//! ABIT* arena, the motion cache, the sample tape, the best path and its motions; a `Box` on the host, a `static`
-//! in the board's SRAM).
+//! host, `&'static mut` slices in the board's PSRAM). So is the planning storage ([`NavPlanStorage`], ~1 MiB: the
+//! ABIT* arena, the suspended search, the best path and its motions; a `Box` on the host, a `static` in the
+//! board's SRAM).
 //! The navigator builds a short-lived [`Map`] view per call ([`Map::reattach`]), so it holds no borrow between
 //! calls.
 //!
@@ -83,7 +72,7 @@
 //! - [`NAV_POINT_BATCH`](crate::config::map::NAV_POINT_BATCH): points converted and integrated per batch
 //!   (default 256), the only stack buffer;
 //! - planning (`config::nav`): `NODE_CAPACITY` 512, `EDGE_QUEUE_CAPACITY` 4096, `EDGE_MEMO_CAPACITY` 256,
-//!   `MOTION_CACHE_CAPACITY` 512, `SAMPLE_TAPE_CAPACITY` 4096, `MOTION_CHECKS_PER_STEP` 1, `SAMPLES_PER_BATCH` 100, `MAX_PLAN_ITERATIONS` 750, `PATH_CAPACITY` 64,
+//!   `MOTION_CHECKS_PER_STEP` 1, `SAMPLES_PER_BATCH` 100, `MAX_PLAN_ITERATIONS` 750, `PATH_CAPACITY` 64,
 //!   `MOTION_CAPACITY` 189, `MIN_TURN_RAD` 1e-3, `MIN_DRIVE_M` 1e-3, `BOUNDS_Z_MARGIN_M` 0.5,
 //!   `TRACK_APPROXIMATE` true, `BOOM_MASS_FRACTION` 0.2; the space's parameters are
 //!   [`TetherSpaceParams::DEFAULT`](crate::plan::tethered::TetherSpaceParams::DEFAULT) and ABIT*'s
@@ -102,20 +91,22 @@
 //! ## Verified
 //! Unit tests (`nav::tests`): plans on mapped flat and 12-degree worlds whose motions, dead-reckoned, end in the goal
 //! region; a goal behind an unobserved gap ends approximate or unsolved; every refusal; per-step and goal budgets;
-//! the time budget; the same plan for the same inputs whatever the step size (replays), with no motion check or
-//! sample computed twice. `tests/tests/nav_planning.rs`: the same end to end over the link, and on the emulated
-//! board (QEMU mps2-an500) with identical output; there the planning storage is 2,013,976 bytes of SRAM `.bss`
-//! (`.bss` 2.15 MB of 4 MiB) and the stack high-water mark 102.5 KiB of 256 KiB.
+//! the time budget; the same plan for the same inputs whatever the step size (resumed), with no motion check or
+//! sample computed twice; a scan between steps makes the next step replay. `tests/tests/nav_planning.rs`: the same
+//! end to end over the link, and on the emulated board (QEMU mps2-an500) with identical output; there the planning
+//! storage is 1,031,328 bytes of SRAM `.bss` (`.bss` 1.17 MB of 4 MiB; 2,013,976 B with the replay caches of
+//! sessions 2-4) and the stack high-water mark 102.5 KiB of 256 KiB (session 2).
 //!
 //! Work per scan is bounded by `points * max_ray_voxels` voxel updates plus `esdf_max_sweeps` ESDF sweeps; an
 //! ESDF that runs out of sweeps is counted and continues with the next scan. Work per `plan_step` is bounded by
-//! the replayed iterations (at most `MAX_PLAN_ITERATIONS`), each bounded by the planner's own budgets.
+//! its new iterations and `MOTION_CHECKS_PER_STEP`, and after a map change by the replayed iterations (at most
+//! `MAX_PLAN_ITERATIONS`), each bounded by the planner's own budgets.
 
 mod planning;
 #[cfg(test)]
 mod tests;
 
-pub use planning::{segment_motions, CachedMotion, GoalRefusal, NavArena, NavPlanStats, NavPlanStorage};
+pub use planning::{segment_motions, GoalRefusal, NavArena, NavPlanStats, NavPlanStorage};
 
 use core::borrow::BorrowMut;
 
@@ -228,8 +219,8 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
 
     fn scan(&mut self, scan: &Scan<'_>, _now: Instant) {
         self.pose = Some(scan.sensor_pose);
-        // The map changes: cached motion checks no longer hold.
-        planning::clear_cache(&mut self.storage);
+        // The map changes: the suspended search's motion checks no longer hold; the next step replays it.
+        planning::forget_search(&mut self.storage);
         let sensor_pose = pose3(&scan.sensor_pose);
         let mut status = self.status;
         let Some(mut map) = self.map() else {

@@ -1,9 +1,8 @@
-//! Goal planning on board: the tethered ABIT* problem on the onboard map, replayed per executive step.
+//! Goal planning on board: the tethered ABIT* problem on the onboard map, suspended between executive steps.
 //! See the module docs of [`crate::nav`] for the design.
 
 use core::borrow::BorrowMut;
 use core::cell::Cell;
-use core::convert::Infallible;
 
 use hal::Instant;
 
@@ -14,10 +13,9 @@ use crate::config::tether::ANCHOR_HISTORY_CAPACITY;
 use crate::exec::{PlanBuffer, PlanProgress};
 use crate::geom::{norm3, Real, Vec3};
 use crate::map::{DistanceField, DistanceQuery, Map};
-use crate::plan::abit::{AbitArena, AbitParams, AbitStar};
+use crate::plan::abit::{AbitArena, AbitParams, AbitStar, AbitSuspended};
 use crate::plan::space::{
-    Budget, Cost, GoalState, InformedSample, MotionCheck, MotionValidator, OptimizationObjective, Planner,
-    PlannerStatus, ProblemDefinition, StateSpace, StateValidityChecker, Termination,
+    Budget, GoalState, MotionCheck, MotionValidator, Planner, PlannerStatus, ProblemDefinition, Termination,
 };
 use crate::plan::tethered::{
     MotionPlan, MotionStats, PlanBounds, RoverState, TetherMotionValidator, TetherObjective, TetherSpace, TetherSpaceParams,
@@ -26,7 +24,6 @@ use crate::plan::tethered::{
 use crate::protocol::{Configure, Motion, PlanState, Point3, Pose, Quat, Waypoint};
 use crate::tether::{Anchor, AnchorHistory};
 use crate::workload::SplitMix64;
-use rand_core::{Rng, TryRng};
 
 /// The on-board ABIT* arena (capacities of `config::nav`).
 pub type NavArena = AbitArena<
@@ -37,37 +34,19 @@ pub type NavArena = AbitArena<
     { cfg::EDGE_MEMO_CAPACITY },
 >;
 
-/// One remembered motion check: the exact end states, a fingerprint of the start's anchor history, the answer.
-#[derive(Debug, Clone)]
-pub struct CachedMotion {
-    key: u64,
-    from: [u32; 5],
-    to: [u32; 5],
-    history_len: u8,
-    result: Option<AnchorHistory>,
-}
-
-/// One recorded sampler call of a replay (see [`TapedSpace`]).
-#[derive(Debug, Clone)]
-pub struct TapedSample {
-    /// Generator state before the call.
-    before: u64,
-    /// Generator state after the call.
-    after: u64,
-    /// 0 for a uniform sample; a fingerprint of (start, goal, max_cost) for an informed one.
-    request: u64,
-    result: InformedSample<RoverState>,
-}
-
 /// The navigator's planning storage, lent like the map's (a `Box` on the host, a `static` on the board). Its empty
 /// state is all zero bytes (empty `heapless` vectors), so the board keeps it in `.bss`.
 pub struct NavPlanStorage {
     /// The ABIT* arena (nodes, edge queue, ABIT*'s own edge memo).
     pub arena: NavArena,
-    cache: heapless::Vec<CachedMotion, { cfg::MOTION_CACHE_CAPACITY }>,
-    tape: heapless::Vec<TapedSample, { cfg::SAMPLE_TAPE_CAPACITY }>,
     path: heapless::Vec<(RoverState, AnchorHistory), { cfg::PATH_CAPACITY }>,
     motions: heapless::Vec<Motion, { cfg::MOTION_CAPACITY }>,
+    /// The goal's search between executive steps ([`AbitStar::suspend`]), at most one; empty when the next step
+    /// must replay (a new goal, a changed map). A vector rather than an `Option`, so the empty storage stays all
+    /// zero bytes.
+    suspended: heapless::Vec<AbitSuspended<RoverState>, 1>,
+    /// The generator's state when the search was suspended.
+    rng_state: u64,
 }
 
 impl NavPlanStorage {
@@ -75,10 +54,10 @@ impl NavPlanStorage {
     pub const fn new() -> Self {
         Self {
             arena: AbitArena::new(),
-            cache: heapless::Vec::new(),
-            tape: heapless::Vec::new(),
             path: heapless::Vec::new(),
             motions: heapless::Vec::new(),
+            suspended: heapless::Vec::new(),
+            rng_state: 0,
         }
     }
     /// Bytes of the storage (for the board's memory report).
@@ -141,23 +120,17 @@ pub struct NavPlanStats {
     pub steps: u32,
     /// Planner iterations run, replays included (the work actually done).
     pub iterations_run: u64,
+    /// Steps that resumed the suspended search (the others replayed it: a new goal or a changed map).
+    pub resumes: u32,
     /// Settles run, replays included (samples, interpolated states of motion checks).
     pub settles_run: u64,
     /// Static-stability problems solved, replays included (motion checks and the plan's margins).
     pub stability_checks_run: u64,
-    /// Sampler calls answered from the sample tape.
-    pub tape_hits: u32,
-    /// Sampler calls run (and recorded while the tape has room).
-    pub tape_misses: u32,
-    /// Motion checks answered by the navigator's cache.
-    pub cache_hits: u32,
-    /// Motion checks computed.
-    pub cache_misses: u32,
-    /// Motion checks not cached because the cache was full.
-    pub cache_full: u32,
-    /// The space's work and motion-failure counters of the last replay (samples, settles, stability checks,
-    /// motions invalid by reason; cached motion checks are not counted again).
-    pub last_replay: MotionStats,
+    /// Motion checks run, replays included.
+    pub motion_checks_run: u32,
+    /// The space's work and motion-failure counters of the last step (samples, settles, stability checks, motions
+    /// invalid by reason).
+    pub last_step: MotionStats,
     /// Waypoints whose anchor history was shortened to `MAX_ANCHORS_PER_WAYPOINT` (root and most recent kept).
     pub anchors_truncated: u32,
 }
@@ -294,200 +267,21 @@ pub(crate) fn set_up(
     })
 }
 
-const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
-const FNV_PRIME: u64 = 0x0000_0100_0000_01b3;
-
-fn fnv(mut h: u64, word: u32) -> u64 {
-    for b in word.to_le_bytes() {
-        h = (h ^ u64::from(b)).wrapping_mul(FNV_PRIME);
-    }
-    h
+/// [`TetherMotionValidator`], counting the motion checks of one `plan_step` call (its stop predicate bounds them).
+struct CountedMotions<'c> {
+    checks: &'c Cell<u32>,
 }
 
-fn state_bits(s: &RoverState) -> [u32; 5] {
-    [s.ground.x.to_bits(), s.ground.y.to_bits(), s.ground.z.to_bits(), s.theta.to_bits(), u32::from(s.off_map)]
-}
-
-/// The motion validator of the replays: answers from the cache, or checks with [`TetherMotionValidator`] and
-/// remembers. A motion's validity and resulting history are a function of the two states (each a function of its
-/// ground point and yaw on the map), the start's anchor history and the map, which is fixed while the cache lives
-/// (the navigator clears it whenever a scan changes the map).
-struct CachedMotions<'c> {
-    cache: &'c mut heapless::Vec<CachedMotion, { cfg::MOTION_CACHE_CAPACITY }>,
-    hits: u32,
-    /// Motion checks computed in this call (shared with the step's stop predicate).
-    misses: &'c Cell<u32>,
-    full: u32,
-}
-
-impl<D: DistanceField> MotionValidator<TapedSpace<'_, '_, D>> for CachedMotions<'_> {
+impl<D: DistanceField> MotionValidator<TetherSpace<'_, D>> for CountedMotions<'_> {
     fn check_motion(
         &mut self,
-        space: &TapedSpace<'_, '_, D>,
+        space: &TetherSpace<'_, D>,
         from: &RoverState,
         from_attachment: &AnchorHistory,
         to: &RoverState,
     ) -> MotionCheck<AnchorHistory> {
-        let (fb, tb) = (state_bits(from), state_bits(to));
-        let mut key = FNV_OFFSET;
-        for w in fb.iter().chain(tb.iter()) {
-            key = fnv(key, *w);
-        }
-        for a in from_attachment.as_slice() {
-            for v in [a.point.x, a.point.y, a.point.z, a.gradient.x, a.gradient.y, a.gradient.z] {
-                key = fnv(key, v.to_bits());
-            }
-        }
-        let len = u8::try_from(from_attachment.len()).unwrap_or(u8::MAX);
-        let found = self.cache.iter().find(|c| c.key == key && c.from == fb && c.to == tb && c.history_len == len);
-        let result = match found {
-            Some(c) => {
-                self.hits = self.hits.saturating_add(1);
-                c.result.clone()
-            }
-            None => {
-                self.misses.set(self.misses.get().saturating_add(1));
-                let r = match TetherMotionValidator.check_motion(&space.inner, from, from_attachment, to) {
-                    MotionCheck::Valid { attachment } => Some(attachment),
-                    MotionCheck::Invalid => None,
-                };
-                let entry = CachedMotion { key, from: fb, to: tb, history_len: len, result: r.clone() };
-                if self.cache.push(entry).is_err() {
-                    self.full = self.full.saturating_add(1);
-                }
-                r
-            }
-        };
-        match result {
-            Some(attachment) => MotionCheck::Valid { attachment },
-            None => MotionCheck::Invalid,
-        }
-    }
-}
-
-/// SplitMix64 (Steele, Lea, Flood 2014) with its state in a shared cell, so the [`TapedSpace`] can read and set
-/// the state around a sampler call while the planner owns the generator.
-pub(crate) struct CellRng<'c>(pub &'c Cell<u64>);
-
-impl TryRng for CellRng<'_> {
-    type Error = Infallible;
-    fn try_next_u32(&mut self) -> Result<u32, Infallible> {
-        self.try_next_u64().map(|x| (x >> 32) as u32)
-    }
-    fn try_next_u64(&mut self) -> Result<u64, Infallible> {
-        let mut g = SplitMix64(self.0.get());
-        let x = g.try_next_u64()?;
-        self.0.set(g.0);
-        Ok(x)
-    }
-    fn try_fill_bytes(&mut self, dst: &mut [u8]) -> Result<(), Infallible> {
-        let mut g = SplitMix64(self.0.get());
-        g.try_fill_bytes(dst)?;
-        self.0.set(g.0);
-        Ok(())
-    }
-}
-
-/// The tethered space of the replays, with a **sample tape**: a replay makes the same sampler calls in the same
-/// order with the same generator states, so call `k` is answered from entry `k` of the tape when the generator
-/// state before it (and, for informed samples, the request) matches, and the generator jumps to the recorded
-/// state after it. A sample is a function of the generator's draws and the map only, so the answer is the one the
-/// call would compute. A mismatch (the map changed) truncates the tape there; a full tape only costs sampling.
-pub(crate) struct TapedSpace<'c, 'm, D> {
-    pub inner: TetherSpace<'m, D>,
-    rng: &'c Cell<u64>,
-    tape: &'c mut heapless::Vec<TapedSample, { cfg::SAMPLE_TAPE_CAPACITY }>,
-    cursor: usize,
-    hits: u32,
-    misses: u32,
-}
-
-impl<D: DistanceField> TapedSpace<'_, '_, D> {
-    fn taped(
-        &mut self,
-        request: u64,
-        run: impl FnOnce(&mut TetherSpace<'_, D>) -> InformedSample<RoverState>,
-    ) -> InformedSample<RoverState> {
-        let before = self.rng.get();
-        let recorded = self.tape.get(self.cursor).filter(|e| e.before == before && e.request == request);
-        if let Some(e) = recorded {
-            self.rng.set(e.after);
-            self.cursor = self.cursor.saturating_add(1);
-            self.hits = self.hits.saturating_add(1);
-            return e.result.clone();
-        }
-        self.tape.truncate(self.cursor);
-        self.misses = self.misses.saturating_add(1);
-        let result = run(&mut self.inner);
-        let entry = TapedSample { before, after: self.rng.get(), request, result: result.clone() };
-        if self.tape.push(entry).is_ok() {
-            self.cursor = self.cursor.saturating_add(1);
-        }
-        result
-    }
-}
-
-impl<D: DistanceField> StateSpace for TapedSpace<'_, '_, D> {
-    type State = RoverState;
-    type Attachment = AnchorHistory;
-    const NON_MARKOVIAN: bool = true;
-    fn dimension(&self) -> usize {
-        self.inner.dimension()
-    }
-    fn measure(&self) -> f64 {
-        self.inner.measure()
-    }
-    fn distance(&self, a: &RoverState, b: &RoverState) -> f64 {
-        self.inner.distance(a, b)
-    }
-    fn interpolate(&self, a: &RoverState, b: &RoverState, t: f64) -> RoverState {
-        self.inner.interpolate(a, b, t)
-    }
-    fn sample_uniform<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Option<RoverState> {
-        match self.taped(0, |inner| inner.sample_uniform(rng).map_or(InformedSample::Rejected, InformedSample::Sampled)) {
-            InformedSample::Sampled(s) => Some(s),
-            _ => None,
-        }
-    }
-    fn attachments_compatible(&self, resulting: &AnchorHistory, existing: &AnchorHistory) -> bool {
-        self.inner.attachments_compatible(resulting, existing)
-    }
-}
-
-/// [`TetherValidity`] on the taped space.
-struct TapedValidity;
-
-impl<D: DistanceField> StateValidityChecker<TapedSpace<'_, '_, D>> for TapedValidity {
-    fn is_valid(&mut self, state: &RoverState) -> bool {
-        StateValidityChecker::<TetherSpace<'_, D>>::is_valid(&mut TetherValidity, state)
-    }
-}
-
-/// [`TetherObjective`] on the taped space (informed samples go through the tape).
-struct TapedObjective;
-
-impl<D: DistanceField> OptimizationObjective<TapedSpace<'_, '_, D>> for TapedObjective {
-    fn motion_cost(&self, space: &TapedSpace<'_, '_, D>, from: &RoverState, h: &AnchorHistory, to: &RoverState) -> Cost {
-        TetherObjective.motion_cost(&space.inner, from, h, to)
-    }
-    fn motion_cost_heuristic(&self, space: &TapedSpace<'_, '_, D>, from: &RoverState, to: &RoverState) -> Cost {
-        TetherObjective.motion_cost_heuristic(&space.inner, from, to)
-    }
-    fn sample_informed<R: Rng + ?Sized>(
-        &self,
-        space: &mut TapedSpace<'_, '_, D>,
-        rng: &mut R,
-        start: &RoverState,
-        goal: &RoverState,
-        max_cost: Cost,
-    ) -> InformedSample<RoverState> {
-        let mut request = FNV_OFFSET;
-        for w in state_bits(start).iter().chain(state_bits(goal).iter()) {
-            request = fnv(request, *w);
-        }
-        let c = max_cost.to_bits();
-        request = fnv(fnv(request, c as u32), (c >> 32) as u32) | 1;
-        space.taped(request, |inner| TetherObjective.sample_informed(inner, rng, start, goal, max_cost))
+        self.checks.set(self.checks.get().saturating_add(1));
+        TetherMotionValidator.check_motion(space, from, from_attachment, to)
     }
 }
 
@@ -549,8 +343,8 @@ pub(crate) fn waypoint(s: &RoverState, h: &AnchorHistory, margin: f32, truncated
     }
 }
 
-/// Run the problem for at most `iterations` new iterations (see the module docs: the planner is rebuilt and
-/// replayed). Fills `plan` and the storage's motions when planning finishes with a path.
+/// Run the problem for at most `iterations` new iterations (see the module docs: the planner is resumed, or
+/// replayed after a map change). Fills `plan` and the storage's motions when planning finishes with a path.
 pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
     map: &Map<'_>,
     problem: &mut Problem,
@@ -563,13 +357,13 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
     let store = storage.borrow_mut();
     stats.steps = stats.steps.saturating_add(1);
     let out_of_time = problem.deadline.is_some_and(|d| now >= d);
-    // With no time left, the replay only restores the best solution so far (no new iterations).
+    // With no time left, only the best solution so far is restored (no new iterations).
     let target = if out_of_time { problem.done } else { problem.done.saturating_add(iterations).min(problem.budget) };
-    let Ok(inner) = TetherSpace::new(map, problem.bounds, problem.rover, TetherSpaceParams::DEFAULT) else {
+    let Ok(mut space) = TetherSpace::new(map, problem.bounds, problem.rover, TetherSpaceParams::DEFAULT) else {
         problem.finished = Some(PlanState::InvalidInput);
         return finished(problem, PlanState::InvalidInput);
     };
-    let goal_state = match inner.goal_state(problem.goal, 0.0) {
+    let goal_state = match space.goal_state(problem.goal, 0.0) {
         Ok(g) => g,
         Err(_) => {
             // The map changed under the goal since it was accepted.
@@ -582,24 +376,33 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
         start: problem.start,
         start_attachment: AnchorHistory::new(Anchor::root(problem.root)),
         goal: GoalState { state: goal_state, tolerance: problem.tolerance },
-        objective: TapedObjective,
+        objective: TetherObjective,
     };
-    let rng_state = Cell::new(problem.seed);
-    let mut space = TapedSpace { inner, rng: &rng_state, tape: &mut store.tape, cursor: 0, hits: 0, misses: 0 };
-    let mut validity = TapedValidity;
+    // Resume the search the last step suspended, or (a new goal, a changed map) replay it from its seed.
+    let resumable = store.suspended.first().is_some_and(|s| s.counters().iterations == problem.done);
+    let suspended = if resumable { store.suspended.pop() } else { None };
+    store.suspended.clear();
+    let mut rng = SplitMix64(if suspended.is_some() { store.rng_state } else { problem.seed });
+    let mut validity = TetherValidity;
     let new_checks = Cell::new(0u32);
-    let mut motions = CachedMotions { cache: &mut store.cache, hits: 0, misses: &new_checks, full: 0 };
-    let mut rng = CellRng(&rng_state);
-    let mut planner =
-        AbitStar::new(&mut store.arena, &mut space, &mut validity, &mut motions, &pdef, &mut rng, problem.abit);
-    // At least one new iteration, then stop after MOTION_CHECKS_PER_STEP new motion checks: the geometric work
-    // of one call stays bounded whatever the iteration count (replayed checks come from the cache).
+    let mut motions = CountedMotions { checks: &new_checks };
+    let arena = &mut store.arena;
+    let mut planner = match suspended {
+        Some(s) => {
+            stats.resumes = stats.resumes.saturating_add(1);
+            AbitStar::resume(arena, &mut space, &mut validity, &mut motions, &pdef, &mut rng, s)
+        }
+        None => AbitStar::new(arena, &mut space, &mut validity, &mut motions, &pdef, &mut rng, problem.abit),
+    };
+    let iterations_before = planner.counters().iterations;
+    // At least one new iteration, then stop after MOTION_CHECKS_PER_STEP motion checks: the geometric work of one
+    // call stays bounded whatever the iteration count (except a replay, which redoes the checks before `done`).
     let first_new = problem.done;
     let report = planner.solve_until(&Budget::iterations(target), |c| {
         c.iterations > first_new && new_checks.get() >= cfg::MOTION_CHECKS_PER_STEP
     });
     let c = report.counters;
-    stats.iterations_run = stats.iterations_run.saturating_add(u64::from(c.iterations));
+    stats.iterations_run = stats.iterations_run.saturating_add(u64::from(c.iterations - iterations_before));
     problem.done = c.iterations;
     problem.best_cost = match report.status {
         PlannerStatus::ExactSolution { cost } => Some(cost as f32),
@@ -623,25 +426,21 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
     let mut state = state;
     let solved = done && matches!(state, PlanState::ExactSolution | PlanState::ApproximateSolution);
     let written = if solved { planner.write_path(&mut store.path).is_ok() } else { false };
-    drop(planner);
-    stats.cache_hits = stats.cache_hits.saturating_add(motions.hits);
-    stats.cache_misses = stats.cache_misses.saturating_add(new_checks.get());
-    stats.cache_full = stats.cache_full.saturating_add(motions.full);
+    let _ = store.suspended.push(planner.suspend());
+    store.rng_state = rng.0;
+    stats.motion_checks_run = stats.motion_checks_run.saturating_add(new_checks.get());
     if solved {
         if !written || store.path.len() < 2 {
             // No path (TooLong: more states than PATH_CAPACITY; or an approximate "path" of the start alone).
             state = PlanState::NoSolutionWithinBudget;
             store.path.clear();
         } else {
-            fill_plan(&space.inner, &store.path, &mut store.motions, stats, plan);
+            fill_plan(&space, &store.path, &mut store.motions, stats, plan);
         }
     }
-    stats.last_replay = space.inner.stats();
-    stats.tape_hits = stats.tape_hits.saturating_add(space.hits);
-    stats.tape_misses = stats.tape_misses.saturating_add(space.misses);
-    stats.settles_run = stats.settles_run.saturating_add(u64::from(stats.last_replay.settles));
-    stats.stability_checks_run =
-        stats.stability_checks_run.saturating_add(u64::from(stats.last_replay.stability_checks));
+    stats.last_step = space.stats();
+    stats.settles_run = stats.settles_run.saturating_add(u64::from(stats.last_step.settles));
+    stats.stability_checks_run = stats.stability_checks_run.saturating_add(u64::from(stats.last_step.stability_checks));
     if done {
         problem.finished = Some(state);
         finished(problem, state)
@@ -699,18 +498,15 @@ pub(crate) fn motion_at<P: BorrowMut<NavPlanStorage>>(storage: &mut P, index: us
     storage.borrow_mut().motions.get(index).copied()
 }
 
-/// Forget the cached motion checks and the sample tape (the map changed).
-pub(crate) fn clear_cache<P: BorrowMut<NavPlanStorage>>(storage: &mut P) {
-    let s = storage.borrow_mut();
-    s.cache.clear();
-    s.tape.clear();
+/// Forget the suspended search (the map changed: the next step replays the search on the new map).
+pub(crate) fn forget_search<P: BorrowMut<NavPlanStorage>>(storage: &mut P) {
+    storage.borrow_mut().suspended.clear();
 }
 
 /// Forget the last plan (a new goal).
 pub(crate) fn clear_plan<P: BorrowMut<NavPlanStorage>>(storage: &mut P) {
     let s = storage.borrow_mut();
-    s.cache.clear();
-    s.tape.clear();
+    s.suspended.clear();
     s.path.clear();
     s.motions.clear();
 }

@@ -321,7 +321,7 @@ mod planning {
                 PlanProgress::Searching { iterations, .. } => (iterations, false),
                 PlanProgress::Finished { iterations, .. } => (iterations, true),
             };
-            let checks = n.plan_stats().cache_misses;
+            let checks = n.plan_stats().motion_checks_run;
             assert!(its > last_its && its - last_its <= 5, "call {k}: {last_its} -> {its}");
             assert!(checks - last_checks <= crate::config::nav::MOTION_CHECKS_PER_STEP, "call {k}: {checks}");
             (last_its, last_checks) = (its, checks);
@@ -356,8 +356,9 @@ mod planning {
         assert!(!plan.is_empty());
     }
 
-    /// The same inputs give the same plan, and stepping in small pieces (replays) gives the plan of one
-    /// uninterrupted run.
+    /// The same inputs give the same plan, and stepping in small pieces (the search suspended and resumed between
+    /// steps) gives the plan of one uninterrupted run, doing no work twice; a scan between steps (a changed map)
+    /// makes the next step replay the search instead.
     #[test]
     fn same_inputs_same_plan_whatever_the_step_size() {
         let (mut a, pa, plan_a, _) = plan_on(&flat, 3.5, 9, 30, 3);
@@ -370,15 +371,40 @@ mod planning {
         let (ma, mb, mc) = (motions(&mut a), motions(&mut b), motions(&mut c));
         assert_eq!(ma, mb);
         assert_eq!(ma, mc);
-        // the replays were answered from the cache: every motion checked once, no stability problem solved twice
+        // every step after the first resumed: no iteration, motion check or stability problem twice
         let (sa, sc) = (a.plan_stats(), c.plan_stats());
-        assert!(sa.cache_hits > 0, "{sa:?}");
-        assert_eq!(sa.cache_misses, sc.cache_misses);
+        assert!(sa.steps > sc.steps, "{sa:?}\n{sc:?}");
+        assert_eq!(sa.resumes, sa.steps - 1, "{sa:?}");
+        assert_eq!(sa.iterations_run, sc.iterations_run, "{sa:?}\n{sc:?}");
+        assert_eq!(sa.motion_checks_run, sc.motion_checks_run, "{sa:?}\n{sc:?}");
         assert_eq!(sa.stability_checks_run, sc.stability_checks_run, "{sa:?}\n{sc:?}");
-        // and no sample settled twice: the only extra settle of a replay is the goal state's
+        // the only extra settle of a step is the goal state's
         assert_eq!(sa.settles_run, sc.settles_run + u64::from(sa.steps - sc.steps), "{sa:?}\n{sc:?}");
-        assert!(sa.tape_hits > 0);
-        assert!(sa.steps > sc.steps);
+    }
+
+    /// A scan between two steps changes the map: the next step replays the search from its seed on the new map
+    /// (the iterations before it run again) instead of resuming it.
+    #[test]
+    fn a_scan_between_steps_makes_the_next_step_replay() {
+        let mut n = nav();
+        n.configure(&configure(9)).unwrap();
+        map_world(&mut n, -1.0, 5.0, 0.0, &flat);
+        assert_eq!(n.goal(&goal(3.5, 0.0, 30), Instant::from_micros(0)), PlanState::Accepted);
+        let mut plan = PlanBuffer::new();
+        let step = |n: &mut TestNav, k: u64, plan: &mut PlanBuffer| match n.plan_step(Instant::from_micros(k), 3, plan) {
+            PlanProgress::Searching { iterations, .. } | PlanProgress::Finished { iterations, .. } => iterations,
+        };
+        let first = step(&mut n, 1, &mut plan);
+        let second = step(&mut n, 2, &mut plan);
+        let s = n.plan_stats();
+        assert_eq!((s.steps, s.resumes), (2, 1), "{s:?}");
+        assert_eq!(s.iterations_run, u64::from(second), "{s:?}");
+        map_world(&mut n, -1.0, 5.0, 0.0, &flat);
+        let third = step(&mut n, 3, &mut plan);
+        let s = n.plan_stats();
+        assert_eq!((s.steps, s.resumes), (3, 1), "{s:?}");
+        assert_eq!(s.iterations_run, u64::from(second) + u64::from(third), "replayed from 0: {first} {second} {third} {s:?}");
+        assert!(third > second);
     }
 }
 

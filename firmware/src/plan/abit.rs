@@ -347,6 +347,45 @@ pub enum PathError {
     TooLong(usize),
 }
 
+/// The search state of a suspended [`AbitStar`]: everything the planner keeps outside its arena (inflation and
+/// truncation, the goals, the best solution, the free lists, the counters), as plain data, so a caller that cannot
+/// keep the planner's borrows alive between calls (the on-board navigator, between executive steps) can hold it
+/// and continue the search later with [`AbitStar::resume`]. The graph, the edge queue and the memo stay in the
+/// arena.
+#[derive(Debug, Clone)]
+pub struct AbitSuspended<St> {
+    params: AbitParams,
+    goal_state: Option<St>,
+    goals: Vec<u32, { cfg::GOAL_CAPACITY }>,
+    free_head: u32,
+    free_edge: u32,
+    live_nodes: usize,
+    best_goal: u32,
+    best_cost: Cost,
+    min_cost: Cost,
+    inflation: f64,
+    truncation: f64,
+    search_id: u32,
+    search_done: bool,
+    final_search: bool,
+    k: usize,
+    r: f64,
+    recycled: usize,
+    approx_vertex: u32,
+    approx_h: Cost,
+    pending_full: Option<Arena>,
+    counters: Counters,
+    invalid: Option<InvalidInput>,
+    high_water: ArenaUse,
+}
+
+impl<St> AbitSuspended<St> {
+    /// The work counters when the search was suspended.
+    pub fn counters(&self) -> Counters {
+        self.counters
+    }
+}
+
 /// ABIT* over a [`StateSpace`] with attachments. See the module docs.
 pub struct AbitStar<'a, S, V, M, O, G, R, const NV: usize, const NQ: usize, const NM: usize>
 where
@@ -449,6 +488,107 @@ where
             planner.invalid = Some(e);
         }
         planner
+    }
+
+    /// Release the borrows and keep the search: the graph, queue and memo stay in the arena, the rest is
+    /// returned. Resume it with [`Self::resume`]; a new problem starts with [`Self::new`] instead.
+    pub fn suspend(self) -> AbitSuspended<S::State> {
+        AbitSuspended {
+            params: self.params,
+            goal_state: self.goal_state,
+            goals: self.goals,
+            free_head: self.free_head,
+            free_edge: self.free_edge,
+            live_nodes: self.live_nodes,
+            best_goal: self.best_goal,
+            best_cost: self.best_cost,
+            min_cost: self.min_cost,
+            inflation: self.inflation,
+            truncation: self.truncation,
+            search_id: self.search_id,
+            search_done: self.search_done,
+            final_search: self.final_search,
+            k: self.k,
+            r: self.r,
+            recycled: self.recycled,
+            approx_vertex: self.approx_vertex,
+            approx_h: self.approx_h,
+            pending_full: self.pending_full,
+            counters: self.counters,
+            invalid: self.invalid,
+            high_water: self.high_water,
+        }
+    }
+
+    /// Continue a suspended search where [`Self::suspend`] left it. The caller's contract: the arena is the one
+    /// the search was suspended from, untouched since; the problem, the space (its map) and the validators answer
+    /// as they did; `rng` continues the generator's sequence. Then the search goes on exactly as if it had never
+    /// been interrupted (`nav`'s tests compare the two).
+    pub fn resume(
+        arena: &'a mut AbitArena<S::State, S::Attachment, NV, NQ, NM>,
+        space: &'a mut S,
+        validity: &'a mut V,
+        motion: &'a mut M,
+        pdef: &'a ProblemDefinition<S, G, O>,
+        rng: &'a mut R,
+        suspended: AbitSuspended<S::State>,
+    ) -> Self {
+        let AbitSuspended {
+            params,
+            goal_state,
+            goals,
+            free_head,
+            free_edge,
+            live_nodes,
+            best_goal,
+            best_cost,
+            min_cost,
+            inflation,
+            truncation,
+            search_id,
+            search_done,
+            final_search,
+            k,
+            r,
+            recycled,
+            approx_vertex,
+            approx_h,
+            pending_full,
+            counters,
+            invalid,
+            high_water,
+        } = suspended;
+        Self {
+            arena,
+            space,
+            validity,
+            motion,
+            pdef,
+            rng,
+            params,
+            goal_state,
+            goals,
+            free_head,
+            free_edge,
+            live_nodes,
+            best_goal,
+            best_cost,
+            min_cost,
+            inflation,
+            truncation,
+            search_id,
+            search_done,
+            final_search,
+            k,
+            r,
+            recycled,
+            approx_vertex,
+            approx_h,
+            pending_full,
+            counters,
+            invalid,
+            high_water,
+        }
     }
 
     fn set_up(&mut self) -> Result<(), InvalidInput> {
@@ -1832,6 +1972,46 @@ mod tests {
         assert_eq!(r.report.termination, Termination::Converged);
         assert_eq!(r.path.len(), 2);
         assert_valid_path(&p, &r.path, 1.6);
+    }
+
+    /// Suspending the planner every few iterations and resuming it on the same arena and generator is the same
+    /// search as one uninterrupted solve: same counters, same cost, same path.
+    #[test]
+    fn a_suspended_and_resumed_search_is_the_uninterrupted_search() {
+        let w2 = wall_gap::<2>("w2");
+        let mut found = 0;
+        for (seed, chunk) in [(3u64, 1u32), (7, 13), (11, 250)] {
+            let whole = run(&w2, seed, 3000);
+            let mut arena: Box<AbitArena<[f64; 2], (), 4096, 16384, 4096>> = Box::default();
+            let (mut space, mut v, mut m) = (w2.space, w2.obstacles.clone(), w2.obstacles.clone());
+            let pd = pdef(&w2);
+            let mut rng = Pcg64::seed_from_u64(seed);
+            let mut suspended =
+                AbitStar::new(&mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, AbitParams::ompl_defaults())
+                    .suspend();
+            let mut calls = 0;
+            while suspended.counters().iterations < 3000 {
+                let target = (suspended.counters().iterations + chunk).min(3000);
+                let mut planner =
+                    AbitStar::resume(&mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, suspended.clone());
+                let report = planner.solve(&Budget::iterations(target));
+                assert_eq!(report.counters.iterations, target);
+                suspended = planner.suspend();
+                calls += 1;
+            }
+            assert_eq!(calls, 3000_u32.div_ceil(chunk));
+            let planner = AbitStar::resume(&mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, suspended);
+            assert_eq!(planner.counters(), whole.report.counters, "seed {seed}, chunks of {chunk}");
+            assert_eq!(planner.best_cost().to_bits(), whole.costs[0].to_bits());
+            let mut out: Vec<([f64; 2], ()), 512> = Vec::new();
+            let path = match planner.write_path(&mut out) {
+                Ok(_) => out.iter().map(|(s, _)| *s).collect(),
+                Err(_) => StdVec::new(),
+            };
+            assert_eq!(path, whole.path);
+            found += usize::from(whole.report.status.is_exact());
+        }
+        assert!(found >= 2, "only {found} of the three searches found a path: the comparison needs paths");
     }
 
     #[test]

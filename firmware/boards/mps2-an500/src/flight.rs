@@ -48,8 +48,8 @@ static MAP_BLOCKS: Lent<[Block; FLIGHT_BLOCKS]> = Lent::new([Block::ZEROED; FLIG
 #[link_section = ".psram"]
 static MAP_INDEX: Lent<[u32; FLIGHT_INDEX]> = Lent::new([0; FLIGHT_INDEX]);
 
-/// The navigator's planning storage (the ABIT* arena, the motion cache, the best path; `NavPlanStorage::bytes()`,
-/// ~1.5 MiB) in SRAM `.bss`: the PSRAM is nearly full with the map's pool and the bench's arenas. Its empty state is
+/// The navigator's planning storage (the ABIT* arena, the suspended search, the best path; `NavPlanStorage::bytes()`,
+/// ~1 MiB) in SRAM `.bss`: the PSRAM is nearly full with the map's pool and the bench's arenas. Its empty state is
 /// all zero bytes (empty `heapless` vectors), which the runtime's `.bss` zeroing provides.
 static NAV_PLAN: Lent<NavPlanStorage> = Lent::new(NavPlanStorage::new());
 
