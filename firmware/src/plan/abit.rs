@@ -397,29 +397,8 @@ where
     motion: &'a mut M,
     pdef: &'a ProblemDefinition<S, G, O>,
     rng: &'a mut R,
-    params: AbitParams,
-    goal_state: Option<S::State>,
-    goals: Vec<u32, { cfg::GOAL_CAPACITY }>,
-    free_head: u32,
-    free_edge: u32,
-    live_nodes: usize,
-    best_goal: u32,
-    best_cost: Cost,
-    min_cost: Cost,
-    inflation: f64,
-    truncation: f64,
-    search_id: u32,
-    search_done: bool,
-    final_search: bool,
-    k: usize,
-    r: f64,
-    recycled: usize,
-    approx_vertex: u32,
-    approx_h: Cost,
-    pending_full: Option<Arena>,
-    counters: Counters,
-    invalid: Option<InvalidInput>,
-    high_water: ArenaUse,
+    /// The search state (everything but the borrows): what [`Self::suspend`] hands out.
+    st: AbitSuspended<S::State>,
 }
 
 impl<'a, S, V, M, O, G, R, const NV: usize, const NQ: usize, const NM: usize> AbitStar<'a, S, V, M, O, G, R, NV, NQ, NM>
@@ -460,32 +439,34 @@ where
             motion,
             pdef,
             rng,
-            params,
-            goal_state: None,
-            goals: Vec::new(),
-            free_head: NONE,
-            free_edge: NONE,
-            live_nodes: 0,
-            best_goal: NONE,
-            best_cost: f64::INFINITY,
-            min_cost: f64::INFINITY,
-            inflation: params.initial_inflation_factor,
-            truncation: 1.0,
-            search_id: 1,
-            search_done: false,
-            final_search: false,
-            k: 0,
-            r: f64::INFINITY,
-            recycled: 0,
-            approx_vertex: NONE,
-            approx_h: f64::INFINITY,
-            pending_full: None,
-            counters: Counters::default(),
-            invalid: None,
-            high_water: ArenaUse::default(),
+            st: AbitSuspended {
+                params,
+                goal_state: None,
+                goals: Vec::new(),
+                free_head: NONE,
+                free_edge: NONE,
+                live_nodes: 0,
+                best_goal: NONE,
+                best_cost: f64::INFINITY,
+                min_cost: f64::INFINITY,
+                inflation: params.initial_inflation_factor,
+                truncation: 1.0,
+                search_id: 1,
+                search_done: false,
+                final_search: false,
+                k: 0,
+                r: f64::INFINITY,
+                recycled: 0,
+                approx_vertex: NONE,
+                approx_h: f64::INFINITY,
+                pending_full: None,
+                counters: Counters::default(),
+                invalid: None,
+                high_water: ArenaUse::default(),
+            },
         };
         if let Err(e) = planner.set_up() {
-            planner.invalid = Some(e);
+            planner.st.invalid = Some(e);
         }
         planner
     }
@@ -493,37 +474,13 @@ where
     /// Release the borrows and keep the search: the graph, queue and memo stay in the arena, the rest is
     /// returned. Resume it with [`Self::resume`]; a new problem starts with [`Self::new`] instead.
     pub fn suspend(self) -> AbitSuspended<S::State> {
-        AbitSuspended {
-            params: self.params,
-            goal_state: self.goal_state,
-            goals: self.goals,
-            free_head: self.free_head,
-            free_edge: self.free_edge,
-            live_nodes: self.live_nodes,
-            best_goal: self.best_goal,
-            best_cost: self.best_cost,
-            min_cost: self.min_cost,
-            inflation: self.inflation,
-            truncation: self.truncation,
-            search_id: self.search_id,
-            search_done: self.search_done,
-            final_search: self.final_search,
-            k: self.k,
-            r: self.r,
-            recycled: self.recycled,
-            approx_vertex: self.approx_vertex,
-            approx_h: self.approx_h,
-            pending_full: self.pending_full,
-            counters: self.counters,
-            invalid: self.invalid,
-            high_water: self.high_water,
-        }
+        self.st
     }
 
     /// Continue a suspended search where [`Self::suspend`] left it. The caller's contract: the arena is the one
     /// the search was suspended from, untouched since; the problem, the space (its map) and the validators answer
     /// as they did; `rng` continues the generator's sequence. Then the search goes on exactly as if it had never
-    /// been interrupted (`nav`'s tests compare the two).
+    /// been interrupted (`a_suspended_and_resumed_search_is_the_uninterrupted_search`, and `nav`'s tests).
     pub fn resume(
         arena: &'a mut AbitArena<S::State, S::Attachment, NV, NQ, NM>,
         space: &'a mut S,
@@ -533,52 +490,21 @@ where
         rng: &'a mut R,
         suspended: AbitSuspended<S::State>,
     ) -> Self {
-        let s = suspended;
-        Self {
-            arena,
-            space,
-            validity,
-            motion,
-            pdef,
-            rng,
-            params: s.params,
-            goal_state: s.goal_state,
-            goals: s.goals,
-            free_head: s.free_head,
-            free_edge: s.free_edge,
-            live_nodes: s.live_nodes,
-            best_goal: s.best_goal,
-            best_cost: s.best_cost,
-            min_cost: s.min_cost,
-            inflation: s.inflation,
-            truncation: s.truncation,
-            search_id: s.search_id,
-            search_done: s.search_done,
-            final_search: s.final_search,
-            k: s.k,
-            r: s.r,
-            recycled: s.recycled,
-            approx_vertex: s.approx_vertex,
-            approx_h: s.approx_h,
-            pending_full: s.pending_full,
-            counters: s.counters,
-            invalid: s.invalid,
-            high_water: s.high_water,
-        }
+        Self { arena, space, validity, motion, pdef, rng, st: suspended }
     }
 
     fn set_up(&mut self) -> Result<(), InvalidInput> {
-        self.params.check()?;
+        self.st.params.check()?;
         if NV < 3 || NQ < 1 {
             return Err(InvalidInput::ArenaTooSmall);
         }
         let pdef = self.pdef;
-        self.counters.states_checked += 1;
+        self.st.counters.states_checked += 1;
         if !self.validity.is_valid(&pdef.start) {
             return Err(InvalidInput::StartInvalid);
         }
         let goal = pdef.goal.sample_goal(self.rng).ok_or(InvalidInput::GoalUnsampleable)?;
-        self.counters.states_checked += 1;
+        self.st.counters.states_checked += 1;
         if !self.validity.is_valid(&goal) {
             return Err(InvalidInput::GoalInvalid);
         }
@@ -586,8 +512,8 @@ where
         if h.is_nan() || h < 0.0 {
             return Err(InvalidInput::HeuristicNotAdmissible);
         }
-        self.min_cost = h;
-        self.goal_state = Some(goal.clone());
+        self.st.min_cost = h;
+        self.st.goal_state = Some(goal.clone());
         // Start: the root, a vertex with the start attachment.
         let start = self
             .alloc(pdef.start.clone(), Some(pdef.start_attachment.clone()), F_START | F_IN_TREE)
@@ -598,8 +524,8 @@ where
         self.add_goal_vertex(goal).ok_or(InvalidInput::ArenaTooSmall)?;
         // OMPL: before the first batch, k = |starts| + |goals| and r = infinity, so the first queue holds the
         // start-goal edge only.
-        self.k = 1 + self.goals.len();
-        self.r = f64::INFINITY;
+        self.st.k = 1 + self.st.goals.len();
+        self.st.r = f64::INFINITY;
         self.insert_outgoing_edges(start, false);
         Ok(())
     }
@@ -621,7 +547,7 @@ where
     fn heuristics(&self, state: &S::State) -> (Cost, Cost) {
         let obj = &self.pdef.objective;
         let h_come = obj.motion_cost_heuristic(self.space, &self.pdef.start, state);
-        let h_go = self.goal_state.as_ref().map_or(f64::INFINITY, |g| obj.motion_cost_heuristic(self.space, state, g));
+        let h_go = self.st.goal_state.as_ref().map_or(f64::INFINITY, |g| obj.motion_cost_heuristic(self.space, state, g));
         (h_come, h_go)
     }
 
@@ -645,10 +571,10 @@ where
             twin_generation: 0,
             flags,
         };
-        let index = if self.free_head != NONE {
-            let i = self.free_head;
+        let index = if self.st.free_head != NONE {
+            let i = self.st.free_head;
             let slot = self.arena.nodes.get_mut(i as usize)?;
-            self.free_head = slot.next_sibling;
+            self.st.free_head = slot.next_sibling;
             let generation = slot.generation.wrapping_add(1);
             *slot = fresh(generation);
             i
@@ -657,13 +583,13 @@ where
             self.arena.nodes.push(fresh(0)).ok()?;
             i
         };
-        self.live_nodes += 1;
-        self.high_water.nodes = self.high_water.nodes.max(self.live_nodes);
+        self.st.live_nodes += 1;
+        self.st.high_water.nodes = self.st.high_water.nodes.max(self.st.live_nodes);
         Some(index)
     }
 
     fn free(&mut self, i: u32) {
-        let head = self.free_head;
+        let head = self.st.free_head;
         if let Some(n) = self.node_mut(i) {
             n.flags = F_FREE;
             n.generation = n.generation.wrapping_add(1);
@@ -672,18 +598,18 @@ where
             n.next_sibling = head;
             n.cost = f64::INFINITY;
             n.attachment = None;
-            self.free_head = i;
-            self.live_nodes = self.live_nodes.saturating_sub(1);
+            self.st.free_head = i;
+            self.st.live_nodes = self.st.live_nodes.saturating_sub(1);
         }
     }
 
     fn add_goal_vertex(&mut self, goal: S::State) -> Option<u32> {
-        if self.goals.is_full() {
+        if self.st.goals.is_full() {
             return None;
         }
         let i = self.alloc(goal, None, F_GOAL)?;
         // Cannot fail: checked not full above.
-        let _ = self.goals.push(i);
+        let _ = self.st.goals.push(i);
         Some(i)
     }
 
@@ -769,23 +695,23 @@ where
         e.heap_pos = pos as u32;
         e.prev_out = NONE;
         e.next_out = self.node(e.parent).map_or(NONE, |n| n.first_out);
-        let slot = if self.free_edge != NONE {
-            let slot = self.free_edge;
+        let slot = if self.st.free_edge != NONE {
+            let slot = self.st.free_edge;
             let Some(entry) = self.arena.edges.get_mut(slot as usize) else { return };
-            self.free_edge = entry.next_out;
+            self.st.free_edge = entry.next_out;
             *entry = e;
             slot
         } else {
             let slot = self.arena.edges.len() as u32;
             if self.arena.edges.push(e).is_err() {
-                self.pending_full = Some(Arena::EdgeQueue);
+                self.st.pending_full = Some(Arena::EdgeQueue);
                 return;
             }
             slot
         };
         if self.arena.heap.push(slot).is_err() {
             // Cannot happen (heap and slab have the same capacity); keep the slab consistent anyway.
-            self.pending_full = Some(Arena::EdgeQueue);
+            self.st.pending_full = Some(Arena::EdgeQueue);
             self.release_edge(slot);
             return;
         }
@@ -795,7 +721,7 @@ where
         if let Some(p) = self.node_mut(e.parent) {
             p.first_out = slot;
         }
-        self.high_water.queue = self.high_water.queue.max(self.arena.heap.len());
+        self.st.high_water.queue = self.st.high_water.queue.max(self.arena.heap.len());
         self.sift_up(pos);
     }
 
@@ -814,13 +740,13 @@ where
         if let Some(next) = self.arena.edges.get_mut(e.next_out as usize) {
             next.prev_out = e.prev_out;
         }
-        let free = self.free_edge;
+        let free = self.st.free_edge;
         if let Some(entry) = self.arena.edges.get_mut(slot as usize) {
             entry.next_out = free;
             entry.prev_out = NONE;
             entry.heap_pos = NONE;
         }
-        self.free_edge = slot;
+        self.st.free_edge = slot;
     }
 
     fn heap_pop(&mut self) -> Option<QueueEdge> {
@@ -836,7 +762,7 @@ where
     fn queue_clear(&mut self) {
         self.arena.heap.clear();
         self.arena.edges.clear();
-        self.free_edge = NONE;
+        self.st.free_edge = NONE;
         for n in self.arena.nodes.iter_mut() {
             n.first_out = NONE;
         }
@@ -894,7 +820,7 @@ where
     fn sort_key(&self, parent: u32, child: u32, c_hat: Cost) -> [f64; 3] {
         let g = self.g(parent);
         let h = self.node(child).map_or(f64::INFINITY, |n| n.h_go);
-        [g + c_hat + self.inflation * h, g + c_hat, g]
+        [g + c_hat + self.st.inflation * h, g + c_hat, g]
     }
 
     /// Drop entries at the front whose nodes left the tree or were freed (only possible across prunings, which
@@ -982,7 +908,7 @@ where
         if let Some(slot) = self.arena.memo.get_mut(idx) {
             *slot = Some(MemoEntry { parent, parent_generation: pg, child, child_generation: cg, result });
             if was_empty {
-                self.high_water.memo += 1;
+                self.st.high_water.memo += 1;
             }
         }
     }
@@ -1002,10 +928,10 @@ where
     /// Check the motion parent -> child (memoised). Returns the child's attachment after the motion.
     fn check_edge(&mut self, parent: u32, child: u32) -> Option<S::Attachment> {
         if let Some(result) = self.memo_get(parent, child) {
-            self.counters.memo_hits += 1;
+            self.st.counters.memo_hits += 1;
             return result;
         }
-        self.counters.edges_evaluated += 1;
+        self.st.counters.edges_evaluated += 1;
         let result = match (self.arena.nodes.get(parent as usize), self.arena.nodes.get(child as usize)) {
             (Some(p), Some(c)) => match p.attachment.as_ref() {
                 Some(att) => match self.motion.check_motion(self.space, &p.state, att, &c.state) {
@@ -1028,9 +954,9 @@ where
         let Some(center) = self.node(of).map(|n| n.state.clone()) else {
             return out;
         };
-        let (limit, radius) = match self.params.connection {
-            Connection::KNearest => (self.k, f64::INFINITY),
-            Connection::RDisc => (usize::MAX, self.r),
+        let (limit, radius) = match self.st.params.connection {
+            Connection::KNearest => (self.st.k, f64::INFINITY),
+            Connection::RDisc => (usize::MAX, self.st.r),
         };
         let cap = limit.min(cfg::NEIGHBOUR_CAPACITY);
         let mut truncated = limit > cfg::NEIGHBOUR_CAPACITY && limit != usize::MAX;
@@ -1064,7 +990,7 @@ where
             let _ = out.insert(pos, entry);
         }
         if truncated {
-            self.counters.neighbour_lists_truncated += 1;
+            self.st.counters.neighbour_lists_truncated += 1;
         }
         out
     }
@@ -1084,7 +1010,7 @@ where
         };
         let c_hat = self.pdef.objective.motion_cost_heuristic(self.space, &p.state, &c.state);
         // Can it ever improve the solution? h(start,u) + c^(u,v) + h(v,goal) <= c_best.
-        if p.h_come + c_hat + c.h_go > self.best_cost {
+        if p.h_come + c_hat + c.h_go > self.st.best_cost {
             return;
         }
         // Can it ever improve the child's cost-to-come? h(start,u) + c^(u,v) <= g(v). (A child of another
@@ -1119,7 +1045,7 @@ where
     /// rewirings, ABIT* — to its connected neighbours).
     fn insert_outgoing_edges(&mut self, v: u32, reexpansion: bool) {
         let Some(n) = self.node(v) else { return };
-        if n.h_come + n.h_go > self.best_cost {
+        if n.h_come + n.h_go > self.st.best_cost {
             return;
         }
         let (own_parent, first_child) = (n.parent, n.first_child);
@@ -1152,7 +1078,7 @@ where
     }
 
     fn twins_enabled(&self) -> bool {
-        S::NON_MARKOVIAN && self.params.history_twins
+        S::NON_MARKOVIAN && self.st.params.history_twins
     }
 
     /// Do `u` (the parent) and `w` — a tree vertex, or a sample that copied an attachment — hold incompatible
@@ -1191,11 +1117,11 @@ where
             } else {
                 let i = self.alloc(state, None, 0);
                 if i.is_none() {
-                    self.pending_full = Some(Arena::Nodes);
+                    self.st.pending_full = Some(Arena::Nodes);
                 }
                 i
             }?;
-            self.counters.history_twins += 1;
+            self.st.counters.history_twins += 1;
             if let Some(n) = self.node_mut(created) {
                 n.flags |= F_TWIN;
             }
@@ -1212,7 +1138,7 @@ where
     /// A vertex is expanded on the current search once one of its outgoing edges has been processed (OMPL's
     /// `registerExpansion`); a vertex improved after that is inconsistent and re-expanded in the final search.
     fn register_expansion(&mut self, u: u32) {
-        let search = self.search_id;
+        let search = self.st.search_id;
         if let Some(n) = self.node_mut(u) {
             n.expanded_search = search;
         }
@@ -1291,7 +1217,7 @@ where
     fn add_edge(&mut self, parent: u32, child: u32, edge_cost: Cost, attachment: S::Attachment) {
         let was_in_tree = self.node(child).is_some_and(|n| n.in_tree());
         if was_in_tree {
-            self.counters.rewirings += 1;
+            self.st.counters.rewirings += 1;
             self.unlink_from_parent(child);
         }
         let g = self.g(parent) + edge_cost;
@@ -1309,14 +1235,14 @@ where
         }
         self.update_out_edges(child);
         self.propagate_costs(child);
-        if self.params.track_approximate {
+        if self.st.params.track_approximate {
             let h = self.node(child).map_or(f64::INFINITY, |n| n.h_go);
-            if h < self.approx_h {
-                self.approx_h = h;
-                self.approx_vertex = child;
+            if h < self.st.approx_h {
+                self.st.approx_h = h;
+                self.st.approx_vertex = child;
             }
         }
-        let expanded = self.node(child).is_some_and(|n| n.expanded_search == self.search_id);
+        let expanded = self.node(child).is_some_and(|n| n.expanded_search == self.st.search_id);
         if !expanded {
             self.insert_outgoing_edges(child, false);
         } else if let Some(n) = self.node_mut(child) {
@@ -1326,27 +1252,27 @@ where
 
     /// Recompute the best goal; true if the solution improved.
     fn update_goal(&mut self) -> bool {
-        let mut best = (self.best_cost, self.best_goal);
-        for &gi in self.goals.iter() {
+        let mut best = (self.st.best_cost, self.st.best_goal);
+        for &gi in self.st.goals.iter() {
             if let Some(n) = self.arena.nodes.get(gi as usize) {
                 if n.in_tree() && n.cost < best.0 {
                     best = (n.cost, gi);
                 }
             }
         }
-        if best.0 < self.best_cost {
-            self.best_cost = best.0;
-            self.best_goal = best.1;
-            self.counters.improvements += 1;
-            if self.counters.first_solution_iteration == 0 {
-                self.counters.first_solution_iteration = self.counters.iterations;
+        if best.0 < self.st.best_cost {
+            self.st.best_cost = best.0;
+            self.st.best_goal = best.1;
+            self.st.counters.improvements += 1;
+            if self.st.counters.first_solution_iteration == 0 {
+                self.st.counters.first_solution_iteration = self.st.counters.iterations;
             }
-            if S::NON_MARKOVIAN && self.params.fresh_goal_on_improvement {
-                let has_open_goal = self.goals.iter().any(|&gi| {
+            if S::NON_MARKOVIAN && self.st.params.fresh_goal_on_improvement {
+                let has_open_goal = self.st.goals.iter().any(|&gi| {
                     self.node(gi).is_some_and(|n| !n.in_tree() && n.attachment.is_none())
                 });
                 if !has_open_goal {
-                    if let Some(goal) = self.goal_state.clone() {
+                    if let Some(goal) = self.st.goal_state.clone() {
                         // A full goal list or arena only means no fresh goal this time.
                         let _ = self.add_goal_vertex(goal);
                     }
@@ -1359,7 +1285,7 @@ where
     }
 
     fn has_solution(&self) -> bool {
-        self.best_goal != NONE
+        self.st.best_goal != NONE
     }
 
     // ---------------------------------------------------------------- batches
@@ -1368,7 +1294,7 @@ where
         if !self.has_solution() {
             return;
         }
-        let best = self.best_cost;
+        let best = self.st.best_cost;
         // OMPL: prunable states (vertices included) over `numSamples() + numVertices()`.
         let total = self.ompl_graph_size();
         let prunable = self
@@ -1377,10 +1303,10 @@ where
             .iter()
             .filter(|n| !n.has(F_FREE) && !n.has(F_START) && n.h_come + n.h_go >= best)
             .count();
-        if (prunable as f64) / total < self.params.prune_fraction {
+        if (prunable as f64) / total < self.st.params.prune_fraction {
             return;
         }
-        self.counters.prunings += 1;
+        self.st.counters.prunings += 1;
         let len = self.arena.nodes.len();
         // Pass 1: disconnect vertices that cannot be on a better path; drop samples that cannot help.
         for i in 0..len as u32 {
@@ -1389,12 +1315,12 @@ where
                 continue;
             }
             if n.in_tree() {
-                if i != self.best_goal && n.cost + n.h_go > best {
+                if i != self.st.best_goal && n.cost + n.h_go > best {
                     self.disconnect(i);
                     // Kept as a sample: OMPL "recycles" it, i.e. it rejoins the samples only after the next
                     // batch's RGG terms are computed.
                     if self.node(i).is_some_and(|n| !n.has(F_FREE)) {
-                        self.recycled += 1;
+                        self.st.recycled += 1;
                     }
                 }
             } else if !n.has(F_GOAL) && n.h_come + n.h_go >= best {
@@ -1436,7 +1362,7 @@ where
             }
             c = next;
         }
-        let best = self.best_cost;
+        let best = self.st.best_cost;
         let Some(n) = self.node_mut(i) else { return };
         n.first_child = NONE;
         n.flags &= !(F_IN_TREE | F_INCONSISTENT);
@@ -1452,9 +1378,9 @@ where
         if !keep {
             self.free(i);
         }
-        if self.approx_vertex == i {
-            self.approx_vertex = NONE;
-            self.approx_h = f64::INFINITY;
+        if self.st.approx_vertex == i {
+            self.st.approx_vertex = NONE;
+            self.st.approx_h = f64::INFINITY;
         }
     }
 
@@ -1462,7 +1388,7 @@ where
     /// attachments among the k nearest tree vertices, chosen uniformly, so rare histories (the one anchored on the
     /// column, Fig. 7d) are copied as often as the common one. Bounded by the arena size and `NEIGHBOUR_CAPACITY`.
     fn copied_attachment(&mut self, state: &S::State) -> Option<S::Attachment> {
-        let cap = self.k.clamp(1, cfg::NEIGHBOUR_CAPACITY);
+        let cap = self.st.k.clamp(1, cfg::NEIGHBOUR_CAPACITY);
         let mut near: Vec<(f64, u32), { cfg::NEIGHBOUR_CAPACITY }> = Vec::new();
         for (i, n) in self.arena.nodes.iter().enumerate() {
             if !n.in_tree() || n.attachment.is_none() {
@@ -1506,20 +1432,20 @@ where
             return self.space.sample_uniform(self.rng);
         }
         let pdef = self.pdef;
-        let goal = self.goal_state.as_ref()?;
+        let goal = self.st.goal_state.as_ref()?;
         // Like OMPL's direct informed sampler, retry draws rejected by the bounds (bounded).
-        for _ in 0..self.params.informed_rejection_attempts {
-            match pdef.objective.sample_informed(self.space, self.rng, &pdef.start, goal, self.best_cost) {
+        for _ in 0..self.st.params.informed_rejection_attempts {
+            match pdef.objective.sample_informed(self.space, self.rng, &pdef.start, goal, self.st.best_cost) {
                 InformedSample::Sampled(x) => return Some(x),
                 InformedSample::Rejected => continue,
                 InformedSample::Unsupported => break,
             }
         }
         // No direct sampler: rejection sampling on the heuristic (OMPL RejectionInfSampler), bounded.
-        for _ in 0..self.params.informed_rejection_attempts {
+        for _ in 0..self.st.params.informed_rejection_attempts {
             let x = self.space.sample_uniform(self.rng)?;
             let (hc, hg) = self.heuristics(&x);
-            if hc + hg < self.best_cost {
+            if hc + hg < self.st.best_cost {
                 return Some(x);
             }
         }
@@ -1527,40 +1453,40 @@ where
     }
 
     fn new_batch(&mut self) {
-        self.counters.batches += 1;
-        let batch = self.params.samples_per_batch as usize;
+        self.st.counters.batches += 1;
+        let batch = self.st.params.samples_per_batch as usize;
         // RGG terms for the number of states we have (OMPL: plus the batch on the very first batch).
         // OMPL counts the states before the recycled ones (vertices disconnected by the last pruning and kept
         // as samples) are added back.
-        let mut q = self.live_nodes.saturating_sub(self.recycled);
-        self.recycled = 0;
-        if q == 1 + self.goals.len() {
+        let mut q = self.st.live_nodes.saturating_sub(self.st.recycled);
+        self.st.recycled = 0;
+        if q == 1 + self.st.goals.len() {
             q += batch;
         }
         let qf = (q.max(2)) as f64;
         let d = self.space.dimension().max(1) as f64;
         let e = core::f64::consts::E;
-        self.k = libm::ceil(self.params.rewire_factor * (e + e / d) * libm::log(qf)) as usize;
+        self.st.k = libm::ceil(self.st.params.rewire_factor * (e + e / d) * libm::log(qf)) as usize;
         let r_rgg = libm::pow(
             2.0 * (1.0 + 1.0 / d) * (self.space.measure() / unit_ball_measure(self.space.dimension().max(1))),
             1.0 / d,
         );
-        self.r = self.params.rewire_factor * r_rgg * libm::pow(libm::log(qf) / qf, 1.0 / d);
+        self.st.r = self.st.params.rewire_factor * r_rgg * libm::pow(libm::log(qf) / qf, 1.0 / d);
 
-        let attempts = self.params.sample_attempts_per_sample as usize * batch;
+        let attempts = self.st.params.sample_attempts_per_sample as usize * batch;
         let mut added = 0usize;
         for _ in 0..attempts {
             if added >= batch {
                 break;
             }
             let Some(x) = self.draw_sample() else { continue };
-            self.counters.states_checked += 1;
+            self.st.counters.states_checked += 1;
             if !self.validity.is_valid(&x) {
                 continue;
             }
             let attachment = if S::NON_MARKOVIAN
-                && self.params.attachment_copy_fraction > 0.0
-                && uniform01(self.rng) < self.params.attachment_copy_fraction
+                && self.st.params.attachment_copy_fraction > 0.0
+                && uniform01(self.rng) < self.st.params.attachment_copy_fraction
             {
                 self.copied_attachment(&x)
             } else {
@@ -1569,16 +1495,16 @@ where
             // A copied attachment makes the sample's attachment-dependent validity checkable now (Paton V-A).
             if let Some(a) = attachment.as_ref() {
                 if !self.space.valid_with_attachment(&x, a) {
-                    self.counters.samples_invalid_with_copy += 1;
+                    self.st.counters.samples_invalid_with_copy += 1;
                     continue;
                 }
             }
             if self.alloc(x, attachment, 0).is_none() {
-                self.pending_full = Some(Arena::Nodes);
+                self.st.pending_full = Some(Arena::Nodes);
                 break;
             }
             added += 1;
-            self.counters.samples_added += 1;
+            self.st.counters.samples_added += 1;
         }
     }
 
@@ -1590,42 +1516,42 @@ where
     /// the truncation and final-search inflation factors. Bounded by the arena size.
     fn ompl_graph_size(&self) -> f64 {
         let vertices = self.arena.nodes.iter().filter(|n| n.in_tree() && !n.has(F_FREE)).count();
-        ((self.live_nodes + vertices).max(1)) as f64
+        ((self.st.live_nodes + vertices).max(1)) as f64
     }
 
     /// High-water marks of the arenas so far.
     pub fn arena_use(&self) -> ArenaUse {
-        self.high_water
+        self.st.high_water
     }
 
     /// Current inflation factor.
     pub fn inflation_factor(&self) -> f64 {
-        self.inflation
+        self.st.inflation
     }
 
     /// Current k of the k-nearest RGG (OMPL `getConnectivityK`).
     pub fn connectivity_k(&self) -> usize {
-        self.k
+        self.st.k
     }
 
     /// Current truncation factor.
     pub fn truncation_factor(&self) -> f64 {
-        self.truncation
+        self.st.truncation
     }
 
     /// Cost of the best solution (`INFINITY` if none).
     pub fn best_cost(&self) -> Cost {
-        self.best_cost
+        self.st.best_cost
     }
 
     /// The heuristic lower bound on the solution cost (start-goal heuristic).
     pub fn min_cost(&self) -> Cost {
-        self.min_cost
+        self.st.min_cost
     }
 
     /// Live nodes (start, goals, samples and vertices).
     pub fn num_states(&self) -> usize {
-        self.live_nodes
+        self.st.live_nodes
     }
 
     /// All live nodes (for pictures and tests).
@@ -1635,9 +1561,9 @@ where
 
     fn path_end(&self) -> Option<u32> {
         if self.has_solution() {
-            Some(self.best_goal)
-        } else if self.params.track_approximate && self.approx_vertex != NONE {
-            Some(self.approx_vertex)
+            Some(self.st.best_goal)
+        } else if self.st.params.track_approximate && self.st.approx_vertex != NONE {
+            Some(self.st.approx_vertex)
         } else {
             None
         }
@@ -1681,28 +1607,28 @@ where
     // ---------------------------------------------------------------- the iteration
 
     fn iterate(&mut self) -> StepOutcome {
-        self.counters.iterations += 1;
+        self.st.counters.iterations += 1;
         self.clean_front();
-        if self.search_done || self.arena.heap.is_empty() {
-            if self.final_search || !self.has_solution() {
-                if self.params.pruning {
+        if self.st.search_done || self.arena.heap.is_empty() {
+            if self.st.final_search || !self.has_solution() {
+                if self.st.params.pruning {
                     self.prune();
                 }
                 self.new_batch();
-                self.inflation = self.params.initial_inflation_factor;
+                self.st.inflation = self.st.params.initial_inflation_factor;
                 self.queue_clear();
-                self.search_id = self.search_id.wrapping_add(1);
+                self.st.search_id = self.st.search_id.wrapping_add(1);
                 self.insert_outgoing_edges(self.start_index(), false);
-                self.final_search = false;
-                self.truncation = 1.0 + self.params.truncation_scaling_parameter / self.ompl_graph_size();
-                self.search_done = false;
-                return match self.pending_full.take() {
+                self.st.final_search = false;
+                self.st.truncation = 1.0 + self.st.params.truncation_scaling_parameter / self.ompl_graph_size();
+                self.st.search_done = false;
+                return match self.st.pending_full.take() {
                     Some(a) => StepOutcome::ArenaFull(a),
                     None => StepOutcome::NewBatch,
                 };
             }
             // Final search of this batch: less inflation, re-key, re-expand the inconsistent vertices.
-            self.inflation = 1.0 + self.params.inflation_scaling_parameter / self.ompl_graph_size();
+            self.st.inflation = 1.0 + self.st.params.inflation_scaling_parameter / self.ompl_graph_size();
             self.queue_rebuild();
             for i in 0..self.arena.nodes.len() as u32 {
                 let inconsistent = self.node(i).is_some_and(|n| n.has(F_INCONSISTENT) && n.in_tree());
@@ -1710,9 +1636,9 @@ where
                     self.insert_outgoing_edges(i, true);
                 }
             }
-            self.final_search = true;
-            self.search_done = false;
-            return match self.pending_full.take() {
+            self.st.final_search = true;
+            self.st.search_done = false;
+            return match self.st.pending_full.take() {
                 Some(a) => StepOutcome::ArenaFull(a),
                 None => StepOutcome::FinalSearch,
             };
@@ -1722,8 +1648,8 @@ where
         let mut popped = None;
         for _ in 0..NQ {
             let Some(edge) = self.heap_pop() else { break };
-            if self.params.drop_dead_edges && self.edge_cannot_improve_child(&edge) {
-                self.counters.edges_dropped += 1;
+            if self.st.params.drop_dead_edges && self.edge_cannot_improve_child(&edge) {
+                self.st.counters.edges_dropped += 1;
                 continue;
             }
             popped = Some(edge);
@@ -1732,10 +1658,10 @@ where
         let Some(edge) = popped else {
             return StepOutcome::ProcessedEdge;
         };
-        self.counters.edges_popped += 1;
+        self.st.counters.edges_popped += 1;
         let (u, v) = (edge.parent, edge.child);
         let outcome = self.process_edge(u, v, edge.c_hat);
-        match self.pending_full.take() {
+        match self.st.pending_full.take() {
             Some(a) => StepOutcome::ArenaFull(a),
             None => outcome,
         }
@@ -1767,7 +1693,7 @@ where
         };
         // Already in the tree: a freebie, expand the child.
         if vn.parent == u && vn.in_tree() {
-            if un.expanded_search != self.search_id {
+            if un.expanded_search != self.st.search_id {
                 self.register_expansion(u);
             }
             self.insert_outgoing_edges(v, false);
@@ -1775,8 +1701,8 @@ where
         }
         let (g_u, h_come_u, g_v, h_go_v) = (un.cost, un.h_come, vn.cost, vn.h_go);
         // Truncated search: can this edge improve the solution by more than the truncation factor?
-        if (g_u + c_hat + h_go_v) * self.truncation >= self.best_cost {
-            self.search_done = true;
+        if (g_u + c_hat + h_go_v) * self.st.truncation >= self.st.best_cost {
+            self.st.search_done = true;
             return StepOutcome::ProcessedEdge;
         }
         // Could it improve the child's cost-to-come?
@@ -1791,7 +1717,7 @@ where
             return StepOutcome::ProcessedEdge;
         }
         // Could the true edge improve the solution?
-        if h_come_u + c + h_go_v >= self.best_cost {
+        if h_come_u + c + h_go_v >= self.st.best_cost {
             return StepOutcome::ProcessedEdge;
         }
         let Some(att) = self.check_edge(u, v) else {
@@ -1802,7 +1728,7 @@ where
             None => true,
         };
         if !compatible {
-            self.counters.incompatible_attachments += 1;
+            self.st.counters.incompatible_attachments += 1;
             return StepOutcome::ProcessedEdge;
         }
         if g_u + c < g_v {
@@ -1827,34 +1753,34 @@ where
     R: Rng,
 {
     fn step(&mut self) -> StepOutcome {
-        if self.invalid.is_some() {
+        if self.st.invalid.is_some() {
             return StepOutcome::Converged;
         }
         // OMPL stops iterating when no better solution is possible (minCost >= bestCost).
-        if self.has_solution() && self.best_cost <= self.min_cost {
+        if self.has_solution() && self.st.best_cost <= self.st.min_cost {
             return StepOutcome::Converged;
         }
         self.iterate()
     }
 
     fn counters(&self) -> Counters {
-        self.counters
+        self.st.counters
     }
 
     fn status(&self) -> PlannerStatus {
-        if let Some(e) = self.invalid {
+        if let Some(e) = self.st.invalid {
             PlannerStatus::InvalidInput(e)
         } else if self.has_solution() {
-            PlannerStatus::ExactSolution { cost: self.best_cost }
-        } else if self.params.track_approximate && self.approx_vertex != NONE {
-            PlannerStatus::ApproximateSolution { cost_to_go: self.approx_h }
+            PlannerStatus::ExactSolution { cost: self.st.best_cost }
+        } else if self.st.params.track_approximate && self.st.approx_vertex != NONE {
+            PlannerStatus::ApproximateSolution { cost_to_go: self.st.approx_h }
         } else {
             PlannerStatus::NoSolutionWithinBudget
         }
     }
 
     fn objective_satisfied(&self) -> bool {
-        self.has_solution() && self.pdef.objective.is_satisfied(self.best_cost)
+        self.has_solution() && self.pdef.objective.is_satisfied(self.st.best_cost)
     }
 }
 
