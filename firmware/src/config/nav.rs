@@ -16,7 +16,7 @@ pub const EDGE_MEMO_CAPACITY: usize = 256;
 /// New motion checks after which a `plan_step` call stops (after at least one new iteration), whatever its
 /// iteration allowance. Default 1: a motion check is tens of settles, anchor predictions and stability LPs (~8 M
 /// instructions each on the emulated Cortex-M7), so one per executive step keeps a step well inside the board's
-/// 2 s watchdog (a step that replays the search after a map change also redoes the checks before it).
+/// 2 s watchdog.
 pub const MOTION_CHECKS_PER_STEP: u32 = 1;
 /// Samples per ABIT* batch on board when `Configure.planner.batch_size` asks for more. Default 100 (OMPL's).
 pub const SAMPLES_PER_BATCH: u32 = 100;

@@ -41,7 +41,7 @@
 //! when Axel drives the segment backwards) and a turn to the next state's yaw ([`segment_motions`], exactly the
 //! motions [`crate::plan::tethered::MotionPlan`] interpolated and the validator checked).
 //!
-//! ## Suspended between steps, replayed after a map change (no heap, no `unsafe`)
+//! ## Suspended between steps, restarted after a map change (no heap, no `unsafe`)
 //! [`AbitStar`](crate::plan::abit::AbitStar) borrows its arena, the space (which borrows the map), the validators,
 //! the problem and the generator for its whole life. The navigator cannot keep it between executive steps: that
 //! would be a self-referential struct (the map view borrows the navigator's own storage, which scans must also
@@ -49,15 +49,18 @@
 //! - **resumes** the search the previous step suspended ([`AbitStar::suspend`](crate::plan::abit::AbitStar::suspend)
 //!   keeps the graph, queue and memo in the lent arena and returns the rest as plain data, held in
 //!   [`NavPlanStorage`] with the SplitMix64 generator's state; `resume` continues exactly where it stopped), or
-//! - after a scan (the map changed: the suspended search's motion checks no longer hold) **replays** it from the
-//!   goal's seed to `done + iterations` iterations on the new map (the start state settled at goal time is kept).
+//! - after a scan (the map changed: the suspended search's motion checks and its solution no longer hold)
+//!   **restarts** it from the goal's seed on the new map, for what is left of the goal's iteration budget
+//!   (`NavPlanStats::restarts`; the start state settled at goal time is kept).
 //!
 //! A resumed search equals one uninterrupted `solve` (`plan::abit`'s
 //! `a_suspended_and_resumed_search_is_the_uninterrupted_search`; here `same_inputs_same_plan_whatever_the_step_size`:
 //! with 3 iterations per step, the same plan, iterations, motion checks and stability problems as in one step, and
-//! one extra settle per step, the goal state's). Until session 5 every step replayed the search, answering the
-//! replayed motion checks and samples from a motion cache and a sample tape (~1 MB of the storage, now gone); the
-//! replays still repeated the queue and arena work (624 replayed iterations for 96 new ones at 8 per step).
+//! one extra settle per step, the goal state's). No step runs an iteration twice, so every step's geometry stays
+//! within `MOTION_CHECKS_PER_STEP`. Until session 5 every step replayed the search from its seed, answering the
+//! replayed motion checks and samples from a motion cache and a sample tape (~1 MB of the storage, now gone): the
+//! replays repeated the queue and arena work (624 replayed iterations for 96 new ones at 8 per step), and after a
+//! scan, which cleared both, a step redid every motion check of the goal so far.
 //!
 //! ## Storage
 //! The block pool and the block index are owned by the caller and lent to the navigator for good (`Vec`s on the
@@ -92,15 +95,14 @@
 //! Unit tests (`nav::tests`): plans on mapped flat and 12-degree worlds whose motions, dead-reckoned, end in the goal
 //! region; a goal behind an unobserved gap ends approximate or unsolved; every refusal; per-step and goal budgets;
 //! the time budget; the same plan for the same inputs whatever the step size (resumed), with no motion check or
-//! sample computed twice; a scan between steps makes the next step replay. `tests/tests/nav_planning.rs`: the same
+//! sample computed twice; a scan between steps restarts the search. `tests/tests/nav_planning.rs`: the same
 //! end to end over the link, and on the emulated board (QEMU mps2-an500) with identical output; there the planning
 //! storage is 1,031,328 bytes of SRAM `.bss` (`.bss` 1.17 MB of 4 MiB; 2,013,976 B with the replay caches of
 //! sessions 2-4) and the stack high-water mark 102.5 KiB of 256 KiB (session 2).
 //!
 //! Work per scan is bounded by `points * max_ray_voxels` voxel updates plus `esdf_max_sweeps` ESDF sweeps; an
 //! ESDF that runs out of sweeps is counted and continues with the next scan. Work per `plan_step` is bounded by
-//! its new iterations and `MOTION_CHECKS_PER_STEP`, and after a map change by the replayed iterations (at most
-//! `MAX_PLAN_ITERATIONS`), each bounded by the planner's own budgets.
+//! its new iterations and `MOTION_CHECKS_PER_STEP`, each iteration bounded by the planner's own budgets.
 
 mod planning;
 #[cfg(test)]
@@ -219,7 +221,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
 
     fn scan(&mut self, scan: &Scan<'_>, _now: Instant) {
         self.pose = Some(scan.sensor_pose);
-        // The map changes: the suspended search's motion checks no longer hold; the next step replays it.
+        // The map changes: the suspended search's motion checks no longer hold; the next step starts anew.
         planning::forget_search(&mut self.storage);
         let sensor_pose = pose3(&scan.sensor_pose);
         let mut status = self.status;

@@ -42,7 +42,7 @@ pub struct NavPlanStorage {
     path: heapless::Vec<(RoverState, AnchorHistory), { cfg::PATH_CAPACITY }>,
     motions: heapless::Vec<Motion, { cfg::MOTION_CAPACITY }>,
     /// The goal's search between executive steps ([`AbitStar::suspend`]), at most one; empty when the next step
-    /// must replay (a new goal, a changed map). A vector rather than an `Option`, so the empty storage stays all
+    /// starts a new search (a new goal, a changed map). A vector rather than an `Option`, so the empty storage stays all
     /// zero bytes.
     suspended: heapless::Vec<AbitSuspended<RoverState>, 1>,
     /// The generator's state when the search was suspended.
@@ -118,15 +118,17 @@ pub struct NavPlanStats {
     pub refusals: [u32; GoalRefusal::COUNT],
     /// `plan_step` calls.
     pub steps: u32,
-    /// Planner iterations run, replays included (the work actually done).
+    /// Planner iterations run.
     pub iterations_run: u64,
-    /// Steps that resumed the suspended search (the others replayed it: a new goal or a changed map).
+    /// Steps that resumed the suspended search.
     pub resumes: u32,
-    /// Settles run, replays included (samples, interpolated states of motion checks).
+    /// Searches restarted on a changed map (a scan arrived between two steps), keeping the goal's iteration count.
+    pub restarts: u32,
+    /// Settles run (samples, interpolated states of motion checks, goal states).
     pub settles_run: u64,
-    /// Static-stability problems solved, replays included (motion checks and the plan's margins).
+    /// Static-stability problems solved (motion checks and the plan's margins).
     pub stability_checks_run: u64,
-    /// Motion checks run, replays included.
+    /// Motion checks run.
     pub motion_checks_run: u32,
     /// The space's work and motion-failure counters of the last step (samples, settles, stability checks, motions
     /// invalid by reason).
@@ -180,6 +182,9 @@ pub(crate) struct Problem {
     pub budget: u32,
     pub deadline: Option<Instant>,
     pub done: u32,
+    /// Iterations of the goal before the current search began (non-zero after the map changed under a search,
+    /// which then restarted on the new map).
+    pub search_base: u32,
     pub best_cost: Option<f32>,
     pub finished: Option<PlanState>,
 }
@@ -262,6 +267,7 @@ pub(crate) fn set_up(
         budget,
         deadline,
         done: 0,
+        search_base: 0,
         best_cost: None,
         finished: None,
     })
@@ -343,8 +349,8 @@ pub(crate) fn waypoint(s: &RoverState, h: &AnchorHistory, margin: f32, truncated
     }
 }
 
-/// Run the problem for at most `iterations` new iterations (see the module docs: the planner is resumed, or
-/// replayed after a map change). Fills `plan` and the storage's motions when planning finishes with a path.
+/// Run the problem for at most `iterations` new iterations (see the module docs: the search is resumed, or
+/// restarted after a map change). Fills `plan` and the storage's motions when planning finishes with a path.
 pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
     map: &Map<'_>,
     problem: &mut Problem,
@@ -378,10 +384,17 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
         goal: GoalState { state: goal_state, tolerance: problem.tolerance },
         objective: TetherObjective,
     };
-    // Resume the search the last step suspended, or (a new goal, a changed map) replay it from its seed.
-    let resumable = store.suspended.first().is_some_and(|s| s.counters().iterations == problem.done);
+    // Resume the search the last step suspended, or (a new goal; a changed map, under which its motion checks no
+    // longer hold) start a new one from the goal's seed for the rest of the goal's budget.
+    let resumable =
+        store.suspended.first().is_some_and(|s| problem.search_base.saturating_add(s.counters().iterations) == problem.done);
     let suspended = if resumable { store.suspended.pop() } else { None };
     store.suspended.clear();
+    if suspended.is_none() && problem.done > problem.search_base {
+        stats.restarts = stats.restarts.saturating_add(1);
+        problem.search_base = problem.done;
+        problem.best_cost = None;
+    }
     let mut rng = SplitMix64(if suspended.is_some() { store.rng_state } else { problem.seed });
     let mut validity = TetherValidity;
     let new_checks = Cell::new(0u32);
@@ -394,22 +407,22 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
         }
         None => AbitStar::new(arena, &mut space, &mut validity, &mut motions, &pdef, &mut rng, problem.abit),
     };
-    let iterations_before = planner.counters().iterations;
+    // The search's own iteration counts (the goal's minus the iterations of searches on earlier maps).
+    let first_new = problem.done - problem.search_base;
     // At least one new iteration, then stop after MOTION_CHECKS_PER_STEP motion checks: the geometric work of one
-    // call stays bounded whatever the iteration count (except a replay, which redoes the checks before `done`).
-    let first_new = problem.done;
-    let report = planner.solve_until(&Budget::iterations(target), |c| {
+    // call stays bounded whatever the iteration count.
+    let report = planner.solve_until(&Budget::iterations(target - problem.search_base), |c| {
         c.iterations > first_new && new_checks.get() >= cfg::MOTION_CHECKS_PER_STEP
     });
     let c = report.counters;
-    stats.iterations_run = stats.iterations_run.saturating_add(u64::from(c.iterations - iterations_before));
-    problem.done = c.iterations;
+    stats.iterations_run = stats.iterations_run.saturating_add(u64::from(c.iterations - first_new));
+    problem.done = problem.search_base.saturating_add(c.iterations);
     problem.best_cost = match report.status {
         PlannerStatus::ExactSolution { cost } => Some(cost as f32),
         _ => None,
     };
     let done = out_of_time
-        || c.iterations >= problem.budget
+        || problem.done >= problem.budget
         || matches!(
             report.termination,
             Termination::Converged | Termination::ArenaFull(_) | Termination::ObjectiveSatisfied | Termination::InvalidInput
@@ -498,7 +511,7 @@ pub(crate) fn motion_at<P: BorrowMut<NavPlanStorage>>(storage: &mut P, index: us
     storage.borrow_mut().motions.get(index).copied()
 }
 
-/// Forget the suspended search (the map changed: the next step replays the search on the new map).
+/// Forget the suspended search (the map changed: the next step starts a new search on the new map).
 pub(crate) fn forget_search<P: BorrowMut<NavPlanStorage>>(storage: &mut P) {
     storage.borrow_mut().suspended.clear();
 }
