@@ -25,7 +25,7 @@ use firmware::map::{Block, DistanceField, DistanceQuery, Map};
 use firmware::plan::abit::{AbitArena, AbitParams, AbitStar};
 use firmware::plan::space::{Budget, GoalState, Planner, ProblemDefinition, Termination};
 use firmware::plan::tethered::{
-    MotionStats, PlanBounds, RoverState, TetherMotionValidator, TetherObjective, TetherSpace, TetherSpaceParams,
+    MotionStats, PlanBounds, RoverState, SettleFailure, TetherMotionValidator, TetherObjective, TetherSpace, TetherSpaceParams,
     TetherValidity,
 };
 use firmware::tether::{Anchor, AnchorHistory};
@@ -297,9 +297,17 @@ pub fn planning_params(spec: &CampaignSpec) -> TetherSpaceParams {
 /// Start and goal states of a spec on a field.
 pub fn endpoints<D: DistanceField>(space: &TetherSpace<'_, D>, spec: &CampaignSpec) -> Result<(RoverState, RoverState), String> {
     let yaw = spec.start_yaw_deg.to_radians() as Real;
-    let start = space
-        .settle_state(spec.start[0] as Real, spec.start[1] as Real, yaw)
-        .map_err(|e| format!("the start {:?} does not settle: {e:?}", spec.start))?;
+    let start = space.settle_state(spec.start[0] as Real, spec.start[1] as Real, yaw).map_err(|e| {
+        let hint = if spec.field == PlanningField::Map && e == SettleFailure::Collision {
+            format!(
+                " (on the onboard map Axel's body clearance grows by one voxel, {} m: try a finer --voxel, e.g. 0.05, or --field truth)",
+                spec.voxel_m
+            )
+        } else {
+            String::new()
+        };
+        format!("the start {:?} does not settle: {e:?}{hint}", spec.start)
+    })?;
     let goal = space.goal_state(v3(spec.goal), 0.0).map_err(|e| format!("the goal {:?} does not settle: {e:?}", spec.goal))?;
     Ok((start, goal))
 }
