@@ -25,8 +25,8 @@ use firmware::map::{Block, DistanceField, DistanceQuery, Map};
 use firmware::plan::abit::{AbitArena, AbitParams, AbitStar};
 use firmware::plan::space::{Budget, GoalState, Planner, ProblemDefinition, Termination};
 use firmware::plan::tethered::{
-    MotionStats, PlanBounds, RoverState, SettleFailure, TetherMotionValidator, TetherObjective, TetherSpace, TetherSpaceParams,
-    TetherValidity,
+    MotionStats, PlanBounds, RoverState, SettleFailure, TetherMotionValidator, TetherObjective, TetherSpace,
+    TetherSpaceParams, TetherValidity,
 };
 use firmware::tether::{Anchor, AnchorHistory};
 use heapless::Vec as HVec;
@@ -300,7 +300,8 @@ pub fn endpoints<D: DistanceField>(space: &TetherSpace<'_, D>, spec: &CampaignSp
     let start = space.settle_state(spec.start[0] as Real, spec.start[1] as Real, yaw).map_err(|e| {
         let hint = if spec.field == PlanningField::Map && e == SettleFailure::Collision {
             format!(
-                " (on the onboard map Axel's body clearance grows by one voxel, {} m: try a finer --voxel, e.g. 0.05, or --field truth)",
+                " (on the onboard map Axel's body clearance grows by one voxel, {} m: try a finer --voxel, e.g. \
+                 0.05, or --field truth)",
                 spec.voxel_m
             )
         } else {

@@ -42,8 +42,8 @@ pub struct NavPlanStorage {
     path: heapless::Vec<(RoverState, AnchorHistory), { cfg::PATH_CAPACITY }>,
     motions: heapless::Vec<Motion, { cfg::MOTION_CAPACITY }>,
     /// The goal's search between executive steps ([`AbitStar::suspend`]), at most one; empty when the next step
-    /// starts a new search (a new goal, a changed map). A vector rather than an `Option`, so the empty storage stays all
-    /// zero bytes.
+    /// starts a new search (a new goal, a changed map). A vector rather than an `Option`, so the empty storage
+    /// stays all zero bytes.
     suspended: heapless::Vec<AbitSuspended<RoverState>, 1>,
     /// The generator's state when the search was suspended.
     rng_state: u64,
@@ -386,8 +386,10 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
     };
     // Resume the search the last step suspended, or (a new goal; a changed map, under which its motion checks no
     // longer hold) start a new one from the goal's seed for the rest of the goal's budget.
-    let resumable =
-        store.suspended.first().is_some_and(|s| problem.search_base.saturating_add(s.counters().iterations) == problem.done);
+    let resumable = store
+        .suspended
+        .first()
+        .is_some_and(|s| problem.search_base.saturating_add(s.counters().iterations) == problem.done);
     let suspended = if resumable { store.suspended.pop() } else { None };
     store.suspended.clear();
     if suspended.is_none() && problem.done > problem.search_base {

@@ -391,8 +391,10 @@ mod planning {
         map_world(&mut n, -1.0, 5.0, 0.0, &flat);
         assert_eq!(n.goal(&goal(3.5, 0.0, 30), Instant::from_micros(0)), PlanState::Accepted);
         let mut plan = PlanBuffer::new();
-        let step = |n: &mut TestNav, k: u64, plan: &mut PlanBuffer| match n.plan_step(Instant::from_micros(k), 3, plan) {
-            PlanProgress::Searching { iterations, .. } | PlanProgress::Finished { iterations, .. } => iterations,
+        let step = |n: &mut TestNav, k: u64, plan: &mut PlanBuffer| {
+            match n.plan_step(Instant::from_micros(k), 3, plan) {
+                PlanProgress::Searching { iterations, .. } | PlanProgress::Finished { iterations, .. } => iterations,
+            }
         };
         let first = step(&mut n, 1, &mut plan);
         let second = step(&mut n, 2, &mut plan);
