@@ -194,13 +194,13 @@ pub struct Map<'a> {
 
 /// Floor division by the block edge (a power of two) and the local coordinate.
 #[inline]
-fn split(g: i32) -> (i32, usize) {
+pub(crate) fn split(g: i32) -> (i32, usize) {
     const SHIFT: u32 = BLOCK_EDGE.trailing_zeros();
     (g >> SHIFT, (g & (BLOCK_EDGE as i32 - 1)) as usize)
 }
 
 #[inline]
-fn local_index(l: [usize; 3]) -> usize {
+pub(crate) fn local_index(l: [usize; 3]) -> usize {
     l[0] + BLOCK_EDGE * (l[1] + BLOCK_EDGE * l[2])
 }
 
