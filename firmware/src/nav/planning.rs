@@ -395,7 +395,6 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
     if suspended.is_none() && problem.done > problem.search_base {
         stats.restarts = stats.restarts.saturating_add(1);
         problem.search_base = problem.done;
-        problem.best_cost = None;
     }
     let mut rng = SplitMix64(if suspended.is_some() { store.rng_state } else { problem.seed });
     let mut validity = TetherValidity;
@@ -410,14 +409,14 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
         None => AbitStar::new(arena, &mut space, &mut validity, &mut motions, &pdef, &mut rng, problem.abit),
     };
     // The search's own iteration counts (the goal's minus the iterations of searches on earlier maps).
-    let first_new = problem.done - problem.search_base;
+    let first_new = problem.done.saturating_sub(problem.search_base);
     // At least one new iteration, then stop after MOTION_CHECKS_PER_STEP motion checks: the geometric work of one
     // call stays bounded whatever the iteration count.
-    let report = planner.solve_until(&Budget::iterations(target - problem.search_base), |c| {
+    let report = planner.solve_until(&Budget::iterations(target.saturating_sub(problem.search_base)), |c| {
         c.iterations > first_new && new_checks.get() >= cfg::MOTION_CHECKS_PER_STEP
     });
     let c = report.counters;
-    stats.iterations_run = stats.iterations_run.saturating_add(u64::from(c.iterations - first_new));
+    stats.iterations_run = stats.iterations_run.saturating_add(u64::from(c.iterations.saturating_sub(first_new)));
     problem.done = problem.search_base.saturating_add(c.iterations);
     problem.best_cost = match report.status {
         PlannerStatus::ExactSolution { cost } => Some(cost as f32),
