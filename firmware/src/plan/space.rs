@@ -116,6 +116,13 @@ pub trait StateSpace {
     fn valid_with_attachment(&self, _state: &Self::State, _attachment: &Self::Attachment) -> bool {
         true
     }
+    /// A quick prediction of the attachment a motion from `from` (holding `attachment`) to `to` would end with,
+    /// without checking the motion (the tethered rover: anchor prediction along the straight line between the two
+    /// tether ends). The planner uses it to find edges between tree vertices that would reach another attachment.
+    /// Default: `None` (no prediction).
+    fn predict_attachment(&self, _from: &Self::State, _attachment: &Self::Attachment, _to: &Self::State) -> Option<Self::Attachment> {
+        None
+    }
 }
 
 /// State validity (OMPL `StateValidityChecker`): attachment-independent checks of one state (bounds, collision,
@@ -390,6 +397,8 @@ pub struct Counters {
     pub incompatible_attachments: u32,
     /// Twins with undetermined history created for edges into vertices of another history.
     pub history_twins: u32,
+    /// Attachment predictions asked of the space ([`StateSpace::predict_attachment`]).
+    pub attachment_predictions: u32,
     /// Neighbour lists truncated at `NEIGHBOUR_CAPACITY`.
     pub neighbour_lists_truncated: u32,
     /// Iteration at which the first solution was found (0 = none yet).

@@ -830,6 +830,16 @@ impl<D: DistanceField> StateSpace for TetherSpace<'_, D> {
     fn valid_with_attachment(&self, state: &RoverState, attachment: &AnchorHistory) -> bool {
         self.stable_with(&state.settled, attachment).is_ok()
     }
+    /// Alg. 1 over the straight line between the two axles, from `attachment` (no settling, no stability).
+    fn predict_attachment(&self, from: &RoverState, attachment: &AnchorHistory, to: &RoverState) -> Option<AnchorHistory> {
+        if from.off_map || to.off_map {
+            return None;
+        }
+        self.count(|s| s.anchor_predictions += 1);
+        let mut out = AnchorHistory::default();
+        predict_anchors(self.map, attachment, &from.axle(), &to.axle(), &mut out).ok()?;
+        Some(out)
+    }
 }
 
 /// State validity: settled (every state the space produces is), finite.

@@ -50,6 +50,13 @@ pub struct CampaignArgs {
     /// Switch off the history twins of `plan::abit` (Paton et al.'s planner has none).
     #[arg(long)]
     pub no_twins: bool,
+    /// Switch off the goal edges of `plan::abit` (every vertex queues its edge to the goal; OMPL has none).
+    #[arg(long)]
+    pub no_goal_edges: bool,
+    /// Switch off the revealing edges of `plan::abit` (edges between tree vertices queued because the tether
+    /// would catch on something between them; OMPL has none).
+    #[arg(long)]
+    pub no_reveal: bool,
     /// Smallest stability margin of a planned state (default `config::tethered::defaults::MIN_STABILITY_MARGIN`).
     #[arg(long)]
     pub min_margin: Option<f64>,
@@ -86,6 +93,8 @@ impl CampaignArgs {
             rewire_factor: None,
             copy_fraction: None,
             no_twins: false,
+            no_goal_edges: false,
+            no_reveal: false,
             min_margin: None,
             drop_dead_edges: false,
             wheel_mu: None,
@@ -150,6 +159,8 @@ pub fn spec_from(a: &CampaignArgs) -> Result<CampaignSpec, String> {
     }
     abit.history_twins = !a.no_twins;
     abit.drop_dead_edges = a.drop_dead_edges;
+    abit.goal_edges = !a.no_goal_edges;
+    abit.reveal_attachments = !a.no_reveal;
     let mut params = TetherSpaceParams::DEFAULT;
     if let Some(m) = a.min_margin {
         params.min_stability_margin = m;
