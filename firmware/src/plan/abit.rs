@@ -1227,20 +1227,10 @@ where
     /// is unconnected or of a compatible history, creating a twin with undetermined history at the end of the
     /// chain if there is room (`MAX_HISTORY_TWINS`). `None` if no target is possible.
     fn twin_target(&mut self, u: u32, v: u32) -> Option<u32> {
-        let mut cur = v;
-        for _ in 0..cfg::MAX_HISTORY_TWINS {
-            if !self.histories_conflict(u, cur) {
-                return Some(cur);
-            }
-            let (twin, twin_generation) = self.node(cur).map(|n| (n.twin, n.twin_generation))?;
-            let twin_alive = self.node(twin).is_some_and(|t| t.generation == twin_generation && !t.has(F_FREE));
-            if twin_alive {
-                cur = twin;
-                continue;
-            }
-            return self.new_twin(cur);
+        match self.node(u)?.attachment.clone() {
+            Some(att) => self.twin_for_attachment(v, &att),
+            None => Some(v),
         }
-        None
     }
 
     /// A vertex is expanded on the current search once one of its outgoing edges has been processed (OMPL's
