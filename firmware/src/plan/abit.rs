@@ -1153,7 +1153,7 @@ where
                 let (Some(un), Some(wn)) = (self.node(u), self.node(w)) else { return false };
                 let Some(att) = un.attachment.as_ref() else { return false };
                 let predicted = self.space.predict_attachment(&un.state, att, &wn.state);
-                self.st.counters.attachment_predictions += 1;
+                self.st.counters.attachment_predictions = self.st.counters.attachment_predictions.saturating_add(1);
                 predicted
             }
         };

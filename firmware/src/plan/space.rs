@@ -120,7 +120,12 @@ pub trait StateSpace {
     /// without checking the motion (the tethered rover: anchor prediction along the straight line between the two
     /// tether ends). The planner uses it to find edges between tree vertices that would reach another attachment.
     /// Default: `None` (no prediction).
-    fn predict_attachment(&self, _from: &Self::State, _attachment: &Self::Attachment, _to: &Self::State) -> Option<Self::Attachment> {
+    fn predict_attachment(
+        &self,
+        _from: &Self::State,
+        _attachment: &Self::Attachment,
+        _to: &Self::State,
+    ) -> Option<Self::Attachment> {
         None
     }
 }

@@ -831,7 +831,12 @@ impl<D: DistanceField> StateSpace for TetherSpace<'_, D> {
         self.stable_with(&state.settled, attachment).is_ok()
     }
     /// Alg. 1 over the straight line between the two axles, from `attachment` (no settling, no stability).
-    fn predict_attachment(&self, from: &RoverState, attachment: &AnchorHistory, to: &RoverState) -> Option<AnchorHistory> {
+    fn predict_attachment(
+        &self,
+        from: &RoverState,
+        attachment: &AnchorHistory,
+        to: &RoverState,
+    ) -> Option<AnchorHistory> {
         if from.off_map || to.off_map {
             return None;
         }
