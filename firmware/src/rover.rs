@@ -37,7 +37,8 @@
 //! # Boom (section IV-A, last paragraph)
 //! *Inline*: the boom points at the most recent anchor ([`boom_inline_angle`]). *In contact*: from the inline angle
 //! the boom is swept (`BOOM_SWEEP_STEPS` steps of 2 degrees, in the direction that lowers its tip) until its tip
-//! touches the terrain ([`boom_in_contact`]). [`check_pose_stability`] tries both: a pose is stable when one boom
+//! touches the terrain ([`boom_in_contact`]; a boom whose inline tip is buried rests where it enters the terrain).
+//! [`check_pose_stability`] tries both: a pose is stable when one boom
 //! configuration admits static equilibrium (the rover chooses its boom angle).
 //!
 //! # Parameters
@@ -48,7 +49,7 @@
 //! 60 roll steps, 180 boom steps, 8 footprint points).
 
 use crate::config::rover::{
-    RoverParams, BODY_COLLISION_POINTS, BOOM_SWEEP_STEPS, FOOTPRINT_POINTS, SETTLE_MAX_DROP_STEPS,
+    RoverParams, BODY_COLLISION_POINTS, BOOM_ENTRY_STEPS, BOOM_SWEEP_STEPS, FOOTPRINT_POINTS, SETTLE_MAX_DROP_STEPS,
     RIM_REFINE_STEPS, SETTLE_MAX_ITERATIONS, SETTLE_ROLL_STEPS, WHEEL_CONTACT_POINTS,
 };
 use crate::geom::{normalize3, Pose3, Real, Rot3, Vec3};
@@ -374,6 +375,13 @@ pub struct BoomContact {
 
 /// Sweep the boom from `start_angle` in the direction that lowers its tip until the tip touches the terrain: the
 /// *in contact* configuration. `None` if it never touches within `BOOM_SWEEP_STEPS` or meets unknown space.
+///
+/// When the tip at `start_angle` is already deeper in the terrain than twice the contact threshold (the rover
+/// facing a pole closer than its boom, the tether pulling past it), the boom rests where it enters the terrain:
+/// the contact is the first point along the boom, from the axle, within twice the threshold of the surface
+/// (`BOOM_ENTRY_STEPS` points). Projecting the buried tip to the surface instead took the contact from the
+/// distance field's interior, which the onboard map truncates: on test 3 (seed 189) a pose the map found stable
+/// was unstable on the true terrain.
 pub fn boom_in_contact(
     map: &impl DistanceField,
     settled: &SettledPose,
@@ -389,11 +397,39 @@ pub fn boom_in_contact(
         let beta = start_angle + dir * step * k as Real;
         let tip = boom_tip(settled, beta, params);
         let (d, g) = query(map, &tip)?;
+        if k == 0 && d < -params.contact_threshold_m * 2.0 {
+            return boom_entry_contact(map, settled, beta, tip, params);
+        }
         if d <= params.contact_threshold_m * 2.0 {
             return Some(BoomContact {
                 angle_rad: beta,
                 tip,
                 point: tip - g * d,
+                normal: normalize3(&g, 1e-6).unwrap_or(up),
+            });
+        }
+    }
+    None
+}
+
+/// The contact of a boom at `beta` whose tip is buried: the first point along it (from the axle) near the surface.
+fn boom_entry_contact(
+    map: &impl DistanceField,
+    settled: &SettledPose,
+    beta: Real,
+    tip: Vec3,
+    params: &RoverParams,
+) -> Option<BoomContact> {
+    let axle = settled.pose.translation.vector;
+    let up = settled.pose.rotation * Vec3::z();
+    for k in 1..=BOOM_ENTRY_STEPS {
+        let p = axle + (tip - axle) * (k as Real / BOOM_ENTRY_STEPS as Real);
+        let (d, g) = query(map, &p)?;
+        if d <= params.contact_threshold_m * 2.0 {
+            return Some(BoomContact {
+                angle_rad: beta,
+                tip,
+                point: p - g * d,
                 normal: normalize3(&g, 1e-6).unwrap_or(up),
             });
         }
@@ -670,5 +706,41 @@ mod tests {
         let SettleOutcome::Settled(s) = settle(&plane, &Vec3::zeros(), 0.3, &params) else { panic!() };
         let (o, _) = check_pose_stability(&plane, &s, None, &params).unwrap_or_else(|e| panic!("{e:?}"));
         assert!(o.is_stable(), "{o:?}");
+    }
+
+    /// Flat ground `z = 0` plus a vertical pole of radius 0.25 m at `(0.93, 0)`: exact SDF (union).
+    struct GroundAndPole;
+    impl DistanceField for GroundAndPole {
+        fn query(&self, p: &Vec3) -> DistanceQuery {
+            let rel = Vec3::new(p.x - 0.93, p.y, 0.0);
+            let r = rel.norm();
+            let d_pole = r - 0.25;
+            if p.z < d_pole || r < 1e-6 {
+                DistanceQuery::Known { distance: p.z, gradient: Vec3::z() }
+            } else {
+                DistanceQuery::Known { distance: d_pole, gradient: rel / r }
+            }
+        }
+    }
+
+    /// The rover faces a pole closer than its boom with the tether pulling past it: the inline boom's tip is buried
+    /// 0.18 m deep in the pole. The boom rests where it enters the pole, on the near side with the normal towards
+    /// the rover; projecting the buried tip would put the contact on the far side, pushing the wrong way.
+    #[test]
+    fn a_buried_boom_rests_where_it_enters_the_terrain() {
+        let params = RoverParams::AXEL;
+        let field = GroundAndPole;
+        let SettleOutcome::Settled(s) = settle(&field, &Vec3::zeros(), 0.0, &params) else { panic!("no settle") };
+        let anchor = Vec3::new(5.0, 0.0, s.pose.translation.vector.z);
+        let beta = boom_inline_angle(&s, &anchor);
+        let tip = boom_tip(&s, beta, &params);
+        assert!(matches!(field.query(&tip), DistanceQuery::Known { distance, .. } if distance < -0.15), "{tip:?}");
+        let c = boom_in_contact(&field, &s, beta, &params).expect("a contact");
+        assert_eq!(c.angle_rad, beta);
+        assert!((c.point.x - 0.68).abs() < 0.04 && c.point.y.abs() < 0.01, "contact {:?}", c.point);
+        assert!(c.normal.x < -0.99, "normal {:?}", c.normal);
+        // A tip in free air (the boom raised backwards, away from the pole) still sweeps down to the ground.
+        let free = boom_in_contact(&field, &s, core::f32::consts::PI - 0.5, &params).expect("a ground contact");
+        assert!(free.point.z.abs() < 0.03 && free.normal.z > 0.99, "{free:?}");
     }
 }

@@ -178,6 +178,16 @@ fn blocked_line(
     Ok(best)
 }
 
+/// Does the straight tether from `pivot` to `end` touch the terrain (the sweep-line test of the attachment
+/// search, one line)? Used to find where the tether starts to catch (`plan::tethered`'s catch-boundary samples).
+pub fn tether_touches(map: &impl DistanceField, pivot: &Vec3, end: &Vec3) -> Result<bool, TetherError> {
+    if !(pivot.iter().all(|v| v.is_finite()) && end.iter().all(|v| v.is_finite())) {
+        return Err(TetherError::InvalidInput);
+    }
+    let mut stats = PredictStats::default();
+    Ok(blocked_line(map, pivot, end, &mut stats)?.is_some())
+}
+
 /// Attachment search (IV-B a) for the tether pivoting about `pivot` while its end moves `x0 -> x1`. New anchors are
 /// pushed onto `out` in order; returns how many.
 pub fn attach_anchors(

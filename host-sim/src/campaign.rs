@@ -242,6 +242,10 @@ pub struct TrialResult {
     pub anchor_predictions: u32,
     /// Motions invalid because unstable.
     pub motions_unstable: u32,
+    /// Samples drawn near a catch boundary (the edge of a tether shadow) and added to the graph's draws.
+    pub catch_samples: u32,
+    /// Surface points probed for the tether shadow by the catch-boundary sampler.
+    pub catch_probes: u32,
     /// Largest node-arena use.
     pub arena_nodes: usize,
     /// Largest edge-queue use.
@@ -415,6 +419,8 @@ pub fn run_trial<D: DistanceField>(
         stability_checks: stats.stability_checks,
         anchor_predictions: stats.anchor_predictions,
         motions_unstable: stats.fail_unstable,
+        catch_samples: c.catch_samples,
+        catch_probes: stats.catch_probes,
         arena_nodes: arena_use.nodes,
         arena_queue: arena_use.queue,
         path,

@@ -4,8 +4,11 @@
 use std::process::ExitCode;
 
 use firmware::config::rover::RoverParams;
-use firmware::geom::Real;
+use firmware::geom::{Real, Vec3};
+use firmware::plan::space::StateSpace;
 use firmware::plan::tethered::{RoverState, TetherSpace, TetherSpaceParams};
+use firmware::tether::{Anchor, AnchorHistory};
+use rand_core::SeedableRng;
 use host_sim::campaign::{self, revalidate, CampaignResult, Truth};
 use host_sim::cli::campaign::{spec_from, CampaignArgs};
 
@@ -52,6 +55,35 @@ fn ledge_test3_wraps_the_pole_then_descends() {
     // Without the goal edges and revealing edges of `plan::abit` the same trials find fewer paths.
     let without = run(&CampaignArgs { no_goal_edges: true, no_reveal: true, ..args("ledge_test3", 4, 750) });
     assert!(without.found_stable() < r.found_stable(), "{}", without.table());
+}
+
+/// The catch-boundary sampler puts its samples along the edges of the tether shadow that the pole casts from the
+/// root anchor of test 3 (the strip behind the pole, x < -2.75 m, |y| < ~0.3 m): the only shadow on the ledge,
+/// whose top, slope and ground the tether from the root sees. A uniform sample lands there one time in ~60.
+#[test]
+fn catch_boundary_samples_line_the_pole_shadow() {
+    let spec = spec_from(&args("ledge_test3", 1, 1)).expect("scenario");
+    let truth = Truth(spec.world.as_ref());
+    let mut space = TetherSpace::new(&truth, spec.bounds, RoverParams::AXEL, TetherSpaceParams::DEFAULT).expect("space");
+    let root = Vec3::new(spec.root[0] as Real, spec.root[1] as Real, spec.root[2] as Real);
+    let history = AnchorHistory::new(Anchor::root(root));
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+    let drawn: Vec<RoverState> = (0..40).filter_map(|_| space.sample_catch_boundary(&mut rng, &history)).collect();
+    // Pairs straddling the shadow are rare (~1 in 110 on this seed) but 256 are tried per draw; about one settle in
+    // three then fails (the body meets the pole or the back wall), as a uniform draw's may (seed 7: 24 of 40).
+    assert!(drawn.len() >= 20, "{} of 40 draws", drawn.len());
+    for st in &drawn {
+        let (x, y) = (st.ground.x, st.ground.y);
+        // behind the pole, within the pair radius of the shadow edge (|y| up to 0.3 m there)
+        assert!(x < -2.5 && y.abs() < 0.3 + 0.25 + 0.06, "({x:.2}, {y:.2})");
+    }
+    // Both edges of the shadow are sampled.
+    assert!(drawn.iter().any(|s| s.ground.y > 0.0) && drawn.iter().any(|s| s.ground.y < 0.0));
+    let stats = space.stats();
+    // every pair found was settled (a few settles may fail next to the pole); each pair probed two points
+    assert!(stats.catch_samples as usize >= drawn.len() && stats.catch_probes >= 2 * stats.catch_samples, "{stats:?}");
+    // A history without a root anchor has no shadow to sample.
+    assert!(space.sample_catch_boundary(&mut rng, &AnchorHistory::default()).is_none());
 }
 
 #[test]

@@ -68,3 +68,13 @@ pub const DEFAULT_ITERATION_BUDGET: u32 = 750;
 /// (non-Markovian spaces). The ledge needs two or three histories (root only, anchored on the lip, anchored on
 /// the pole); 4 bounds the arena growth.
 pub const MAX_HISTORY_TWINS: usize = 4;
+
+/// Fraction of new samples drawn near where the tether would catch on terrain
+/// ([`crate::plan::space::StateSpace::sample_catch_boundary`]) instead of uniformly (non-Markovian spaces; this
+/// project's addition, see the `plan::abit` module docs). The rest stay uniform (or informed), so the RGG still
+/// covers the whole space.
+pub const CATCH_SAMPLE_FRACTION: f64 = 0.1;
+
+/// Most distinct attachments (compatibility classes of the tree's vertices) whose catch boundaries a batch samples
+/// from; the first ones found in arena order are kept.
+pub const CATCH_ATTACHMENT_CAPACITY: usize = 8;

@@ -21,6 +21,11 @@ pub const SETTLE_MAX_DROP_STEPS: u32 = 64;
 pub const SETTLE_ROLL_STEPS: i32 = 60;
 /// Boom angles tried when sweeping the boom into ground contact. Default 180 (2 degree steps over a full turn).
 pub const BOOM_SWEEP_STEPS: u32 = 180;
+
+/// Points along a buried boom searched for where it enters the terrain (`rover::boom_in_contact`). Default 32
+/// (3 cm apart on the 1 m boom of `RoverParams::AXEL`).
+pub const BOOM_ENTRY_STEPS: u32 = 32;
+
 /// Footprint sample points for the surface normal (a ring of this many points plus the centre). Default 8.
 pub const FOOTPRINT_POINTS: usize = 8;
 

@@ -75,10 +75,20 @@
 //!   front of the pole, with the tether wrapped around it, reaches the goal 7 m away, while the k nearest states of
 //!   that vertex lie within ~3 m. One iteration per vertex, when the edge reaches the front of the queue. Where no
 //!   goal motion can succeed before a detour, that iteration is wasted: on the column toy of the tests (40 seeds,
-//!   1000 iterations) goal edges lower the success from 30 to 16 (at 2000 iterations, 36 to 34).
+//!   1000 iterations, catch-boundary samples off) goal edges lower the success from 30 to 16 (at 2000 iterations,
+//!   36 to 34).
+//! - **Catch-boundary samples** (this project's addition, `catch_sample_fraction`): a fraction of the sample draws
+//!   is taken where a history the tree knows would change ([`StateSpace::sample_catch_boundary`]; the tethered
+//!   rover: along the edge of the tether shadow that terrain casts as seen from the history's last anchor). Each
+//!   such draw picks one of the tree's distinct histories uniformly (at the first batch, the start's). After a
+//!   solution they are kept only inside the informed set. On the ledge the pole's shadow is a 0.6 m strip behind
+//!   the pole: uniform samples straddle it so rarely that in 5 trials of 100 no edge across it was ever in a
+//!   k-nearest list (seed 9: the vertices behind the pole stood at |y| > 1.1 m, every pair across more than
+//!   the 2.99 m of the 21 nearest apart), and the tether never wrapped the pole within the budget.
 //! - Measured on test 3 of Table I (`tetherbot campaign ledge_test3 --trials 30`, planning on the 0.10 m map):
-//!   4/30 found with neither, 5/30 with revealing edges only, 8/30 with goal edges only, 21/30 with both
-//!   (78/100); with twins of the start's pose as well, 94/100.
+//!   4/30 found with neither goal nor revealing edges, 5/30 with revealing edges only, 8/30 with goal edges only,
+//!   21/30 with both (78/100); with twins of the start's pose as well, 94/100; with catch-boundary samples as
+//!   well (100 trials), see `host-sim/doc/campaign.md`.
 //!
 //! These are active only when [`StateSpace::NON_MARKOVIAN`] is true.
 //!
@@ -97,6 +107,7 @@
 //! | `history_twins` | true |
 //! | `goal_edges` | true |
 //! | `reveal_attachments` | true |
+//! | `catch_sample_fraction` | 0.1 (non-Markovian only) |
 //! | `track_approximate` | false (as OMPL) |
 //! | `sample_attempts_per_sample` | 2 |
 //! | `informed_rejection_attempts` | 100 |
@@ -178,6 +189,9 @@ pub struct AbitParams {
     /// motion would give the child another attachment; it connects a history twin (non-Markovian spaces with
     /// `history_twins` only; see the module docs).
     pub reveal_attachments: bool,
+    /// Fraction of sample draws taken near where a known attachment would change
+    /// ([`StateSpace::sample_catch_boundary`]; non-Markovian spaces only; see the module docs).
+    pub catch_sample_fraction: f64,
 }
 
 impl AbitParams {
@@ -201,6 +215,7 @@ impl AbitParams {
             drop_dead_edges: false,
             goal_edges: true,
             reveal_attachments: true,
+            catch_sample_fraction: cfg::CATCH_SAMPLE_FRACTION,
         }
     }
 
@@ -226,6 +241,9 @@ impl AbitParams {
         }
         if !(0.0..=1.0).contains(&self.attachment_copy_fraction) {
             return Err(p("attachment_copy_fraction must be in [0, 1]"));
+        }
+        if !(0.0..=1.0).contains(&self.catch_sample_fraction) {
+            return Err(p("catch_sample_fraction must be in [0, 1]"));
         }
         if self.sample_attempts_per_sample == 0 || self.informed_rejection_attempts == 0 {
             return Err(p("sampling attempts must be at least 1"));
@@ -1510,13 +1528,7 @@ where
         let mut distinct: Vec<u32, { cfg::NEIGHBOUR_CAPACITY }> = Vec::new();
         for &(_, i) in near.iter() {
             let Some(att) = self.node(i).and_then(|n| n.attachment.as_ref()) else { continue };
-            let seen = distinct
-                .iter()
-                .any(|&j| {
-                    let other = self.node(j).and_then(|n| n.attachment.as_ref());
-                    other.is_some_and(|b| self.space.attachments_compatible(att, b))
-                });
-            if !seen {
+            if !self.any_compatible(&distinct, att) {
                 let _ = distinct.push(i);
             }
         }
@@ -1527,7 +1539,52 @@ where
         distinct.get(pick).and_then(|&i| self.node(i)).and_then(|n| n.attachment.clone())
     }
 
-    fn draw_sample(&mut self) -> Option<S::State> {
+    /// Does one of the nodes `of` hold an attachment compatible with `att`?
+    fn any_compatible(&self, of: &[u32], att: &S::Attachment) -> bool {
+        of.iter().any(|&j| {
+            let other = self.node(j).and_then(|n| n.attachment.as_ref());
+            other.is_some_and(|b| self.space.attachments_compatible(att, b))
+        })
+    }
+
+    /// One tree vertex per distinct attachment (compatibility class), in arena order, up to
+    /// `CATCH_ATTACHMENT_CAPACITY`: the histories whose catch boundaries a batch samples. Bounded by the arena
+    /// size times that capacity.
+    fn distinct_attachment_vertices(&self) -> Vec<u32, { cfg::CATCH_ATTACHMENT_CAPACITY }> {
+        let mut distinct: Vec<u32, { cfg::CATCH_ATTACHMENT_CAPACITY }> = Vec::new();
+        for (i, n) in self.arena.nodes.iter().enumerate() {
+            let Some(att) = n.attachment.as_ref().filter(|_| n.in_tree()) else { continue };
+            if !self.any_compatible(&distinct, att) && distinct.push(i as u32).is_err() {
+                break;
+            }
+        }
+        distinct
+    }
+
+    /// A sample near the catch boundary of one of `histories` (chosen uniformly), kept only if it can improve
+    /// the solution (informed set by rejection, as for uniform draws).
+    fn catch_sample(&mut self, histories: &[u32]) -> Option<S::State> {
+        let pick = ((uniform01(self.rng) * histories.len() as f64) as usize).min(histories.len().saturating_sub(1));
+        let att = histories.get(pick).and_then(|&i| self.node(i)).and_then(|n| n.attachment.clone())?;
+        let x = self.space.sample_catch_boundary(self.rng, &att)?;
+        if self.has_solution() {
+            let (hc, hg) = self.heuristics(&x);
+            if hc + hg >= self.st.best_cost {
+                return None;
+            }
+        }
+        self.st.counters.catch_samples = self.st.counters.catch_samples.saturating_add(1);
+        Some(x)
+    }
+
+    /// A new sample: near a catch boundary (a fraction `catch_sample_fraction` of the draws, non-Markovian
+    /// spaces), else uniform before the first solution and informed after it.
+    fn draw_sample(&mut self, catch_histories: &[u32]) -> Option<S::State> {
+        if !catch_histories.is_empty() && uniform01(self.rng) < self.st.params.catch_sample_fraction {
+            if let Some(x) = self.catch_sample(catch_histories) {
+                return Some(x);
+            }
+        }
         if !self.has_solution() {
             return self.space.sample_uniform(self.rng);
         }
@@ -1573,13 +1630,18 @@ where
         );
         self.st.r = self.st.params.rewire_factor * r_rgg * libm::pow(libm::log(qf) / qf, 1.0 / d);
 
+        let catch_histories = if S::NON_MARKOVIAN && self.st.params.catch_sample_fraction > 0.0 {
+            self.distinct_attachment_vertices()
+        } else {
+            Vec::new()
+        };
         let attempts = self.st.params.sample_attempts_per_sample as usize * batch;
         let mut added = 0usize;
         for _ in 0..attempts {
             if added >= batch {
                 break;
             }
-            let Some(x) = self.draw_sample() else { continue };
+            let Some(x) = self.draw_sample(&catch_histories) else { continue };
             self.st.counters.states_checked += 1;
             if !self.validity.is_valid(&x) {
                 continue;
@@ -2246,6 +2308,18 @@ mod tests {
         fn predict_attachment(&self, from: &[f64; 2], anchored: &bool, to: &[f64; 2]) -> Option<bool> {
             Some(*anchored || COLUMN.intersects_segment(from, to))
         }
+        /// Where the unanchored history changes: around the column (0.1 beyond it, within the square).
+        fn sample_catch_boundary<R2: Rng + ?Sized>(&mut self, rng: &mut R2, anchored: &bool) -> Option<[f64; 2]> {
+            if *anchored {
+                return None;
+            }
+            let mut x = [0.0; 2];
+            for (d, v) in x.iter_mut().enumerate() {
+                let (lo, hi) = ((COLUMN.lo[d] - 0.1).max(-1.0), (COLUMN.hi[d] + 0.1).min(1.0));
+                *v = lo + (hi - lo) * uniform01(rng);
+            }
+            Some(x)
+        }
     }
     struct AnchoredRules;
     impl StateValidityChecker<Anchored> for AnchoredRules {
@@ -2395,7 +2469,7 @@ mod tests {
     fn non_markovian_histories_are_respected_and_a_detour_is_found() {
         // The column sits in the far corner: every state between it and the slope is first reached without the
         // anchor (the Fig. 7c trap). Measured: 20/20 with the defaults, 0/20 with copying, fresh goals, twins, goal
-        // edges and revealing edges all off.
+        // edges, revealing edges and catch-boundary samples all off.
         let with = anchored_runs(AbitParams::ompl_defaults(), 20, 6000);
         let none = AbitParams {
             attachment_copy_fraction: 0.0,
@@ -2403,6 +2477,7 @@ mod tests {
             history_twins: false,
             goal_edges: false,
             reveal_attachments: false,
+            catch_sample_fraction: 0.0,
             ..AbitParams::ompl_defaults()
         };
         let without = anchored_runs(none, 20, 6000);
@@ -2414,10 +2489,20 @@ mod tests {
     fn revealing_edges_reach_the_anchored_history_sooner() {
         // Edges between two unanchored vertices that would cross the column are queued (and connect a twin) only
         // with `reveal_attachments`. Measured on 40 seeds at 1000 iterations (goal edges off in both): 35 found
-        // with it, 30 without.
-        let base = AbitParams { goal_edges: false, ..AbitParams::ompl_defaults() };
+        // with it, 30 without (catch-boundary samples off in both).
+        let base = AbitParams { goal_edges: false, catch_sample_fraction: 0.0, ..AbitParams::ompl_defaults() };
         let with = anchored_runs(AbitParams { reveal_attachments: true, ..base }, 40, 1000);
         let without = anchored_runs(AbitParams { reveal_attachments: false, ..base }, 40, 1000);
         assert!(with > without, "with revealing edges {with}/40, without {without}/40");
+    }
+
+    #[test]
+    fn catch_boundary_samples_reach_the_anchored_history_sooner() {
+        // A tenth of the draws land around the column, where the unanchored history changes (the toy's
+        // `sample_catch_boundary`). Measured on 40 seeds at 1000 iterations with the defaults: 37 found with them,
+        // 19 without (with goal edges off as well: 40 and 35).
+        let with = anchored_runs(AbitParams::ompl_defaults(), 40, 1000);
+        let without = anchored_runs(AbitParams { catch_sample_fraction: 0.0, ..AbitParams::ompl_defaults() }, 40, 1000);
+        assert!(with >= 35 && without < with, "with catch-boundary samples {with}/40, without {without}/40");
     }
 }

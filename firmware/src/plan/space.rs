@@ -128,6 +128,19 @@ pub trait StateSpace {
     ) -> Option<Self::Attachment> {
         None
     }
+    /// A sample near the boundary of the region where a state holding `attachment` would keep it: where the
+    /// history would change (the tethered rover: the edge of the tether shadow cast by terrain seen from the
+    /// history's last anchor, where the tether starts to catch). The planner draws a fraction of its samples here
+    /// so that the motions that change the history (wrapping the tether around an obstacle) have end states
+    /// close enough to be neighbours. `None` when no such sample was found within the space's budget (the planner
+    /// then draws a uniform one). Default: `None` (no bias).
+    fn sample_catch_boundary<R: Rng + ?Sized>(
+        &mut self,
+        _rng: &mut R,
+        _attachment: &Self::Attachment,
+    ) -> Option<Self::State> {
+        None
+    }
 }
 
 /// State validity (OMPL `StateValidityChecker`): attachment-independent checks of one state (bounds, collision,
@@ -404,6 +417,8 @@ pub struct Counters {
     pub history_twins: u32,
     /// Attachment predictions asked of the space ([`StateSpace::predict_attachment`]).
     pub attachment_predictions: u32,
+    /// Samples drawn near a catch boundary ([`StateSpace::sample_catch_boundary`]).
+    pub catch_samples: u32,
     /// Neighbour lists truncated at `NEIGHBOUR_CAPACITY`.
     pub neighbour_lists_truncated: u32,
     /// Iteration at which the first solution was found (0 = none yet).

@@ -13,7 +13,13 @@
 //! only along the fall line (on the 55-degree slope of Paton et al. VI-A a pose turned 15 degrees off it is already
 //! unstable), so a uniformly drawn yaw would waste eleven samples in twelve there; and facing downhill loses nothing,
 //! because the rover is symmetric and drives either way. A failed settle (no ground, body collision, unknown space,
-//! budget) is a failed draw. The planner only ever sees settled states, so state validity is settledness; the
+//! budget) is a failed draw. **Catch-boundary samples** ([`StateSpace::sample_catch_boundary`], a fraction of the
+//! planner's draws): the Gaussian (bridge) sampling of obstacle boundaries applied to the tether's line of sight.
+//! Two surface points at most `catch_pair_radius_m` apart are drawn; when exactly one of them is in the shadow of
+//! the history's last anchor (a straight tether from it to the point's axle height would touch terrain,
+//! [`crate::tether::tether_touches`]), the sample is settled at their midpoint. These are the places where the
+//! tether starts to wrap an obstacle (behind the pole of Paton et al. VI-A, test 3), which uniform samples
+//! rarely straddle. The planner only ever sees settled states, so state validity is settledness; the
 //! attachment-dependent checks belong to the motion, except for a sample that copied a neighbour's anchor history
 //! (Paton et al. V-A), which must be stable with it (`StateSpace::valid_with_attachment`).
 //!
@@ -72,11 +78,13 @@
 //! | `fall_line_tilt_rad` | 0.35 rad (20 degrees) |
 //! | `fall_line_yaw_spread_rad` | 0.15 rad (8.6 degrees) |
 //! | `refine_tilt_rad` | 0.1 rad (6 degrees) |
-//! | `refine_substeps` | 4 (0.05 m sub-steps; at most `MAX_REFINE_SUBSTEPS = 16`) |
+//! | `refine_substeps` | 8 (0.025 m sub-steps; at most `MAX_REFINE_SUBSTEPS = 16`) |
 //! | `surface_uncertainty_m` | 0 m (exact field; the campaign sets half a voxel when planning on the map) |
+//! | `catch_pair_radius_m` | 0.5 m |
 //!
 //! Budgets (`config::tethered`): `SURFACE_TRACE_STEPS = 64` (minimum step `SURFACE_MIN_STEP_M = 0.05`),
-//! `MAX_MOTION_STATES = 256` interpolated states per motion.
+//! `MAX_MOTION_STATES = 256` interpolated states per motion, `CATCH_PAIR_ATTEMPTS = 256` point pairs per
+//! catch-boundary sample.
 
 use core::cell::Cell;
 
@@ -85,7 +93,8 @@ use rand_core::Rng;
 use crate::config::rover::RoverParams;
 use crate::config::tether::ANCHOR_HISTORY_CAPACITY;
 use crate::config::tethered::{
-    defaults, BOOM_REACH_CLEARANCE_M, MAX_MOTION_STATES, MAX_REFINE_SUBSTEPS, SURFACE_MIN_STEP_M, SURFACE_TRACE_STEPS,
+    defaults, BOOM_REACH_CLEARANCE_M, CATCH_PAIR_ATTEMPTS, MAX_MOTION_STATES, MAX_REFINE_SUBSTEPS, SURFACE_MIN_STEP_M,
+    SURFACE_TRACE_STEPS,
 };
 use crate::geom::{norm3, Real, Vec3};
 use crate::map::{DistanceField, DistanceQuery};
@@ -95,7 +104,7 @@ use crate::plan::space::{
 };
 use crate::rover::{check_pose_stability, settle, SettleOutcome, SettledPose};
 use crate::stability::StabilityOutcome;
-use crate::tether::{predict_anchors, AnchorHistory, TetherError};
+use crate::tether::{predict_anchors, tether_touches, AnchorHistory, TetherError};
 
 /// Parameters of the space (see the module docs for their meaning and defaults).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -136,6 +145,9 @@ pub struct TetherSpaceParams {
     /// a map). Every state of a refined drive step must also be stable settled this far ahead and behind along
     /// the drive, with the same anchor history.
     pub surface_uncertainty_m: Real,
+    /// Largest distance between the two surface points of a catch-boundary pair, metres
+    /// ([`TetherSpace::sample_catch_boundary`]).
+    pub catch_pair_radius_m: Real,
 }
 
 impl TetherSpaceParams {
@@ -158,6 +170,7 @@ impl TetherSpaceParams {
         refine_tilt_rad: defaults::REFINE_TILT_RAD,
         refine_substeps: defaults::REFINE_SUBSTEPS,
         surface_uncertainty_m: defaults::SURFACE_UNCERTAINTY_M,
+        catch_pair_radius_m: defaults::CATCH_PAIR_RADIUS_M,
     };
 
     /// The first field that is out of range, with the reason.
@@ -192,6 +205,9 @@ impl TetherSpaceParams {
         }
         if !nonneg(f64::from(self.surface_uncertainty_m)) {
             return Err(("surface_uncertainty_m", "must be >= 0 and finite"));
+        }
+        if !pos(f64::from(self.catch_pair_radius_m)) {
+            return Err(("catch_pair_radius_m", "must be > 0 and finite"));
         }
         if self.refine_substeps == 0 || self.refine_substeps > MAX_REFINE_SUBSTEPS {
             return Err(("refine_substeps", "must be in 1..=MAX_REFINE_SUBSTEPS (config::tethered)"));
@@ -380,6 +396,10 @@ pub struct MotionStats {
     pub fail_unstable: u32,
     /// Invalid: more than `MAX_MOTION_STATES` interpolated states, or an off-map goal too far from the edge.
     pub fail_too_long: u32,
+    /// Surface points tested for the tether shadow by the catch-boundary sampler.
+    pub catch_probes: u32,
+    /// Catch-boundary pairs found (each then settled like a uniform sample).
+    pub catch_samples: u32,
 }
 
 /// The tether-aware state space over a distance field (the onboard map, or a world on the host).
@@ -466,6 +486,45 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
         let st = self.settle_state(px, py, theta).ok()?;
         self.count(|s| s.samples_settled += 1);
         Some(st)
+    }
+
+    /// Is the tether end above the surface point under `(x, y)` (one wheel radius up) in the shadow of terrain
+    /// seen from `pivot`, i.e. would a straight tether from `pivot` touch terrain? `None` outside the bounds, over
+    /// no surface, or when the line meets unknown space.
+    fn in_tether_shadow(&self, pivot: &Vec3, x: Real, y: Real) -> Option<bool> {
+        if !self.bounds.contains_xy(x, y) {
+            return None;
+        }
+        self.count(|s| s.catch_probes = s.catch_probes.saturating_add(1));
+        let b = self.bounds;
+        let ground = surface_point(self.map, x, y, b.max[2], b.min[2])?;
+        let end = ground + Vec3::new(0.0, 0.0, self.rover.wheel_radius_m);
+        tether_touches(self.map, pivot, &end).ok()
+    }
+
+    /// The catch-boundary sampler of [`StateSpace::sample_catch_boundary`]: the Gaussian (bridge) sampling of
+    /// obstacle boundaries, applied to the tether's line of sight instead of collision. Draw a uniform `(x, y)`
+    /// and a second point within `catch_pair_radius_m` of it; when exactly one of the two is in the tether
+    /// shadow of the history's last anchor, settle a state at their midpoint (within half the radius of the
+    /// shadow's edge). At most `CATCH_PAIR_ATTEMPTS` pairs.
+    fn catch_boundary_sample<R: Rng + ?Sized>(&mut self, rng: &mut R, history: &AnchorHistory) -> Option<RoverState> {
+        let pivot = history.last()?.point;
+        let b = self.bounds;
+        let r = self.params.catch_pair_radius_m;
+        for _ in 0..CATCH_PAIR_ATTEMPTS {
+            let x = b.min[0] + (b.max[0] - b.min[0]) * uniform01(rng) as Real;
+            let y = b.min[1] + (b.max[1] - b.min[1]) * uniform01(rng) as Real;
+            let angle = core::f32::consts::TAU * uniform01(rng) as Real;
+            let dist = r * libm::sqrtf(uniform01(rng) as Real);
+            let (qx, qy) = (x + dist * libm::cosf(angle), y + dist * libm::sinf(angle));
+            let Some(p_shadow) = self.in_tether_shadow(&pivot, x, y) else { continue };
+            let Some(q_shadow) = self.in_tether_shadow(&pivot, qx, qy) else { continue };
+            if p_shadow != q_shadow {
+                self.count(|s| s.catch_samples = s.catch_samples.saturating_add(1));
+                return self.sample_at(rng, 0.5 * (x + qx), 0.5 * (y + qy));
+            }
+        }
+        None
     }
 
     /// The stability of a settled state with the last anchor of `history` (counted). `Ok(margin)` when stable
@@ -844,6 +903,10 @@ impl<D: DistanceField> StateSpace for TetherSpace<'_, D> {
         let mut out = AnchorHistory::default();
         predict_anchors(self.map, attachment, &from.axle(), &to.axle(), &mut out).ok()?;
         Some(out)
+    }
+    /// Near the edge of the tether shadow of the history's last anchor (see `catch_boundary_sample`).
+    fn sample_catch_boundary<R: Rng + ?Sized>(&mut self, rng: &mut R, attachment: &AnchorHistory) -> Option<RoverState> {
+        self.catch_boundary_sample(rng, attachment)
     }
 }
 

@@ -57,6 +57,10 @@ pub struct CampaignArgs {
     /// would catch on something between them; OMPL has none).
     #[arg(long)]
     pub no_reveal: bool,
+    /// Fraction of sample draws taken near the edge of a tether shadow, where the tether starts to catch on
+    /// terrain (default `config::abit`'s 0.1; 0 switches catch-boundary sampling off; OMPL has none).
+    #[arg(long)]
+    pub catch_fraction: Option<f64>,
     /// Smallest stability margin of a planned state (default `config::tethered::defaults::MIN_STABILITY_MARGIN`).
     #[arg(long)]
     pub min_margin: Option<f64>,
@@ -95,6 +99,7 @@ impl CampaignArgs {
             no_twins: false,
             no_goal_edges: false,
             no_reveal: false,
+            catch_fraction: None,
             min_margin: None,
             drop_dead_edges: false,
             wheel_mu: None,
@@ -161,6 +166,9 @@ pub fn spec_from(a: &CampaignArgs) -> Result<CampaignSpec, String> {
     abit.drop_dead_edges = a.drop_dead_edges;
     abit.goal_edges = !a.no_goal_edges;
     abit.reveal_attachments = !a.no_reveal;
+    if let Some(f) = a.catch_fraction {
+        abit.catch_sample_fraction = f;
+    }
     let mut params = TetherSpaceParams::DEFAULT;
     if let Some(m) = a.min_margin {
         params.min_stability_margin = m;
