@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use firmware::config::rover::RoverParams;
 use firmware::geom::{Real, Vec3};
-use firmware::plan::space::StateSpace;
+use firmware::plan::space::{CatchSample, StateSpace};
 use firmware::plan::tethered::{RoverState, TetherSpace, TetherSpaceParams};
 use firmware::tether::{Anchor, AnchorHistory};
 use rand_core::SeedableRng;
@@ -68,9 +68,14 @@ fn catch_boundary_samples_line_the_pole_shadow() {
     let root = Vec3::new(spec.root[0] as Real, spec.root[1] as Real, spec.root[2] as Real);
     let history = AnchorHistory::new(Anchor::root(root));
     let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
-    let drawn: Vec<RoverState> = (0..40).filter_map(|_| space.sample_catch_boundary(&mut rng, &history)).collect();
-    // Pairs straddling the shadow are rare (~1 in 110 on this seed) but 256 are tried per draw; about one settle in
-    // three then fails (the body meets the pole or the back wall), as a uniform draw's may (seed 7: 24 of 40).
+    let drawn: Vec<RoverState> = (0..40)
+        .filter_map(|_| match space.sample_catch_boundary(&mut rng, &history) {
+            CatchSample::Sampled(st) => Some(st),
+            _ => None,
+        })
+        .collect();
+    // Pairs straddling the shadow are rare (~1 in 110) but 512 are tried per draw; about one settle in three then
+    // fails (the body meets the pole or the back wall), as a uniform draw's may.
     assert!(drawn.len() >= 20, "{} of 40 draws", drawn.len());
     for st in &drawn {
         let (x, y) = (st.ground.x, st.ground.y);
@@ -83,7 +88,7 @@ fn catch_boundary_samples_line_the_pole_shadow() {
     // every pair found was settled (a few settles may fail next to the pole); each pair probed two points
     assert!(stats.catch_samples as usize >= drawn.len() && stats.catch_probes >= 2 * stats.catch_samples, "{stats:?}");
     // A history without a root anchor has no shadow to sample.
-    assert!(space.sample_catch_boundary(&mut rng, &AnchorHistory::default()).is_none());
+    assert_eq!(space.sample_catch_boundary(&mut rng, &AnchorHistory::default()), CatchSample::NotFound);
 }
 
 #[test]

@@ -21,11 +21,11 @@ pub const BOOM_REACH_CLEARANCE_M: f32 = 0.35;
 /// Largest `refine_substeps` accepted (bounds the refinement loop). Default 16.
 pub const MAX_REFINE_SUBSTEPS: u32 = 16;
 
-/// Pairs of surface points tried for one catch-boundary sample (`TetherSpace::sample_catch_boundary`) before the
-/// draw fails and the planner falls back to a uniform sample. Default 256: on the ledge of test 3 about one pair
-/// in 150 straddles the pole's tether shadow; each pair costs two surface traces and two sweep lines (~250 ESDF
-/// queries).
-pub const CATCH_PAIR_ATTEMPTS: u32 = 256;
+/// Pairs of surface points tried for one catch-boundary sample (`TetherSpace::sample_catch_boundary`) before it
+/// reports `NotFound` (the planner then stops sampling that history's boundary until the next batch). Default
+/// 512: on the ledge of test 3 about one pair in 110 straddles the pole's tether shadow, so a search fails about
+/// once in 100; each pair costs two surface traces and two sweep lines (~150 ESDF queries).
+pub const CATCH_PAIR_ATTEMPTS: u32 = 512;
 
 /// Default parameters of the tether-aware space ([`crate::plan::tethered::TetherSpaceParams::DEFAULT`]).
 pub mod defaults {

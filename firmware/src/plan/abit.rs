@@ -124,7 +124,7 @@ use rand_core::Rng;
 use crate::config::abit as cfg;
 
 use super::space::{
-    uniform01, Arena, Cost, Counters, GoalRegion, InformedSample, InvalidInput, MotionCheck, MotionValidator,
+    uniform01, Arena, CatchSample, Cost, Counters, GoalRegion, InformedSample, InvalidInput, MotionCheck, MotionValidator,
     OptimizationObjective, Planner, PlannerStatus, ProblemDefinition, StateSpace, StateValidityChecker,
     StepOutcome,
 };
@@ -1562,11 +1562,20 @@ where
     }
 
     /// A sample near the catch boundary of one of `histories` (chosen uniformly), kept only if it can improve
-    /// the solution (informed set by rejection, as for uniform draws).
-    fn catch_sample(&mut self, histories: &[u32]) -> Option<S::State> {
+    /// the solution (informed set by rejection, as for uniform draws). A history whose boundary the space did
+    /// not find leaves `histories` for the rest of the batch, so a root anchor that sees the whole planning area
+    /// costs one search per batch, not one per draw.
+    fn catch_sample(&mut self, histories: &mut Vec<u32, { cfg::CATCH_ATTACHMENT_CAPACITY }>) -> Option<S::State> {
         let pick = ((uniform01(self.rng) * histories.len() as f64) as usize).min(histories.len().saturating_sub(1));
         let att = histories.get(pick).and_then(|&i| self.node(i)).and_then(|n| n.attachment.clone())?;
-        let x = self.space.sample_catch_boundary(self.rng, &att)?;
+        let x = match self.space.sample_catch_boundary(self.rng, &att) {
+            CatchSample::Sampled(x) => x,
+            CatchSample::Rejected => return None,
+            CatchSample::NotFound => {
+                let _ = histories.swap_remove(pick);
+                return None;
+            }
+        };
         if self.has_solution() {
             let (hc, hg) = self.heuristics(&x);
             if hc + hg >= self.st.best_cost {
@@ -1579,7 +1588,7 @@ where
 
     /// A new sample: near a catch boundary (a fraction `catch_sample_fraction` of the draws, non-Markovian
     /// spaces), else uniform before the first solution and informed after it.
-    fn draw_sample(&mut self, catch_histories: &[u32]) -> Option<S::State> {
+    fn draw_sample(&mut self, catch_histories: &mut Vec<u32, { cfg::CATCH_ATTACHMENT_CAPACITY }>) -> Option<S::State> {
         if !catch_histories.is_empty() && uniform01(self.rng) < self.st.params.catch_sample_fraction {
             if let Some(x) = self.catch_sample(catch_histories) {
                 return Some(x);
@@ -1630,7 +1639,7 @@ where
         );
         self.st.r = self.st.params.rewire_factor * r_rgg * libm::pow(libm::log(qf) / qf, 1.0 / d);
 
-        let catch_histories = if S::NON_MARKOVIAN && self.st.params.catch_sample_fraction > 0.0 {
+        let mut catch_histories = if S::NON_MARKOVIAN && self.st.params.catch_sample_fraction > 0.0 {
             self.distinct_attachment_vertices()
         } else {
             Vec::new()
@@ -1641,7 +1650,7 @@ where
             if added >= batch {
                 break;
             }
-            let Some(x) = self.draw_sample(&catch_histories) else { continue };
+            let Some(x) = self.draw_sample(&mut catch_histories) else { continue };
             self.st.counters.states_checked += 1;
             if !self.validity.is_valid(&x) {
                 continue;
@@ -2309,16 +2318,16 @@ mod tests {
             Some(*anchored || COLUMN.intersects_segment(from, to))
         }
         /// Where the unanchored history changes: around the column (0.1 beyond it, within the square).
-        fn sample_catch_boundary<R2: Rng + ?Sized>(&mut self, rng: &mut R2, anchored: &bool) -> Option<[f64; 2]> {
+        fn sample_catch_boundary<R2: Rng + ?Sized>(&mut self, rng: &mut R2, anchored: &bool) -> CatchSample<[f64; 2]> {
             if *anchored {
-                return None;
+                return CatchSample::NotFound;
             }
             let mut x = [0.0; 2];
             for (d, v) in x.iter_mut().enumerate() {
                 let (lo, hi) = ((COLUMN.lo[d] - 0.1).max(-1.0), (COLUMN.hi[d] + 0.1).min(1.0));
                 *v = lo + (hi - lo) * uniform01(rng);
             }
-            Some(x)
+            CatchSample::Sampled(x)
         }
     }
     struct AnchoredRules;

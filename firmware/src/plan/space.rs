@@ -72,6 +72,19 @@ pub enum InformedSample<St> {
     Unsupported,
 }
 
+/// Result of a catch-boundary sampling request ([`StateSpace::sample_catch_boundary`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum CatchSample<St> {
+    /// A state near the boundary.
+    Sampled(St),
+    /// A boundary point was found but no state could be made there (e.g. settling failed); worth asking again.
+    Rejected,
+    /// No boundary found within the space's budget (there may be none, e.g. a root anchor that sees the whole
+    /// planning area), or the space has no such sampler: the planner stops asking for this attachment until the
+    /// next batch.
+    NotFound,
+}
+
 /// The configuration space: sampling, metric and interpolation (OMPL `StateSpace` + samplers).
 pub trait StateSpace {
     /// A state. Stored by value in the planner's arena.
@@ -132,14 +145,14 @@ pub trait StateSpace {
     /// history would change (the tethered rover: the edge of the tether shadow cast by terrain seen from the
     /// history's last anchor, where the tether starts to catch). The planner draws a fraction of its samples here
     /// so that the motions that change the history (wrapping the tether around an obstacle) have end states
-    /// close enough to be neighbours. `None` when no such sample was found within the space's budget (the planner
-    /// then draws a uniform one). Default: `None` (no bias).
+    /// close enough to be neighbours. When no sample results, the planner draws a uniform one instead. Default:
+    /// `NotFound` (no bias).
     fn sample_catch_boundary<R: Rng + ?Sized>(
         &mut self,
         _rng: &mut R,
         _attachment: &Self::Attachment,
-    ) -> Option<Self::State> {
-        None
+    ) -> CatchSample<Self::State> {
+        CatchSample::NotFound
     }
 }
 

@@ -83,7 +83,7 @@
 //! | `catch_pair_radius_m` | 0.5 m |
 //!
 //! Budgets (`config::tethered`): `SURFACE_TRACE_STEPS = 64` (minimum step `SURFACE_MIN_STEP_M = 0.05`),
-//! `MAX_MOTION_STATES = 256` interpolated states per motion, `CATCH_PAIR_ATTEMPTS = 256` point pairs per
+//! `MAX_MOTION_STATES = 256` interpolated states per motion, `CATCH_PAIR_ATTEMPTS = 512` point pairs per
 //! catch-boundary sample.
 
 use core::cell::Cell;
@@ -99,7 +99,7 @@ use crate::config::tethered::{
 use crate::geom::{norm3, Real, Vec3};
 use crate::map::{DistanceField, DistanceQuery};
 use crate::plan::space::{
-    uniform01, Cost, InformedSample, MotionCheck, MotionValidator, OptimizationObjective, StateSpace,
+    uniform01, CatchSample, Cost, InformedSample, MotionCheck, MotionValidator, OptimizationObjective, StateSpace,
     StateValidityChecker,
 };
 use crate::rover::{check_pose_stability, settle, SettleOutcome, SettledPose};
@@ -507,8 +507,8 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
     /// and a second point within `catch_pair_radius_m` of it; when exactly one of the two is in the tether
     /// shadow of the history's last anchor, settle a state at their midpoint (within half the radius of the
     /// shadow's edge). At most `CATCH_PAIR_ATTEMPTS` pairs.
-    fn catch_boundary_sample<R: Rng + ?Sized>(&mut self, rng: &mut R, history: &AnchorHistory) -> Option<RoverState> {
-        let pivot = history.last()?.point;
+    fn catch_boundary_sample<R: Rng + ?Sized>(&mut self, rng: &mut R, history: &AnchorHistory) -> CatchSample<RoverState> {
+        let Some(pivot) = history.last().map(|a| a.point) else { return CatchSample::NotFound };
         let b = self.bounds;
         let r = self.params.catch_pair_radius_m;
         for _ in 0..CATCH_PAIR_ATTEMPTS {
@@ -521,10 +521,13 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
             let Some(q_shadow) = self.in_tether_shadow(&pivot, qx, qy) else { continue };
             if p_shadow != q_shadow {
                 self.count(|s| s.catch_samples = s.catch_samples.saturating_add(1));
-                return self.sample_at(rng, 0.5 * (x + qx), 0.5 * (y + qy));
+                return match self.sample_at(rng, 0.5 * (x + qx), 0.5 * (y + qy)) {
+                    Some(st) => CatchSample::Sampled(st),
+                    None => CatchSample::Rejected,
+                };
             }
         }
-        None
+        CatchSample::NotFound
     }
 
     /// The stability of a settled state with the last anchor of `history` (counted). `Ok(margin)` when stable
@@ -905,7 +908,11 @@ impl<D: DistanceField> StateSpace for TetherSpace<'_, D> {
         Some(out)
     }
     /// Near the edge of the tether shadow of the history's last anchor (see `catch_boundary_sample`).
-    fn sample_catch_boundary<R: Rng + ?Sized>(&mut self, rng: &mut R, attachment: &AnchorHistory) -> Option<RoverState> {
+    fn sample_catch_boundary<R: Rng + ?Sized>(
+        &mut self,
+        rng: &mut R,
+        attachment: &AnchorHistory,
+    ) -> CatchSample<RoverState> {
         self.catch_boundary_sample(rng, attachment)
     }
 }
