@@ -401,15 +401,15 @@ pub fn boom_in_contact(
             return boom_entry_contact(map, settled, beta, tip, params);
         }
         if d <= params.contact_threshold_m * 2.0 {
-            return Some(BoomContact {
-                angle_rad: beta,
-                tip,
-                point: tip - g * d,
-                normal: normalize3(&g, 1e-6).unwrap_or(up),
-            });
+            return Some(boom_contact_at(beta, tip, &tip, d, &g, &up));
         }
     }
     None
+}
+
+/// The boom at `beta` (tip `tip`) touching the surface nearest to `p`, which lies `d` from it along `-g`.
+fn boom_contact_at(beta: Real, tip: Vec3, p: &Vec3, d: Real, g: &Vec3, up: &Vec3) -> BoomContact {
+    BoomContact { angle_rad: beta, tip, point: p - g * d, normal: normalize3(g, 1e-6).unwrap_or(*up) }
 }
 
 /// The contact of a boom at `beta` whose tip is buried: the first point along it (from the axle) near the surface.
@@ -426,12 +426,7 @@ fn boom_entry_contact(
         let p = axle + (tip - axle) * (k as Real / BOOM_ENTRY_STEPS as Real);
         let (d, g) = query(map, &p)?;
         if d <= params.contact_threshold_m * 2.0 {
-            return Some(BoomContact {
-                angle_rad: beta,
-                tip,
-                point: p - g * d,
-                normal: normalize3(&g, 1e-6).unwrap_or(up),
-            });
+            return Some(boom_contact_at(beta, tip, &p, d, &g, &up));
         }
     }
     None
