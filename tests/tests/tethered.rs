@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use firmware::config::rover::RoverParams;
 use firmware::geom::{Real, Vec3};
 use firmware::plan::space::{CatchSample, StateSpace};
-use firmware::plan::tethered::{RoverState, TetherSpace, TetherSpaceParams};
+use firmware::plan::tethered::{RoverState, SettleFailure, TetherSpace, TetherSpaceParams};
 use firmware::tether::{Anchor, AnchorHistory};
 use rand_core::SeedableRng;
 use host_sim::campaign::{self, revalidate, CampaignResult, Truth};
@@ -89,6 +89,20 @@ fn catch_boundary_samples_line_the_pole_shadow() {
     assert!(stats.catch_samples as usize >= drawn.len() && stats.catch_probes >= 2 * stats.catch_samples, "{stats:?}");
     // A history without a root anchor has no shadow to sample.
     assert_eq!(space.sample_catch_boundary(&mut rng, &AnchorHistory::default()), CatchSample::NotFound);
+}
+
+/// Turned towards the pole 0.85 m behind it (a turn of the test-3 path of seed 83), the settler rests one wheel on
+/// the pole's side and tilts the rover 33 degrees; such a pose is refused. The same spot at the path's own heading
+/// settles on the ledge top.
+#[test]
+fn a_wheel_on_the_pole_side_is_not_a_settled_pose() {
+    let spec = spec_from(&args("ledge_test3", 1, 1)).expect("scenario");
+    let truth = Truth(spec.world.as_ref());
+    let space = TetherSpace::new(&truth, spec.bounds, RoverParams::AXEL, TetherSpaceParams::DEFAULT).expect("space");
+    let (x, y) = (-3.349, 0.137);
+    assert_eq!(space.settle_state(x, y, -2.293).err(), Some(SettleFailure::SteepContact));
+    let level = space.settle_state(x, y, -2.996).expect("settles at the path's heading");
+    assert!(level.settled.wheels.iter().all(|w| w.normal.z > 0.99), "{:?}", level.settled.wheels);
 }
 
 #[test]

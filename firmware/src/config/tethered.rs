@@ -27,6 +27,12 @@ pub const MAX_REFINE_SUBSTEPS: u32 = 16;
 /// once in 100; each pair costs two surface traces and two sweep lines (~150 ESDF queries).
 pub const CATCH_PAIR_ATTEMPTS: u32 = 512;
 
+/// Steepest surface a settled wheel may rest on, radians from the horizontal (`plan::tethered::settle_at`).
+/// Default 75 degrees (1.309 rad): the 55-degree slope and the edge contacts of its lip pass; a wheel climbing the
+/// side of the test-3 pole (the settler tilts the rover 30 degrees against it) does not, and near such poses the
+/// settler's answer changes from pose to failure within millimetres, so the map and the true terrain disagree.
+pub const MAX_WHEEL_CONTACT_INCLINE_RAD: f32 = 1.309;
+
 /// Default parameters of the tether-aware space ([`crate::plan::tethered::TetherSpaceParams::DEFAULT`]).
 pub mod defaults {
     /// Weight of path length in the objective (per metre of axle travel). Default 1.0.

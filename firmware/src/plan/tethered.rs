@@ -13,13 +13,14 @@
 //! only along the fall line (on the 55-degree slope of Paton et al. VI-A a pose turned 15 degrees off it is already
 //! unstable), so a uniformly drawn yaw would waste eleven samples in twelve there; and facing downhill loses nothing,
 //! because the rover is symmetric and drives either way. A failed settle (no ground, body collision, unknown space,
-//! budget) is a failed draw. **Catch-boundary samples** ([`StateSpace::sample_catch_boundary`], a fraction of the
-//! planner's draws): the Gaussian (bridge) sampling of obstacle boundaries applied to the tether's line of sight.
-//! Two surface points at most `catch_pair_radius_m` apart are drawn; when exactly one of them is in the shadow of
-//! the history's last anchor (a straight tether from it to the point's axle height would touch terrain,
-//! [`crate::tether::tether_touches`]), the sample is settled at their midpoint. These are the places where the
-//! tether starts to wrap an obstacle (behind the pole of Paton et al. VI-A, test 3), which uniform samples
-//! rarely straddle. The planner only ever sees settled states, so state validity is settledness; the
+//! budget, a wheel on a surface steeper than 75 degrees such as a pole's side) is a failed draw.
+//! **Catch-boundary samples** ([`StateSpace::sample_catch_boundary`], a fraction of the planner's draws): the
+//! Gaussian (bridge) sampling of obstacle boundaries applied to the tether's line of sight. Two surface points at
+//! most `catch_pair_radius_m` apart are drawn; when exactly one of them is in the shadow of the history's last anchor
+//! (a straight tether from it to the point's axle height would touch terrain, [`crate::tether::tether_touches`]), the
+//! sample is settled at their midpoint. These are the places where the tether starts to wrap an obstacle (behind
+//! the pole of Paton et al. VI-A, test 3), which uniform samples rarely straddle. The planner only ever sees settled
+//! states, so state validity is settledness; the
 //! attachment-dependent checks belong to the motion, except for a sample that copied a neighbour's anchor history
 //! (Paton et al. V-A), which must be stable with it (`StateSpace::valid_with_attachment`).
 //!
@@ -93,8 +94,8 @@ use rand_core::Rng;
 use crate::config::rover::RoverParams;
 use crate::config::tether::ANCHOR_HISTORY_CAPACITY;
 use crate::config::tethered::{
-    defaults, BOOM_REACH_CLEARANCE_M, CATCH_PAIR_ATTEMPTS, MAX_MOTION_STATES, MAX_REFINE_SUBSTEPS, SURFACE_MIN_STEP_M,
-    SURFACE_TRACE_STEPS,
+    defaults, BOOM_REACH_CLEARANCE_M, CATCH_PAIR_ATTEMPTS, MAX_MOTION_STATES, MAX_REFINE_SUBSTEPS,
+    MAX_WHEEL_CONTACT_INCLINE_RAD, SURFACE_MIN_STEP_M, SURFACE_TRACE_STEPS,
 };
 use crate::geom::{norm3, Real, Vec3};
 use crate::map::{DistanceField, DistanceQuery};
@@ -342,11 +343,15 @@ pub enum SettleFailure {
     UnknownSpace,
     /// The settler ran out of iterations.
     Budget,
+    /// A wheel rests on a surface steeper than `MAX_WHEEL_CONTACT_INCLINE_RAD` (a pole's side, a wall): the
+    /// settler's answer there is not a pose Axel can stand in.
+    SteepContact,
     /// Non-finite input.
     InvalidInput,
 }
 
-/// Settle the rover at the surface point under `(x, y)` with yaw `theta` about the normal.
+/// Settle the rover at the surface point under `(x, y)` with yaw `theta` about the normal. A pose with a wheel on a
+/// surface steeper than `MAX_WHEEL_CONTACT_INCLINE_RAD` is refused ([`SettleFailure::SteepContact`]).
 pub fn settle_at(
     map: &impl DistanceField,
     bounds: &PlanBounds,
@@ -360,6 +365,11 @@ pub fn settle_at(
     }
     let ground = surface_point(map, x, y, bounds.max[2], bounds.min[2]).ok_or(SettleFailure::NoSurface)?;
     match settle(map, &ground, theta, rover) {
+        SettleOutcome::Settled(settled)
+            if settled.wheels.iter().any(|w| w.normal.z < libm::cosf(MAX_WHEEL_CONTACT_INCLINE_RAD)) =>
+        {
+            Err(SettleFailure::SteepContact)
+        }
         SettleOutcome::Settled(settled) => Ok(RoverState { ground, theta, settled, off_map: false }),
         SettleOutcome::NoGround => Err(SettleFailure::NoGround),
         SettleOutcome::Collision { .. } => Err(SettleFailure::Collision),
@@ -507,7 +517,11 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
     /// and a second point within `catch_pair_radius_m` of it; when exactly one of the two is in the tether
     /// shadow of the history's last anchor, settle a state at their midpoint (within half the radius of the
     /// shadow's edge). At most `CATCH_PAIR_ATTEMPTS` pairs.
-    fn catch_boundary_sample<R: Rng + ?Sized>(&mut self, rng: &mut R, history: &AnchorHistory) -> CatchSample<RoverState> {
+    fn catch_boundary_sample<R: Rng + ?Sized>(
+        &mut self,
+        rng: &mut R,
+        history: &AnchorHistory,
+    ) -> CatchSample<RoverState> {
         let Some(pivot) = history.last().map(|a| a.point) else { return CatchSample::NotFound };
         let b = self.bounds;
         let r = self.params.catch_pair_radius_m;
