@@ -10,6 +10,7 @@
 //!   stability-checked motions) for [`abit`].
 
 pub mod abit;
+pub mod heap;
 pub mod geometric;
 pub mod homotopy;
 pub mod space;
