@@ -6,7 +6,7 @@ use rand_core::Rng;
 
 use crate::config::abit as cfg;
 
-use super::super::space::{
+use crate::plan::space::{
     uniform01, Arena, CatchSample, GoalRegion, MotionValidator, OptimizationObjective, StateSpace,
     StateValidityChecker,
 };

@@ -6,8 +6,8 @@ use rand_core::Rng;
 
 use crate::config::abit as cfg;
 
-use super::super::geometric::unit_ball_measure;
-use super::super::space::{
+use crate::plan::geometric::unit_ball_measure;
+use crate::plan::space::{
     uniform01, Arena, GoalRegion, InformedSample, MotionValidator, OptimizationObjective, StateSpace,
     StateValidityChecker,
 };

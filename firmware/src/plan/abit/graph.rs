@@ -7,8 +7,8 @@ use rand_core::Rng;
 
 use crate::config::abit as cfg;
 
-use super::super::heap::IndexedHeap;
-use super::super::space::{
+use crate::plan::heap::IndexedHeap;
+use crate::plan::space::{
     Cost, GoalRegion, MotionValidator, OptimizationObjective, StateSpace, StateValidityChecker,
 };
 use super::memo::MemoEntry;

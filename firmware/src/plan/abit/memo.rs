@@ -3,7 +3,7 @@
 
 use rand_core::Rng;
 
-use super::super::space::{
+use crate::plan::space::{
     GoalRegion, MotionCheck, MotionValidator, OptimizationObjective, StateSpace, StateValidityChecker,
 };
 use super::{AbitStar, NONE};

@@ -248,7 +248,6 @@ where
         planner
     }
 
-
     fn set_up(&mut self) -> Result<(), InvalidInput> {
         self.st.params.check()?;
         if NV < 3 || NQ < 1 {

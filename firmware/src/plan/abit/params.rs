@@ -2,7 +2,7 @@
 
 use crate::config::abit as cfg;
 
-use super::super::space::InvalidInput;
+use crate::plan::space::InvalidInput;
 
 /// How the implicit RGG connects states.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

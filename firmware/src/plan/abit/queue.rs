@@ -5,8 +5,8 @@
 use heapless::Vec;
 use rand_core::Rng;
 
-use super::super::heap::{HeapItems, NOT_IN_HEAP};
-use super::super::space::{
+use crate::plan::heap::{HeapItems, NOT_IN_HEAP};
+use crate::plan::space::{
     Arena, Cost, GoalRegion, MotionValidator, OptimizationObjective, StateSpace, StateValidityChecker,
 };
 use super::graph::{F_FREE, F_INCONSISTENT, F_START, F_TWIN};

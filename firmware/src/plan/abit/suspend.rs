@@ -5,7 +5,7 @@ use rand_core::Rng;
 
 use crate::config::abit as cfg;
 
-use super::super::space::{
+use crate::plan::space::{
     Arena, Cost, Counters, GoalRegion, InvalidInput, MotionValidator, OptimizationObjective, ProblemDefinition,
     StateSpace, StateValidityChecker,
 };

@@ -18,7 +18,7 @@
 //! unstable), so a uniformly drawn yaw would waste eleven samples in twelve there; and facing downhill loses nothing,
 //! because the rover is symmetric and drives either way. A failed settle (no ground, body collision, unknown space,
 //! budget, a wheel on a surface steeper than 75 degrees such as a pole's side) is a failed draw.
-//! **Catch-boundary samples** ([`StateSpace::sample_catch_boundary`](crate::plan::space::StateSpace::sample_catch_boundary), a fraction of the planner's draws): the
+//! **Catch-boundary samples** ([`StateSpace::sample_catch_boundary`], a fraction of the planner's draws): the
 //! Gaussian (bridge) sampling of obstacle boundaries applied to the tether's line of sight. Two surface points at
 //! most `catch_pair_radius_m` apart are drawn; when exactly one of them is in the shadow of the history's last anchor
 //! (a straight tether from it to the point's axle height would touch terrain, [`crate::tether::tether_touches`]), the
@@ -38,8 +38,8 @@
 //! the step between them is also checked at `refine_substeps` evenly spaced points, and each of these states must
 //! also be stable settled `surface_uncertainty_m` ahead and behind along the drive (the map's edge is not where the
 //! true edge is); each is settled (body collision included), its tether end (the axle centre) is moved from the
-//! previous state's with [`predict_anchors`](crate::tether::predict_anchors) (skipped when it moved less than `tether_still_m`), and it must be
-//! statically stable ([`check_pose_stability`](crate::rover::check_pose_stability)) with a margin of at least `min_stability_margin`, the tether pulling
+//! previous state's with [`predict_anchors`] (skipped when it moved less than `tether_still_m`), and it must be
+//! statically stable ([`check_pose_stability`]) with a margin of at least `min_stability_margin`, the tether pulling
 //! towards the last anchor of the history that lies beyond the boom's reach ([`tether_pull_anchor`]: an anchor
 //! closer than the boom, e.g. the lip right after the rover went over it, is under the boom, which rests on it). The motion's attachment is the anchor history at `b`. Every failure is counted by
 //! reason ([`MotionStats`]). A tether that bends more than `max_tether_bend_rad` in total over its anchors
@@ -90,6 +90,10 @@
 //! Budgets (`config::tethered`): `SURFACE_TRACE_STEPS = 64` (minimum step `SURFACE_MIN_STEP_M = 0.05`),
 //! `MAX_MOTION_STATES = 256` interpolated states per motion, `CATCH_PAIR_ATTEMPTS = 512` point pairs per
 //! catch-boundary sample.
+//!
+//! [`StateSpace::sample_catch_boundary`]: crate::plan::space::StateSpace::sample_catch_boundary
+//! [`predict_anchors`]: crate::tether::predict_anchors
+//! [`check_pose_stability`]: crate::rover::check_pose_stability
 
 mod motion;
 mod objective;
