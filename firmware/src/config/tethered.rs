@@ -50,10 +50,9 @@ pub mod defaults {
     /// uniform slopes are never refined, the lip of the 55-degree ledge always is (the margin of the pose that
     /// straddles the lip dips to zero over ~0.1 m of ground, half a drive step; measured on the ledge world).
     pub const REFINE_TILT_RAD: f32 = 0.1;
-    /// Sub-steps of a refined drive step. Default 8 (0.025 m at the default 0.2 m drive resolution). 4 (0.05 m)
-    /// let one path of 100 in test 3 through whose lip crossing is unstable on the true terrain (seed 15, with
-    /// catch-boundary sampling): the margin over the sharp true lip dips below zero within 3 cm, and the map's
-    /// rounded lip shows that dip (to 0.01) only at 2.5 cm spacing.
+    /// Sub-steps of a refined drive step. Default 8 (0.025 m at the default 0.2 m drive resolution): the margin
+    /// over a sharp lip can dip below zero within a few centimetres, and a map's rounded lip shows that dip only at
+    /// about 2.5 cm spacing (the measurement that set it: `host-sim/doc/abit_notes.md`).
     pub const REFINE_SUBSTEPS: u32 = 8;
     /// Distance between the field's surfaces and the true terrain that the states over an edge must tolerate
     /// (`plan::tethered` settles them this far ahead and behind too). Default 0 m: an exact field. A planner on a

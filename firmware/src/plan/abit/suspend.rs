@@ -1,0 +1,83 @@
+//! Suspending and resuming a search: [`AbitSuspended`] holds everything the planner keeps outside its arena.
+
+use heapless::Vec;
+use rand_core::Rng;
+
+use crate::config::abit as cfg;
+
+use crate::plan::space::{
+    Arena, Cost, Counters, GoalRegion, InvalidInput, MotionValidator, OptimizationObjective, ProblemDefinition,
+    StateSpace, StateValidityChecker,
+};
+use super::{AbitArena, AbitParams, AbitStar, ArenaUse};
+
+/// The search state of a suspended [`AbitStar`]: everything the planner keeps outside its arena (inflation and
+/// truncation, the goals, the best solution, the free lists, the counters), as plain data, so a caller that cannot
+/// keep the planner's borrows alive between calls (the on-board navigator, between executive steps) can hold it
+/// and continue the search later with [`AbitStar::resume`]. The graph, the edge queue and the memo stay in the
+/// arena.
+#[derive(Debug, Clone)]
+pub struct AbitSuspended<St> {
+    pub(super) params: AbitParams,
+    pub(super) goal_state: Option<St>,
+    pub(super) goals: Vec<u32, { cfg::GOAL_CAPACITY }>,
+    pub(super) free_head: u32,
+    pub(super) free_edge: u32,
+    pub(super) live_nodes: usize,
+    pub(super) best_goal: u32,
+    pub(super) best_cost: Cost,
+    pub(super) min_cost: Cost,
+    pub(super) inflation: f64,
+    pub(super) truncation: f64,
+    pub(super) search_id: u32,
+    pub(super) search_done: bool,
+    pub(super) final_search: bool,
+    pub(super) k: usize,
+    pub(super) r: f64,
+    pub(super) recycled: usize,
+    pub(super) approx_vertex: u32,
+    pub(super) approx_h: Cost,
+    pub(super) pending_full: Option<Arena>,
+    pub(super) counters: Counters,
+    pub(super) invalid: Option<InvalidInput>,
+    pub(super) high_water: ArenaUse,
+}
+
+impl<St> AbitSuspended<St> {
+    /// The work counters when the search was suspended.
+    pub fn counters(&self) -> Counters {
+        self.counters
+    }
+}
+
+impl<'a, S, V, M, O, G, R, const NV: usize, const NQ: usize, const NM: usize> AbitStar<'a, S, V, M, O, G, R, NV, NQ, NM>
+where
+    S: StateSpace,
+    V: StateValidityChecker<S>,
+    M: MotionValidator<S>,
+    O: OptimizationObjective<S>,
+    G: GoalRegion<S>,
+    R: Rng,
+{
+    /// Release the borrows and keep the search: the graph, queue and memo stay in the arena, the rest is
+    /// returned. Resume it with [`Self::resume`]; a new problem starts with [`Self::new`] instead.
+    pub fn suspend(self) -> AbitSuspended<S::State> {
+        self.st
+    }
+
+    /// Continue a suspended search where [`Self::suspend`] left it. The caller's contract: the arena is the one
+    /// the search was suspended from, untouched since; the problem, the space (its map) and the validators answer
+    /// as they did; `rng` continues the generator's sequence. Then the search goes on exactly as if it had never
+    /// been interrupted (`a_suspended_and_resumed_search_is_the_uninterrupted_search`, and `nav`'s tests).
+    pub fn resume(
+        arena: &'a mut AbitArena<S::State, S::Attachment, NV, NQ, NM>,
+        space: &'a mut S,
+        validity: &'a mut V,
+        motion: &'a mut M,
+        pdef: &'a ProblemDefinition<S, G, O>,
+        rng: &'a mut R,
+        suspended: AbitSuspended<S::State>,
+    ) -> Self {
+        Self { arena, space, validity, motion, pdef, rng, st: suspended }
+    }
+}

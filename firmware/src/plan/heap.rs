@@ -1,0 +1,361 @@
+//! A fixed-capacity indexed binary min-heap: the open list of a search.
+//!
+//! The heap holds `u32` ids (an edge slot, a cell, a node: whatever the search queues). The items themselves —
+//! their keys and their heap positions — stay with the caller, who lends them to every operation as a
+//! [`HeapItems`]: `before` orders two ids, `set_position` records where an id now sits, `position` reads it back.
+//! Knowing the positions is what makes the heap *indexed*: an item whose key changed is moved in O(log n)
+//! ([`IndexedHeap::update`], decrease-key and increase-key alike) and an item can leave from anywhere
+//! ([`IndexedHeap::remove`]), as with OMPL's `BinaryHeap` element handles.
+//!
+//! - **No allocation.** The capacity `N` is a const generic (a `heapless::Vec` of ids); the heap can be a `static`
+//!   ([`IndexedHeap::new`] is `const`).
+//! - **No panics.** A push onto a full heap returns [`Full`] and changes nothing; every lookup is checked.
+//! - **Bounded loops.** A sift moves one level per round (at most log2 `N` rounds); `heapify` sifts `len / 2`
+//!   positions.
+//! - **Order.** The heap uses `before` alone, a strict order (`a` comes out before `b`). Two ids neither of which
+//!   is before the other leave in an order fixed by the sequence of operations (deterministic, but not by id): a
+//!   search that needs a specified tie-break puts it into `before` (ABIT* orders its edges by key, then by
+//!   `(parent, child)`).
+//! - **Clearing** is O(1) and leaves the caller's recorded positions stale; the heap never trusts a recorded
+//!   position without checking that the id sits there, so a stale one is harmless.
+
+use heapless::Vec;
+
+/// The position a caller records for an id that is not in the heap.
+pub const NOT_IN_HEAP: u32 = u32::MAX;
+
+/// The heap was full: the push changed nothing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Full;
+
+/// The caller's items, addressed by id: their order and their heap positions.
+pub trait HeapItems {
+    /// Does `a` come out of the heap before `b`? A strict order; `false` for an unknown id.
+    fn before(&self, a: u32, b: u32) -> bool;
+    /// Record that `id` now sits at heap position `pos` ([`NOT_IN_HEAP`] when it left the heap).
+    fn set_position(&mut self, id: u32, pos: u32);
+    /// The position last recorded for `id` (`None` or [`NOT_IN_HEAP`] if none).
+    fn position(&self, id: u32) -> Option<u32>;
+}
+
+/// An indexed binary min-heap of at most `N` ids. See the module docs.
+#[derive(Debug, Clone)]
+pub struct IndexedHeap<const N: usize> {
+    ids: Vec<u32, N>,
+}
+
+impl<const N: usize> Default for IndexedHeap<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize> IndexedHeap<N> {
+    /// An empty heap (const, so it can be a `static`).
+    pub const fn new() -> Self {
+        Self { ids: Vec::new() }
+    }
+
+    /// Ids in the heap.
+    pub fn len(&self) -> usize {
+        self.ids.len()
+    }
+
+    /// Is the heap empty?
+    pub fn is_empty(&self) -> bool {
+        self.ids.is_empty()
+    }
+
+    /// Is the heap full (a push would return [`Full`])?
+    pub fn is_full(&self) -> bool {
+        self.ids.is_full()
+    }
+
+    /// The capacity `N`.
+    pub const fn capacity(&self) -> usize {
+        N
+    }
+
+    /// The id that [`Self::pop`] would return.
+    pub fn peek(&self) -> Option<u32> {
+        self.ids.first().copied()
+    }
+
+    /// The id at heap position `pos` (position 0 is the front).
+    pub fn get(&self, pos: usize) -> Option<u32> {
+        self.ids.get(pos).copied()
+    }
+
+    /// Empty the heap. O(1): the positions the items recorded become stale (see the module docs).
+    pub fn clear(&mut self) {
+        self.ids.clear();
+    }
+
+    /// Queue `id` (the caller makes sure it is not queued yet).
+    pub fn push<I: HeapItems + ?Sized>(&mut self, id: u32, items: &mut I) -> Result<(), Full> {
+        let pos = self.ids.len();
+        self.ids.push(id).map_err(|_| Full)?;
+        items.set_position(id, pos as u32);
+        self.sift_up(pos, items);
+        Ok(())
+    }
+
+    /// Take the front id out of the heap.
+    pub fn pop<I: HeapItems + ?Sized>(&mut self, items: &mut I) -> Option<u32> {
+        let last = self.ids.len().checked_sub(1)?;
+        self.swap(0, last, items);
+        let id = self.ids.pop()?;
+        self.sift_down(0, items);
+        items.set_position(id, NOT_IN_HEAP);
+        Some(id)
+    }
+
+    /// Restore the order after the key of `id` changed, in either direction. Nothing happens if `id` is not
+    /// queued.
+    pub fn update<I: HeapItems + ?Sized>(&mut self, id: u32, items: &mut I) {
+        if let Some(pos) = self.position_of(id, items) {
+            self.fix(pos, items);
+        }
+    }
+
+    /// Take `id` out of the heap wherever it sits. `false` if it was not queued.
+    pub fn remove<I: HeapItems + ?Sized>(&mut self, id: u32, items: &mut I) -> bool {
+        let Some(pos) = self.position_of(id, items) else { return false };
+        let Some(last) = self.ids.len().checked_sub(1) else { return false };
+        self.swap(pos, last, items);
+        if self.ids.pop().is_none() {
+            return false;
+        }
+        items.set_position(id, NOT_IN_HEAP);
+        if pos < self.ids.len() {
+            self.fix(pos, items);
+        }
+        true
+    }
+
+    /// Restore the order after the keys of many queued ids changed (Floyd's bottom-up construction).
+    pub fn heapify<I: HeapItems + ?Sized>(&mut self, items: &mut I) {
+        for i in (0..self.ids.len() / 2).rev() {
+            self.sift_down(i, items);
+        }
+    }
+
+    /// The position of `id`, if it is queued (the recorded position is checked against the heap).
+    fn position_of<I: HeapItems + ?Sized>(&self, id: u32, items: &I) -> Option<usize> {
+        let pos = items.position(id).filter(|&p| p != NOT_IN_HEAP)? as usize;
+        (self.ids.get(pos) == Some(&id)).then_some(pos)
+    }
+
+    fn before_at<I: HeapItems + ?Sized>(&self, a: usize, b: usize, items: &I) -> bool {
+        let (Some(&x), Some(&y)) = (self.ids.get(a), self.ids.get(b)) else {
+            return false;
+        };
+        items.before(x, y)
+    }
+
+    fn swap<I: HeapItems + ?Sized>(&mut self, a: usize, b: usize, items: &mut I) {
+        let len = self.ids.len();
+        if a >= len || b >= len {
+            return;
+        }
+        self.ids.swap(a, b);
+        for i in [a, b] {
+            if let Some(&id) = self.ids.get(i) {
+                items.set_position(id, i as u32);
+            }
+        }
+    }
+
+    /// Move the id at `i` up to its place; returns where it ended.
+    fn sift_up<I: HeapItems + ?Sized>(&mut self, mut i: usize, items: &mut I) -> usize {
+        // Bounded: i halves every round.
+        while i > 0 {
+            let p = (i - 1) / 2;
+            if self.before_at(i, p, items) {
+                self.swap(i, p, items);
+                i = p;
+            } else {
+                break;
+            }
+        }
+        i
+    }
+
+    fn sift_down<I: HeapItems + ?Sized>(&mut self, mut i: usize, items: &mut I) {
+        let len = self.ids.len();
+        // Bounded: i at least doubles every round.
+        loop {
+            let l = 2 * i + 1;
+            if l >= len {
+                break;
+            }
+            let r = l + 1;
+            let c = if r < len && self.before_at(r, l, items) { r } else { l };
+            if self.before_at(c, i, items) {
+                self.swap(c, i, items);
+                i = c;
+            } else {
+                break;
+            }
+        }
+    }
+
+    /// Up if it belongs higher, else down.
+    fn fix<I: HeapItems + ?Sized>(&mut self, pos: usize, items: &mut I) {
+        let up = self.sift_up(pos, items);
+        if up == pos {
+            self.sift_down(pos, items);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use std::vec::Vec as StdVec;
+
+    use super::*;
+
+    /// Items with a key and a tie-break by id; positions kept per id.
+    struct Keys {
+        key: [i32; 16],
+        pos: [u32; 16],
+    }
+
+    impl Keys {
+        fn new(key: [i32; 16]) -> Self {
+            Self { key, pos: [NOT_IN_HEAP; 16] }
+        }
+    }
+
+    impl HeapItems for Keys {
+        fn before(&self, a: u32, b: u32) -> bool {
+            match (self.key.get(a as usize), self.key.get(b as usize)) {
+                (Some(x), Some(y)) => (x, a) < (y, b),
+                _ => false,
+            }
+        }
+        fn set_position(&mut self, id: u32, pos: u32) {
+            if let Some(p) = self.pos.get_mut(id as usize) {
+                *p = pos;
+            }
+        }
+        fn position(&self, id: u32) -> Option<u32> {
+            self.pos.get(id as usize).copied()
+        }
+    }
+
+    fn drain<const N: usize>(heap: &mut IndexedHeap<N>, items: &mut Keys) -> StdVec<u32> {
+        let mut out = StdVec::new();
+        while let Some(id) = heap.pop(items) {
+            assert_eq!(items.pos[id as usize], NOT_IN_HEAP);
+            out.push(id);
+        }
+        out
+    }
+
+    /// Every queued id's recorded position is where it sits, and no child comes before its parent.
+    fn assert_consistent<const N: usize>(heap: &IndexedHeap<N>, items: &Keys) {
+        for p in 0..heap.len() {
+            let id = heap.get(p).unwrap();
+            assert_eq!(items.pos[id as usize] as usize, p);
+            if p > 0 {
+                assert!(!items.before(id, heap.get((p - 1) / 2).unwrap()), "heap order broken at {p}");
+            }
+        }
+    }
+
+    #[test]
+    fn pops_in_key_order_with_ties_by_the_items_order() {
+        let mut items = Keys::new([5, 3, 9, 3, 0, 7, 1, 8, 3, 2, 6, 4, 9, 0, 5, 1]);
+        let mut heap: IndexedHeap<16> = IndexedHeap::new();
+        for id in [7, 2, 11, 0, 15, 4, 9, 13, 1, 6, 12, 3, 10, 5, 8, 14] {
+            heap.push(id, &mut items).unwrap();
+            assert_consistent(&heap, &items);
+        }
+        assert_eq!(heap.peek(), Some(4));
+        let order = drain(&mut heap, &mut items);
+        let mut expect: StdVec<u32> = (0..16).collect();
+        expect.sort_by_key(|&i| (items.key[i as usize], i));
+        assert_eq!(order, expect);
+        assert!(heap.is_empty());
+        assert_eq!(heap.pop(&mut items), None);
+    }
+
+    #[test]
+    fn decrease_and_increase_key_move_the_item() {
+        let mut items = Keys::new([10, 20, 30, 40, 50, 60, 70, 80, 0, 0, 0, 0, 0, 0, 0, 0]);
+        let mut heap: IndexedHeap<16> = IndexedHeap::new();
+        for id in 0..8 {
+            heap.push(id, &mut items).unwrap();
+        }
+        items.key[6] = 5; // decrease: to the front
+        heap.update(6, &mut items);
+        assert_consistent(&heap, &items);
+        assert_eq!(heap.peek(), Some(6));
+        items.key[0] = 65; // increase: behind 5 (60), before 7 (80)
+        heap.update(0, &mut items);
+        assert_consistent(&heap, &items);
+        assert_eq!(drain(&mut heap, &mut items), [6, 1, 2, 3, 4, 5, 0, 7]);
+        // Updating an id that is not queued (its recorded position is stale) changes nothing.
+        heap.push(3, &mut items).unwrap();
+        items.pos[1] = 0;
+        heap.update(1, &mut items);
+        assert_eq!(heap.len(), 1);
+        assert_eq!(heap.peek(), Some(3));
+    }
+
+    #[test]
+    fn rekeying_everything_then_heapify_restores_the_order() {
+        let mut items = Keys::new([0; 16]);
+        let mut heap: IndexedHeap<16> = IndexedHeap::new();
+        for id in 0..16 {
+            heap.push(id, &mut items).unwrap();
+        }
+        for (id, k) in items.key.iter_mut().enumerate() {
+            *k = (id as i32 * 7) % 16;
+        }
+        heap.heapify(&mut items);
+        assert_consistent(&heap, &items);
+        let order = drain(&mut heap, &mut items);
+        let keys: StdVec<i32> = order.iter().map(|&i| items.key[i as usize]).collect();
+        assert_eq!(keys, (0..16).collect::<StdVec<_>>());
+    }
+
+    #[test]
+    fn remove_takes_an_item_from_anywhere() {
+        let mut items = Keys::new([4, 8, 1, 6, 3, 9, 2, 7, 5, 0, 0, 0, 0, 0, 0, 0]);
+        let mut heap: IndexedHeap<16> = IndexedHeap::new();
+        for id in 0..9 {
+            heap.push(id, &mut items).unwrap();
+        }
+        assert!(heap.remove(2, &mut items)); // the front
+        assert!(heap.remove(5, &mut items)); // a leaf or inner node
+        assert!(heap.remove(7, &mut items));
+        assert_consistent(&heap, &items);
+        assert!(!heap.remove(5, &mut items), "removed twice");
+        assert_eq!(items.pos[5], NOT_IN_HEAP);
+        assert_eq!(drain(&mut heap, &mut items), [6, 4, 0, 8, 3, 1]);
+        assert!(!heap.remove(0, &mut items), "empty heap");
+    }
+
+    #[test]
+    fn a_full_heap_is_a_typed_outcome_that_changes_nothing() {
+        let mut items = Keys::new([3, 1, 2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
+        let mut heap: IndexedHeap<3> = IndexedHeap::new();
+        assert_eq!(heap.capacity(), 3);
+        for id in 0..3 {
+            heap.push(id, &mut items).unwrap();
+        }
+        assert!(heap.is_full());
+        assert_eq!(heap.push(3, &mut items), Err(Full));
+        assert_eq!(items.pos[3], NOT_IN_HEAP);
+        assert_eq!(heap.len(), 3);
+        assert_eq!(drain(&mut heap, &mut items), [1, 2, 0]);
+        // Room again after pops; clear empties at once.
+        heap.push(3, &mut items).unwrap();
+        heap.clear();
+        assert!(heap.is_empty());
+        assert_eq!(heap.pop(&mut items), None);
+    }
+}

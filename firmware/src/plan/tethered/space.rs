@@ -1,0 +1,421 @@
+//! The state space: settled states ([`RoverState`]), the surface trace and settling, sampling (uniform and
+//! catch-boundary), anchor-history compatibility, and the [`StateSpace`] implementation.
+
+use core::cell::Cell;
+
+use rand_core::Rng;
+
+use crate::config::rover::RoverParams;
+use crate::config::tether::ANCHOR_HISTORY_CAPACITY;
+use crate::config::tethered::{CATCH_PAIR_ATTEMPTS, MAX_WHEEL_CONTACT_INCLINE_RAD, SURFACE_MIN_STEP_M, SURFACE_TRACE_STEPS};
+use crate::geom::{norm3, Real, Vec3};
+use crate::map::{DistanceField, DistanceQuery};
+use crate::plan::space::{uniform01, CatchSample, StateSpace, StateValidityChecker};
+use crate::rover::{settle, SettleOutcome, SettledPose};
+use crate::tether::{predict_anchors, tether_touches, AnchorHistory};
+
+use super::{PlanBounds, TetherSpaceParams};
+
+/// A settled rover state (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RoverState {
+    /// The surface point the state was settled from.
+    pub ground: Vec3,
+    /// The yaw about the surface normal given to the settler, radians.
+    pub theta: Real,
+    /// The settled pose. For an off-map goal only `pose.translation` is meaningful.
+    pub settled: SettledPose,
+    /// An off-map goal (section VI-B): not settled, outside the planning bounds.
+    pub off_map: bool,
+}
+
+impl RoverState {
+    /// Axle centre, world frame (the tether end used for anchor prediction).
+    pub fn axle(&self) -> Vec3 {
+        self.settled.pose.translation.vector
+    }
+    /// Heading of the rover's x axis projected on the horizontal plane, radians.
+    pub fn heading(&self) -> Real {
+        let x = self.settled.pose.rotation * Vec3::x();
+        libm::atan2f(x.y, x.x)
+    }
+    /// Roll: the angle of the axle (rover y axis) above the horizontal, radians, in `[0, pi/2]`.
+    pub fn roll(&self) -> Real {
+        let y = self.settled.pose.rotation * Vec3::y();
+        libm::asinf(libm::fabsf(y.z).min(1.0))
+    }
+    /// An off-map goal at `point` (its pose has the identity rotation).
+    pub fn off_map_goal(point: Vec3) -> Self {
+        let settled = SettledPose {
+            pose: crate::geom::Pose3::translation(point.x, point.y, point.z),
+            roll_rad: 0.0,
+            wheels: [crate::rover::WheelContact { point, normal: Vec3::z(), gap_m: 0.0 }; 2],
+            iterations: 0,
+        };
+        RoverState { ground: point, theta: 0.0, settled, off_map: true }
+    }
+}
+
+/// The surface under `(x, y)`: sphere tracing down the distance field from `z_top` to `z_bottom`. `None` when no
+/// surface is reached within [`SURFACE_TRACE_STEPS`] or a query meets unknown space.
+pub fn surface_point(map: &impl DistanceField, x: Real, y: Real, z_top: Real, z_bottom: Real) -> Option<Vec3> {
+    let mut z = z_top;
+    for _ in 0..SURFACE_TRACE_STEPS {
+        if z < z_bottom {
+            return None;
+        }
+        let p = Vec3::new(x, y, z);
+        let DistanceQuery::Known { distance, .. } = map.query(&p) else { return None };
+        if !distance.is_finite() {
+            return None;
+        }
+        if distance <= SURFACE_MIN_STEP_M * 0.5 {
+            // At most half a minimum step from the surface (or inside it, just below): the settler takes it from
+            // here (it starts `settle_delta_m` up along the normal).
+            return Some(p);
+        }
+        z -= distance.max(SURFACE_MIN_STEP_M);
+    }
+    None
+}
+
+/// The tilt of the surface at `ground` (radians from level) and the settler yaw (`settle`'s `theta_m`) that faces
+/// straight downhill, from the footprint normal. `None` in unknown space or on level ground.
+pub fn fall_line_theta(map: &impl DistanceField, ground: &Vec3, rover: &RoverParams) -> Option<(Real, Real)> {
+    let n = crate::rover::footprint_normal(map, ground, rover)?;
+    let tilt = libm::acosf(n.z.clamp(-1.0, 1.0));
+    // the settler measures yaw about n from world x projected on the tangent plane (world y if x is parallel to n)
+    let project = |v: Vec3| crate::geom::normalize3(&(v - n * n.dot(&v)), 1e-4);
+    let x_t = project(Vec3::x()).or_else(|| project(Vec3::y()))?;
+    let downhill = project(-Vec3::z())?;
+    Some((tilt, libm::atan2f(x_t.cross(&downhill).dot(&n), x_t.dot(&downhill))))
+}
+
+/// Why a sample or an interpolated state could not be settled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SettleFailure {
+    /// No surface under the point within the bounds.
+    NoSurface,
+    /// The settler found no ground.
+    NoGround,
+    /// Body collision.
+    Collision,
+    /// Unknown (unobserved) space.
+    UnknownSpace,
+    /// The settler ran out of iterations.
+    Budget,
+    /// A wheel rests on a surface steeper than `MAX_WHEEL_CONTACT_INCLINE_RAD` (a pole's side, a wall): the
+    /// settler's answer there is not a pose Axel can stand in.
+    SteepContact,
+    /// Non-finite input.
+    InvalidInput,
+}
+
+/// Settle the rover at the surface point under `(x, y)` with yaw `theta` about the normal. A pose with a wheel on a
+/// surface steeper than `MAX_WHEEL_CONTACT_INCLINE_RAD` is refused ([`SettleFailure::SteepContact`]).
+pub fn settle_at(
+    map: &impl DistanceField,
+    bounds: &PlanBounds,
+    rover: &RoverParams,
+    x: Real,
+    y: Real,
+    theta: Real,
+) -> Result<RoverState, SettleFailure> {
+    if !(x.is_finite() && y.is_finite() && theta.is_finite()) {
+        return Err(SettleFailure::InvalidInput);
+    }
+    let ground = surface_point(map, x, y, bounds.max[2], bounds.min[2]).ok_or(SettleFailure::NoSurface)?;
+    match settle(map, &ground, theta, rover) {
+        SettleOutcome::Settled(settled)
+            if settled.wheels.iter().any(|w| w.normal.z < libm::cosf(MAX_WHEEL_CONTACT_INCLINE_RAD)) =>
+        {
+            Err(SettleFailure::SteepContact)
+        }
+        SettleOutcome::Settled(settled) => Ok(RoverState { ground, theta, settled, off_map: false }),
+        SettleOutcome::NoGround => Err(SettleFailure::NoGround),
+        SettleOutcome::Collision { .. } => Err(SettleFailure::Collision),
+        SettleOutcome::UnknownSpace => Err(SettleFailure::UnknownSpace),
+        SettleOutcome::BudgetExhausted { .. } => Err(SettleFailure::Budget),
+        SettleOutcome::InvalidInput => Err(SettleFailure::InvalidInput),
+    }
+}
+
+/// Counters of the space's work (sampling) and of the motion validator's work and failures, by reason.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct MotionStats {
+    /// Sampling draws.
+    pub samples_drawn: u32,
+    /// Draws that settled.
+    pub samples_settled: u32,
+    /// Settle calls (samples and interpolated states).
+    pub settles: u32,
+    /// `predict_anchors` calls.
+    pub anchor_predictions: u32,
+    /// Stability checks.
+    pub stability_checks: u32,
+    /// Motions checked.
+    pub motions: u32,
+    /// Motions found valid.
+    pub motions_valid: u32,
+    /// Invalid: an interpolated state did not settle (no ground, collision, budget).
+    pub fail_settle: u32,
+    /// Invalid: unknown space met (settling, tether sweep or stability).
+    pub fail_unknown: u32,
+    /// Invalid: anchor prediction failed (history full, budget) or the tether bends too much.
+    pub fail_tether: u32,
+    /// Invalid: an interpolated state is not statically stable with its anchor history.
+    pub fail_unstable: u32,
+    /// Invalid: more than `MAX_MOTION_STATES` interpolated states, or an off-map goal too far from the edge.
+    pub fail_too_long: u32,
+    /// Surface points tested for the tether shadow by the catch-boundary sampler.
+    pub catch_probes: u32,
+    /// Catch-boundary pairs found (each then settled like a uniform sample).
+    pub catch_samples: u32,
+}
+
+/// The tether-aware state space over a distance field (the onboard map, or a world on the host).
+pub struct TetherSpace<'m, D> {
+    pub(super) map: &'m D,
+    pub(super) bounds: PlanBounds,
+    pub(super) rover: RoverParams,
+    pub(super) params: TetherSpaceParams,
+    pub(super) stats: Cell<MotionStats>,
+}
+
+impl<'m, D: DistanceField> TetherSpace<'m, D> {
+    /// A space over `map` within `bounds`. Errors name the offending parameter.
+    pub fn new(
+        map: &'m D,
+        bounds: PlanBounds,
+        rover: RoverParams,
+        params: TetherSpaceParams,
+    ) -> Result<Self, (&'static str, &'static str)> {
+        if !bounds.is_valid() {
+            return Err(("bounds", "must be a finite box with min < max on every axis"));
+        }
+        params.validate()?;
+        Ok(Self { map, bounds, rover, params, stats: Cell::new(MotionStats::default()) })
+    }
+    /// The distance field planned on.
+    pub fn map(&self) -> &'m D {
+        self.map
+    }
+    /// The planning bounds.
+    pub fn bounds(&self) -> &PlanBounds {
+        &self.bounds
+    }
+    /// The parameters.
+    pub fn params(&self) -> &TetherSpaceParams {
+        &self.params
+    }
+    /// The rover model.
+    pub fn rover(&self) -> &RoverParams {
+        &self.rover
+    }
+    /// Work counters so far.
+    pub fn stats(&self) -> MotionStats {
+        self.stats.get()
+    }
+    pub(super) fn count(&self, f: impl FnOnce(&mut MotionStats)) {
+        let mut s = self.stats.get();
+        f(&mut s);
+        self.stats.set(s);
+    }
+    /// Settle a state at the surface under `(x, y)` (counted).
+    pub fn settle_state(&self, x: Real, y: Real, theta: Real) -> Result<RoverState, SettleFailure> {
+        self.count(|s| s.settles += 1);
+        settle_at(self.map, &self.bounds, &self.rover, x, y, theta)
+    }
+    /// A goal state: settled at `(x, y)` when inside the bounds, an off-map goal at `point` otherwise.
+    pub fn goal_state(&self, point: Vec3, theta: Real) -> Result<RoverState, SettleFailure> {
+        if self.bounds.contains_xy(point.x, point.y) {
+            self.settle_state(point.x, point.y, theta)
+        } else if crate::geom::is_finite3(&point) {
+            Ok(RoverState::off_map_goal(point))
+        } else {
+            Err(SettleFailure::InvalidInput)
+        }
+    }
+
+    pub(super) fn sample_at<R: Rng + ?Sized>(&mut self, rng: &mut R, x: Real, y: Real) -> Option<RoverState> {
+        let p = self.params.sample_perturbation_m;
+        let px = x + p * (2.0 * uniform01(rng) as Real - 1.0);
+        let py = y + p * (2.0 * uniform01(rng) as Real - 1.0);
+        let u = uniform01(rng) as Real;
+        self.count(|s| s.samples_drawn += 1);
+        if !self.bounds.contains_xy(px, py) {
+            return None;
+        }
+        let b = self.bounds;
+        let ground = surface_point(self.map, px, py, b.max[2], b.min[2])?;
+        let theta = match fall_line_theta(self.map, &ground, &self.rover) {
+            Some((tilt, downhill)) if tilt > self.params.fall_line_tilt_rad => {
+                downhill + self.params.fall_line_yaw_spread_rad * (2.0 * u - 1.0)
+            }
+            _ => core::f32::consts::TAU * u - core::f32::consts::PI,
+        };
+        let st = self.settle_state(px, py, theta).ok()?;
+        self.count(|s| s.samples_settled += 1);
+        Some(st)
+    }
+
+    /// Is the tether end above the surface point under `(x, y)` (one wheel radius up) in the shadow of terrain
+    /// seen from `pivot`, i.e. would a straight tether from `pivot` touch terrain? `None` outside the bounds, over
+    /// no surface, or when the line meets unknown space.
+    fn in_tether_shadow(&self, pivot: &Vec3, x: Real, y: Real) -> Option<bool> {
+        if !self.bounds.contains_xy(x, y) {
+            return None;
+        }
+        self.count(|s| s.catch_probes = s.catch_probes.saturating_add(1));
+        let b = self.bounds;
+        let ground = surface_point(self.map, x, y, b.max[2], b.min[2])?;
+        let end = ground + Vec3::new(0.0, 0.0, self.rover.wheel_radius_m);
+        tether_touches(self.map, pivot, &end).ok()
+    }
+
+    /// The catch-boundary sampler of [`StateSpace::sample_catch_boundary`]: the Gaussian (bridge) sampling of
+    /// obstacle boundaries, applied to the tether's line of sight instead of collision. Draw a uniform `(x, y)`
+    /// and a second point within `catch_pair_radius_m` of it; when exactly one of the two is in the tether
+    /// shadow of the history's last anchor, settle a state at their midpoint (within half the radius of the
+    /// shadow's edge). At most `CATCH_PAIR_ATTEMPTS` pairs.
+    fn catch_boundary_sample<R: Rng + ?Sized>(
+        &mut self,
+        rng: &mut R,
+        history: &AnchorHistory,
+    ) -> CatchSample<RoverState> {
+        let Some(pivot) = history.last().map(|a| a.point) else { return CatchSample::NotFound };
+        let b = self.bounds;
+        let r = self.params.catch_pair_radius_m;
+        for _ in 0..CATCH_PAIR_ATTEMPTS {
+            let x = b.min[0] + (b.max[0] - b.min[0]) * uniform01(rng) as Real;
+            let y = b.min[1] + (b.max[1] - b.min[1]) * uniform01(rng) as Real;
+            let angle = core::f32::consts::TAU * uniform01(rng) as Real;
+            let dist = r * libm::sqrtf(uniform01(rng) as Real);
+            let (qx, qy) = (x + dist * libm::cosf(angle), y + dist * libm::sinf(angle));
+            let Some(p_shadow) = self.in_tether_shadow(&pivot, x, y) else { continue };
+            let Some(q_shadow) = self.in_tether_shadow(&pivot, qx, qy) else { continue };
+            if p_shadow != q_shadow {
+                self.count(|s| s.catch_samples = s.catch_samples.saturating_add(1));
+                return match self.sample_at(rng, 0.5 * (x + qx), 0.5 * (y + qy)) {
+                    Some(st) => CatchSample::Sampled(st),
+                    None => CatchSample::Rejected,
+                };
+            }
+        }
+        CatchSample::NotFound
+    }
+
+    /// Are two anchor histories compatible? Both are reduced to their **wraps** (runs of consecutive anchors less
+    /// than `anchor_cluster_m` apart: one obstacle the tether bends around, e.g. the 8 anchors of half a turn
+    /// around a pole), each represented by its last anchor; compatible when they have the same number of wraps and
+    /// the representatives lie within `anchor_match_m` of each other. Histories that differ only in how finely
+    /// the same wrap was discretised are compatible; wraps on different sides of an obstacle are not.
+    pub fn histories_match(&self, a: &AnchorHistory, b: &AnchorHistory) -> bool {
+        let (wa, wb) = (wraps(a, self.params.anchor_cluster_m), wraps(b, self.params.anchor_cluster_m));
+        wa.len() == wb.len() && wa.iter().zip(wb.iter()).all(|(p, q)| norm3(&(p - q)) <= self.params.anchor_match_m)
+    }
+}
+
+/// The wraps of a history (see [`TetherSpace::histories_match`]): the last anchor of every run of consecutive
+/// anchors closer than `cluster_m`, root first.
+pub fn wraps(h: &AnchorHistory, cluster_m: Real) -> heapless::Vec<Vec3, ANCHOR_HISTORY_CAPACITY> {
+    let mut out: heapless::Vec<Vec3, ANCHOR_HISTORY_CAPACITY> = heapless::Vec::new();
+    let mut prev: Option<Vec3> = None;
+    for a in h.as_slice() {
+        match (prev, out.last_mut()) {
+            (Some(p), Some(last)) if norm3(&(a.point - p)) < cluster_m => *last = a.point,
+            _ => {
+                let _ = out.push(a.point);
+            }
+        }
+        prev = Some(a.point);
+    }
+    out
+}
+
+/// `a - b` wrapped to `(-pi, pi]`.
+pub(super) fn angle_diff(a: Real, b: Real) -> Real {
+    let tau = core::f32::consts::TAU;
+    let mut d = libm::fmodf(a - b, tau);
+    if d > core::f32::consts::PI {
+        d -= tau;
+    } else if d <= -core::f32::consts::PI {
+        d += tau;
+    }
+    d
+}
+
+impl<D: DistanceField> StateSpace for TetherSpace<'_, D> {
+    type State = RoverState;
+    type Attachment = AnchorHistory;
+    const NON_MARKOVIAN: bool = true;
+
+    /// States live on the 2D surface manifold (plus a yaw that only the cost sees): the RGG terms use d = 2.
+    fn dimension(&self) -> usize {
+        2
+    }
+    fn measure(&self) -> f64 {
+        self.bounds.area()
+    }
+    fn distance(&self, a: &RoverState, b: &RoverState) -> f64 {
+        f64::from(norm3(&(b.axle() - a.axle())))
+    }
+    /// Ground point and yaw interpolated, then settled; when that fails, the nearer end state.
+    fn interpolate(&self, a: &RoverState, b: &RoverState, t: f64) -> RoverState {
+        let t = t.clamp(0.0, 1.0) as Real;
+        let g = a.ground + (b.ground - a.ground) * t;
+        let theta = a.theta + angle_diff(b.theta, a.theta) * t;
+        match self.settle_state(g.x, g.y, theta) {
+            Ok(s) => s,
+            Err(_) if t < 0.5 => *a,
+            Err(_) => *b,
+        }
+    }
+    fn sample_uniform<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Option<RoverState> {
+        let b = self.bounds;
+        let x = b.min[0] + (b.max[0] - b.min[0]) * uniform01(rng) as Real;
+        let y = b.min[1] + (b.max[1] - b.min[1]) * uniform01(rng) as Real;
+        self.sample_at(rng, x, y)
+    }
+    fn attachments_compatible(&self, resulting: &AnchorHistory, existing: &AnchorHistory) -> bool {
+        self.histories_match(resulting, existing)
+    }
+    /// Statically stable with the tether pulling towards the history's pull anchor, margin at least
+    /// `min_stability_margin` (the end-state check of a motion that keeps this history).
+    fn valid_with_attachment(&self, state: &RoverState, attachment: &AnchorHistory) -> bool {
+        self.stable_with(&state.settled, attachment).is_ok()
+    }
+    /// Alg. 1 over the straight line between the two axles, from `attachment` (no settling, no stability).
+    fn predict_attachment(
+        &self,
+        from: &RoverState,
+        attachment: &AnchorHistory,
+        to: &RoverState,
+    ) -> Option<AnchorHistory> {
+        if from.off_map || to.off_map {
+            return None;
+        }
+        self.count(|s| s.anchor_predictions += 1);
+        let mut out = AnchorHistory::default();
+        predict_anchors(self.map, attachment, &from.axle(), &to.axle(), &mut out).ok()?;
+        Some(out)
+    }
+    /// Near the edge of the tether shadow of the history's last anchor (see `catch_boundary_sample`).
+    fn sample_catch_boundary<R: Rng + ?Sized>(
+        &mut self,
+        rng: &mut R,
+        attachment: &AnchorHistory,
+    ) -> CatchSample<RoverState> {
+        self.catch_boundary_sample(rng, attachment)
+    }
+}
+
+/// State validity: settled (every state the space produces is), finite.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct TetherValidity;
+
+impl<D: DistanceField> StateValidityChecker<TetherSpace<'_, D>> for TetherValidity {
+    fn is_valid(&mut self, state: &RoverState) -> bool {
+        crate::geom::is_finite3(&state.axle())
+    }
+}

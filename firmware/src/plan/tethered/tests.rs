@@ -1,0 +1,129 @@
+use super::*;
+use crate::config::rover::RoverParams;
+use crate::config::tethered::SURFACE_MIN_STEP_M;
+use crate::geom::{Real, Vec3};
+use crate::map::{DistanceField, DistanceQuery};
+use crate::tether::{Anchor, AnchorHistory};
+
+/// The plane z = 0 (exact signed distance).
+struct Ground;
+impl DistanceField for Ground {
+    fn query(&self, p: &Vec3) -> DistanceQuery {
+        DistanceQuery::Known { distance: p.z, gradient: Vec3::z() }
+    }
+}
+struct Nothing;
+impl DistanceField for Nothing {
+    fn query(&self, _: &Vec3) -> DistanceQuery {
+        DistanceQuery::Unknown
+    }
+}
+const BOUNDS: PlanBounds = PlanBounds { min: [-10.0, -10.0, -1.0], max: [10.0, 10.0, 5.0] };
+
+fn history(points: &[[Real; 3]]) -> AnchorHistory {
+    let mut h = AnchorHistory::default();
+    for p in points {
+        h.push(Anchor { point: Vec3::new(p[0], p[1], p[2]), gradient: Vec3::z() }).unwrap();
+    }
+    h
+}
+
+#[test]
+fn surface_point_finds_the_plane_and_refuses_unknown_space() {
+    let p = surface_point(&Ground, 1.0, 2.0, 5.0, -1.0).unwrap();
+    assert!(p.z.abs() <= SURFACE_MIN_STEP_M * 0.5, "{p:?}");
+    assert_eq!((p.x, p.y), (1.0, 2.0));
+    assert_eq!(surface_point(&Nothing, 1.0, 2.0, 5.0, -1.0), None);
+    // the surface is below the search range
+    assert_eq!(surface_point(&Ground, 0.0, 0.0, 5.0, 1.0), None);
+}
+
+#[test]
+fn tether_bend_is_the_sum_of_turning_angles() {
+    let straight = history(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]);
+    assert!(tether_bend(&straight, &Vec3::new(2.0, 0.0, 0.0)).abs() < 1e-5);
+    let right = history(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]);
+    let b = tether_bend(&right, &Vec3::new(1.0, 1.0, 0.0));
+    assert!((b - core::f32::consts::FRAC_PI_2).abs() < 1e-5, "{b}");
+    // two right angles in a row: a U-turn around a post
+    let u = history(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]]);
+    let b = tether_bend(&u, &Vec3::new(0.0, 1.0, 0.0));
+    assert!((b - core::f32::consts::PI).abs() < 1e-5, "{b}");
+}
+
+#[test]
+fn wraps_merge_close_anchors_and_compatibility_follows_them() {
+    let space = TetherSpace::new(&Ground, BOUNDS, RoverParams::AXEL, TetherSpaceParams::DEFAULT).unwrap();
+    // root, then three anchors 0.1 m apart around a post, then a lip 3 m away
+    let fine = history(&[[9.0, 0.0, 6.0], [0.0, 0.25, 4.5], [-0.1, 0.2, 4.5], [-0.2, 0.1, 4.5], [3.0, -0.5, 4.0]]);
+    let coarse = history(&[[9.0, 0.0, 6.0], [0.0, 0.25, 4.5], [-0.18, 0.12, 4.5], [3.0, -0.5, 4.0]]);
+    let w = wraps(&fine, space.params().anchor_cluster_m);
+    assert_eq!(w.len(), 3);
+    assert_eq!(w[1], Vec3::new(-0.2, 0.1, 4.5));
+    assert!(space.histories_match(&fine, &coarse));
+    // the same post wrapped on its other side (last anchor 0.5 m away) is another history
+    let other_side = history(&[[9.0, 0.0, 6.0], [0.0, -0.25, 4.5], [-0.2, -0.3, 4.5], [3.0, -0.5, 4.0]]);
+    assert!(!space.histories_match(&fine, &other_side));
+    // one wrap more or less is another history
+    let root_only = history(&[[9.0, 0.0, 6.0]]);
+    assert!(!space.histories_match(&root_only, &coarse));
+    assert!(space.histories_match(&root_only, &root_only.clone()));
+}
+
+#[test]
+fn motion_plan_turns_the_short_way_and_drives_backwards_when_cheaper() {
+    let space = TetherSpace::new(&Ground, BOUNDS, RoverParams::AXEL, TetherSpaceParams::DEFAULT).unwrap();
+    let a = space.settle_state(0.0, 0.0, 0.0).unwrap();
+    let b = space.settle_state(2.0, 0.0, 0.0).unwrap();
+    let p = MotionPlan::new(&a, &b, space.params());
+    assert_eq!((p.turn_a_rad, p.turn_b_rad), (0.0, 0.0));
+    // 2 m at 0.2 m: 10 drive states, the last of which is followed by the end state
+    assert_eq!(p.total_states(), 11);
+    assert_eq!(p.state(11), MotionPoint::End);
+    assert!(matches!(p.state(10), MotionPoint::Drive { x, .. } if (x - 2.0).abs() < 1e-5));
+    // facing away from the target: Axel reverses instead of turning around
+    let c = space.settle_state(-2.0, 0.0, 0.0).unwrap();
+    let p = MotionPlan::new(&a, &c, space.params());
+    assert!(p.turn_a_rad.abs() < 1e-5 && p.turn_b_rad.abs() < 1e-5, "{p:?}");
+    // a quarter turn at the end, in ceil((pi/2) / 0.5) = 4 steps
+    let d = space.settle_state(2.0, 0.0, core::f32::consts::FRAC_PI_2).unwrap();
+    let p = MotionPlan::new(&a, &d, space.params());
+    assert!((p.turn_b_rad.abs() - core::f32::consts::FRAC_PI_2).abs() < 1e-5);
+    assert_eq!(p.total_states(), 10 + 4);
+}
+
+#[test]
+fn flat_ground_motion_is_valid_and_keeps_a_straight_tether() {
+    let space = TetherSpace::new(&Ground, BOUNDS, RoverParams::AXEL, TetherSpaceParams::DEFAULT).unwrap();
+    let a = space.settle_state(0.0, 0.0, 0.0).unwrap();
+    let b = space.settle_state(3.0, 1.0, 0.5).unwrap();
+    let root = history(&[[-6.0, 0.0, 2.0]]);
+    let h = space.check(&a, &root, &b).unwrap();
+    assert_eq!(h.len(), 1);
+    let s = space.stats();
+    assert_eq!((s.motions, s.motions_valid), (1, 1));
+    assert!(s.stability_checks as usize >= MotionPlan::new(&a, &b, space.params()).total_states() as usize);
+}
+
+#[test]
+fn off_map_goal_connects_only_near_the_edge() {
+    let space = TetherSpace::new(&Ground, BOUNDS, RoverParams::AXEL, TetherSpaceParams::DEFAULT).unwrap();
+    let goal = space.goal_state(Vec3::new(30.0, 0.0, 0.35), 0.0).unwrap();
+    assert!(goal.off_map);
+    let root = history(&[[-6.0, 0.0, 2.0]]);
+    let near = space.settle_state(9.5, 0.0, 0.0).unwrap();
+    let far = space.settle_state(0.0, 0.0, 0.0).unwrap();
+    assert!(space.check(&near, &root, &goal).is_ok());
+    assert_eq!(space.check(&far, &root, &goal), Err(MotionFailure::OffMap));
+    assert_eq!(space.check(&goal, &root, &near), Err(MotionFailure::OffMap));
+}
+
+#[test]
+fn bad_parameters_and_bounds_are_named() {
+    let mut p = TetherSpaceParams::DEFAULT;
+    p.drive_resolution_m = 0.0;
+    assert_eq!(TetherSpace::new(&Ground, BOUNDS, RoverParams::AXEL, p).err().map(|e| e.0), Some("drive_resolution_m/turn_resolution_rad"));
+    let mut b = BOUNDS;
+    b.max[2] = b.min[2];
+    assert_eq!(TetherSpace::new(&Ground, b, RoverParams::AXEL, TetherSpaceParams::DEFAULT).err().map(|e| e.0), Some("bounds"));
+}
