@@ -4,16 +4,19 @@
 //! The same code runs in-process inside the host simulator and cross-compiled on the flight computer
 //! (`firmware/boards/*`).
 //!
-//! ## Layers (each depends only on the ones above it)
-//! - [`config`]: every capacity (arena size) and every budget (iterations, solver steps) in one place.
+//! ## Layers (each uses only the ones above it; the modules of one line form one layer)
 //! - [`geom`]: vectors, transforms, planes, polygons over `nalgebra` (no_std) and `libm`.
+//! - [`config`]: every capacity (arena size) and every budget (iterations, solver steps) in one place.
 //! - [`protocol`]: wire format between simulator / ground and flight software (postcard bodies, COBS, CRC).
 //! - [`map`]: onboard terrain map (TSDF -> ESDF in a fixed pool of voxel blocks) — Paton et al. IV.
-//! - [`rover`], [`tether`], [`stability`]: tether-aware traversability — Paton et al. IV-A, IV-B, IV-C.
+//! - [`rover`], [`tether`], [`stability`]: tether-aware traversability — Paton et al. IV-A, IV-B, IV-C (`rover`
+//!   and `stability` use each other).
 //! - [`plan`]: planners: ABIT* (Paton et al. V), homotopy planning on tether-demand planes (Abad-Manterola et
 //!   al.; Tanner et al.), tethered climbing teams (Morad et al.).
-//! - [`nav`]: the executive's autonomy: builds the onboard map from the link's scans (planning on it comes next).
-//! - [`exec`]: the flight executive: mode machine, frame dispatch, per-cycle budgets, telemetry.
+//! - [`exec`]: the flight executive: mode machine, frame dispatch, per-cycle budgets, telemetry, and the
+//!   [`exec::Autonomy`] hooks where the map and the planners plug in.
+//! - [`nav`]: the executive's autonomy: builds the onboard map from the link's scans and plans goal requests on
+//!   it (tethered ABIT*, Paton et al. IV-V).
 //!
 //! ## Rules of the core
 //! - **No heap, no panic.** Containers are `heapless` or fixed arrays; a full container is a typed outcome.
@@ -25,7 +28,8 @@
 //!   on the ARM flight computer.
 //!
 //! Numbers: the 3D map and rover use `f32` ([`geom::Real`]); solvers that need the headroom (QP, L-values) use
-//! `f64` internally. Both are IEEE-exact on the Cortex-M7 (f64 through the compiler's soft-float routines).
+//! `f64` internally. Both are IEEE-exact on the Cortex-M7 (f64 in its double-precision FPU: the flight build sets
+//! `target-cpu=cortex-m7`, `.cargo/config.toml`).
 #![no_std]
 #![forbid(unsafe_code)]
 #![cfg_attr(

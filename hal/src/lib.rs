@@ -11,10 +11,12 @@
 //! Devices as the flight software sees them:
 //! - [`ByteLink`]: the serial-like link to the host / ground (a UART on the board, a byte queue in-process);
 //! - [`MonotonicClock`]: time since boot, passed into algorithms by the executive (algorithms never read clocks);
-//! - [`Watchdog`]: kicked once per executive cycle;
-//! - [`TetherEncoder`], [`RangeSensor`], [`DriveActuator`]: the rover's devices. In simulation they are backed by
-//!   the link (the simulator's frames arrive as bytes and the glue turns them into readings); on a rover they would
-//!   be backed by drivers.
+//! - [`Watchdog`]: kicked once per executive cycle.
+//!
+//! The rover's own devices (tether encoder, range sensor, drive) have no trait here: their readings and commands
+//! travel as protocol frames over the [`ByteLink`] (`firmware::protocol`: `TetherReading`, `SensorChunk`,
+//! `DriveCommand`), produced and consumed by the simulator or the rover's device glue. A trait for one of them is
+//! added together with its first implementation and its first caller.
 #![no_std]
 #![forbid(unsafe_code)]
 
@@ -92,70 +94,4 @@ pub trait Watchdog {
     type Error: Error;
     /// Restarts the watchdog's countdown.
     fn kick(&mut self) -> Result<(), Self::Error>;
-}
-
-/// One tether-encoder sample: what the winch / boom sensors report.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct TetherSample {
-    /// Time of the sample.
-    pub at: Instant,
-    /// Tether paid out from the root anchor, metres.
-    pub payout_m: f32,
-    /// Tether tension, newtons.
-    pub tension_n: f32,
-    /// Boom angle relative to the body, radians.
-    pub boom_angle_rad: f32,
-}
-
-/// The tether encoder (payout length, tension, boom angle).
-pub trait TetherEncoder {
-    /// Device error type.
-    type Error: Error;
-    /// The latest sample, or `Ok(None)` if no new sample arrived since the last call.
-    fn sample(&mut self) -> Result<Option<TetherSample>, Self::Error>;
-}
-
-/// One range return in the sensor frame, metres.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct RangePoint {
-    /// x (forward), metres.
-    pub x: f32,
-    /// y (left), metres.
-    pub y: f32,
-    /// z (up), metres.
-    pub z: f32,
-}
-
-/// A range sensor (stereo or lidar) delivering scans as points in the sensor frame.
-pub trait RangeSensor {
-    /// Device error type.
-    type Error: Error;
-    /// Copies up to `out.len()` points of the next pending scan into `out`; returns how many were written and
-    /// whether the scan is complete. `Ok((0, false))` means no scan is pending.
-    fn read_points(&mut self, out: &mut [RangePoint]) -> Result<(usize, bool), Self::Error>;
-}
-
-/// A drive command: the Axel motion primitives (in-place turn, straight drive) and the tether winch.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum DriveCommand {
-    /// Stop the wheels and hold the tether.
-    Stop,
-    /// Turn in place by the given yaw angle, radians (positive counter-clockwise about the surface normal).
-    Turn {
-        /// Yaw change, radians.
-        yaw_rad: f32,
-    },
-    /// Drive straight by the given distance, metres (negative = reverse), paying out or reeling in tether.
-    Straight {
-        /// Distance, metres.
-        distance_m: f32,
-    },
-}
-
-/// The drive actuator (wheels + tether winch), as the flight software commands it.
-pub trait DriveActuator {
-    /// Device error type.
-    type Error: Error;
-    /// Issues a command; returns once the actuator has accepted it (not when the motion is done).
-    fn command(&mut self, cmd: DriveCommand) -> Result<(), Self::Error>;
 }

@@ -159,7 +159,7 @@ fn lockstep_board_reports_a_fault_instead_of_hanging() {
     let mut cfg = QemuConfig::new(elf);
     cfg.boot_words = Some("tetherbot.clock=lockstep tetherbot.probe=panic".into());
     cfg.ready_timeout = Duration::from_secs(10);
-    let err = match qemu::link::QemuLink::with_config(&cfg, 1000) {
+    let err = match host_sim::link::qemu::QemuLink::with_config(&cfg, 1000) {
         Ok(_) => panic!("a panicking board completed the handshake"),
         Err(e) => e,
     };

@@ -14,9 +14,10 @@ use core::time::Duration;
 
 use host_sim::fieldlog::{self, Header, Writer};
 use host_sim::link::inproc::{InProcLink, DEFAULT_STEP_US};
+use host_sim::link::qemu::QemuLink;
 use host_sim::link::recording::RecordingLink;
 use host_sim::link::FlightLink;
-use host_sim::qemu::{self, link::QemuLink};
+use host_sim::qemu;
 use host_sim::replay::{replay, ReplayOutcome};
 use host_sim::scripted as scenario;
 

@@ -179,7 +179,7 @@ fn goal_is_planned_identically_on_the_board() {
     let g = goal(1.0, 16);
     let mut inproc = session_with_map(InProcLink::new(DEFAULT_STEP_US), &xs);
     let a = plan_goal(&mut inproc, g);
-    let link = host_sim::qemu::link::QemuLink::start(&elf, DEFAULT_STEP_US).unwrap_or_else(|e| panic!("{e}"));
+    let link = host_sim::link::qemu::QemuLink::start(&elf, DEFAULT_STEP_US).unwrap_or_else(|e| panic!("{e}"));
     let t0 = std::time::Instant::now();
     let mut board = session_with_map(link, &xs);
     let t1 = std::time::Instant::now();

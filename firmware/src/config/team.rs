@@ -42,6 +42,16 @@ pub const PATH_MAX_HOPS: usize = 64;
 /// Moving AI maps). Default 64 x 64 = 4096 cells (47 bytes per cell: ~190 KiB of D* Lite state).
 pub const GLOBAL_GRID_MAX_CELLS: usize = 64 * 64;
 
+/// Bisection steps of the hub motion at the end of a round (`plan::team::formation::Team::hub_motion`: how far
+/// towards the attached robots' centroid the hub may move with every leg within r_max). Default 24: the step
+/// fraction in [0, 1] is then resolved to 2^-24, the spacing of `f32` values just below 1.
+pub const HUB_BISECTION_STEPS: usize = 24;
+
+/// Jacobi sweeps of the 3 x 3 symmetric eigen-solver of a point's normal (`plan::team::scene`, plane fit of
+/// section V-A.2). Default 32: a 3 x 3 matrix converges in fewer than 10; past the bound the fit reports
+/// non-convergence instead of looping.
+pub const EIGEN_MAX_SWEEPS: usize = 32;
+
 /// Tunable parameters of the team planner (all lengths metres).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TeamParams {

@@ -1,12 +1,18 @@
-//! Hook points where the planning modules plug into the executive.
+//! Hook points where the map and the planners plug into the executive.
 //!
 //! The executive owns the protocol, the modes and the budgets; everything that knows about terrain, tether and
-//! planning sits behind [`Autonomy`]. Every method has a default that does nothing (or reports that no planner
-//! is available), so [`NoAutonomy`] is the honest configuration until `map` and the planners are wired in.
-//! Wiring the map: implement [`Autonomy::scan`] to integrate the scan (Paton et al. IV, TSDF -> ESDF). Wiring a
-//! planner: [`Autonomy::goal`] validates and sets up the problem, [`Autonomy::plan_step`] runs a bounded number
-//! of iterations (OMPL's `solve(termination)` split into steps) and fills the plan buffer when it finishes,
-//! [`Autonomy::next_motion`] hands out the motion primitives to drive.
+//! planning sits behind [`Autonomy`]. The flight implementation is `crate::nav::Navigator` (the onboard map and
+//! tethered ABIT* on it); [`NoAutonomy`] (every method's default: nothing done, goals answered
+//! `PlannerUnavailable`) runs the executive with no map and no planner (the executive's own tests, the board's
+//! dispatch benchmark).
+//!
+//! The calls, all with the time passed in and each bounded by its caller's budget: [`Autonomy::configure`] on
+//! `Configure`; [`Autonomy::tether_reading`] and [`Autonomy::scan`] for each reading and each reassembled scan
+//! (Paton et al. IV, TSDF -> ESDF); [`Autonomy::goal`] validates and sets up a goal request;
+//! [`Autonomy::plan_step`] runs at most `PLANNER_ITERATIONS_PER_STEP` iterations per step (OMPL's
+//! `solve(termination)` split into steps) and fills the [`PlanBuffer`] when it finishes;
+//! [`Autonomy::next_motion`] hands out the motion primitives to drive; [`Autonomy::abort`] on `Shutdown`;
+//! [`Autonomy::map_status`] for each `Telemetry` frame.
 
 use hal::Instant;
 

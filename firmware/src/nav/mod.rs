@@ -57,10 +57,7 @@
 //! `a_suspended_and_resumed_search_is_the_uninterrupted_search`; here `same_inputs_same_plan_whatever_the_step_size`:
 //! with 3 iterations per step, the same plan, iterations, motion checks and stability problems as in one step, and
 //! one extra settle per step, the goal state's). No step runs an iteration twice, so every step's geometry stays
-//! within `MOTION_CHECKS_PER_STEP`. Until session 5 every step replayed the search from its seed, answering the
-//! replayed motion checks and samples from a motion cache and a sample tape (~1 MB of the storage, now gone): the
-//! replays repeated the queue and arena work (624 replayed iterations for 96 new ones at 8 per step), and after a
-//! scan, which cleared both, a step redid every motion check of the goal so far.
+//! within `MOTION_CHECKS_PER_STEP`.
 //!
 //! ## Storage
 //! The block pool and the block index are owned by the caller and lent to the navigator for good (`Vec`s on the
@@ -81,7 +78,7 @@
 //!   [`TetherSpaceParams::DEFAULT`](crate::plan::tethered::TetherSpaceParams::DEFAULT) and ABIT*'s
 //!   [`AbitParams::ompl_defaults`](crate::plan::abit::AbitParams::ompl_defaults).
 //!
-//! ## What the onboard map must hold (limits found while testing)
+//! ## What the onboard map must hold
 //! - The tether sweep of anchor prediction ([`crate::tether::predict_anchors`]) fails in unknown space, so the
 //!   **root anchor must lie in observed space** (e.g. mapped from the rover's own scans): a root above an unmapped
 //!   crater rim makes every motion invalid (`NoSolutionWithinBudget`). The `protocol` scenario's root is such a case.
@@ -91,18 +88,19 @@
 //! - The executive integrates a whole scan in one step: on the emulated board an 8000-point scan at the flight
 //!   map's 5 cm voxels outlasts the 2 s watchdog (a 2000-point scan does not).
 //!
-//! ## Verified
+//! ## Budgets
+//! Work per scan is bounded by `points * max_ray_voxels` voxel updates plus `esdf_max_sweeps` ESDF sweeps; an
+//! ESDF that runs out of sweeps is counted and continues with the next scan. Work per `plan_step` is bounded by
+//! its new iterations and `MOTION_CHECKS_PER_STEP`, each iteration bounded by the planner's own budgets.
+//!
+//! ## Tests
 //! Unit tests (`nav::tests`): plans on mapped flat and 12-degree worlds whose motions, dead-reckoned, end in the goal
 //! region; a goal behind an unobserved gap ends approximate or unsolved; every refusal; per-step and goal budgets;
 //! the time budget; the same plan for the same inputs whatever the step size (resumed), with no motion check or
 //! sample computed twice; a scan between steps restarts the search. `tests/tests/nav_planning.rs`: the same
-//! end to end over the link, and on the emulated board (QEMU mps2-an500) with identical output; there the planning
-//! storage is 1,031,328 bytes of SRAM `.bss` (`.bss` 1.17 MB of 4 MiB; 2,013,976 B with the replay caches of
-//! sessions 2-4) and the stack high-water mark 102.5 KiB of 256 KiB (session 2).
+//! end to end over the link, and on the emulated board (QEMU mps2-an500) with identical output.
+//! `host-sim/doc/nav.md` has the on-target storage and stack figures and how the navigator came to its design.
 //!
-//! Work per scan is bounded by `points * max_ray_voxels` voxel updates plus `esdf_max_sweeps` ESDF sweeps; an
-//! ESDF that runs out of sweeps is counted and continues with the next scan. Work per `plan_step` is bounded by
-//! its new iterations and `MOTION_CHECKS_PER_STEP`, each iteration bounded by the planner's own budgets.
 
 mod planning;
 #[cfg(test)]

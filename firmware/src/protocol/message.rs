@@ -495,16 +495,6 @@ pub enum Motion {
     },
 }
 
-impl From<Motion> for hal::DriveCommand {
-    fn from(m: Motion) -> Self {
-        match m {
-            Motion::Stop => hal::DriveCommand::Stop,
-            Motion::Turn { yaw_rad } => hal::DriveCommand::Turn { yaw_rad },
-            Motion::Straight { distance_m } => hal::DriveCommand::Straight { distance_m },
-        }
-    }
-}
-
 /// Flight -> host: a drive command for the rover (the simulator executes it).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct DriveCommand {

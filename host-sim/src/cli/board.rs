@@ -21,19 +21,9 @@ use std::process::ExitCode;
 
 use core::time::Duration;
 
-use crate::link::FlightLink;
-use crate::qemu::{self, link::QemuLink, perf, report};
-
-/// Which flight software a run talks to.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
-pub enum LinkKind {
-    /// The executive linked into the host, stepped on a simulated clock (fast; the default).
-    #[default]
-    Inproc,
-    /// The cross-compiled board binary in QEMU (mps2-an500, Cortex-M7) over an emulated UART, stepped in
-    /// lockstep on the same simulated clock (byte-identical output to `inproc`).
-    Qemu,
-}
+use crate::link::qemu::QemuLink;
+use crate::link::{FlightLink, LinkKind};
+use crate::qemu::{self, perf, report};
 
 /// Arguments of `board`.
 #[derive(Debug, Clone, clap::Args)]

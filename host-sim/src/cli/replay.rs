@@ -4,6 +4,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use crate::fieldlog;
+use crate::link::LinkKind;
 use crate::replay::{replay, ReplayOutcome, RunConfig};
 
 /// Arguments of `replay`.
@@ -13,8 +14,8 @@ pub struct ReplayArgs {
     pub log: PathBuf,
     /// Flight software to replay against (default: in-process; logs recorded on either link replay on either,
     /// because the board runs in lockstep on the same simulated clock).
-    #[arg(long, value_enum, default_value_t = super::board::LinkKind::Inproc)]
-    pub link: super::board::LinkKind,
+    #[arg(long, value_enum, default_value_t = LinkKind::Inproc)]
+    pub link: LinkKind,
 }
 
 /// `replay` entry point: exit 0 when identical, 1 on a mismatch or a damaged log, 2 if it cannot run.

@@ -3,11 +3,10 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::board::LinkKind;
 use crate::fieldlog::{self, Writer};
 use crate::link::inproc::DEFAULT_STEP_US;
 use crate::link::recording::RecordingLink;
-use crate::link::FlightLink;
+use crate::link::{FlightLink, LinkKind};
 use crate::replay::RunConfig;
 use crate::scripted::{self, ScenarioReport};
 

@@ -1,12 +1,22 @@
-//! Host-side links to the flight software.
+//! Host-side links to the flight software, in one place.
 //!
-//! [`FlightLink`] is what the simulator, the scenarios, the field-log recorder and the test kit talk to. Two
-//! implementations are planned: [`inproc::InProcLink`] (the firmware executive linked in as a library, stepped on
-//! a simulated clock) and a QEMU-backed link to the board binary (emulated UART over TCP). Anything written
-//! against `FlightLink` runs over both.
+//! [`FlightLink`] is what the simulator, the scenarios, the field-log recorder and the test kit talk to; anything
+//! written against it runs over every link:
+//!
+//! - [`inproc::InProcLink`]: the firmware executive linked in as a library, stepped on a simulated clock;
+//! - [`qemu::QemuLink`]: the cross-compiled board binary in QEMU (emulated UART over TCP), stepped in lockstep on
+//!   the same simulated clock, so it gives the same bytes as the in-process link (the board itself, its build and
+//!   its reports live in [`crate::qemu`]);
+//! - [`recording::RecordingLink`]: a wrapper around either that records every byte, both ways, into a field log.
+//!
+//! [`LinkKind`] (in [`kind`]) is the CLI's choice between the in-process and the QEMU link.
 
 pub mod inproc;
+pub mod kind;
+pub mod qemu;
 pub mod recording;
+
+pub use kind::LinkKind;
 
 /// Why a link operation failed.
 #[derive(Debug)]

@@ -18,7 +18,7 @@
 //! 5. move bytes ([`QemuBoard::send`], [`QemuBoard::recv`]); [`QemuBoard::quit`] asks the board for its resource
 //!    report and waits for its exit.
 //!
-//! [`link::QemuLink`] puts this behind the simulator's link abstraction.
+//! [`crate::link::qemu::QemuLink`] puts this behind the simulator's link abstraction.
 //!
 //! QEMU is killed when the [`QemuBoard`] is dropped. The board's semihosting output (report lines
 //! `board: key=value ...`, fault reports) is captured and returned by [`QemuBoard::finish`].
@@ -28,7 +28,6 @@
 //! or [`build_board_elf`]. [`board_elf_path`] finds the result; `TETHERBOT_BOARD_ELF` overrides the path.
 
 pub mod bench;
-pub mod link;
 pub mod perf;
 pub mod report;
 

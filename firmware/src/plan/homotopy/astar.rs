@@ -73,6 +73,11 @@ struct Node {
 
 const NO_NODE: u16 = u16::MAX;
 
+// Node indices are `u16` (`alloc`'s `i as u16`, below `MAX_SEARCH_NODES`) with `NO_NODE` = `u16::MAX` never a real
+// index; chain depths are `u16` below `MAX_SLEEVE`.
+const _: () = assert!(MAX_SEARCH_NODES <= u16::MAX as usize);
+const _: () = assert!(MAX_SLEEVE <= u16::MAX as usize);
+
 /// Node arena and open list, owned by the caller (about 0.3 MiB).
 pub struct SearchArena {
     nodes: [Node; MAX_SEARCH_NODES],

@@ -45,8 +45,11 @@ pub struct AStarArena<const V: usize> {
 }
 
 impl<const V: usize> AStarArena<V> {
-    /// Empty arena.
+    /// Empty arena. Checked at compile time: vertex indices (`u16`, `u16::MAX` = no parent) fit `V`.
     pub const fn new() -> Self {
+        const {
+            assert!(V <= u16::MAX as usize, "AStarArena: V must fit u16 vertex indices");
+        }
         Self { g: [Real::INFINITY; V], parent: [u16::MAX; V], open: [false; V], closed: [false; V] }
     }
 }
@@ -80,6 +83,10 @@ pub fn bounded_leg_astar<const V: usize, const E: usize, const H: usize>(
     c_m: &Vec3,
     params: &TeamParams,
 ) -> LocalPath<H> {
+    // Vertex indices are `u16` (`u as u16`, `cur as u16` below `V`), `u16::MAX` meaning no parent.
+    const {
+        assert!(V <= u16::MAX as usize, "bounded_leg_astar: V must fit u16 vertex indices");
+    }
     let n = graph.n_vertices;
     let mut out = LocalPath { status: AStarStatus::InvalidInput, vertices: HVec::new(), loss: 0.0, expansions: 0 };
     if start as usize >= n {

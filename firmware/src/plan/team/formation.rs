@@ -5,7 +5,7 @@
 //!   in index order, skipping robots whose tether is cut. [`Team::next_mover`] gives the next one.
 //! - **Hub motion**: the hub is held by the gripped robots during a hop; after a round (every attached robot has
 //!   had its turn) it is drawn towards the "instantaneous center" (the centroid of the attached robots, section IV
-//!   Fig. 5) as far as every attached robot's leg stays within r_max (bisection on the step, `HUB_BISECTION_STEPS`
+//!   Fig. 5) as far as every attached robot's leg stays within r_max (bisection on the step, [`HUB_BISECTION_STEPS`]
 //!   steps; a zero step is always feasible, so the tether limit is never broken by the hub).
 //! - **Node loss** (section V-A.6): a robot that fails cuts its tether ([`Team::cut_tether`]); the rest keep
 //!   planning independently, indifferent to the loss.
@@ -14,11 +14,10 @@
 //! Capacity: the team size is the const generic `N` (default [`TEAM_SIZE`] = 4).
 //!
 //! [`TEAM_SIZE`]: crate::config::team::TEAM_SIZE
+//! [`HUB_BISECTION_STEPS`]: crate::config::team::HUB_BISECTION_STEPS
 
+use crate::config::team::HUB_BISECTION_STEPS;
 use crate::geom::{norm3, Real, Vec3};
-
-/// Bisection steps of the hub motion.
-pub const HUB_BISECTION_STEPS: usize = 24;
 
 /// One robot as the team sees it.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -32,12 +32,11 @@
 //! [`SURFACE_CELLS_PER_AXIS`]: crate::config::team::SURFACE_CELLS_PER_AXIS
 //! [`TeamParams`]: crate::config::team::TeamParams
 
-use crate::config::team::{TeamParams, KNN_BUCKETS_PER_AXIS, KNN_K, SURFACE_CELLS_PER_AXIS, SURFACE_MAX_VERTICES};
+use crate::config::team::{
+    TeamParams, EIGEN_MAX_SWEEPS, KNN_BUCKETS_PER_AXIS, KNN_K, SURFACE_CELLS_PER_AXIS, SURFACE_MAX_VERTICES,
+};
 use crate::geom::{is_finite3, norm3, normalize3, Real, Vec3};
 use nalgebra::Matrix3;
-
-/// Maximum Jacobi sweeps of the 3 x 3 symmetric eigen-solver (converges in < 10 for 3 x 3).
-pub const EIGEN_MAX_SWEEPS: usize = 32;
 
 const NONE: u32 = u32::MAX;
 const BUCKETS: usize = KNN_BUCKETS_PER_AXIS * KNN_BUCKETS_PER_AXIS;

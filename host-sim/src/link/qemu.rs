@@ -1,4 +1,4 @@
-//! The emulated board as a flight link.
+//! The emulated board as a flight link (the board binary in QEMU, started by [`crate::qemu::QemuBoard`]).
 //!
 //! [`QemuLink`] runs the board in **lockstep**: the board's executive is stepped by the host over the control port
 //! on the host's simulated clock, one step every `step_us`, with bytes delivered at step boundaries, exactly the
@@ -15,7 +15,8 @@ use core::time::Duration;
 use std::io;
 use std::time::Instant;
 
-use super::{QemuBoard, QemuConfig, QemuError, QemuExit};
+use super::{FlightLink, LinkError};
+use crate::qemu::{QemuBoard, QemuConfig, QemuError, QemuExit};
 
 /// Default bound on one lockstep run command's reply (generous: thousands of steps on a loaded 2-core machine).
 pub const DEFAULT_REPLY_TIMEOUT: Duration = Duration::from_secs(60);
@@ -207,8 +208,7 @@ impl QemuLink {
     }
 }
 
-fn link_error(link: &QemuLink, e: io::Error) -> crate::link::LinkError {
-    use crate::link::LinkError;
+fn link_error(link: &QemuLink, e: io::Error) -> LinkError {
     match e.kind() {
         io::ErrorKind::UnexpectedEof
         | io::ErrorKind::NotConnected
@@ -225,20 +225,20 @@ fn link_error(link: &QemuLink, e: io::Error) -> crate::link::LinkError {
     }
 }
 
-impl crate::link::FlightLink for QemuLink {
+impl FlightLink for QemuLink {
     fn name(&self) -> &str {
         "qemu"
     }
     fn now_us(&self) -> u64 {
         self.now_us
     }
-    fn send(&mut self, bytes: &[u8]) -> Result<(), crate::link::LinkError> {
+    fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
         QemuLink::send(self, bytes).map_err(|e| link_error(self, e))
     }
-    fn recv_until_quiet(&mut self, max_wait_us: u64) -> Result<Vec<u8>, crate::link::LinkError> {
+    fn recv_until_quiet(&mut self, max_wait_us: u64) -> Result<Vec<u8>, LinkError> {
         QemuLink::recv_until_quiet(self, max_wait_us).map_err(|e| link_error(self, e))
     }
-    fn advance_to(&mut self, t_us: u64) -> Result<Vec<u8>, crate::link::LinkError> {
+    fn advance_to(&mut self, t_us: u64) -> Result<Vec<u8>, LinkError> {
         QemuLink::advance_to(self, t_us).map_err(|e| link_error(self, e))
     }
 }
