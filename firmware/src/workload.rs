@@ -29,7 +29,6 @@
 //! the work (the board: SysTick under `-icount shift=0`; the host: nothing) and receives the summaries.
 //! The big arenas are lent by the caller in [`Arenas`] (statics on the board, boxes on the host).
 
-use core::convert::Infallible;
 use core::fmt::Write;
 
 use crate::config::rover::RoverParams;
@@ -39,6 +38,7 @@ use crate::map::{DistanceField, DistanceQuery};
 use crate::plan::abit::{AbitParams, AbitStar, DefaultAbitArena};
 use crate::plan::geometric::wall_gap;
 use crate::plan::homotopy::plan::PlanReport;
+use crate::plan::rng::SplitMix64;
 use crate::plan::homotopy::terrain::{HoldModel, SoilMap};
 use crate::plan::homotopy::{preplan, Btm, PlannerParams, Workspace};
 use crate::plan::space::{Budget, GoalState, PathLength, Planner, PlannerStatus, ProblemDefinition};
@@ -68,33 +68,6 @@ pub const SCAN_POINTS: usize = SCAN_SIDE * SCAN_SIDE;
 
 /// The ABIT* arena of the wall-with-gap workload (default capacities of `config::abit`).
 pub type WallGapArena = DefaultAbitArena<[f64; 2], ()>;
-
-/// SplitMix64 (Steele, Lea, Flood 2014): a tiny deterministic generator for the workloads.
-#[derive(Debug, Clone)]
-pub struct SplitMix64(pub u64);
-
-impl rand_core::TryRng for SplitMix64 {
-    type Error = Infallible;
-    fn try_next_u32(&mut self) -> Result<u32, Infallible> {
-        self.try_next_u64().map(|x| (x >> 32) as u32)
-    }
-    fn try_next_u64(&mut self) -> Result<u64, Infallible> {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        Ok(z ^ (z >> 31))
-    }
-    fn try_fill_bytes(&mut self, dst: &mut [u8]) -> Result<(), Infallible> {
-        for chunk in dst.chunks_mut(8) {
-            let bytes = self.try_next_u64()?.to_le_bytes();
-            for (d, s) in chunk.iter_mut().zip(bytes) {
-                *d = s;
-            }
-        }
-        Ok(())
-    }
-}
 
 /// An inclined plane through the origin, `z = -tan(alpha) x` (descending towards `+x`); exact SDF.
 #[derive(Debug, Clone, Copy)]

@@ -21,7 +21,7 @@
 //!   within `off_map_edge_m` of the bounds, and the plan ends at that state;
 //! - **goal region**: within `tolerance_m` (axle distance) of the rover settled under the goal position;
 //! - **budget**: `min(goal.max_iterations, MAX_PLAN_ITERATIONS)` iterations, and `time_budget_ms` of flight time
-//!   when non-zero; the sampler is SplitMix64 (as [`SplitMix64`]) seeded from `Configure.planner.rng_seed` and the goal id;
+//!   when non-zero; the sampler is SplitMix64 ([`crate::plan::SplitMix64`]) seeded from `Configure.planner.rng_seed` and the goal id;
 //!   `batch_size` is the samples per batch (at most `SAMPLES_PER_BATCH`); `goal_bias` has no meaning for ABIT*
 //!   (it samples no goal states) and is ignored.
 //!
@@ -122,8 +122,6 @@ use crate::map::{Block, Map, MapError};
 use crate::plan::tethered::{PlanBounds, RoverState};
 use crate::protocol::{Configure, GoalRequest, MapStatus, Motion, PlanState, PlannerChoice, Pose};
 use crate::tether::AnchorHistory;
-#[cfg(doc)]
-use crate::workload::SplitMix64;
 
 use planning::{PlanSetup, Problem};
 

@@ -128,7 +128,7 @@ use super::space::{
     OptimizationObjective, Planner, PlannerStatus, ProblemDefinition, StateSpace, StateValidityChecker,
     StepOutcome,
 };
-use super::geometric::unit_ball_measure;
+use crate::geom::unit_ball_measure;
 
 /// "No node".
 const NONE: u32 = u32::MAX;

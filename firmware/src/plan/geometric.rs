@@ -15,6 +15,8 @@
 use heapless::Vec;
 use rand_core::Rng;
 
+use crate::geom::unit_ball_measure;
+
 use super::space::{
     standard_normal, uniform01, InformedSample, MotionCheck, MotionValidator, StateSpace, StateValidityChecker,
 };
@@ -40,12 +42,6 @@ impl<const N: usize> RealVectorSpace<N> {
     pub fn contains(&self, x: &[f64; N]) -> bool {
         x.iter().zip(self.lo.iter().zip(self.hi.iter())).all(|(v, (l, h))| *v >= *l && *v <= *h)
     }
-}
-
-/// Measure of the unit n-ball, pi^(n/2) / Gamma(n/2 + 1).
-pub fn unit_ball_measure(n: usize) -> f64 {
-    let half = n as f64 / 2.0;
-    libm::pow(core::f64::consts::PI, half) / libm::tgamma(half + 1.0)
 }
 
 impl<const N: usize> StateSpace for RealVectorSpace<N> {
