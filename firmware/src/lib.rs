@@ -11,9 +11,12 @@
 //! - [`map`]: onboard terrain map (TSDF -> ESDF in a fixed pool of voxel blocks) — Paton et al. IV.
 //! - [`rover`], [`tether`], [`stability`]: tether-aware traversability — Paton et al. IV-A, IV-B, IV-C.
 //! - [`plan`]: planners: ABIT* (Paton et al. V), homotopy planning on tether-demand planes (Abad-Manterola et
-//!   al.; Tanner et al.), tethered climbing teams (Morad et al.).
+//!   al.; Tanner et al.), tethered climbing teams (Morad et al.), and the flight RNG ([`plan::SplitMix64`]).
 //! - [`nav`]: the executive's autonomy: builds the onboard map from the link's scans (planning on it comes next).
 //! - [`exec`]: the flight executive: mode machine, frame dispatch, per-cycle budgets, telemetry.
+//!
+//! Flight code only: the fixed benchmark workloads (on-target instruction counts and their host twins) and the
+//! planners' test problems are the `workloads` crate (`firmware/workloads/`), which depends on this one.
 //!
 //! ## Rules of the core
 //! - **No heap, no panic.** Containers are `heapless` or fixed arrays; a full container is a typed outcome.
@@ -51,4 +54,3 @@ pub mod protocol;
 pub mod rover;
 pub mod stability;
 pub mod tether;
-pub mod workload;

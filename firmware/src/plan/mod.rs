@@ -13,7 +13,6 @@
 //! `workloads` crate (`firmware/workloads/`).
 
 pub mod abit;
-pub mod geometric;
 pub mod homotopy;
 pub mod rng;
 pub mod space;

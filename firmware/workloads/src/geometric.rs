@@ -1,6 +1,7 @@
 //! Geometric planning problems in R^n with axis-aligned box obstacles: the shared benchmark problems of the
 //! ABIT* side-by-side with OMPL (issue 6, "a wall with a narrow offset gap in R^2, R^4 and R^8 and a 3D box
-//! world") and the planner's own tests.
+//! world") and the planner's own tests (`firmware/workloads/tests/abit_geometric.rs`). Test problems, not flight
+//! code: they implement `firmware::plan::space`'s traits from outside the flight crate.
 //!
 //! - [`RealVectorSpace`]: R^N in a box, Euclidean metric, linear interpolation, uniform sampling and the direct
 //!   informed sampler of the prolate hyperspheroid (Gammell, Barfoot, Srinivasa, IROS 2014 / TPAMI 2018), with
@@ -15,9 +16,8 @@
 use heapless::Vec;
 use rand_core::Rng;
 
-use crate::geom::unit_ball_measure;
-
-use super::space::{
+use firmware::geom::unit_ball_measure;
+use firmware::plan::space::{
     standard_normal, uniform01, InformedSample, MotionCheck, MotionValidator, StateSpace, StateValidityChecker,
 };
 
