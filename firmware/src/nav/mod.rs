@@ -53,7 +53,7 @@
 //!   **restarts** it from the goal's seed on the new map, for what is left of the goal's iteration budget
 //!   (`NavPlanStats::restarts`; the start state settled at goal time is kept).
 //!
-//! A resumed search equals one uninterrupted `solve` (`plan::abit`'s
+//! A resumed search equals one uninterrupted `solve` (`firmware/workloads/tests/abit_geometric.rs`'s
 //! `a_suspended_and_resumed_search_is_the_uninterrupted_search`; here `same_inputs_same_plan_whatever_the_step_size`:
 //! with 3 iterations per step, the same plan, iterations, motion checks and stability problems as in one step, and
 //! one extra settle per step, the goal state's). No step runs an iteration twice, so every step's geometry stays
