@@ -34,6 +34,12 @@ pub fn normalize3(v: &Vec3, eps: Real) -> Option<Vec3> {
     }
 }
 
+/// Measure (volume) of the unit ball in R^n, `pi^(n/2) / Gamma(n/2 + 1)` (through `libm`).
+pub fn unit_ball_measure(n: usize) -> f64 {
+    let half = n as f64 / 2.0;
+    libm::pow(core::f64::consts::PI, half) / libm::tgamma(half + 1.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -9,14 +9,16 @@
 //! - [`config`]: every capacity (arena size) and every budget (iterations, solver steps) in one place.
 //! - [`protocol`]: wire format between simulator / ground and flight software (postcard bodies, COBS, CRC).
 //! - [`map`]: onboard terrain map (TSDF -> ESDF in a fixed pool of voxel blocks) — Paton et al. IV.
-//! - [`rover`], [`tether`], [`stability`]: tether-aware traversability — Paton et al. IV-A, IV-B, IV-C (`rover`
-//!   and `stability` use each other).
+//! - [`rover`], [`tether`], [`stability`]: tether-aware traversability — Paton et al. IV-A, IV-B, IV-C.
 //! - [`plan`]: planners: ABIT* (Paton et al. V), homotopy planning on tether-demand planes (Abad-Manterola et
-//!   al.; Tanner et al.), tethered climbing teams (Morad et al.).
+//!   al.; Tanner et al.), tethered climbing teams (Morad et al.), and the flight RNG ([`plan::SplitMix64`]).
 //! - [`exec`]: the flight executive: mode machine, frame dispatch, per-cycle budgets, telemetry, and the
 //!   [`exec::Autonomy`] hooks where the map and the planners plug in.
 //! - [`nav`]: the executive's autonomy: builds the onboard map from the link's scans and plans goal requests on
 //!   it (tethered ABIT*, Paton et al. IV-V).
+//!
+//! Flight code only: the fixed benchmark workloads (on-target instruction counts and their host twins) and the
+//! planners' test problems are the `workloads` crate (`firmware/workloads/`), which depends on this one.
 //!
 //! ## Rules of the core
 //! - **No heap, no panic.** Containers are `heapless` or fixed arrays; a full container is a typed outcome.
@@ -55,4 +57,3 @@ pub mod protocol;
 pub mod rover;
 pub mod stability;
 pub mod tether;
-pub mod workload;

@@ -15,9 +15,9 @@ use core::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use firmware::plan::abit::{AbitArena, AbitParams, AbitStar};
-use firmware::plan::geometric::GeometricProblem;
 use firmware::plan::space::{Budget, GoalState, PathLength, Planner, ProblemDefinition};
 use host_sim::harness::{shared_problems, SharedProblem};
+use workloads::geometric::GeometricProblem;
 use rand_core::SeedableRng;
 
 type Arena<const N: usize> = AbitArena<[f64; N], (), 16384, 262_144, 65536>;

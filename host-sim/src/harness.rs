@@ -1,7 +1,7 @@
 //! One harness that runs every planner of the project on every shared problem it applies to.
 //!
 //! - [`shared_problems`] lists the shared problems (today: the geometric ABIT* benchmark problems of issue 6 —
-//!   a wall with a narrow offset gap in R^2, R^4, R^8 and a 3D box world).
+//!   a wall with a narrow offset gap in R^2, R^4, R^8 and a 3D box world, `workloads::geometric`).
 //! - [`planners`] lists the planners, each a [`HarnessPlanner`] saying which problems it applies to.
 //! - [`run_all`] runs every (planner, problem, seed) combination and returns one [`RunResult`] per run, with the
 //!   returned path re-validated independently of the planner ([`verify_geometric_path`]).
@@ -14,10 +14,10 @@ use core::time::Duration;
 use std::time::Instant;
 
 use firmware::plan::abit::{AbitArena, AbitParams, AbitStar};
-use firmware::plan::geometric::{box_world_3d, wall_gap, GeometricProblem};
 use firmware::plan::space::{Budget, GoalState, PathLength, Planner, ProblemDefinition, StateSpace};
 use heapless::Vec as HVec;
 use rand_core::SeedableRng;
+use workloads::geometric::{box_world_3d, wall_gap, GeometricProblem};
 
 /// A shared problem.
 // A handful of problems exist at a time; their size does not matter.

@@ -1,8 +1,8 @@
 //! The planner harness: every planner of the project on every shared problem it applies to
 //! (`host_sim::harness`). Small budgets; the full comparison is `tetherbot abit-bench`.
 
-use firmware::plan::geometric::wall_gap_optimal_cost;
 use host_sim::harness::{planners, run_all, shared_problems, SharedProblem};
+use workloads::geometric::wall_gap_optimal_cost;
 
 #[test]
 fn every_planner_solves_every_shared_problem_it_applies_to_with_verified_paths() {

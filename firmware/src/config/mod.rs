@@ -2,7 +2,8 @@
 //!
 //! One submodule per part of the core, so the numbers sit next to each other and next to their reasons. Arena
 //! sizes are `usize` consts used as const-generic arguments; budgets are iteration counts. Change a number here,
-//! never a literal in an algorithm.
+//! never a literal in an algorithm. (The capacities of the benchmark workloads are not flight settings: they are
+//! `workloads::config`, in `firmware/workloads/`.)
 
 pub mod abit;
 pub mod exec;
@@ -14,5 +15,4 @@ pub mod rover;
 pub mod stability;
 pub mod team;
 pub mod tethered;
-pub mod workload;
 pub mod tether;

@@ -21,7 +21,7 @@
 //!   within `off_map_edge_m` of the bounds, and the plan ends at that state;
 //! - **goal region**: within `tolerance_m` (axle distance) of the rover settled under the goal position;
 //! - **budget**: `min(goal.max_iterations, MAX_PLAN_ITERATIONS)` iterations, and `time_budget_ms` of flight time
-//!   when non-zero; the sampler is SplitMix64 (as [`SplitMix64`]) seeded from `Configure.planner.rng_seed` and the goal id;
+//!   when non-zero; the sampler is SplitMix64 ([`crate::plan::SplitMix64`]) seeded from `Configure.planner.rng_seed` and the goal id;
 //!   `batch_size` is the samples per batch (at most `SAMPLES_PER_BATCH`); `goal_bias` has no meaning for ABIT*
 //!   (it samples no goal states) and is ignored.
 //!
@@ -53,7 +53,7 @@
 //!   **restarts** it from the goal's seed on the new map, for what is left of the goal's iteration budget
 //!   (`NavPlanStats::restarts`; the start state settled at goal time is kept).
 //!
-//! A resumed search equals one uninterrupted `solve` (`plan::abit`'s
+//! A resumed search equals one uninterrupted `solve` (`firmware/workloads/tests/abit_geometric.rs`'s
 //! `a_suspended_and_resumed_search_is_the_uninterrupted_search`; here `same_inputs_same_plan_whatever_the_step_size`:
 //! with 3 iterations per step, the same plan, iterations, motion checks and stability problems as in one step, and
 //! one extra settle per step, the goal state's). No step runs an iteration twice, so every step's geometry stays
@@ -120,8 +120,6 @@ use crate::map::{Block, Map, MapError};
 use crate::plan::tethered::{PlanBounds, RoverState};
 use crate::protocol::{Configure, GoalRequest, MapStatus, Motion, PlanState, PlannerChoice, Pose};
 use crate::tether::AnchorHistory;
-#[cfg(doc)]
-use crate::workload::SplitMix64;
 
 use planning::{PlanSetup, Problem};
 

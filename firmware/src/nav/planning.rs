@@ -23,7 +23,7 @@ use crate::plan::tethered::{
 };
 use crate::protocol::{Configure, Motion, PlanState, Point3, Pose, Quat, Waypoint};
 use crate::tether::{Anchor, AnchorHistory};
-use crate::workload::SplitMix64;
+use crate::plan::rng::SplitMix64;
 
 /// The on-board ABIT* arena (capacities of `config::nav`).
 pub type NavArena = AbitArena<

@@ -4,9 +4,9 @@
 //!   board (lockstep) and its on-target resource report: stack high-water mark (paint) and the peak use of each
 //!   executive buffer / arena.
 //! - `tetherbot board bench`: instruction counts of the fixed on-target workloads under `-icount shift=0`, and the
-//!   planning workloads of `firmware::workload` with their outcomes next to the host's (exit status 1 unless equal)
+//!   planning workloads of the `workloads` crate with their outcomes next to the host's (exit status 1 unless equal)
 //!   and the run's stack high-water mark. `--workload tethered_test3 [--iterations N]` runs instead only the opt-in
-//!   test-3 planning workload (`firmware::workload::test3`: ABIT* over the tether-aware space, Paton et al.
+//!   test-3 planning workload (`workloads::ledge_pole`: ABIT* over the tether-aware space, Paton et al.
 //!   Table I test 3, 750 iterations by default) on the board and on the host, compares the summaries and reports
 //!   instructions in total, per iteration, per settle and per stability LP, the wall time, the stack high-water
 //!   mark and the storage's bytes (see `host-sim/doc/board_test3.md`).
@@ -214,24 +214,25 @@ fn bench_workload_cmd(
     iterations: Option<u32>,
     timeout: Duration,
 ) -> Result<(), Box<dyn core::error::Error>> {
-    use firmware::workload::test3::{TEST3_ITERATIONS, TEST3_NAME};
-    if workload != TEST3_NAME {
-        return Err(format!("--workload {workload:?}: the opt-in workloads are: {TEST3_NAME}").into());
+    use workloads::ledge_pole;
+    let name = ledge_pole::NAME;
+    if workload != name {
+        return Err(format!("--workload {workload:?}: the opt-in workloads are: {name}").into());
     }
-    let iterations = iterations.unwrap_or(TEST3_ITERATIONS);
+    let iterations = iterations.unwrap_or(ledge_pole::ITERATIONS);
     if iterations == 0 {
         return Err("--iterations must be at least 1".into());
     }
     let words = format!(
-        "tetherbot.mode=bench tetherbot.workload={TEST3_NAME} tetherbot.iterations={iterations}"
+        "tetherbot.mode=bench tetherbot.workload={name} tetherbot.iterations={iterations}"
     );
     println!(
-        "{TEST3_NAME}: {iterations} ABIT* iterations on the emulated board (qemu-system-arm -icount shift=0, \
+        "{name}: {iterations} ABIT* iterations on the emulated board (qemu-system-arm -icount shift=0, \
          mps2-an500 Cortex-M7) and on the host ..."
     );
     let host = std::thread::spawn(move || {
         let t0 = std::time::Instant::now();
-        qemu::bench::host_test3_summary(iterations).map(|s| (s, t0.elapsed()))
+        qemu::bench::host_ledge_pole_summary(iterations).map(|s| (s, t0.elapsed()))
     });
     let t0 = std::time::Instant::now();
     let (results, text) = report::run_bench_with(elf, &words, timeout)?;
@@ -242,11 +243,11 @@ fn bench_workload_cmd(
     let board = qemu::bench::board_summaries(&text);
     let board_summary = board
         .iter()
-        .find(|(n, _)| n == TEST3_NAME)
+        .find(|(n, _)| n == name)
         .map(|(_, s)| s.clone());
     let ins = results
         .iter()
-        .find(|r| r.name == TEST3_NAME)
+        .find(|r| r.name == name)
         .map(|r| r.instructions)
         .ok_or("the board printed no instruction count for the workload")?;
     let field = |s: &str, k: &str| -> Option<u64> {
@@ -294,7 +295,7 @@ fn bench_workload_cmd(
         println!("{line}");
     }
     if !same {
-        return Err(format!("{TEST3_NAME} differs between the board and the host").into());
+        return Err(format!("{name} differs between the board and the host").into());
     }
     Ok(())
 }

@@ -1,4 +1,4 @@
-//! The planning workloads of `firmware::workload` on the host, for `tetherbot board bench`: the board prints one
+//! The planning workloads of the `workloads` crate on the host, for `tetherbot board bench`: the board prints one
 //! `bench: result name=<workload> summary=<line>` per workload, the host runs the same code on boxed arenas, and
 //! the two summaries must be equal (the floats in them are printed shortest-round-trip, so equal text means equal
 //! bits).
@@ -8,8 +8,8 @@ use firmware::geom::Vec3;
 use firmware::plan::homotopy::{Btm, Workspace};
 use firmware::plan::team::dstar_lite::DStarArena;
 use firmware::plan::team::DefaultLocalPlanner;
-use firmware::workload::test3::{run_test3, Test3Storage};
-use firmware::workload::{run_all, Arenas, Harness, WallGapArena, SCAN_POINTS};
+use workloads::ledge_pole::{run_ledge_pole, LedgePoleStorage};
+use workloads::{run_all, Arenas, Harness, WallGapArena, SCAN_POINTS};
 
 struct Collect(Vec<(String, String)>);
 
@@ -46,13 +46,13 @@ pub fn host_summaries() -> Vec<(String, String)> {
 /// The opt-in `tethered_test3` workload on the host (`iterations` iterations): `(name, summary)`. Runs on a
 /// thread with a large stack (the storage is built before it is boxed, and the planner's recursion into the
 /// stability LP is deep at opt-level 1).
-pub fn host_test3_summary(iterations: u32) -> Result<(String, String), String> {
+pub fn host_ledge_pole_summary(iterations: u32) -> Result<(String, String), String> {
     std::thread::Builder::new()
         .stack_size(64 << 20)
         .spawn(move || {
-            let mut storage: Box<Test3Storage> = Box::default();
+            let mut storage: Box<LedgePoleStorage> = Box::default();
             let mut h = Collect(Vec::new());
-            run_test3(&mut storage, iterations, &mut h);
+            run_ledge_pole(&mut storage, iterations, &mut h);
             h.0.into_iter().next().unwrap_or_default()
         })
         .map_err(|e| format!("cannot start the host twin: {e}"))?

@@ -7,7 +7,10 @@
 //!
 //! Under `qemu-system-arm -icount shift=0` each instruction advances virtual time by exactly 1 ns, so one SysTick
 //! tick is [`INSTRUCTIONS_PER_TICK`] instructions and tick counts repeat exactly from run to run: this is how the
-//! benchmark command counts on-target instructions (`bench.rs`).
+//! benchmark command counts on-target instructions (`bench/`).
+//!
+//! [`BoardClock`] is the executive's clock, shared by the flight loop and the executive benchmark: SysTick when
+//! free-running, the host's step time in lockstep.
 
 use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m::peripheral::{syst::SystClkSource, SYST};
@@ -74,5 +77,22 @@ impl SysTickClock {
 impl hal::MonotonicClock for SysTickClock {
     fn now(&mut self) -> hal::Instant {
         hal::Instant::from_micros(self.ticks() / (CORE_HZ / 1_000_000))
+    }
+}
+
+/// The executive's clock: SysTick when free-running, the host's step time in lockstep.
+pub struct BoardClock {
+    /// The free-running clock.
+    pub systick: SysTickClock,
+    /// Lockstep only: the host's time of the current step (then `now` returns it, not SysTick).
+    pub lockstep_now: Option<hal::Instant>,
+}
+
+impl hal::MonotonicClock for BoardClock {
+    fn now(&mut self) -> hal::Instant {
+        match self.lockstep_now {
+            Some(t) => t,
+            None => self.systick.now(),
+        }
     }
 }

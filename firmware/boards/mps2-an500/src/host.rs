@@ -2,9 +2,9 @@
 //! machine-readable report lines.
 //!
 //! Boot words recognised on the command line (QEMU passes `<kernel path> <append string>`):
-//! - `tetherbot.mode=bench`: run the on-target benchmark workloads (`bench.rs`), print them, exit 0;
-//!   with `tetherbot.workload=tethered_test3` instead only the opt-in test-3 planning workload
-//!   (`firmware::workload::test3`), for `tetherbot.iterations=N` iterations (default 750, Table I);
+//! - `tetherbot.mode=bench`: run the on-target benchmark workloads (`bench/`), print them, exit 0;
+//!   with `tetherbot.workload=tethered_test3` instead only the opt-in ledge-with-pole planning workload
+//!   (Table I test 3, `workloads::ledge_pole`), for `tetherbot.iterations=N` iterations (default 750, Table I);
 //! - `tetherbot.probe=panic` / `hardfault` / `watchdog`: force that fault at boot, to test that faults end the run
 //!   with a failure status and a report (used by the host's tests; harmless in flight: no semihosting host, no
 //!   command line).
@@ -27,8 +27,8 @@ pub enum BootMode {
     },
     /// The benchmark workloads.
     Bench,
-    /// Only the opt-in test-3 planning workload, this many ABIT* iterations.
-    BenchTest3 {
+    /// Only the opt-in ledge-with-pole (Table I test 3) planning workload, this many ABIT* iterations.
+    BenchLedgePole {
         /// Planner iterations.
         iterations: u32,
     },
@@ -55,9 +55,9 @@ pub fn boot_mode() -> BootMode {
     let line = buf.get(..len).unwrap_or(&[]);
     let has = |word: &[u8]| line.windows(word.len()).any(|w| w == word);
     if has(b"tetherbot.mode=bench") && has(b"tetherbot.workload=tethered_test3") {
-        BootMode::BenchTest3 {
+        BootMode::BenchLedgePole {
             iterations: number_after(line, b"tetherbot.iterations=")
-                .unwrap_or(firmware::workload::test3::TEST3_ITERATIONS),
+                .unwrap_or(workloads::ledge_pole::ITERATIONS),
         }
     } else if has(b"tetherbot.mode=bench") {
         BootMode::Bench

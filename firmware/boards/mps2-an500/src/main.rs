@@ -6,8 +6,10 @@
 //!
 //! Modules: `uart` (CMSDK UART as `hal::ByteLink`), `clock` (SysTick as `hal::MonotonicClock`), `watchdog` (CMSDK
 //! APB watchdog as `hal::Watchdog`, bite = NMI), `fault` (panic / HardFault / NMI reports over semihosting and a
-//! failure exit), `stack` (high-water mark from the paint), `storage` (statics lent once), `bench` (on-target
-//! instruction counts), `host` (semihosting command line).
+//! failure exit), `stack` (high-water mark from the paint), `storage` (statics lent once, the executive's storage),
+//! `host` (semihosting command line), `flight` (the flight loop), `bench` (on-target instruction counts: the flight
+//! code's link path and the `workloads` crate's planning workloads; boot word `tetherbot.mode=bench`). `flight` and
+//! `bench` share `clock` and `storage`; neither uses the other.
 //!
 //! `unsafe` is confined to this crate (register access, the one-time static borrow, the semihosting call) and
 //! each use carries its justification. See README.md for building, running and the measured figures.
@@ -19,7 +21,6 @@ mod clock;
 mod fault;
 mod flight;
 mod host;
-mod planning;
 mod stack;
 mod storage;
 mod uart;
@@ -45,8 +46,8 @@ fn main() -> ! {
             debug::exit(debug::EXIT_SUCCESS);
             fault::fail()
         }
-        BootMode::BenchTest3 { iterations } => {
-            bench::run_test3(&mut clock, iterations);
+        BootMode::BenchLedgePole { iterations } => {
+            bench::run_ledge_pole(&mut clock, iterations);
             debug::exit(debug::EXIT_SUCCESS);
             fault::fail()
         }

@@ -8,6 +8,12 @@ use core::cell::UnsafeCell;
 use core::mem::MaybeUninit;
 use core::sync::atomic::{AtomicBool, Ordering};
 
+use firmware::exec::ExecStorage;
+
+/// The executive's large buffers (scan reassembly, plan), lent once: to the flight loop, or in bench mode to the
+/// executive benchmark. ~130 KiB of `.bss` in SRAM.
+pub static EXEC_STORAGE: Lent<ExecStorage> = Lent::new(ExecStorage::new());
+
 /// A static value that can be borrowed mutably once, for the rest of the program.
 pub struct Lent<T> {
     taken: AtomicBool,
@@ -119,7 +125,7 @@ extern "C" {
 
 /// Zeroes the `.psram` section (see `memory.x`): statics placed there with `#[link_section = ".psram"]` must have
 /// an all-zero initial value (or be an [`UninitSlot`]). Called once at boot, before anything in `.psram` is used.
-/// Holds the benchmark's planning arenas (`planning.rs`); the executive's storage (132 KiB) stays in SRAM.
+/// Holds the benchmark's planning arenas (`bench/planning.rs`); the executive's storage (132 KiB) stays in SRAM.
 pub fn zero_psram() {
     let start = core::ptr::addr_of_mut!(__spsram);
     let end = core::ptr::addr_of_mut!(__epsram);

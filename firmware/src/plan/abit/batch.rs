@@ -6,7 +6,7 @@ use rand_core::Rng;
 
 use crate::config::abit as cfg;
 
-use crate::plan::geometric::unit_ball_measure;
+use crate::geom::unit_ball_measure;
 use crate::plan::space::{
     uniform01, Arena, GoalRegion, InformedSample, MotionValidator, OptimizationObjective, StateSpace,
     StateValidityChecker,

@@ -120,7 +120,8 @@ where
     G: GoalRegion<S>,
     R: Rng,
 {
-    pub(super) fn node(&self, i: u32) -> Option<&Node<S::State, S::Attachment>> {
+    /// The node in arena slot `i` (the index [`Node::parent`] returns), free slots included; `None` past the end.
+    pub fn node(&self, i: u32) -> Option<&Node<S::State, S::Attachment>> {
         self.arena.nodes.get(i as usize)
     }
 

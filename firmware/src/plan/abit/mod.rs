@@ -133,8 +133,6 @@ mod memo;
 mod params;
 mod queue;
 mod suspend;
-#[cfg(test)]
-mod tests;
 
 use heapless::Vec;
 use rand_core::Rng;

@@ -68,7 +68,8 @@ where
     /// Continue a suspended search where [`Self::suspend`] left it. The caller's contract: the arena is the one
     /// the search was suspended from, untouched since; the problem, the space (its map) and the validators answer
     /// as they did; `rng` continues the generator's sequence. Then the search goes on exactly as if it had never
-    /// been interrupted (`a_suspended_and_resumed_search_is_the_uninterrupted_search`, and `nav`'s tests).
+    /// been interrupted (`a_suspended_and_resumed_search_is_the_uninterrupted_search` in
+    /// `firmware/workloads/tests/abit_geometric.rs`, and `nav`'s tests).
     pub fn resume(
         arena: &'a mut AbitArena<S::State, S::Attachment, NV, NQ, NM>,
         space: &'a mut S,

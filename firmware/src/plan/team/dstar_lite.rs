@@ -36,7 +36,7 @@ const INF: Cost = Cost::INF;
 /// Every cost D* Lite handles on an octile grid — g, rhs, the heuristic, km, the keys — is such a sum, so
 /// comparing them exactly (integer arithmetic, [`Cost::cmp`]) removes the floating-point ties that can end a
 /// D* Lite search too early (an incremental replan once missed a new wall that way: regression test
-/// `km_tie_rounding_hid_a_wall` in `workload`). It is also cheaper than soft-float f64 on the Cortex-M7.
+/// `km_tie_rounding_hid_a_wall` in `workloads::team`). It is also cheaper than soft-float f64 on the Cortex-M7.
 /// Infinity is `a == i32::MAX`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Cost {

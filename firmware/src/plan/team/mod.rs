@@ -25,7 +25,6 @@ pub mod formation;
 pub mod graph;
 pub mod scene;
 pub mod score;
-pub mod workload;
 
 use crate::config::team::{TeamParams, PATH_MAX_HOPS, SURFACE_MAX_VERTICES};
 use crate::geom::{Real, Vec3};

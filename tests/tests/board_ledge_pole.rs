@@ -1,21 +1,21 @@
-//! The on-target test-3 workload (`firmware::workload::test3`, `tetherbot board bench --workload tethered_test3`)
-//! against the host: its analytic ledge + pole field against host-sim's `ledge_pole` world, its PCG-64 against
-//! `rand_pcg`, and its trial against the campaign's `run_trial` on the same seed.
+//! The on-target ledge-with-pole workload (Table I test 3: `workloads::ledge_pole`, `tetherbot board bench
+//! --workload tethered_test3`) against the host: its analytic ledge + pole field against host-sim's `ledge_pole`
+//! world, its PCG-64 against `rand_pcg`, and its trial against the campaign's `run_trial` on the same seed.
 //!
 //! The full 750-iteration comparison and the arena sizing runs are `#[ignore]`d (seconds to minutes at the test
-//! profile's opt-level 1): `cargo test --release -p tests --test board_test3 -- --ignored --nocapture`.
+//! profile's opt-level 1): `cargo test --release -p tests --test board_ledge_pole -- --ignored --nocapture`.
 
 use firmware::geom::{Real, Vec3};
 use firmware::map::{DistanceField, DistanceQuery};
 use firmware::plan::abit::AbitArena;
 use firmware::plan::tethered::{RoverState, TetherSpaceParams};
 use firmware::tether::AnchorHistory;
-use firmware::workload::ledge::LedgePole;
-use firmware::workload::test3::{self, plan_test3, Pcg64, Test3Outcome, Test3Storage};
 use host_sim::campaign::{self, CampaignSpec, TrialArena, Truth};
 use host_sim::cli::campaign::{spec_from, CampaignArgs};
 use host_sim::world::ledge::LedgeWorld;
 use rand_core::{Rng, SeedableRng};
+use workloads::ledge::Ledge;
+use workloads::ledge_pole::{self, plan_ledge_pole, LedgePoleOutcome, LedgePoleStorage, Pcg64};
 
 fn unif(r: &mut rand_pcg::Pcg64, lo: f64, hi: f64) -> f64 {
     lo + (hi - lo) * (r.next_u64() >> 11) as f64 / (1u64 << 53) as f64
@@ -38,7 +38,7 @@ fn analytic_field_equals_the_host_world_at_many_points() {
     let spec = scenario_spec(1);
     let world = Truth(spec.world.as_ref());
     let exact = LedgeWorld::with_pole();
-    let field = LedgePole::new();
+    let field = Ledge::with_pole();
     let mut r = rand_pcg::Pcg64::seed_from_u64(7);
     let (mut n, mut bit_equal, mut near) = (0usize, 0usize, 0usize);
     // Uniform points over the planning box and beyond, then points within 5 cm of the surface (lip, toe, pole,
@@ -111,23 +111,23 @@ fn pcg64_draws_what_rand_pcg_draws() {
 
 #[test]
 fn workload_problem_is_the_scenario_file() {
-    let spec = scenario_spec(test3::TEST3_ITERATIONS);
-    assert_eq!(spec.root, test3::ROOT_ANCHOR);
-    assert_eq!(spec.start, test3::START);
-    assert_eq!(spec.start_yaw_deg, test3::START_YAW_DEG);
-    assert_eq!(spec.goal, test3::GOAL);
-    assert_eq!(spec.goal_tolerance_m, test3::GOAL_TOLERANCE_M);
-    assert_eq!(spec.bounds.min, test3::bounds().min);
-    assert_eq!(spec.bounds.max, test3::bounds().max);
-    assert_eq!(spec.iterations, test3::TEST3_ITERATIONS);
-    assert_eq!(spec.first_seed, test3::TEST3_SEED);
-    assert_eq!(spec.abit, test3::abit_params());
+    let spec = scenario_spec(ledge_pole::ITERATIONS);
+    assert_eq!(spec.root, ledge_pole::ROOT_ANCHOR);
+    assert_eq!(spec.start, ledge_pole::START);
+    assert_eq!(spec.start_yaw_deg, ledge_pole::START_YAW_DEG);
+    assert_eq!(spec.goal, ledge_pole::GOAL);
+    assert_eq!(spec.goal_tolerance_m, ledge_pole::GOAL_TOLERANCE_M);
+    assert_eq!(spec.bounds.min, ledge_pole::bounds().min);
+    assert_eq!(spec.bounds.max, ledge_pole::bounds().max);
+    assert_eq!(spec.iterations, ledge_pole::ITERATIONS);
+    assert_eq!(spec.first_seed, ledge_pole::SEED);
+    assert_eq!(spec.abit, ledge_pole::abit_params());
     assert_eq!(spec.params, TetherSpaceParams::DEFAULT);
     assert_eq!(campaign::planning_rover(&spec), firmware::config::rover::RoverParams::AXEL);
 }
 
 /// The campaign's trial (its own construction code, `run_trial`) and the workload's, compared field by field.
-fn assert_same_trial(c: &campaign::TrialResult, w: &Test3Outcome) {
+fn assert_same_trial(c: &campaign::TrialResult, w: &LedgePoleOutcome) {
     assert_eq!(c.found, w.found);
     assert_eq!(c.first_iteration.unwrap_or(0), w.counters.first_solution_iteration);
     assert_eq!(c.final_cost.map(f64::to_bits), w.cost.map(f64::to_bits));
@@ -149,23 +149,23 @@ fn on_big_stack<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> T 
     std::thread::Builder::new().stack_size(256 << 20).spawn(f).unwrap().join().unwrap()
 }
 
-fn compare_with_campaign(iterations: u32) -> Test3Outcome {
+fn compare_with_campaign(iterations: u32) -> LedgePoleOutcome {
     on_big_stack(move || compare_with_campaign_inner(iterations))
 }
 
-fn compare_with_campaign_inner(iterations: u32) -> Test3Outcome {
+fn compare_with_campaign_inner(iterations: u32) -> LedgePoleOutcome {
     let spec = scenario_spec(iterations);
-    let field = LedgePole::new();
+    let field = Ledge::with_pole();
     let mut trial_arena: Box<TrialArena> = Box::default();
     // The campaign planning on the scenario's own world (--field truth) ...
     let on_world = campaign::run_trial(&Truth(spec.world.as_ref()), &spec, 0, &mut trial_arena).unwrap();
     // ... and on the fixture: the same trial.
     let on_fixture = campaign::run_trial(&field, &spec, 0, &mut trial_arena).unwrap();
     // The workload, with the board's capacities.
-    let mut storage: Box<Test3Storage> = Box::default();
-    let Test3Storage { arena, path } = &mut *storage;
-    let w = plan_test3(&field, arena, path, iterations, spec.first_seed).unwrap();
-    eprintln!("{}", test3::summary(&Ok(w)));
+    let mut storage: Box<LedgePoleStorage> = Box::default();
+    let LedgePoleStorage { arena, path } = &mut *storage;
+    let w = plan_ledge_pole(&field, arena, path, iterations, spec.first_seed).unwrap();
+    eprintln!("{}", ledge_pole::summary(&Ok(w)));
     assert_same_trial(&on_world, &w);
     assert_same_trial(&on_fixture, &w);
     // the paths too
@@ -189,12 +189,12 @@ fn workload_trial_equals_the_campaign_trial_short() {
 #[test]
 #[ignore = "slow at opt-level 1; run with --release -- --ignored"]
 fn workload_trial_equals_the_campaign_trial_750() {
-    let w = compare_with_campaign(test3::TEST3_ITERATIONS);
-    assert_eq!(w.counters.iterations, test3::TEST3_ITERATIONS);
+    let w = compare_with_campaign(ledge_pole::ITERATIONS);
+    assert_eq!(w.counters.iterations, ledge_pole::ITERATIONS);
 }
 
 /// Arena high-water marks over seeds 1-`TETHERBOT_TEST3_SEEDS` (default 20) with the campaign's big arena, for
-/// sizing `config::workload`; fails if a seed exceeds the workload's capacities.
+/// sizing `workloads::config`; fails if a seed exceeds the workload's capacities.
 #[test]
 #[ignore = "sizing run; --release -- --ignored --nocapture"]
 fn arena_high_water_over_seeds() {
@@ -202,22 +202,22 @@ fn arena_high_water_over_seeds() {
 }
 
 fn arena_high_water_inner() {
-    use firmware::config::workload::*;
+    use workloads::config::*;
     let seeds: u64 = std::env::var("TETHERBOT_TEST3_SEEDS").ok().and_then(|s| s.parse().ok()).unwrap_or(20);
-    let field = LedgePole::new();
+    let field = Ledge::with_pole();
     let mut arena: Box<AbitArena<RoverState, AnchorHistory, 4096, 32768, 16384>> = Box::default();
     let mut path: Box<heapless::Vec<(RoverState, AnchorHistory), 256>> = Box::default();
     let (mut nodes, mut queue, mut memo, mut plen) = (0, 0, 0, 0);
     for seed in 1..=seeds {
-        let w = plan_test3(&field, &mut arena, &mut path, test3::TEST3_ITERATIONS, seed).unwrap();
-        eprintln!("seed {seed}: {}", test3::summary(&Ok(w)));
+        let w = plan_ledge_pole(&field, &mut arena, &mut path, ledge_pole::ITERATIONS, seed).unwrap();
+        eprintln!("seed {seed}: {}", ledge_pole::summary(&Ok(w)));
         nodes = nodes.max(w.arena.nodes);
         queue = queue.max(w.arena.queue);
         memo = memo.max(w.arena.memo);
         plen = plen.max(w.path_states);
     }
     eprintln!("high water over seeds 1-{seeds}: nodes {nodes} queue {queue} memo {memo} path {plen}");
-    assert!(nodes <= TEST3_NODE_CAPACITY && queue <= TEST3_EDGE_QUEUE_CAPACITY);
-    assert!(memo <= TEST3_EDGE_MEMO_CAPACITY && plen <= TEST3_PATH_CAPACITY);
+    assert!(nodes <= LEDGE_POLE_NODE_CAPACITY && queue <= LEDGE_POLE_EDGE_QUEUE_CAPACITY);
+    assert!(memo <= LEDGE_POLE_EDGE_MEMO_CAPACITY && plen <= LEDGE_POLE_PATH_CAPACITY);
 }
 

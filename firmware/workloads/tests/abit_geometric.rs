@@ -1,17 +1,21 @@
-extern crate std;
-use std::boxed::Box;
+//! ABIT* (`firmware::plan::abit`) on the R^n box-obstacle test problems of [`workloads::geometric`] and on a
+//! non-Markovian toy problem (Paton et al. Fig. 7): paths, costs, budgets, typed outcomes, determinism,
+//! suspend/resume, and the attachment mechanisms of section V-A. Through the planner's public API only: the test
+//! problems are not flight code, so these tests live with them, outside the flight crate.
+
 use std::vec::Vec as StdVec;
 
-use rand_core::SeedableRng;
+use heapless::Vec;
+use rand_core::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 
-use super::graph::F_GOAL;
-use super::*;
-use crate::plan::geometric::{
-    box_world_3d, wall_gap, wall_gap_optimal_cost, BoxObstacles, GeometricProblem, RealVectorSpace,
+use firmware::plan::abit::{AbitArena, AbitParams, AbitStar, DefaultAbitArena};
+use firmware::plan::space::{
+    uniform01, Arena, Budget, BudgetKind, CatchSample, GoalState, InvalidInput, MotionCheck, MotionValidator, PathLength,
+    Planner, PlannerStatus, ProblemDefinition, SolveReport, StateSpace, StateValidityChecker, StepOutcome, Termination,
 };
-use crate::plan::space::{
-    uniform01, Arena, Budget, BudgetKind, CatchSample, GoalState, MotionCheck, PathLength, SolveReport, Termination,
+use workloads::geometric::{
+    box_world_3d, wall_gap, wall_gap_optimal_cost, Aabb, BoxObstacles, GeometricProblem, RealVectorSpace,
 };
 
 type Pdef<const N: usize> = ProblemDefinition<RealVectorSpace<N>, GoalState<[f64; N]>, PathLength>;
@@ -322,8 +326,7 @@ fn no_solution_within_budget_when_walled_off() {
 struct Anchored {
     inner: RealVectorSpace<2>,
 }
-const COLUMN: crate::plan::geometric::Aabb<2> =
-    crate::plan::geometric::Aabb { lo: [-1.0, 0.6], hi: [-0.8, 0.8] };
+const COLUMN: Aabb<2> = Aabb { lo: [-1.0, 0.6], hi: [-0.8, 0.8] };
 
 impl StateSpace for Anchored {
     type State = [f64; 2];
@@ -406,10 +409,14 @@ fn anchored_runs(params: AbitParams, seeds: u64, iterations: u32) -> usize {
         let mut rng = Pcg64::seed_from_u64(seed);
         let mut planner = AbitStar::new(&mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, params);
         let report = planner.solve(&Budget::iterations(iterations));
-        // Invariant: every tree vertex's attachment is what the motion from its parent gives.
-        let nodes: StdVec<_> = planner.arena.nodes.iter().cloned().collect();
-        for n in nodes.iter().filter(|n| n.in_tree() && !n.has(F_START) && !n.has(F_FREE)) {
-            let p = &nodes[n.parent as usize];
+        // Invariant: every tree vertex's attachment is what the motion from its parent gives; the only tree vertex
+        // without a parent is the root.
+        for n in planner.nodes().filter(|n| n.in_tree()) {
+            let Some(parent) = n.parent() else {
+                assert!(n.state == pd.start && n.attachment == Some(pd.start_attachment), "a parentless tree vertex");
+                continue;
+            };
+            let p = planner.node(parent).expect("the parent is in the arena");
             let expect = motion_attachment(&p.state, p.attachment.unwrap(), &n.state);
             assert_eq!(expect, n.attachment, "vertex attachment disagrees with its parent's motion");
         }
@@ -484,13 +491,13 @@ fn a_sample_that_copied_an_attachment_is_checked_with_it() {
         "{:?}",
         report.counters
     );
-    // Samples not (yet) connected, by where they stand and the history they copied.
+    // Samples not (yet) connected (live, off the tree, neither the start nor a goal vertex), by where they stand and
+    // the history they copied.
     let (mut slope_unanchored, mut elsewhere_unanchored) = (0, 0);
-    for n in planner.arena.nodes.iter() {
+    for n in planner.nodes() {
         if n.in_tree()
-            || n.has(F_FREE)
-            || n.has(F_GOAL)
-            || n.has(F_START)
+            || n.state == pd.goal.state
+            || n.state == pd.start
             || n.attachment != Some(false)
         {
             continue;

@@ -1,6 +1,7 @@
 //! Geometric planning problems in R^n with axis-aligned box obstacles: the shared benchmark problems of the
 //! ABIT* side-by-side with OMPL (issue 6, "a wall with a narrow offset gap in R^2, R^4 and R^8 and a 3D box
-//! world") and the planner's own tests.
+//! world") and the planner's own tests (`firmware/workloads/tests/abit_geometric.rs`). Test problems, not flight
+//! code: they implement `firmware::plan::space`'s traits from outside the flight crate.
 //!
 //! - [`RealVectorSpace`]: R^N in a box, Euclidean metric, linear interpolation, uniform sampling and the direct
 //!   informed sampler of the prolate hyperspheroid (Gammell, Barfoot, Srinivasa, IROS 2014 / TPAMI 2018), with
@@ -15,7 +16,8 @@
 use heapless::Vec;
 use rand_core::Rng;
 
-use super::space::{
+use firmware::geom::unit_ball_measure;
+use firmware::plan::space::{
     standard_normal, uniform01, InformedSample, MotionCheck, MotionValidator, StateSpace, StateValidityChecker,
 };
 
@@ -40,12 +42,6 @@ impl<const N: usize> RealVectorSpace<N> {
     pub fn contains(&self, x: &[f64; N]) -> bool {
         x.iter().zip(self.lo.iter().zip(self.hi.iter())).all(|(v, (l, h))| *v >= *l && *v <= *h)
     }
-}
-
-/// Measure of the unit n-ball, pi^(n/2) / Gamma(n/2 + 1).
-pub fn unit_ball_measure(n: usize) -> f64 {
-    let half = n as f64 / 2.0;
-    libm::pow(core::f64::consts::PI, half) / libm::tgamma(half + 1.0)
 }
 
 impl<const N: usize> StateSpace for RealVectorSpace<N> {

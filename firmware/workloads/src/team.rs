@@ -1,13 +1,15 @@
-//! Deterministic workloads for on-target cost figures (instruction counts on the emulated Cortex-M7) and host
-//! benchmarks: a synthetic scan of a rough 60-degree slope for one local plan, and the crevasse replan of Fig. 12
-//! on a 64 x 64 grid of scenes for D* Lite. Everything is computed with `libm`, so the inputs are bit-identical on
-//! every target. A board calls these with its static arenas (a [`DefaultLocalPlanner`](super::DefaultLocalPlanner)
-//! is ~0.6 MiB, a [`DStarArena`] of 4096 cells ~210 KiB).
+//! Deterministic workloads of the climbing-team planners ([`firmware::plan::team`], Morad et al.) for on-target
+//! cost figures (instruction counts on the emulated Cortex-M7) and host benchmarks: a synthetic scan of a rough
+//! 60-degree slope for one local plan, and the crevasse replan of Fig. 12 on a 64 x 64 grid of scenes for D* Lite.
+//! Everything is computed with `libm`, so the inputs are bit-identical on every target. A board calls these with
+//! its static arenas (a [`DefaultLocalPlanner`](firmware::plan::team::DefaultLocalPlanner) is ~0.6 MiB, a
+//! [`DStarArena`] of 4096 cells ~210 KiB).
 
-use super::dstar_lite::{DStarArena, DStarError, DStarLite, DStarOutcome};
-use super::{LocalPlan, LocalPlanner};
-use crate::config::team::{TeamParams, GLOBAL_GRID_MAX_CELLS};
-use crate::geom::{Real, Vec3};
+use firmware::config::team::{TeamParams, GLOBAL_GRID_MAX_CELLS};
+use firmware::geom::{Real, Vec3};
+use firmware::plan::team::dstar_lite::{DStarArena, DStarError, DStarLite, DStarOutcome};
+use firmware::plan::team::scene::SceneError;
+use firmware::plan::team::{LocalPlan, LocalPlanner};
 
 /// Points per side of the synthetic scan (48 x 48 = 2304 points, 1 m apart).
 pub const SCAN_SIDE: usize = 48;
@@ -29,7 +31,7 @@ pub fn synthetic_scan(out: &mut [Vec3]) -> usize {
 pub fn local_plan_workload<const P: usize, const V: usize, const E: usize>(
     planner: &mut LocalPlanner<P, V, E>,
     scan: &[Vec3],
-) -> Result<LocalPlan, super::scene::SceneError> {
+) -> Result<LocalPlan, SceneError> {
     let up = Vec3::new(0.0, -0.866, 0.5);
     let robot = Vec3::new(0.0, -20.0, -34.64);
     let goal = Vec3::new(0.0, 0.0, 0.0);
@@ -62,10 +64,9 @@ pub fn dstar_workload(arena: &mut DStarArena<GLOBAL_GRID_MAX_CELLS>) -> Result<D
 
 #[cfg(test)]
 mod tests {
-    extern crate std;
-    use super::super::astar::AStarStatus;
-    use super::super::DefaultLocalPlanner;
     use super::*;
+    use firmware::plan::team::astar::AStarStatus;
+    use firmware::plan::team::DefaultLocalPlanner;
     use std::boxed::Box;
 
     #[test]
@@ -78,7 +79,7 @@ mod tests {
         // 40 m with 9.5 m hops needs at least 5 anchors (start included); the end is near the goal
         assert!(plan.hops.len() >= 5, "{} anchors", plan.hops.len());
         let end = plan.hops.last().unwrap();
-        assert!(crate::geom::norm3(end) < 6.0, "ends {} m from the goal", crate::geom::norm3(end));
+        assert!(firmware::geom::norm3(end) < 6.0, "ends {} m from the goal", firmware::geom::norm3(end));
         let mut a: Box<DStarArena<GLOBAL_GRID_MAX_CELLS>> = Box::default();
         let out = dstar_workload(&mut a).unwrap();
         std::eprintln!("dstar workload: {out:?}");
@@ -95,11 +96,10 @@ mod tests {
 }
 #[cfg(test)]
 mod regression {
-    extern crate std;
     use super::*;
     use std::boxed::Box;
 
-    /// Found by `firmware::workload`'s determinism test: a second planner on a reused arena saw the first
+    /// Found by the workloads' determinism test (`workloads_do_real_work` in the crate root): a second planner on a reused arena saw the first
     /// planner's epoch stamps as its own and returned `NoPath` with zero expansions.
     #[test]
     fn reused_arena_gives_the_same_answer() {

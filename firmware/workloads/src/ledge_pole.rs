@@ -1,17 +1,18 @@
-//! `tethered_test3`: one trial of Paton et al.'s Table I test 3 (section VI-A; `shared/SCENARIOS.md` section A)
-//! on the flight computer: ABIT* ([`crate::plan::abit`]) over the tether-aware space ([`crate::plan::tethered`])
-//! on the exact ledge + pole world ([`super::ledge::LedgePole`]), 750 iterations, seed 1.
+//! The ledge-with-pole planning workload, `tethered_test3` in the bench output: one trial of Paton et al.'s Table I
+//! test 3 (section VI-A; `shared/SCENARIOS.md` section A), the ledge with a pole the tether must wrap, on the
+//! flight computer: ABIT* ([`firmware::plan::abit`]) over the tether-aware space ([`firmware::plan::tethered`])
+//! on the exact ledge + pole world ([`Ledge::with_pole`]), 750 iterations, seed 1.
 //!
 //! The problem is built exactly as host-sim's campaign builds a trial of `host-sim/scenarios/ledge_test3.toml`
 //! planning on the exact world (`tetherbot campaign ledge_test3 --field truth`, `campaign::run_trial`): the same
 //! start, yaw, root anchor, goal, tolerance and bounds (as f64 constants cast to `f32` the same way), Axel's rover
 //! model, [`TetherSpaceParams::DEFAULT`], OMPL's ABIT* defaults with history twins, and the campaign's generator,
 //! PCG-64 (`rand_pcg::Pcg64`, re-implemented here as [`Pcg64`] because the core keeps rand_pcg a host-only
-//! dependency) seeded with `seed_from_u64(seed)`. `tests/tests/board_test3.rs` checks that the campaign's
-//! `run_trial` and [`plan_test3`] give the same trial.
+//! dependency) seeded with `seed_from_u64(seed)`. `tests/tests/board_ledge_pole.rs` checks that the campaign's
+//! `run_trial` and [`plan_ledge_pole`] give the same trial.
 //!
-//! Parameters: [`TEST3_ITERATIONS`] = 750 (Table I), [`TEST3_SEED`] = 1 (the scenario's `seeds.planner`);
-//! capacities in `config::workload` (512 nodes, 2048 queued edges, 1024 memo entries, 64 path states).
+//! Parameters: [`ITERATIONS`] = 750 (Table I), [`SEED`] = 1 (the scenario's `seeds.planner`);
+//! capacities in [`crate::config`] (512 nodes, 2048 queued edges, 1024 memo entries, 64 path states).
 //!
 //! It is opt-in on the board (it costs tens of billions of instructions under QEMU): run it with
 //! `cargo run -p host-sim --bin tetherbot -- board bench --build --workload tethered_test3 [--iterations N]`;
@@ -30,7 +31,7 @@
 //! | `-C target-cpu=cortex-m7` (double-precision FPU) | 64 184 662 000 | 85 579 549 | 16 767 153 | 234 s |
 //!
 //! Short variant, 30 iterations: 60.6 G instructions soft-float, 6.06 G with the DP FPU (the first batch's
-//! sampling front-loads the cost). Stack high water 81 456 B (of 256 KiB). Storage ([`Test3Storage`], board
+//! sampling front-loads the cost). Stack high water 81 456 B (of 256 KiB). Storage ([`LedgePoleStorage`], board
 //! `size_of`): 1 498 400 B (arena 1 441 816 B, path 56 580 B), in SRAM `.uninit` on the board.
 
 use core::convert::Infallible;
@@ -38,26 +39,27 @@ use core::fmt::Write;
 
 use rand_core::{SeedableRng, TryRng};
 
-use crate::config::rover::RoverParams;
-use crate::config::workload::{
-    TEST3_EDGE_MEMO_CAPACITY, TEST3_EDGE_QUEUE_CAPACITY, TEST3_NODE_CAPACITY, TEST3_PATH_CAPACITY,
-};
-use crate::geom::{Real, Vec3};
-use crate::map::DistanceField;
-use crate::plan::abit::{AbitArena, AbitParams, AbitStar, ArenaUse, PathError};
-use crate::plan::space::{Budget, Counters, GoalState, Planner, ProblemDefinition, Termination};
-use crate::plan::tethered::{
+use firmware::config::rover::RoverParams;
+use firmware::geom::{Real, Vec3};
+use firmware::map::DistanceField;
+use firmware::plan::abit::{AbitArena, AbitParams, AbitStar, ArenaUse, PathError};
+use firmware::plan::space::{Budget, Counters, GoalState, Planner, ProblemDefinition, Termination};
+use firmware::plan::tethered::{
     MotionStats, PlanBounds, RoverState, TetherMotionValidator, TetherObjective, TetherSpace, TetherSpaceParams,
     TetherValidity,
 };
-use crate::tether::{Anchor, AnchorHistory};
+use firmware::tether::{Anchor, AnchorHistory};
 
-use super::{Harness, Summary};
+use crate::config::{
+    LEDGE_POLE_EDGE_MEMO_CAPACITY, LEDGE_POLE_EDGE_QUEUE_CAPACITY, LEDGE_POLE_NODE_CAPACITY, LEDGE_POLE_PATH_CAPACITY,
+};
+use crate::ledge::Ledge;
+use crate::{Harness, Summary};
 
 /// Iterations of the workload (Paton et al. Table I: 750).
-pub const TEST3_ITERATIONS: u32 = 750;
+pub const ITERATIONS: u32 = 750;
 /// Planner seed (`ledge_test3.toml`'s `seeds.planner`, the campaign's first trial).
-pub const TEST3_SEED: u64 = 1;
+pub const SEED: u64 = 1;
 /// Start position (axle centre; settled on the ledge top below it), `rover.start`.
 pub const START: [f64; 3] = [-1.5, 0.0, 4.35];
 /// Start yaw, degrees (facing +x, down the slope), `rover.yaw_deg`.
@@ -73,30 +75,35 @@ pub const BOUNDS_MIN: [f64; 3] = [-5.0, -5.0, -0.5];
 /// Upper corner of the planning bounds, `plan.bounds_max`.
 pub const BOUNDS_MAX: [f64; 3] = [7.5, 5.0, 7.5];
 
-/// The planner arena of the workload (capacities from `config::workload`).
-pub type Test3Arena =
-    AbitArena<RoverState, AnchorHistory, TEST3_NODE_CAPACITY, TEST3_EDGE_QUEUE_CAPACITY, TEST3_EDGE_MEMO_CAPACITY>;
+/// The planner arena of the workload (capacities from [`crate::config`]).
+pub type LedgePoleArena = AbitArena<
+    RoverState,
+    AnchorHistory,
+    LEDGE_POLE_NODE_CAPACITY,
+    LEDGE_POLE_EDGE_QUEUE_CAPACITY,
+    LEDGE_POLE_EDGE_MEMO_CAPACITY,
+>;
 
 /// A returned path: states with their anchor histories.
-pub type Test3Path = heapless::Vec<(RoverState, AnchorHistory), TEST3_PATH_CAPACITY>;
+pub type LedgePolePath = heapless::Vec<(RoverState, AnchorHistory), LEDGE_POLE_PATH_CAPACITY>;
 
 /// The storage of the workload, lent by the caller (a `.psram` static on the board, a box on the host). Its empty
 /// state is all zero bytes.
-pub struct Test3Storage {
+pub struct LedgePoleStorage {
     /// ABIT* arena.
-    pub arena: Test3Arena,
+    pub arena: LedgePoleArena,
     /// The best path after the budget.
-    pub path: Test3Path,
+    pub path: LedgePolePath,
 }
 
-impl Test3Storage {
+impl LedgePoleStorage {
     /// Empty storage (const, for a static).
     pub const fn new() -> Self {
         Self { arena: AbitArena::new(), path: heapless::Vec::new() }
     }
 }
 
-impl Default for Test3Storage {
+impl Default for LedgePoleStorage {
     fn default() -> Self {
         Self::new()
     }
@@ -177,7 +184,7 @@ pub fn abit_params() -> AbitParams {
 
 /// Why the problem could not be set up.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Test3Error {
+pub enum LedgePoleError {
     /// The space rejected a parameter: (field, reason).
     Space(&'static str, &'static str),
     /// The start did not settle.
@@ -188,7 +195,7 @@ pub enum Test3Error {
 
 /// The outcome of one trial.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Test3Outcome {
+pub struct LedgePoleOutcome {
     /// An exact solution was found.
     pub found: bool,
     /// Cost of the best path after the budget (when found).
@@ -209,22 +216,22 @@ pub struct Test3Outcome {
     pub path_error: Option<PathError>,
 }
 
-/// Plans test 3 on `field` with `iterations` iterations and planner seed `seed`, in `arena`; the best path is
+/// Plans the ledge-with-pole problem (test 3) on `field` with `iterations` iterations and planner seed `seed`, in `arena`; the best path is
 /// written to `path`. Mirrors host-sim's `campaign::run_trial`.
-pub fn plan_test3<D: DistanceField, const NV: usize, const NQ: usize, const NM: usize, const NP: usize>(
+pub fn plan_ledge_pole<D: DistanceField, const NV: usize, const NQ: usize, const NM: usize, const NP: usize>(
     field: &D,
     arena: &mut AbitArena<RoverState, AnchorHistory, NV, NQ, NM>,
     path: &mut heapless::Vec<(RoverState, AnchorHistory), NP>,
     iterations: u32,
     seed: u64,
-) -> Result<Test3Outcome, Test3Error> {
+) -> Result<LedgePoleOutcome, LedgePoleError> {
     let mut space = TetherSpace::new(field, bounds(), RoverParams::AXEL, TetherSpaceParams::DEFAULT)
-        .map_err(|(f, r)| Test3Error::Space(f, r))?;
+        .map_err(|(f, r)| LedgePoleError::Space(f, r))?;
     let yaw = START_YAW_DEG.to_radians() as Real;
     let start = space
         .settle_state(START[0] as Real, START[1] as Real, yaw)
-        .map_err(|_| Test3Error::StartDoesNotSettle)?;
-    let goal = space.goal_state(v3(GOAL), 0.0).map_err(|_| Test3Error::GoalDoesNotSettle)?;
+        .map_err(|_| LedgePoleError::StartDoesNotSettle)?;
+    let goal = space.goal_state(v3(GOAL), 0.0).map_err(|_| LedgePoleError::GoalDoesNotSettle)?;
     let pdef = ProblemDefinition {
         start,
         start_attachment: AnchorHistory::new(Anchor::root(v3(ROOT_ANCHOR))),
@@ -240,7 +247,7 @@ pub fn plan_test3<D: DistanceField, const NV: usize, const NQ: usize, const NM: 
     let cost = found.then(|| planner.best_cost());
     let arena_use = planner.arena_use();
     drop(planner);
-    Ok(Test3Outcome {
+    Ok(LedgePoleOutcome {
         found,
         cost,
         counters: report.counters,
@@ -254,7 +261,7 @@ pub fn plan_test3<D: DistanceField, const NV: usize, const NQ: usize, const NM: 
 }
 
 /// The workload's one-line summary of an outcome (equal text on host and board means equal bits).
-pub fn summary(out: &Result<Test3Outcome, Test3Error>) -> Summary {
+pub fn summary(out: &Result<LedgePoleOutcome, LedgePoleError>) -> Summary {
     let mut s = Summary::new();
     // A summary longer than the capacity is cut.
     let _ = match out {
@@ -282,15 +289,16 @@ pub fn summary(out: &Result<Test3Outcome, Test3Error>) -> Summary {
     s
 }
 
-/// Name of the workload in the bench output.
-pub const TEST3_NAME: &str = "tethered_test3";
+/// Name of the workload in the bench output and on the command line (`--workload tethered_test3`, the boot word
+/// `tetherbot.workload=tethered_test3`).
+pub const NAME: &str = "tethered_test3";
 
-/// Runs the workload (`iterations` iterations, seed [`TEST3_SEED`]) on the exact ledge + pole world, timed by
-/// `h`, and reports its summary as [`TEST3_NAME`].
-pub fn run_test3(storage: &mut Test3Storage, iterations: u32, h: &mut impl Harness) {
-    let field = super::ledge::LedgePole::new();
-    let mut out = Err(Test3Error::StartDoesNotSettle);
-    let Test3Storage { arena, path } = storage;
-    h.measure(TEST3_NAME, &mut || out = plan_test3(&field, arena, path, iterations, TEST3_SEED));
-    h.result(TEST3_NAME, &summary(&out));
+/// Runs the workload (`iterations` iterations, seed [`SEED`]) on the exact ledge + pole world, timed by
+/// `h`, and reports its summary as [`NAME`].
+pub fn run_ledge_pole(storage: &mut LedgePoleStorage, iterations: u32, h: &mut impl Harness) {
+    let field = Ledge::with_pole();
+    let mut out = Err(LedgePoleError::StartDoesNotSettle);
+    let LedgePoleStorage { arena, path } = storage;
+    h.measure(NAME, &mut || out = plan_ledge_pole(&field, arena, path, iterations, SEED));
+    h.result(NAME, &summary(&out));
 }

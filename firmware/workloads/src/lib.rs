@@ -1,17 +1,30 @@
+//! # workloads — fixed benchmark workloads and test problems for the flight software (not flight code)
+//!
 //! Fixed, deterministic planning workloads for on-target cost figures (instruction counts on the emulated
 //! Cortex-M7, `tetherbot board bench`) and their host twins (the same code, run by the unit tests below and by
-//! `tetherbot board bench` to check that the board computed the same answer).
+//! `tetherbot board bench` to check that the board computed the same answer), and the test problems the planners
+//! are checked and benchmarked on. Nothing here flies: the board crate links it for its bench mode only, the
+//! host for its tests, benchmarks and the board comparison. `no_std`, no heap, no panics, like `firmware`, so the
+//! same code runs on the board and on the host.
+//!
+//! - [`geometric`]: R^n with axis-aligned box obstacles, the shared ABIT* benchmark problems (wall with a gap,
+//!   3D box world) and the planner's tests (`tests/abit_geometric.rs`).
+//! - [`ledge`]: the ledge world of Paton et al. VI-A (with or without the test-3 pole) as an exact analytic
+//!   distance field; host-sim's ledge worlds wrap it.
+//! - [`ledge_pole`]: the opt-in `tethered_test3` workload (Table I test 3 on the board).
+//! - [`team`]: the climbing-team workloads (a synthetic scan, a local plan, a D* Lite replan).
+//! - [`config`]: the workloads' own capacities (fixtures, not flight settings).
 //!
 //! Workloads (all inputs are constants; the only randomness is [`SplitMix64`] with a fixed seed):
 //!
 //! | name | what | paper |
 //! |---|---|---|
-//! | `settle_plane_30deg` | [`crate::rover::settle`] on an exact inclined plane ([`InclinedPlane`], 30 deg) | Paton et al. IV-B |
-//! | `predict_anchors_step_lip` | [`crate::tether::predict_anchors`] over a 4 m step ([`Step`]): the tether attaches on the lip | Paton et al. Alg. 1 |
-//! | `pose_stability_plane_30deg` | [`crate::rover::check_pose_stability`] of the settled pose, tether to an anchor upslope | Paton et al. IV-C |
-//! | `abit_wall_gap_r2` | ABIT* on [`crate::plan::geometric::wall_gap`] in R^2, [`ABIT_ITERATIONS`] iterations, seed [`ABIT_SEED`] | Strub & Gammell |
-//! | `team_local_plan` | [`crate::plan::team::workload::local_plan_workload`] (scan, cull, hop graph, A*) | Morad et al. |
-//! | `team_dstar_replan` | [`crate::plan::team::workload::dstar_workload`] (plan, move, crevasse, replan) | Morad et al. |
+//! | `settle_plane_30deg` | [`firmware::rover::settle`] on an exact inclined plane ([`InclinedPlane`], 30 deg) | Paton et al. IV-B |
+//! | `predict_anchors_step_lip` | [`firmware::tether::predict_anchors`] over a 4 m step ([`Step`]): the tether attaches on the lip | Paton et al. Alg. 1 |
+//! | `pose_stability_plane_30deg` | [`firmware::rover::check_pose_stability`] of the settled pose, tether to an anchor upslope | Paton et al. IV-C |
+//! | `abit_wall_gap_r2` | ABIT* on [`geometric::wall_gap`] in R^2, [`ABIT_ITERATIONS`] iterations, seed [`ABIT_SEED`] | Strub & Gammell |
+//! | `team_local_plan` | [`team::local_plan_workload`] (scan, cull, hop graph, A*) | Morad et al. |
+//! | `team_dstar_replan` | [`team::dstar_workload`] (plan, move, crevasse, replan) | Morad et al. |
 //! | `homotopy_btm_build_c` | BTM of scenario C's plane (two triangular obstacles) | Tanner et al. IV |
 //! | `homotopy_preplan_c` | Alg. 1 pre-planning a0 -> g on scenario C | Tanner et al. Alg. 1 |
 //!
@@ -19,38 +32,56 @@
 //!
 //! | name | what | paper |
 //! |---|---|---|
-//! | `tethered_test3` | [`test3::run_test3`]: ABIT* over the tether-aware space on the exact ledge + pole world ([`ledge::LedgePole`]), Table I test 3, 750 iterations, seed 1 | Paton et al. V, VI-A |
+//! | `tethered_test3` | [`ledge_pole::run_ledge_pole`]: ABIT* over the tether-aware space on the exact ledge + pole world ([`ledge::Ledge::with_pole`]), Table I test 3, 750 iterations, seed 1 | Paton et al. V, VI-A |
 //!
 //! Run it on the emulated board with `tetherbot board bench --build --workload tethered_test3` (see
-//! [`test3`] and `host-sim/doc/board_test3.md` for the measured instruction counts and arena sizes).
+//! [`ledge_pole`] and `host-sim/doc/board_test3.md` for the measured instruction counts and arena sizes).
 //!
 //! Each workload's outcome is condensed into a one-line [`Summary`] whose floats are printed with `{}` (the
 //! shortest decimal that round-trips, so two summaries are equal exactly when the bits are). A [`Harness`] times
 //! the work (the board: SysTick under `-icount shift=0`; the host: nothing) and receives the summaries.
 //! The big arenas are lent by the caller in [`Arenas`] (statics on the board, boxes on the host).
+#![no_std]
+#![forbid(unsafe_code)]
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing
+    )
+)]
 
-use core::convert::Infallible;
+#[cfg(test)]
+extern crate std;
+
 use core::fmt::Write;
 
-use crate::config::rover::RoverParams;
-use crate::config::team::GLOBAL_GRID_MAX_CELLS;
-use crate::geom::{Real, Vec3};
-use crate::map::{DistanceField, DistanceQuery};
-use crate::plan::abit::{AbitParams, AbitStar, DefaultAbitArena};
-use crate::plan::geometric::wall_gap;
-use crate::plan::homotopy::plan::PlanReport;
-use crate::plan::homotopy::terrain::{HoldModel, SoilMap};
-use crate::plan::homotopy::{preplan, Btm, PlannerParams, Workspace};
-use crate::plan::space::{Budget, GoalState, PathLength, Planner, PlannerStatus, ProblemDefinition};
-use crate::plan::team::dstar_lite::{DStarArena, DStarOutcome};
-use crate::plan::team::workload::{dstar_workload, local_plan_workload, synthetic_scan, SCAN_SIDE};
-use crate::plan::team::DefaultLocalPlanner;
-use crate::rover::{check_pose_stability, settle, SettleOutcome};
-use crate::stability::StabilityOutcome;
-use crate::tether::{predict_anchors, Anchor, AnchorHistory};
+use firmware::config::rover::RoverParams;
+use firmware::config::team::GLOBAL_GRID_MAX_CELLS;
+use firmware::geom::{Real, Vec3};
+use firmware::map::{DistanceField, DistanceQuery};
+use firmware::plan::abit::{AbitParams, AbitStar, DefaultAbitArena};
+use firmware::plan::homotopy::plan::PlanReport;
+use firmware::plan::homotopy::terrain::{HoldModel, SoilMap};
+use firmware::plan::homotopy::{preplan, Btm, PlannerParams, Workspace};
+use firmware::plan::space::{Budget, GoalState, PathLength, Planner, PlannerStatus, ProblemDefinition};
+use firmware::plan::team::dstar_lite::{DStarArena, DStarOutcome};
+use firmware::plan::team::DefaultLocalPlanner;
+use firmware::plan::SplitMix64;
+use firmware::rover::{check_pose_stability, settle, SettleOutcome};
+use firmware::stability::StabilityOutcome;
+use firmware::tether::{predict_anchors, Anchor, AnchorHistory};
 
+use geometric::wall_gap;
+use team::{dstar_workload, local_plan_workload, synthetic_scan, SCAN_SIDE};
+
+pub mod config;
+pub mod geometric;
 pub mod ledge;
-pub mod test3;
+pub mod ledge_pole;
+pub mod team;
 
 /// One workload's result in one line (at most 240 bytes; longer text is cut).
 pub type Summary = heapless::String<240>;
@@ -68,33 +99,6 @@ pub const SCAN_POINTS: usize = SCAN_SIDE * SCAN_SIDE;
 
 /// The ABIT* arena of the wall-with-gap workload (default capacities of `config::abit`).
 pub type WallGapArena = DefaultAbitArena<[f64; 2], ()>;
-
-/// SplitMix64 (Steele, Lea, Flood 2014): a tiny deterministic generator for the workloads.
-#[derive(Debug, Clone)]
-pub struct SplitMix64(pub u64);
-
-impl rand_core::TryRng for SplitMix64 {
-    type Error = Infallible;
-    fn try_next_u32(&mut self) -> Result<u32, Infallible> {
-        self.try_next_u64().map(|x| (x >> 32) as u32)
-    }
-    fn try_next_u64(&mut self) -> Result<u64, Infallible> {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        Ok(z ^ (z >> 31))
-    }
-    fn try_fill_bytes(&mut self, dst: &mut [u8]) -> Result<(), Infallible> {
-        for chunk in dst.chunks_mut(8) {
-            let bytes = self.try_next_u64()?.to_le_bytes();
-            for (d, s) in chunk.iter_mut().zip(bytes) {
-                *d = s;
-            }
-        }
-        Ok(())
-    }
-}
 
 /// An inclined plane through the origin, `z = -tan(alpha) x` (descending towards `+x`); exact SDF.
 #[derive(Debug, Clone, Copy)]
@@ -140,7 +144,7 @@ impl DistanceField for Step {
         } else if x >= 0.0 && z >= h {
             // above the lip: nearest is the lip edge
             let v = Vec3::new(x, 0.0, z - h);
-            let n = crate::geom::norm3(&v);
+            let n = firmware::geom::norm3(&v);
             if n > 1e-9 {
                 (n, v / n)
             } else {
@@ -205,7 +209,7 @@ pub fn upslope_anchor() -> Vec3 {
 
 /// The tether workload: root anchor above the upper level, the rover moves from above the lower floor to the
 /// floor under the line over the lip; Alg. 1 attaches an anchor on the lip `(0, 0, STEP_HEIGHT_M)`.
-pub fn predict_anchors_workload(out: &mut AnchorHistory) -> Result<crate::tether::PredictStats, crate::tether::TetherError> {
+pub fn predict_anchors_workload(out: &mut AnchorHistory) -> Result<firmware::tether::PredictStats, firmware::tether::TetherError> {
     let a0 = AnchorHistory::new(Anchor::root(Vec3::new(-5.0, 0.0, 6.0)));
     predict_anchors(
         &Step { height_m: STEP_HEIGHT_M },
@@ -220,7 +224,7 @@ pub fn predict_anchors_workload(out: &mut AnchorHistory) -> Result<crate::tether
 /// 50 deg, firm soil (mu = 0.91), two triangular obstacles, a0 = (8, 19.5), g = (12, 1.5). Same geometry as
 /// `host-sim/src/homotopy/scenarios.rs::scenario_c`.
 pub mod scenario_c {
-    use crate::plan::homotopy::geo::{pt, Pt};
+    use firmware::plan::homotopy::geo::{pt, Pt};
 
     /// Plane outline.
     pub fn plane() -> [Pt; 4] {
@@ -269,7 +273,7 @@ pub fn run_all(arenas: &mut Arenas<'_>, h: &mut impl Harness) {
 
     // Tether: anchors over the step.
     let mut history = AnchorHistory::default();
-    let mut predicted = Err(crate::tether::TetherError::EmptyHistory);
+    let mut predicted = Err(firmware::tether::TetherError::EmptyHistory);
     h.measure("predict_anchors_step_lip", &mut || predicted = predict_anchors_workload(&mut history));
     let s = match &predicted {
         Ok(st) => {
@@ -443,7 +447,6 @@ pub fn run_all(arenas: &mut Arenas<'_>, h: &mut impl Harness) {
 
 #[cfg(test)]
 mod tests {
-    extern crate std;
     use super::*;
     use std::boxed::Box;
     use std::string::String;
@@ -514,7 +517,7 @@ mod tests {
         let params = RoverParams::AXEL;
         let height = p.pose.translation.vector.dot(&plane.normal);
         assert!((height - params.wheel_radius_m).abs() < 2.0 * params.contact_threshold_m, "{height}");
-        assert!(crate::rover::rover_up(&p).dot(&plane.normal) > 0.9995);
+        assert!(firmware::rover::rover_up(&p).dot(&plane.normal) > 0.9995);
         assert!(get("settle_plane_30deg").starts_with("Settled "));
 
         // tether: one anchor attached on the lip (0, 0, 4)
@@ -534,7 +537,7 @@ mod tests {
         let s = get("abit_wall_gap_r2");
         assert!(s.starts_with("found=true cost="), "{s}");
         let cost: f64 = s["found=true cost=".len()..].split(' ').next().unwrap().parse().unwrap();
-        let opt = crate::plan::geometric::wall_gap_optimal_cost();
+        let opt = geometric::wall_gap_optimal_cost();
         assert!(cost >= opt - 1e-9 && cost < 1.5 * opt, "{cost} vs {opt}");
         assert!(s.contains(&std::format!("iterations={ABIT_ITERATIONS} ")), "{s}");
 

@@ -7,34 +7,29 @@
 //! every run. Output, one line per workload on semihosting stdout:
 //! `bench: name=<workload> iterations=<N> ticks=<T> instructions=<I> instructions_per_iteration=<I/N>`.
 //! Without `-icount` the figures are real-time based and vary; the host command always passes it.
-//! Then the planning workloads (`planning.rs`: `bench: result ...` lines) and the stack high-water mark of the run
+//! Then the planning workloads (`bench: result ...` lines) and the stack high-water mark of the run
 //! (`bench: stack_high_water_bytes=<B> stack_size_bytes=<S>`).
 //!
 //! Opt-in (boot words `tetherbot.mode=bench tetherbot.workload=tethered_test3 [tetherbot.iterations=N]`): only the
-//! calibration and the test-3 planning workload ([`run_test3`]).
+//! calibration and the ledge-with-pole planning workload (Table I test 3, [`run_ledge_pole`]).
+//!
+//! Modules: `measure` (the SysTick measurement and the planning workloads' harness), `protocol` (the flight code's
+//! link path: encode, deframe + decode, executive dispatch), `planning` (the `workloads` crate's planning
+//! workloads, `run_all`, on static arenas), `ledge_pole` (the opt-in Table I test 3). The bench uses the flight code and the board's shared
+//! pieces (`clock`, `storage`, `stack`); the flight loop (`flight.rs`) does not use the bench.
+
+mod ledge_pole;
+mod measure;
+mod planning;
+mod protocol;
 
 use cortex_m_semihosting::hprintln;
 
-use crate::clock::{SysTickClock, INSTRUCTIONS_PER_TICK};
+use crate::clock::SysTickClock;
+use measure::measure;
 
 /// Iterations of the calibration loop.
 const CALIBRATION_LOOPS: u32 = 1_000_000;
-
-/// Runs `work` once and prints its cost per iteration.
-pub fn measure(clock: &mut SysTickClock, name: &str, iterations: u32, work: impl FnOnce()) {
-    let start = clock.ticks();
-    work();
-    let ticks = clock.ticks().saturating_sub(start);
-    let instructions = ticks * INSTRUCTIONS_PER_TICK;
-    hprintln!(
-        "bench: name={} iterations={} ticks={} instructions={} instructions_per_iteration={}",
-        name,
-        iterations,
-        ticks,
-        instructions,
-        instructions / u64::from(iterations.max(1))
-    );
-}
 
 fn calibration_loop(n: u32) {
     // SAFETY: a register-only countdown loop: `subs` + `bne` per iteration, no memory access, no stack use.
@@ -49,7 +44,7 @@ fn calibration_loop(n: u32) {
     }
 }
 
-/// Runs every workload.
+/// Runs every workload (boot word `tetherbot.mode=bench`).
 pub fn run(clock: &mut SysTickClock) {
     hprintln!(
         "bench: calibration expected_instructions={}",
@@ -58,8 +53,8 @@ pub fn run(clock: &mut SysTickClock) {
     measure(clock, "calibration", CALIBRATION_LOOPS, || {
         calibration_loop(CALIBRATION_LOOPS)
     });
-    crate::flight::bench_workloads(clock);
-    crate::planning::run(clock);
+    protocol::run(clock);
+    planning::run(clock);
     let stack = crate::stack::usage();
     hprintln!(
         "bench: stack_high_water_bytes={} stack_size_bytes={}",
@@ -68,8 +63,9 @@ pub fn run(clock: &mut SysTickClock) {
     );
 }
 
-/// The opt-in test-3 planning workload (`planning::run_test3`) after the calibration loop.
-pub fn run_test3(clock: &mut SysTickClock, iterations: u32) {
+/// The opt-in ledge-with-pole planning workload (`ledge_pole::run`, `iterations` ABIT* iterations) after the
+/// calibration loop.
+pub fn run_ledge_pole(clock: &mut SysTickClock, iterations: u32) {
     hprintln!(
         "bench: calibration expected_instructions={}",
         2 * u64::from(CALIBRATION_LOOPS) + 1
@@ -77,7 +73,7 @@ pub fn run_test3(clock: &mut SysTickClock, iterations: u32) {
     measure(clock, "calibration", CALIBRATION_LOOPS, || {
         calibration_loop(CALIBRATION_LOOPS)
     });
-    crate::planning::run_test3(clock, iterations);
+    ledge_pole::run(clock, iterations);
     let stack = crate::stack::usage();
     hprintln!(
         "bench: stack_high_water_bytes={} stack_size_bytes={}",

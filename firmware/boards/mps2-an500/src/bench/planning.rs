@@ -1,0 +1,83 @@
+//! On-target planning workloads: `workloads::run_all` with static arenas, each workload timed by
+//! [`super::measure::measure`] (one iteration each) and its outcome printed as
+//! `bench: result name=<workload> summary=<one line>`; the host (`tetherbot board bench`) runs the same workloads
+//! and compares the summaries. Finally the stack high-water mark of the whole bench run:
+//! `bench: stack_high_water_bytes=<B> stack_size_bytes=<S>`.
+//!
+//! Arenas: all in `.psram` (16 MiB, zeroed at boot, never loaded), so the flight mode's SRAM layout and boot are
+//! those of a board without these workloads (the opt-in ledge-with-pole workload's storage is in SRAM's `.uninit`
+//! instead: `ledge_pole.rs`). The ABIT* arena (~1.7 MiB) and the scan start all-zero (`Lent`);
+//! the local planner, D* Lite arena, BTM and homotopy workspace have non-zero empty states and are initialised in
+//! place from their `const` images in flash when the bench takes them (`UninitSlot::take_init`).
+
+use firmware::config::team::GLOBAL_GRID_MAX_CELLS;
+use firmware::geom::Vec3;
+use firmware::plan::homotopy::control::ControlGrid;
+use firmware::plan::homotopy::{Btm, SearchArena, Workspace};
+use firmware::plan::team::dstar_lite::DStarArena;
+use firmware::plan::team::DefaultLocalPlanner;
+use workloads::{Arenas, WallGapArena, SCAN_POINTS};
+
+use super::measure::Board;
+use crate::clock::SysTickClock;
+use crate::storage::{ConstInit, Lent, UninitSlot};
+
+impl ConstInit for DefaultLocalPlanner {
+    const INIT: Self = DefaultLocalPlanner::new();
+}
+impl ConstInit for DStarArena<GLOBAL_GRID_MAX_CELLS> {
+    const INIT: Self = DStarArena::new();
+}
+impl ConstInit for Btm {
+    const INIT: Self = Btm::new();
+}
+impl ConstInit for Workspace {
+    const INIT: Self = Workspace {
+        search: SearchArena::new(),
+        grid: ControlGrid::new(),
+        classes: heapless::Vec::new(),
+    };
+}
+
+// The ABIT* arena's empty state is all zero bytes (empty `heapless` vectors): a plain `Lent` in `.psram`.
+#[link_section = ".psram"]
+static ABIT: Lent<WallGapArena> = Lent::new(WallGapArena::new());
+#[link_section = ".psram"]
+static SCAN: Lent<[Vec3; SCAN_POINTS]> = Lent::new([Vec3::new(0.0, 0.0, 0.0); SCAN_POINTS]);
+#[link_section = ".psram"]
+static LOCAL: UninitSlot<DefaultLocalPlanner> = UninitSlot::new();
+#[link_section = ".psram"]
+static DSTAR: UninitSlot<DStarArena<GLOBAL_GRID_MAX_CELLS>> = UninitSlot::new();
+#[link_section = ".psram"]
+static BTM: UninitSlot<Btm> = UninitSlot::new();
+#[link_section = ".psram"]
+static HOMOTOPY: UninitSlot<Workspace> = UninitSlot::new();
+
+/// Runs the planning workloads (once; a second call finds the arenas taken and does nothing).
+pub fn run(clock: &mut SysTickClock) {
+    let (Some(abit), Some(local), Some(scan), Some(dstar), Some(btm), Some(homotopy)) = (
+        ABIT.take(),
+        LOCAL.take_init(),
+        SCAN.take(),
+        DSTAR.take_init(),
+        BTM.take_init(),
+        HOMOTOPY.take_init(),
+    ) else {
+        return;
+    };
+    let mut arenas = Arenas {
+        abit,
+        local,
+        scan,
+        dstar,
+        btm,
+        homotopy,
+    };
+    workloads::run_all(
+        &mut arenas,
+        &mut Board {
+            clock,
+            iterations: 1,
+        },
+    );
+}
