@@ -92,7 +92,7 @@ impl Default for ExecStorage {
 }
 
 #[derive(Debug, Clone, Copy)]
-struct GoalState {
+struct ActiveGoal {
     goal_id: u32,
     state: PlanState,
     iterations: u32,
@@ -131,7 +131,7 @@ pub struct Executive<L, C, W, A, S> {
     tx: Deque<u8, TX_QUEUE_LEN>,
     seq_out: u32,
     counters: Counters,
-    goal: Option<GoalState>,
+    goal: Option<ActiveGoal>,
     plan_tx: Option<PlanTx>,
     drive_command_id: u32,
     last_host_time_us: u64,
@@ -389,7 +389,7 @@ where
             LogLevel::Info,
             format_args!("goal {}: {state:?}", g.goal_id),
         );
-        self.goal = Some(GoalState {
+        self.goal = Some(ActiveGoal {
             goal_id: g.goal_id,
             state,
             iterations: 0,

@@ -81,7 +81,7 @@ impl Map<'_> {
             out.blocks_rebuilt += 1;
             let mut sites_changed = false;
             for ((t, w), (s, sw)) in
-                b.tsdf.iter().zip(b.weight.iter()).zip(b.site.iter_mut().zip(b.site_w.iter_mut()))
+                b.tsdf.iter().zip(b.weight.iter()).zip(b.site.iter_mut().zip(b.site_tsdf.iter_mut()))
             {
                 let nb = if *w > 0 { band_site(*t as Real * tq, band, vs) } else { NO_SITE };
                 let is_site = *sw != NO_SITE && *s == [0, 0, 0];
@@ -139,7 +139,7 @@ impl Map<'_> {
                 let mut reset = false;
                 for i in 0..BLOCK_VOXELS {
                     let Some(b) = self.blocks.get(s) else { break };
-                    let (Some(&w), Some(&off)) = (b.site_w.get(i), b.site.get(i)) else { break };
+                    let (Some(&w), Some(&off)) = (b.site_tsdf.get(i), b.site.get(i)) else { break };
                     if w == NO_SITE || off == [0, 0, 0] {
                         continue;
                     }
@@ -163,11 +163,11 @@ impl Map<'_> {
                     };
                     let si = local_index([slx, sly, slz]);
                     let valid = slot.and_then(|n| self.blocks.get(n)).is_some_and(|nb| {
-                        nb.site_w.get(si) == Some(&w) && nb.site.get(si) == Some(&[0, 0, 0])
+                        nb.site_tsdf.get(si) == Some(&w) && nb.site.get(si) == Some(&[0, 0, 0])
                     });
                     if !valid {
                         reset = true;
-                        if let Some(sw) = self.blocks.get_mut(s).and_then(|b| b.site_w.get_mut(i)) {
+                        if let Some(sw) = self.blocks.get_mut(s).and_then(|b| b.site_tsdf.get_mut(i)) {
                             *sw = NO_SITE;
                         }
                     }
@@ -238,7 +238,7 @@ impl Map<'_> {
                 let i = if pass == 0 { k } else { BLOCK_VOXELS - 1 - k };
                 let l = local_coords(i);
                 let Some(b) = self.blocks.get(s) else { return changed };
-                let (Some(&w0), Some(&o0), Some(&t0)) = (b.site_w.get(i), b.site.get(i), b.tsdf.get(i)) else {
+                let (Some(&w0), Some(&o0), Some(&t0)) = (b.site_tsdf.get(i), b.site.get(i), b.tsdf.get(i)) else {
                     return changed;
                 };
                 if w0 != NO_SITE && o0 == [0, 0, 0] {
@@ -259,7 +259,7 @@ impl Map<'_> {
                     // Fast path: all 26 neighbours are in this block.
                     for (d, delta) in nbrs.iter().zip(deltas.iter()) {
                         let ni = (i as isize + delta) as usize;
-                        if let (Some(&w), Some(&so)) = (b.site_w.get(ni), b.site.get(ni)) {
+                        if let (Some(&w), Some(&so)) = (b.site_tsdf.get(ni), b.site.get(ni)) {
                             cand.consider(w, so, d, dmax);
                         }
                     }
@@ -278,14 +278,14 @@ impl Map<'_> {
                             (nl[1] & (e - 1)) as usize,
                             (nl[2] & (e - 1)) as usize,
                         ]);
-                        if let (Some(&w), Some(&so)) = (nblk.site_w.get(ni), nblk.site.get(ni)) {
+                        if let (Some(&w), Some(&so)) = (nblk.site_tsdf.get(ni), nblk.site.get(ni)) {
                             cand.consider(w, so, d, dmax);
                         }
                     }
                 }
                 if let Some((off, w)) = cand.best {
                     if let Some(b) = self.blocks.get_mut(s) {
-                        if let (Some(sw), Some(so)) = (b.site_w.get_mut(i), b.site.get_mut(i)) {
+                        if let (Some(sw), Some(so)) = (b.site_tsdf.get_mut(i), b.site.get_mut(i)) {
                             *sw = w;
                             *so = off;
                             changed += 1;

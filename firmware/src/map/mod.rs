@@ -105,7 +105,7 @@ pub struct Block {
     tsdf: [i16; BLOCK_VOXELS],
     weight: [u16; BLOCK_VOXELS],
     site: [[i8; 3]; BLOCK_VOXELS],
-    site_w: [i8; BLOCK_VOXELS],
+    site_tsdf: [i8; BLOCK_VOXELS],
 }
 
 impl Block {
@@ -116,7 +116,7 @@ impl Block {
         tsdf: [0; BLOCK_VOXELS],
         weight: [0; BLOCK_VOXELS],
         site: [[0; 3]; BLOCK_VOXELS],
-        site_w: [NO_SITE; BLOCK_VOXELS],
+        site_tsdf: [NO_SITE; BLOCK_VOXELS],
     };
 
     /// An unused block whose bytes are all zero: the initial value of storage in memory the board zeroes itself
@@ -128,7 +128,7 @@ impl Block {
         tsdf: [0; BLOCK_VOXELS],
         weight: [0; BLOCK_VOXELS],
         site: [[0; 3]; BLOCK_VOXELS],
-        site_w: [0; BLOCK_VOXELS],
+        site_tsdf: [0; BLOCK_VOXELS],
     };
 }
 

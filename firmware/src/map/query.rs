@@ -78,7 +78,7 @@ impl Map<'_> {
     pub fn site_distance_voxels(&self, g: VoxelIndex) -> Option<Real> {
         let (s, i) = self.locate(g)?;
         let b = self.blocks.get(s)?;
-        let w = *b.site_w.get(i)?;
+        let w = *b.site_tsdf.get(i)?;
         if w == NO_SITE {
             return None;
         }
@@ -92,7 +92,7 @@ impl Map<'_> {
             return None;
         }
         let dmax = self.cfg.esdf_max_distance;
-        let w = *b.site_w.get(i)?;
+        let w = *b.site_tsdf.get(i)?;
         let d = if w == NO_SITE {
             dmax
         } else {

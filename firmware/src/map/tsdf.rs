@@ -142,7 +142,7 @@ impl Map<'_> {
         let tol = self.site_tolerance();
         let Some(b) = self.blocks.get_mut(slot) else { return };
         let (Some(tq), Some(wq), Some(&sw), Some(&so)) =
-            (b.tsdf.get_mut(li), b.weight.get_mut(li), b.site_w.get(li), b.site.get(li))
+            (b.tsdf.get_mut(li), b.weight.get_mut(li), b.site_tsdf.get(li), b.site.get(li))
         else {
             return;
         };

@@ -101,7 +101,7 @@ const REFINE_SPREAD: f64 = 1e6;
 /// Accuracy accepted as [`LpStatus::AlmostOptimal`], as a multiple of `tol`.
 pub const ALMOST_FACTOR: f64 = 100.0;
 
-fn at<const R: usize, const C: usize>(m: &SMatrix<f64, R, C>, i: usize, j: usize) -> f64 {
+fn mat_get<const R: usize, const C: usize>(m: &SMatrix<f64, R, C>, i: usize, j: usize) -> f64 {
     m.get((i, j)).copied().unwrap_or(0.0)
 }
 
@@ -109,17 +109,17 @@ fn at_mut<const R: usize, const C: usize>(m: &mut SMatrix<f64, R, C>, i: usize, 
     m.get_mut((i, j))
 }
 
-fn el(v: &[f64], i: usize) -> f64 {
+fn vec_get(v: &[f64], i: usize) -> f64 {
     v.get(i).copied().unwrap_or(0.0)
 }
 
-fn put(v: &mut [f64], i: usize, x: f64) {
+fn vec_set(v: &mut [f64], i: usize, x: f64) {
     if let Some(e) = v.get_mut(i) {
         *e = x;
     }
 }
 
-fn add(v: &mut [f64], i: usize, x: f64) {
+fn vec_add(v: &mut [f64], i: usize, x: f64) {
     if let Some(e) = v.get_mut(i) {
         *e += x;
     }
@@ -207,11 +207,11 @@ impl<const K: usize> SparseRow<K> {
         self.idx.get(..n).unwrap_or(&[]).iter().zip(self.val.get(..n).unwrap_or(&[]).iter()).map(|(i, v)| (usize::from(*i), *v))
     }
     fn dot(&self, x: &[f64]) -> f64 {
-        sum(self.iter().map(|(k, v)| v * el(x, k)))
+        sum(self.iter().map(|(k, v)| v * vec_get(x, k)))
     }
     fn axpy(&self, a: f64, out: &mut [f64]) {
         for (k, v) in self.iter() {
-            add(out, k, v * a);
+            vec_add(out, k, v * a);
         }
     }
 }
@@ -249,7 +249,7 @@ impl<const N: usize, const P: usize, const M: usize> Structure<N, P, M> {
         let mut keep_row = [false; M];
         for (i, k) in keep_row.iter_mut().enumerate() {
             for (j, u) in used.iter_mut().enumerate() {
-                if at(&lp.g, i, j) != 0.0 {
+                if mat_get(&lp.g, i, j) != 0.0 {
                     *u = true;
                     *k = true;
                 }
@@ -264,7 +264,7 @@ impl<const N: usize, const P: usize, const M: usize> Structure<N, P, M> {
         let mut zero_a_row = [true; P];
         for (i, z) in zero_a_row.iter_mut().enumerate() {
             for (j, u) in used.iter_mut().enumerate() {
-                if at(&lp.a, i, j) != 0.0 {
+                if mat_get(&lp.a, i, j) != 0.0 {
                     *u = true;
                     *z = false;
                 }
@@ -295,7 +295,7 @@ impl<const N: usize, const P: usize, const M: usize> Structure<N, P, M> {
             put_u16(&mut row, nr, u16_of(i));
             if let Some(pat) = g_rows.get_mut(nr) {
                 for (j, cj) in compact.iter().enumerate() {
-                    let v = at(&lp.g, i, j);
+                    let v = mat_get(&lp.g, i, j);
                     if v != 0.0 {
                         pat.push(usize::from(*cj), v);
                     }
@@ -306,7 +306,7 @@ impl<const N: usize, const P: usize, const M: usize> Structure<N, P, M> {
         let mut a_rows = [SparseRow::<N>::EMPTY; P];
         for (i, pat) in a_rows.iter_mut().enumerate() {
             for (j, cj) in compact.iter().enumerate() {
-                let v = at(&lp.a, i, j);
+                let v = mat_get(&lp.a, i, j);
                 if v != 0.0 {
                     pat.push(usize::from(*cj), v);
                 }
@@ -540,7 +540,7 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
     /// In-place sparse Cholesky `H = L L'` on the symbolic pattern; false if a pivot is not positive.
     fn cholesky(st: &Structure<N, P, M>, l: &mut SMatrix<f64, N, N>) -> bool {
         for (k, col) in st.l_cols.iter().enumerate().take(st.nv) {
-            let d = at(l, k, k);
+            let d = mat_get(l, k, k);
             if d.is_nan() || d <= 0.0 {
                 return false;
             }
@@ -554,9 +554,9 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
                 }
             }
             for (n, i) in col.iter().enumerate() {
-                let lik = at(l, i, k);
+                let lik = mat_get(l, i, k);
                 for j in col.prefix(n + 1) {
-                    let ljk = at(l, j, k);
+                    let ljk = mat_get(l, j, k);
                     if let Some(e) = at_mut(l, i, j) {
                         *e -= lik * ljk;
                     }
@@ -571,25 +571,25 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
         let nv = st.nv;
         let mut y = [0.0; N];
         for (yk, p) in y.iter_mut().zip(st.perm.iter()).take(nv) {
-            *yk = el(b, usize::from(*p));
+            *yk = vec_get(b, usize::from(*p));
         }
         for (k, col) in st.l_cols.iter().enumerate().take(nv) {
-            let yk = el(&y, k) * el(inv_diag, k);
-            put(&mut y, k, yk);
+            let yk = vec_get(&y, k) * vec_get(inv_diag, k);
+            vec_set(&mut y, k, yk);
             for i in col.iter() {
-                add(&mut y, i, -(at(l, i, k) * yk));
+                vec_add(&mut y, i, -(mat_get(l, i, k) * yk));
             }
         }
         for (k, col) in st.l_cols.iter().enumerate().take(nv).rev() {
-            let mut v = el(&y, k);
+            let mut v = vec_get(&y, k);
             for i in col.iter() {
-                v -= at(l, i, k) * el(&y, i);
+                v -= mat_get(l, i, k) * vec_get(&y, i);
             }
-            put(&mut y, k, v * el(inv_diag, k));
+            vec_set(&mut y, k, v * vec_get(inv_diag, k));
         }
         let mut out = [0.0; N];
         for (yk, p) in y.iter().zip(st.perm.iter()).take(nv) {
-            put(&mut out, usize::from(*p), *yk);
+            vec_set(&mut out, usize::from(*p), *yk);
         }
         out
     }
@@ -609,12 +609,12 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
             }
         }
         for (k, e) in inv_diag.iter_mut().enumerate().take(st.nv) {
-            *e = 1.0 / at(l, k, k);
+            *e = 1.0 / mat_get(l, k, k);
         }
         for (i, pat) in st.a_rows.iter().enumerate() {
             let mut ai = [0.0; N];
             for (k, v) in pat.iter() {
-                put(&mut ai, k, v);
+                vec_set(&mut ai, k, v);
             }
             let col = Self::h_solve(st, l, inv_diag, &ai);
             for (k, x) in col.iter().enumerate().take(st.nv) {
@@ -627,7 +627,7 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
         let mut s = SMatrix::<f64, P, P>::zeros();
         for (i, pat) in st.a_rows.iter().enumerate() {
             for k in 0..=i {
-                let acc = sum(pat.iter().map(|(j, a)| a * at(v, j, k)));
+                let acc = sum(pat.iter().map(|(j, a)| a * mat_get(v, j, k)));
                 if let Some(e) = at_mut(&mut s, i, k) {
                     *e = acc;
                 }
@@ -684,16 +684,16 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
         let dy = kkt.schur_solve(&(Self::a_mul(st, &u) + r.p));
         let mut dx = u;
         for (k, e) in dx.iter_mut().enumerate().take(nv) {
-            let vd = sum(dy.iter().enumerate().map(|(i, d)| at(&kkt.v, k, i) * d));
+            let vd = sum(dy.iter().enumerate().map(|(i, d)| mat_get(&kkt.v, k, i) * d));
             *e -= vd;
         }
         let gdx = Self::g_mul(st, &dx);
         let mut dz = [0.0; M];
         let mut ds = [0.0; M];
         for i in 0..nr {
-            let dzi = el(w, i) * (el(&gdx, i) + el(r.g, i)) - el(&cs, i);
-            put(&mut dz, i, dzi);
-            put(&mut ds, i, (-el(r.c, i) - el(&sc.s, i) * dzi) * el(&sc.inv_z, i));
+            let dzi = vec_get(w, i) * (vec_get(&gdx, i) + vec_get(r.g, i)) - vec_get(&cs, i);
+            vec_set(&mut dz, i, dzi);
+            vec_set(&mut ds, i, (-vec_get(r.c, i) - vec_get(&sc.s, i) * dzi) * vec_get(&sc.inv_z, i));
         }
         Step { dx, dy, dz, ds }
     }
@@ -724,9 +724,9 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
         let mut e3 = Self::g_mul(st, &d.dx);
         let mut e4 = [0.0; M];
         for i in 0..nr {
-            let v = el(r.g, i) + el(&e3, i) + el(&d.ds, i);
-            put(&mut e3, i, v);
-            put(&mut e4, i, el(r.c, i) + el(z, i) * el(&d.ds, i) + el(s, i) * el(&d.dz, i));
+            let v = vec_get(r.g, i) + vec_get(&e3, i) + vec_get(&d.ds, i);
+            vec_set(&mut e3, i, v);
+            vec_set(&mut e4, i, vec_get(r.c, i) + vec_get(z, i) * vec_get(&d.ds, i) + vec_get(s, i) * vec_get(&d.dz, i));
         }
         let c = self.direction_once(st, kkt, sc, &Rhs { d: &e1, p: &e2, g: &e3, c: &e4 });
         let mut out = d;
@@ -817,13 +817,13 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
             let mut r_c = [0.0; M];
             let (mut w_min, mut w_max) = (f64::INFINITY, 0.0f64);
             for i in 0..nr {
-                let (si, zi) = (el(&s, i), el(&z, i));
+                let (si, zi) = (vec_get(&s, i), vec_get(&z, i));
                 let inv_s = 1.0 / si;
-                put(&mut sc.inv_s, i, inv_s);
-                put(&mut sc.inv_z, i, 1.0 / zi);
+                vec_set(&mut sc.inv_s, i, inv_s);
+                vec_set(&mut sc.inv_z, i, 1.0 / zi);
                 let wi = zi * inv_s;
-                put(&mut sc.w, i, wi);
-                put(&mut r_c, i, si * zi);
+                vec_set(&mut sc.w, i, wi);
+                vec_set(&mut r_c, i, si * zi);
                 if wi < w_min {
                     w_min = wi;
                 }
@@ -847,14 +847,14 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
             let ad = max_step(z.get(..nr).unwrap_or(&[]), aff.dz.get(..nr).unwrap_or(&[]));
             let mut mu_aff = 0.0;
             for i in 0..nr {
-                mu_aff += (el(&s, i) + el(&aff.ds, i) * ap) * (el(&z, i) + el(&aff.dz, i) * ad);
+                mu_aff += (vec_get(&s, i) + vec_get(&aff.ds, i) * ap) * (vec_get(&z, i) + vec_get(&aff.dz, i) * ad);
             }
             let mu_aff = mu_aff / rows;
             let ratio = mu_aff / mu;
             let sigma = (ratio * ratio * ratio).clamp(0.0, 1.0);
             // corrector
             for i in 0..nr {
-                put(&mut r_c, i, el(&s, i) * el(&z, i) + el(&aff.ds, i) * el(&aff.dz, i) - sigma * mu);
+                vec_set(&mut r_c, i, vec_get(&s, i) * vec_get(&z, i) + vec_get(&aff.ds, i) * vec_get(&aff.dz, i) - sigma * mu);
             }
             let d = self.direction(&st, &kkt, &sc, &Rhs { d: &r_d, p: &r_p, g: &r_g, c: &r_c }, refine);
             let ap = (0.99 * max_step(s.get(..nr).unwrap_or(&[]), d.ds.get(..nr).unwrap_or(&[]))).min(1.0);

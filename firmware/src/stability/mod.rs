@@ -216,23 +216,23 @@ impl StabilityOutcome {
     }
 }
 
-fn put<const R: usize, const C: usize>(m: &mut nalgebra::SMatrix<f64, R, C>, i: usize, j: usize, v: f64) {
+fn mat_set<const R: usize, const C: usize>(m: &mut nalgebra::SMatrix<f64, R, C>, i: usize, j: usize, v: f64) {
     if let Some(e) = m.get_mut((i, j)) {
         *e = v;
     }
 }
 
-fn putv<const R: usize>(m: &mut nalgebra::SVector<f64, R>, i: usize, v: f64) {
+fn vec_set<const R: usize>(m: &mut nalgebra::SVector<f64, R>, i: usize, v: f64) {
     if let Some(e) = m.get_mut(i) {
         *e = v;
     }
 }
 
-fn get(m: &Matrix3<f64>, i: usize, j: usize) -> f64 {
+fn mat_get(m: &Matrix3<f64>, i: usize, j: usize) -> f64 {
     m.get((i, j)).copied().unwrap_or(0.0)
 }
 
-fn getv<const R: usize>(m: &nalgebra::SVector<f64, R>, i: usize) -> f64 {
+fn vec_get<const R: usize>(m: &nalgebra::SVector<f64, R>, i: usize) -> f64 {
     m.get(i).copied().unwrap_or(0.0)
 }
 
@@ -264,9 +264,9 @@ impl StabilityProblem {
         lp.h = nalgebra::SVector::repeat(1.0);
         // Equations: sum of forces = -ghat (weight units), sum of moments about com = 0 (gravity has no moment
         // about the combined centre of mass).
-        putv(&mut lp.b, 0, -ghat.x);
-        putv(&mut lp.b, 1, -ghat.y);
-        putv(&mut lp.b, 2, -ghat.z);
+        vec_set(&mut lp.b, 0, -ghat.x);
+        vec_set(&mut lp.b, 1, -ghat.y);
+        vec_set(&mut lp.b, 2, -ghat.z);
         for (i, c) in self.contacts.iter().enumerate() {
             let ok = finite(&c.position)
                 && finite(&c.normal)
@@ -290,44 +290,44 @@ impl StabilityProblem {
             let mu_m = f64::from(c.mu_m);
             for k in 0..3 {
                 for row in 0..3 {
-                    put(&mut lp.a, row, col + k, get(&r, row, k));
-                    put(&mut lp.a, row + 3, col + k, get(&pr, row, k));
+                    mat_set(&mut lp.a, row, col + k, mat_get(&r, row, k));
+                    mat_set(&mut lp.a, row + 3, col + k, mat_get(&pr, row, k));
                     if mu_m > 0.0 {
-                        put(&mut lp.a, row + 3, col + 3 + k, get(&r, row, k));
+                        mat_set(&mut lp.a, row + 3, col + 3 + k, mat_get(&r, row, k));
                     }
                 }
             }
             let r0 = 12 * i;
             // (1) lambda_z >= 0
-            put(&mut lp.g, r0, col + 2, -1.0);
-            putv(&mut lp.h, r0, 0.0);
+            mat_set(&mut lp.g, r0, col + 2, -1.0);
+            vec_set(&mut lp.h, r0, 0.0);
             // normal-load cap (physical load limit; keeps the LP well conditioned in wedge configurations)
-            put(&mut lp.g, r0 + 11, col + 2, 1.0);
-            putv(&mut lp.h, r0 + 11, NORMAL_FORCE_CAP);
+            mat_set(&mut lp.g, r0 + 11, col + 2, 1.0);
+            vec_set(&mut lp.h, r0 + 11, NORMAL_FORCE_CAP);
             // (2), (3) with margin
             for (j, (k, sign)) in [(0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0)].iter().enumerate() {
-                put(&mut lp.g, r0 + 1 + j, col + k, *sign);
-                put(&mut lp.g, r0 + 1 + j, col + 2, -mu);
-                put(&mut lp.g, r0 + 1 + j, S_COL, 1.0);
-                putv(&mut lp.h, r0 + 1 + j, 0.0);
+                mat_set(&mut lp.g, r0 + 1 + j, col + k, *sign);
+                mat_set(&mut lp.g, r0 + 1 + j, col + 2, -mu);
+                mat_set(&mut lp.g, r0 + 1 + j, S_COL, 1.0);
+                vec_set(&mut lp.h, r0 + 1 + j, 0.0);
             }
             // (4)-(6) with margin, only for contacts that carry moments
             if mu_m > 0.0 {
                 for j in 0..6 {
                     let k = 3 + j / 2;
                     let sign = if j % 2 == 0 { 1.0 } else { -1.0 };
-                    put(&mut lp.g, r0 + 5 + j, col + k, sign);
-                    put(&mut lp.g, r0 + 5 + j, col + 2, -mu_m);
-                    put(&mut lp.g, r0 + 5 + j, S_COL, mu_m / mu);
-                    putv(&mut lp.h, r0 + 5 + j, 0.0);
+                    mat_set(&mut lp.g, r0 + 5 + j, col + k, sign);
+                    mat_set(&mut lp.g, r0 + 5 + j, col + 2, -mu_m);
+                    mat_set(&mut lp.g, r0 + 5 + j, S_COL, mu_m / mu);
+                    vec_set(&mut lp.h, r0 + 5 + j, 0.0);
                 }
             }
         }
         let tr = 12 * MAX_CONTACTS;
-        put(&mut lp.g, tr, T_COL, -1.0);
-        putv(&mut lp.h, tr, 0.0);
-        put(&mut lp.g, tr + 1, T_COL, 1.0);
-        putv(&mut lp.h, tr + 1, 1.0);
+        mat_set(&mut lp.g, tr, T_COL, -1.0);
+        vec_set(&mut lp.h, tr, 0.0);
+        mat_set(&mut lp.g, tr + 1, T_COL, 1.0);
+        vec_set(&mut lp.h, tr + 1, 1.0);
         if let TetherForce::Taut { exit, direction, max_tension_n } = self.tether {
             let d = v64(&direction);
             let tmax = f64::from(max_tension_n);
@@ -338,14 +338,14 @@ impl StabilityProblem {
             let d = d / d.norm();
             let m = (v64(&exit) - com).cross(&d);
             for row in 0..3 {
-                put(&mut lp.a, row, T_COL, d.get(row).copied().unwrap_or(0.0));
-                put(&mut lp.a, row + 3, T_COL, m.get(row).copied().unwrap_or(0.0));
+                mat_set(&mut lp.a, row, T_COL, d.get(row).copied().unwrap_or(0.0));
+                mat_set(&mut lp.a, row + 3, T_COL, m.get(row).copied().unwrap_or(0.0));
             }
-            putv(&mut lp.h, tr + 1, tmax / weight);
+            vec_set(&mut lp.h, tr + 1, tmax / weight);
         }
-        put(&mut lp.g, tr + 2, S_COL, 1.0);
-        putv(&mut lp.h, tr + 2, MARGIN_CAP);
-        putv(&mut lp.c, S_COL, -1.0);
+        mat_set(&mut lp.g, tr + 2, S_COL, 1.0);
+        vec_set(&mut lp.h, tr + 2, MARGIN_CAP);
+        vec_set(&mut lp.c, S_COL, -1.0);
         Ok(lp)
     }
 
@@ -368,11 +368,11 @@ pub fn check_stability(problem: &StabilityProblem) -> Result<StabilityOutcome, S
     let mut util: f64 = 0.0;
     for (i, c) in problem.contacts.iter().enumerate() {
         let col = 6 * i;
-        let fz = getv(&x, col + 2);
+        let fz = vec_get(&x, col + 2);
         if fz > 1e-9 {
-            util = util.max(getv(&x, col).abs().max(getv(&x, col + 1).abs()) / (f64::from(c.mu) * fz));
+            util = util.max(vec_get(&x, col).abs().max(vec_get(&x, col + 1).abs()) / (f64::from(c.mu) * fz));
             if c.mu_m > 0.0 {
-                let m = getv(&x, col + 3).abs().max(getv(&x, col + 4).abs()).max(getv(&x, col + 5).abs());
+                let m = vec_get(&x, col + 3).abs().max(vec_get(&x, col + 4).abs()).max(vec_get(&x, col + 5).abs());
                 util = util.max(m / (f64::from(c.mu_m) * fz));
             }
         }
@@ -380,7 +380,7 @@ pub fn check_stability(problem: &StabilityProblem) -> Result<StabilityOutcome, S
     let report = StabilityReport {
         margin,
         max_utilisation: util,
-        tension_n: getv(&x, T_COL) * problem.weight(),
+        tension_n: vec_get(&x, T_COL) * problem.weight(),
         iterations: sol.iterations,
     };
     Ok(if margin >= MIN_MARGIN { StabilityOutcome::Stable(report) } else { StabilityOutcome::Unstable(report) })

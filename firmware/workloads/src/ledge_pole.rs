@@ -18,21 +18,8 @@
 //! `cargo run -p host-sim --bin tetherbot -- board bench --build --workload tethered_test3 [--iterations N]`;
 //! the default `board bench` and CI do not run it. `--iterations 30` is the short variant (the first batch).
 //!
-//! # Measured (seed 1, 750 iterations, QEMU 7.2 `-icount shift=0`; details in `host-sim/doc/board_test3.md`)
-//! Session 5 (current code, double-precision FPU build, no path found within 750 iterations): 915 384 766 560
-//! instructions (9 769 105 280 for 30 iterations), stack 84 232 B. The figures below are from session 2's code:
-//! Board and host print the identical summary, the campaign's trial 0 (`--field truth`):
-//! `found=true first_iteration=512 cost=25.635648576515692 iterations=750 batches=1 edges=394 nodes=152 queue=542
-//! memo=394 settles=3855 lps=3828 anchor_predictions=2679 path_states=12 final_anchors=14`.
-//!
-//! | board build | instructions | per iteration | per stability LP (amortised) | QEMU wall |
-//! |---|---|---|---|---|
-//! | as shipped (f64 in software) | 623 036 067 080 | 830 714 756 | 162 757 593 | 1 487 s (load ~7) |
-//! | `-C target-cpu=cortex-m7` (double-precision FPU) | 64 184 662 000 | 85 579 549 | 16 767 153 | 234 s |
-//!
-//! Short variant, 30 iterations: 60.6 G instructions soft-float, 6.06 G with the DP FPU (the first batch's
-//! sampling front-loads the cost). Stack high water 81 456 B (of 256 KiB). Storage ([`LedgePoleStorage`], board
-//! `size_of`): 1 498 400 B (arena 1 441 816 B, path 56 580 B), in SRAM `.uninit` on the board.
+//! Its instruction counts, stack and storage on the board, and how they were measured, are in
+//! `host-sim/doc/board_test3.md`.
 
 use core::convert::Infallible;
 use core::fmt::Write;
