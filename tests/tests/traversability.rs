@@ -2,6 +2,7 @@
 //! anchor prediction against the simulator's true tether, and stability of tests 1-3.
 
 use firmware::config::rover::RoverParams;
+use firmware::geom::p3::{dist, dot, norm, sub};
 use firmware::geom::{Real, Vec3};
 use firmware::rover::{check_pose_stability, settle, SettleOutcome, SettledPose};
 use firmware::tether::{predict_anchors, Anchor, AnchorHistory};
@@ -18,9 +19,6 @@ fn v(p: P) -> Vec3 {
 fn p(v: &Vec3) -> P {
     [f64::from(v.x), f64::from(v.y), f64::from(v.z)]
 }
-fn dist(a: P, b: P) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-}
 
 /// A tether end point 0.35 m off the surface above ground point (x, y).
 fn tether_point(w: &LedgeWorld, x: f64, y: f64) -> P {
@@ -31,10 +29,8 @@ fn tether_point(w: &LedgeWorld, x: f64, y: f64) -> P {
 
 /// Bend angle of the true tether at its single contact (0 when straight), degrees.
 fn bend_deg(root: P, c: P, x: P) -> f64 {
-    let a = [c[0] - root[0], c[1] - root[1], c[2] - root[2]];
-    let b = [x[0] - c[0], x[1] - c[1], x[2] - c[2]];
-    let cosv = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
-        / ((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt() * (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]).sqrt());
+    let (a, b) = (sub(c, root), sub(x, c));
+    let cosv = dot(a, b) / (norm(a) * norm(b));
     cosv.clamp(-1.0, 1.0).acos().to_degrees()
 }
 

@@ -20,7 +20,8 @@ use firmware::plan::team::astar::AStarStatus;
 use firmware::plan::team::formation::Team;
 use firmware::plan::team::DefaultLocalPlanner;
 use rand_core::Rng;
-use terrain::{add, dist, scale, sub, unit, Surface, P3};
+use firmware::geom::p3::{add, cross, dist, scale, sub};
+use terrain::{unit, Surface, P3};
 
 /// Range sensor: `rays` directions spread over the sphere (Fibonacci lattice), range, Gaussian-ish noise.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -302,8 +303,8 @@ pub fn itokawa(path: &std::path::Path) -> Result<terrain::MeshSurface, String> {
 /// z; mesh: along the ray from the body's centre), on the true surface.
 pub fn x_start(surface: &dyn Surface, center: P3, body_center: P3, r: f64) -> Option<[P3; 4]> {
     let up = unit(sub(center, body_center));
-    let a = unit(if up[2].abs() < 0.9 { terrain::cross(up, [0.0, 0.0, 1.0]) } else { terrain::cross(up, [1.0, 0.0, 0.0]) });
-    let b = terrain::cross(up, a);
+    let a = unit(if up[2].abs() < 0.9 { cross(up, [0.0, 0.0, 1.0]) } else { cross(up, [1.0, 0.0, 0.0]) });
+    let b = cross(up, a);
     let mut out = [[0.0; 3]; 4];
     // the paper's order: (1,1), (1,0), (0,1), (0,0) around the hub at (0.5, 0.5)
     for (k, (sa, sb)) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)].iter().enumerate() {

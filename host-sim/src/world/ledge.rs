@@ -128,13 +128,7 @@ mod tests {
     use rand_core::Rng;
     use rand_pcg::Pcg64;
 
-    fn sub(a: P, b: P) -> P {
-        [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-    }
-    fn dist(a: P, b: P) -> f64 {
-        let d = sub(a, b);
-        (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
-    }
+    use firmware::geom::p3::{dist, sub};
 
     fn rng() -> Pcg64 {
         Pcg64::new(0xcafe_f00d_d15e_a5e5, 0xa02_bdbf_7bb3_c0a7)
