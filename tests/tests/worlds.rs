@@ -1,7 +1,7 @@
 //! Ground-truth worlds from the real data files: the triangle-mesh world against brute force on the asteroid
 //! shape models, and every terrain and shape-model file in `shared/data` loaded through the scenario path.
 
-use firmware::geom::p3::{norm, sub};
+use firmware::geom::p3::{norm, sub, to_vec3};
 use firmware::geom::{Real, Vec3};
 use firmware::map::{DistanceField, DistanceQuery};
 use host_sim::scenario;
@@ -129,7 +129,7 @@ fn itokawa_raycasts_match_brute_force() {
             })
             .filter(|&t| t <= max)
             .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.min(t))));
-        let got = w.raycast(&v3(o), &v3(d), max as Real);
+        let got = w.raycast(&to_vec3(o), &to_vec3(d), max as Real);
         match (got, brute) {
             // The World interface is f32: compare to f32 resolution at ~100 m.
             (Some(a), Some(b)) => assert!((a as f64 - b).abs() < 1e-3, "{o:?} {d:?}: {a} vs {b}"),
@@ -146,10 +146,6 @@ fn itokawa_raycasts_match_brute_force() {
     assert!(hits > 30 && hits < 270, "{hits} hits");
 }
 
-fn v3(p: P3) -> Vec3 {
-    Vec3::new(p[0] as Real, p[1] as Real, p[2] as Real)
-}
-
 #[test]
 fn itokawa_gradient_matches_finite_differences() {
     let w = shape_model("itokawa.obj", 0.2);
@@ -158,7 +154,7 @@ fn itokawa_gradient_matches_finite_differences() {
     let mut n = 0;
     while n < 200 {
         let p = rng.point(lo, hi, 5.0);
-        let DistanceQuery::Known { distance, gradient } = w.query(&v3(p)) else { panic!("mesh worlds know everywhere") };
+        let DistanceQuery::Known { distance, gradient } = w.query(&to_vec3(p)) else { panic!("mesh worlds know everywhere") };
         if distance.abs() < 0.2 {
             continue;
         }
@@ -228,7 +224,7 @@ fn every_shared_terrain_and_shape_model_loads_through_a_scenario() {
 }
 
 fn sd(w: &dyn World, p: P3) -> f64 {
-    match w.query(&v3(p)) {
+    match w.query(&to_vec3(p)) {
         DistanceQuery::Known { distance, .. } => distance as f64,
         DistanceQuery::Unknown => f64::NAN,
     }
@@ -273,7 +269,7 @@ fn marsyard_truncated_query_is_exact_within_its_limit() {
         }
         let exact = sd(w.as_ref(), p);
         for limit in [0.15f32, 0.3] {
-            let DistanceQuery::Known { distance, .. } = w.query_up_to(&v3(p), limit) else { panic!("{p:?}: unknown") };
+            let DistanceQuery::Known { distance, .. } = w.query_up_to(&to_vec3(p), limit) else { panic!("{p:?}: unknown") };
             let (d, l) = (distance as f64, limit as f64);
             if exact.abs() <= l {
                 assert_eq!(distance, exact as f32, "{p:?} limit {limit}: {d} vs exact {exact}");

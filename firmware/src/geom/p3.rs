@@ -4,8 +4,20 @@
 //! Each helper is the plain component expression, evaluated left to right (`dot` is `a0 b0 + a1 b1 + a2 b2`);
 //! square roots go through `libm` (correctly rounded, as `f64::sqrt` is, so the two agree bit for bit).
 
+use super::{Real, Vec3};
+
 /// A point or vector in `f64`, metres.
 pub type P3 = [f64; 3];
+
+/// As a [`Vec3`] (each component rounded to the nearest `f32`).
+pub fn to_vec3(p: P3) -> Vec3 {
+    Vec3::new(p[0] as Real, p[1] as Real, p[2] as Real)
+}
+
+/// From a [`Vec3`] (exact: every `f32` is an `f64`).
+pub fn from_vec3(v: &Vec3) -> P3 {
+    [f64::from(v.x), f64::from(v.y), f64::from(v.z)]
+}
 
 /// `a - b`.
 pub fn sub(a: P3, b: P3) -> P3 {

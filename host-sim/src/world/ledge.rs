@@ -18,6 +18,7 @@
 
 use super::{Aabb, World};
 use firmware::geom::{Real, Vec3};
+use firmware::geom::p3::from_vec3;
 use firmware::map::{DistanceField, DistanceQuery};
 use workloads::ledge::Ledge;
 
@@ -93,10 +94,6 @@ impl Default for LedgeWorld {
     }
 }
 
-fn to_p(v: &Vec3) -> P {
-    [f64::from(v.x), f64::from(v.y), f64::from(v.z)]
-}
-
 impl DistanceField for LedgeWorld {
     fn query(&self, p: &Vec3) -> DistanceQuery {
         self.ledge.query(p)
@@ -114,7 +111,7 @@ impl World for LedgeWorld {
     }
 
     fn raycast(&self, origin: &Vec3, dir: &Vec3, max_range: Real) -> Option<Real> {
-        self.raycast_f64(to_p(origin), to_p(dir), f64::from(max_range)).map(|t| t as Real)
+        self.raycast_f64(from_vec3(origin), from_vec3(dir), f64::from(max_range)).map(|t| t as Real)
     }
 
     fn height_at(&self, x: Real, y: Real) -> Option<Real> {
