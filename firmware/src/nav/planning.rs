@@ -240,7 +240,8 @@ pub(crate) fn set_up(
     rover.body_clearance_m += map.config().voxel_size;
     let space =
         TetherSpace::new(map, bounds, rover, TetherSpaceParams::DEFAULT).map_err(|_| GoalRefusal::PlannerRejected)?;
-    let start = space.settle_state(p.x, p.y, crate::geom::heading(&pose.to_isometry().rotation)).map_err(|_| GoalRefusal::StartNotSettled)?;
+    let yaw = crate::geom::heading(&pose.to_isometry().rotation);
+    let start = space.settle_state(p.x, p.y, yaw).map_err(|_| GoalRefusal::StartNotSettled)?;
     let g = Vec3::new(goal.position.x, goal.position.y, goal.position.z);
     space.goal_state(g, 0.0).map_err(|_| GoalRefusal::GoalNotSettled)?;
     let mut abit = AbitParams::ompl_defaults();
