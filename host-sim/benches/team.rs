@@ -7,7 +7,7 @@ use firmware::geom::{Real, Vec3};
 use firmware::plan::team::DefaultLocalPlanner;
 use host_sim::cli::team::team_scenario;
 use host_sim::movingai::{load_map, load_scen, run_scenarios};
-use host_sim::team::terrain::{add, scale};
+use firmware::geom::p3::{add, scale};
 use std::path::PathBuf;
 
 fn data() -> PathBuf {

@@ -7,16 +7,13 @@ use core::hint::black_box;
 use criterion::{criterion_group, criterion_main, Criterion};
 use firmware::config::rover::RoverParams;
 use firmware::geom::Vec3;
+use firmware::geom::p3::to_vec3;
 use firmware::rover::{
     boom_in_contact, boom_inline_angle, check_pose_stability, settle, stability_problem, SettleOutcome,
 };
 use firmware::stability::check_stability;
 use firmware::tether::{predict_anchors, Anchor, AnchorHistory};
 use host_sim::world::ledge::{LedgeWorld, ROOT_ANCHOR_TEST1};
-
-fn v(p: [f64; 3]) -> Vec3 {
-    Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)
-}
 
 fn benches(c: &mut Criterion) {
     let w = LedgeWorld::new();
@@ -40,7 +37,7 @@ fn benches(c: &mut Criterion) {
         b.iter(|| check_pose_stability(&w, black_box(&s), Some(&lip), &params))
     });
 
-    let root = AnchorHistory::new(Anchor::root(v(ROOT_ANCHOR_TEST1)));
+    let root = AnchorHistory::new(Anchor::root(to_vec3(ROOT_ANCHOR_TEST1)));
     // a 10 cm step on the ledge top (no contact) and the step on the slope where the lip anchor attaches
     let (a0, a1) = (Vec3::new(-1.0, 0.3, 4.35), Vec3::new(-0.9, 0.3, 4.35));
     c.bench_function("predict_anchors/free_step", |b| {

@@ -21,6 +21,7 @@ use std::time::Instant;
 use firmware::config::map::MapConfig;
 use firmware::config::rover::RoverParams;
 use firmware::geom::{Real, Vec3};
+use firmware::geom::p3::{from_vec3, to_vec3};
 use firmware::map::{Block, DistanceField, DistanceQuery, Map};
 use firmware::plan::abit::{AbitArena, AbitParams, AbitStar};
 use firmware::plan::space::{Budget, GoalState, Planner, ProblemDefinition, Termination};
@@ -267,14 +268,8 @@ impl TrialResult {
     }
 }
 
-fn v3(p: [f64; 3]) -> Vec3 {
-    Vec3::new(p[0] as Real, p[1] as Real, p[2] as Real)
-}
-fn a3(v: &Vec3) -> [f64; 3] {
-    [f64::from(v.x), f64::from(v.y), f64::from(v.z)]
-}
 fn anchors_of(h: &AnchorHistory) -> Vec<[f64; 3]> {
-    h.as_slice().iter().map(|a| a3(&a.point)).collect()
+    h.as_slice().iter().map(|a| from_vec3(&a.point)).collect()
 }
 
 /// The rover model the planner uses: Axel, with the body clearance grown by one voxel when planning on the map
@@ -313,7 +308,7 @@ pub fn endpoints<D: DistanceField>(space: &TetherSpace<'_, D>, spec: &CampaignSp
         };
         format!("the start {:?} does not settle: {e:?}{hint}", spec.start)
     })?;
-    let goal = space.goal_state(v3(spec.goal), 0.0).map_err(|e| format!("the goal {:?} does not settle: {e:?}", spec.goal))?;
+    let goal = space.goal_state(to_vec3(spec.goal), 0.0).map_err(|e| format!("the goal {:?} does not settle: {e:?}", spec.goal))?;
     Ok((start, goal))
 }
 
@@ -323,7 +318,7 @@ pub fn revalidate(world: &dyn World, spec: &CampaignSpec, path: &[RoverState]) -
     let mut params = spec.params;
     params.min_stability_margin = params.min_stability_margin.min(0.0);
     let fail = |failure: String, h: &AnchorHistory| Revalidation { stable: false, failure: Some(failure), final_anchors: anchors_of(h) };
-    let root = AnchorHistory::new(Anchor::root(v3(spec.root)));
+    let root = AnchorHistory::new(Anchor::root(to_vec3(spec.root)));
     let space = match TetherSpace::new(&truth, spec.bounds, spec.rover, params) {
         Ok(s) => s,
         Err((f, r)) => return fail(format!("{f}: {r}"), &root),
@@ -366,7 +361,7 @@ pub fn run_trial<D: DistanceField>(
     let (start, goal) = endpoints(&space, spec)?;
     let pdef = ProblemDefinition {
         start,
-        start_attachment: AnchorHistory::new(Anchor::root(v3(spec.root))),
+        start_attachment: AnchorHistory::new(Anchor::root(to_vec3(spec.root))),
         goal: GoalState { state: goal, tolerance: spec.goal_tolerance_m },
         objective: TetherObjective,
     };
@@ -396,7 +391,7 @@ pub fn run_trial<D: DistanceField>(
     let states: Vec<RoverState> = out.iter().map(|(s, _)| *s).collect();
     let path = out
         .iter()
-        .map(|(s, h)| PathState { axle: a3(&s.axle()), ground: a3(&s.ground), theta: f64::from(s.theta), anchors: anchors_of(h) })
+        .map(|(s, h)| PathState { axle: from_vec3(&s.axle()), ground: from_vec3(&s.ground), theta: f64::from(s.theta), anchors: anchors_of(h) })
         .collect();
     let revalidation = found.then(|| revalidate(spec.world.as_ref(), spec, &states));
     Ok(TrialResult {

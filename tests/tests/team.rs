@@ -46,17 +46,17 @@ fn dstar_lite_matches_movingai_8room_all_scenarios() {
 }
 
 use host_sim::cli::team::team_scenario;
+use firmware::geom::p3::dist;
 use host_sim::team::{simulate, SimReport};
 
 /// The referee's checks again, from the report alone (independent of both the planner and the simulator's own
 /// checks): every hop <= h_max, every landing within r_max of the hub held during the hop, every leg after a hub
 /// motion... (hub positions are in `hub_path`).
 fn check_hops(r: &SimReport, h_max: f64, r_max: f64) {
-    let d = |a: [f64; 3], b: [f64; 3]| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
     assert!(r.violations.is_empty(), "{:?}", r.violations);
     for h in &r.hops {
-        assert!(d(h.from, h.to) <= h_max + 1e-4, "hop {:.3} > {h_max}", d(h.from, h.to));
-        assert!(d(h.to, h.hub) <= r_max + 1e-4, "leg {:.3} > {r_max}", d(h.to, h.hub));
+        assert!(dist(h.from, h.to) <= h_max + 1e-4, "hop {:.3} > {h_max}", dist(h.from, h.to));
+        assert!(dist(h.to, h.hub) <= r_max + 1e-4, "leg {:.3} > {r_max}", dist(h.to, h.hub));
     }
 }
 
@@ -69,9 +69,6 @@ fn short(world: &str, fail: Option<(usize, usize)>, rounds: usize) -> (SimReport
     (r, cfg.goal, cfg.params.h_max as f64, cfg.params.r_max as f64, start)
 }
 
-fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-}
 
 #[test]
 fn hirise_cliff_team_climbs_within_hop_and_tether_limits() {

@@ -2,6 +2,7 @@
 //! anchor prediction against the simulator's true tether, and stability of tests 1-3.
 
 use firmware::config::rover::RoverParams;
+use firmware::geom::p3::{dist, dot, from_vec3, norm, sub, to_vec3};
 use firmware::geom::{Real, Vec3};
 use firmware::rover::{check_pose_stability, settle, SettleOutcome, SettledPose};
 use firmware::tether::{predict_anchors, Anchor, AnchorHistory};
@@ -12,16 +13,6 @@ use host_sim::world::ledge::{
 
 type P = [f64; 3];
 
-fn v(p: P) -> Vec3 {
-    Vec3::new(p[0] as Real, p[1] as Real, p[2] as Real)
-}
-fn p(v: &Vec3) -> P {
-    [f64::from(v.x), f64::from(v.y), f64::from(v.z)]
-}
-fn dist(a: P, b: P) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-}
-
 /// A tether end point 0.35 m off the surface above ground point (x, y).
 fn tether_point(w: &LedgeWorld, x: f64, y: f64) -> P {
     let h = w.height_f64(x, y);
@@ -31,10 +22,8 @@ fn tether_point(w: &LedgeWorld, x: f64, y: f64) -> P {
 
 /// Bend angle of the true tether at its single contact (0 when straight), degrees.
 fn bend_deg(root: P, c: P, x: P) -> f64 {
-    let a = [c[0] - root[0], c[1] - root[1], c[2] - root[2]];
-    let b = [x[0] - c[0], x[1] - c[1], x[2] - c[2]];
-    let cosv = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
-        / ((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt() * (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]).sqrt());
+    let (a, b) = (sub(c, root), sub(x, c));
+    let cosv = dot(a, b) / (norm(a) * norm(b));
     cosv.clamp(-1.0, 1.0).acos().to_degrees()
 }
 
@@ -48,19 +37,19 @@ fn lip_attach_and_detach_match_the_true_tether() {
     let (mut attached_at, mut compared) = (None, 0);
     let mut max_drift: f64 = 0.0;
     for pass in 0..2 {
-        let mut hist = AnchorHistory::new(Anchor::root(v(root)));
+        let mut hist = AnchorHistory::new(Anchor::root(to_vec3(root)));
         if pass == 1 {
             // climb back from the bottom, starting with the true history there
             path.reverse();
             let t = true_tether(&w, root, path[0], None).expect("true tether");
             for c in &t.contacts {
                 let (_, g) = w.sdf(*c);
-                assert!(hist.push(Anchor { point: v(*c), gradient: v(g) }).is_ok());
+                assert!(hist.push(Anchor { point: to_vec3(*c), gradient: to_vec3(g) }).is_ok());
             }
         }
         for (k, win) in path.windows(2).enumerate() {
             let mut out = AnchorHistory::default();
-            predict_anchors(&w, &hist, &v(win[0]), &v(win[1]), &mut out).unwrap_or_else(|e| panic!("{e:?}"));
+            predict_anchors(&w, &hist, &to_vec3(win[0]), &to_vec3(win[1]), &mut out).unwrap_or_else(|e| panic!("{e:?}"));
             hist = out;
             let t = true_tether(&w, root, win[1], None).expect("true tether");
             let predicted = hist.len() - 1;
@@ -73,7 +62,7 @@ fn lip_attach_and_detach_match_the_true_tether() {
             if let (Some(c), Some(a)) = (t.contacts.first(), hist.last()) {
                 // the predicted anchor is on the lip edge; it stays where it attached (Paton's fixed anchors) while
                 // the true frictionless tether slides along the edge, so along the edge they may drift apart
-                let ap = p(&a.point);
+                let ap = from_vec3(&a.point);
                 assert!(ap[0].abs() < 0.01 && (ap[2] - 4.0).abs() < 0.01, "anchor off the lip: {ap:?}");
                 if pass == 0 && attached_at.is_none() {
                     attached_at = Some(k);
@@ -81,7 +70,7 @@ fn lip_attach_and_detach_match_the_true_tether() {
                 }
                 max_drift = max_drift.max(dist(*c, ap));
             }
-            let len = f64::from(hist.length_to(&v(win[1])));
+            let len = f64::from(hist.length_to(&to_vec3(win[1])));
             assert!((len - t.length).abs() < 0.01, "length {len} vs true {}", t.length);
             compared += 1;
         }
@@ -98,7 +87,7 @@ fn pole_wrap_matches_the_true_tether() {
     let root = ROOT_ANCHOR_TEST2;
     let [cx, cy] = POLE_CENTRE_XY;
     let radius = 1.5;
-    let mut hist = AnchorHistory::new(Anchor::root(v(root)));
+    let mut hist = AnchorHistory::new(Anchor::root(to_vec3(root)));
     let pos = |deg: f64| [cx + radius * deg.to_radians().cos(), cy + radius * deg.to_radians().sin(), 4.6];
     let mut wrapped_steps = 0;
     let (mut max_exit_err, mut max_exit_dz, mut max_len_err): (f64, f64, f64) = (0.0, 0.0, 0.0);
@@ -107,7 +96,7 @@ fn pole_wrap_matches_the_true_tether() {
         let (a, b) = (pos(deg), pos(deg + 2.5));
         deg += 2.5;
         let mut out = AnchorHistory::default();
-        predict_anchors(&w, &hist, &v(a), &v(b), &mut out).unwrap_or_else(|e| panic!("at {deg}: {e:?}"));
+        predict_anchors(&w, &hist, &to_vec3(a), &to_vec3(b), &mut out).unwrap_or_else(|e| panic!("at {deg}: {e:?}"));
         hist = out;
         let truth = true_tether(&w, root, b, None).or_else(|| true_tether(&w, root, b, Some(Wrap::Ccw)));
         let wrap = host_sim::truth::tether::around_pole(&w, root, b, Wrap::Ccw);
@@ -128,19 +117,19 @@ fn pole_wrap_matches_the_true_tether() {
         // one anchor spacing on the pole (see `firmware::tether` docs): the discretisation of the wrap
         let spacing = 2.0 * (f64::from(firmware::config::tether::PIVOT_EXCLUSION_M) / (2.0 * POLE_RADIUS_M)).asin();
         for a in hist.as_slice().iter().skip(1) {
-            let ap = p(&a.point);
+            let ap = from_vec3(&a.point);
             let r = ((ap[0] - cx).powi(2) + (ap[1] - cy).powi(2)).sqrt();
             assert!((r - POLE_RADIUS_M).abs() < 0.01, "anchor off the pole: r {r}");
             let rel = (ang(ap) - t1 + spacing).rem_euclid(core::f64::consts::TAU) - spacing;
             assert!(rel > -0.02 && rel < span + spacing, "at {deg}: anchor angle {rel} outside the true arc [0, {span}]");
         }
         if hist.len() > 1 {
-            let last = p(&hist.last().expect("anchor").point);
+            let last = from_vec3(&hist.last().expect("anchor").point);
             let horiz = ((last[0] - p2[0]).powi(2) + (last[1] - p2[1]).powi(2)).sqrt();
             max_exit_err = max_exit_err.max(horiz);
             max_exit_dz = max_exit_dz.max((last[2] - p2[2]).abs());
             assert!(horiz < POLE_RADIUS_M * spacing + 0.01, "at {deg}: last anchor {last:?} vs true exit {p2:?}");
-            let len = f64::from(hist.length_to(&v(b)));
+            let len = f64::from(hist.length_to(&to_vec3(b)));
             max_len_err = max_len_err.max((len - t.length).abs());
             assert!((len - t.length).abs() < 0.02, "at {deg}: length {len} vs true {}", t.length);
             wrapped_steps += 1;
@@ -162,14 +151,14 @@ fn pole_wrap_matches_the_true_tether() {
 
 fn settle_on(w: &LedgeWorld, x: f64, y: f64, yaw: Real) -> SettledPose {
     let g = [x, y, w.height_f64(x, y)];
-    match settle(w, &v(g), yaw, &RoverParams::AXEL) {
+    match settle(w, &to_vec3(g), yaw, &RoverParams::AXEL) {
         SettleOutcome::Settled(s) => s,
         other => panic!("no settle at ({x}, {y}): {other:?}"),
     }
 }
 
 fn stable_with(w: &LedgeWorld, s: &SettledPose, last_anchor: P) -> bool {
-    let (o, _) = check_pose_stability(w, s, Some(&v(last_anchor)), &RoverParams::AXEL).expect("valid problem");
+    let (o, _) = check_pose_stability(w, s, Some(&to_vec3(last_anchor)), &RoverParams::AXEL).expect("valid problem");
     o.is_stable()
 }
 
@@ -181,7 +170,7 @@ fn ledge_test1_slope_stable_test2_unstable() {
     for x in [0.6, 1.0, 1.4, 1.8, 2.2] {
         for y in [-2.0, -1.0, 0.0, 1.0, 2.0] {
             let s = settle_on(&w, x, y, 0.0);
-            let axle = p(&s.pose.translation.vector);
+            let axle = from_vec3(&s.pose.translation.vector);
             // slope: the rover's up axis is the slope normal
             let up = s.pose.rotation * Vec3::z();
             assert!((f64::from(up.z).acos().to_degrees() - 55.0).abs() < 1.0, "tilt at {x},{y}");
@@ -227,19 +216,19 @@ fn ledge_test3_anchoring_on_the_pole_makes_the_slope_stable() {
     for k in 1..=25 {
         path.push(tether_point(&w, -0.3 + 0.1 * k as f64, yd));
     }
-    let mut hist = AnchorHistory::new(Anchor::root(v(root)));
+    let mut hist = AnchorHistory::new(Anchor::root(to_vec3(root)));
     let mut stable_looped = 0;
     let mut checked = 0;
     for (k, win) in path.windows(2).enumerate() {
         let mut out = AnchorHistory::default();
-        predict_anchors(&w, &hist, &v(win[0]), &v(win[1]), &mut out).unwrap_or_else(|e| panic!("step {k}: {e:?}"));
+        predict_anchors(&w, &hist, &to_vec3(win[0]), &to_vec3(win[1]), &mut out).unwrap_or_else(|e| panic!("step {k}: {e:?}"));
         hist = out;
         let x = win[1][0];
         // poses whose boom (1 m) can reach the lip are outside the inline / in-contact boom model: skip them
-        let lip_dist = dist(p(&settle_on(&w, x.clamp(0.0, 2.7), yd, 0.0).pose.translation.vector), [0.0, yd, 4.0]);
+        let lip_dist = dist(from_vec3(&settle_on(&w, x.clamp(0.0, 2.7), yd, 0.0).pose.translation.vector), [0.0, yd, 4.0]);
         if x > 0.5 && x < 2.4 && lip_dist > f64::from(RoverParams::AXEL.boom_length_m) + 0.2 {
             let s = settle_on(&w, x, yd, 0.0);
-            let last_anchor = p(&hist.last().expect("anchor").point);
+            let last_anchor = from_vec3(&hist.last().expect("anchor").point);
             // the history holds the pole contacts and the lip
             assert!(hist.len() >= 3, "history {hist:?}");
             let on_lip = last_anchor[0].abs() < 0.03 && (last_anchor[2] - 4.0).abs() < 0.03;
@@ -250,9 +239,9 @@ fn ledge_test3_anchoring_on_the_pole_makes_the_slope_stable() {
             // independent expectation (Abad-Manterola et al. VI): stable while the tether's angle from upslope in
             // the slope plane is below asin(mu cot alpha) (5 degrees of slack for the rover's extent and boom)
             let params = RoverParams::AXEL;
-            let tip = firmware::rover::boom_tip(&s, firmware::rover::boom_inline_angle(&s, &v(last_anchor)), &params);
+            let tip = firmware::rover::boom_tip(&s, firmware::rover::boom_inline_angle(&s, &to_vec3(last_anchor)), &params);
             let d = {
-                let t = p(&tip);
+                let t = from_vec3(&tip);
                 let e = [last_anchor[0] - t[0], last_anchor[1] - t[1], last_anchor[2] - t[2]];
                 let n = dist(e, [0.0; 3]);
                 [e[0] / n, e[1] / n, e[2] / n]

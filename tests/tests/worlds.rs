@@ -1,6 +1,7 @@
 //! Ground-truth worlds from the real data files: the triangle-mesh world against brute force on the asteroid
 //! shape models, and every terrain and shape-model file in `shared/data` loaded through the scenario path.
 
+use firmware::geom::p3::{norm, sub, to_vec3};
 use firmware::geom::{Real, Vec3};
 use firmware::map::{DistanceField, DistanceQuery};
 use host_sim::scenario;
@@ -34,12 +35,6 @@ impl Uni {
     }
 }
 
-fn sub(a: P3, b: P3) -> P3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn len(a: P3) -> f64 {
-    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
-}
 
 fn bounds(w: &MeshWorld) -> (P3, P3) {
     let b = w.bounds();
@@ -51,7 +46,7 @@ fn brute_distance(w: &MeshWorld, p: P3) -> f64 {
     (0..w.triangle_count())
         .map(|t| {
             let [a, b, c] = w.triangle(t).unwrap();
-            len(sub(p, closest_point_on_triangle(p, a, b, c)))
+            norm(sub(p, closest_point_on_triangle(p, a, b, c)))
         })
         .fold(f64::INFINITY, f64::min)
 }
@@ -81,7 +76,7 @@ fn shape_model(name: &str, scale: f64) -> MeshWorld {
 
 fn distance_and_sign_against_brute_force(w: &MeshWorld, n: usize, seed: u64) {
     let (lo, hi) = bounds(w);
-    let margin = 0.1 * len(sub(hi, lo));
+    let margin = 0.1 * norm(sub(hi, lo));
     let mut rng = Uni(seed);
     let mut inside = 0;
     for _ in 0..n {
@@ -89,7 +84,7 @@ fn distance_and_sign_against_brute_force(w: &MeshWorld, n: usize, seed: u64) {
         let (sd, q) = w.sdf_closest(p);
         let b = brute_distance(w, p);
         assert!((sd.abs() - b).abs() <= 1e-9 * (1.0 + b), "{}: {p:?}: {sd} vs brute {b}", w.name());
-        assert!((len(sub(p, q)) - b).abs() <= 1e-9 * (1.0 + b));
+        assert!((norm(sub(p, q)) - b).abs() <= 1e-9 * (1.0 + b));
         let bi = brute_inside(w, p);
         assert_eq!(sd < 0.0, bi, "{}: {p:?}: sd {sd}, parity inside {bi}", w.name());
         inside += usize::from(bi);
@@ -123,7 +118,7 @@ fn itokawa_raycasts_match_brute_force() {
         let o = rng.point(lo, hi, 10.0);
         let d = {
             let v = [rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)];
-            let l = len(v);
+            let l = norm(v);
             [v[0] / l, v[1] / l, v[2] / l]
         };
         let max = 60.0;
@@ -134,7 +129,7 @@ fn itokawa_raycasts_match_brute_force() {
             })
             .filter(|&t| t <= max)
             .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.min(t))));
-        let got = w.raycast(&v3(o), &v3(d), max as Real);
+        let got = w.raycast(&to_vec3(o), &to_vec3(d), max as Real);
         match (got, brute) {
             // The World interface is f32: compare to f32 resolution at ~100 m.
             (Some(a), Some(b)) => assert!((a as f64 - b).abs() < 1e-3, "{o:?} {d:?}: {a} vs {b}"),
@@ -151,10 +146,6 @@ fn itokawa_raycasts_match_brute_force() {
     assert!(hits > 30 && hits < 270, "{hits} hits");
 }
 
-fn v3(p: P3) -> Vec3 {
-    Vec3::new(p[0] as Real, p[1] as Real, p[2] as Real)
-}
-
 #[test]
 fn itokawa_gradient_matches_finite_differences() {
     let w = shape_model("itokawa.obj", 0.2);
@@ -163,7 +154,7 @@ fn itokawa_gradient_matches_finite_differences() {
     let mut n = 0;
     while n < 200 {
         let p = rng.point(lo, hi, 5.0);
-        let DistanceQuery::Known { distance, gradient } = w.query(&v3(p)) else { panic!("mesh worlds know everywhere") };
+        let DistanceQuery::Known { distance, gradient } = w.query(&to_vec3(p)) else { panic!("mesh worlds know everywhere") };
         if distance.abs() < 0.2 {
             continue;
         }
@@ -175,9 +166,9 @@ fn itokawa_gradient_matches_finite_differences() {
             b[k] -= h;
             (w.sdf_closest(a).0 - w.sdf_closest(b).0) / (2.0 * h)
         });
-        let err = len(sub(fd, [gradient.x as f64, gradient.y as f64, gradient.z as f64]));
+        let err = norm(sub(fd, [gradient.x as f64, gradient.y as f64, gradient.z as f64]));
         // Where the closest point is unique the SDF is differentiable; skip the medial set (|fd| < 1).
-        if (len(fd) - 1.0).abs() < 1e-3 {
+        if (norm(fd) - 1.0).abs() < 1e-3 {
             assert!(err < 1e-3, "{p:?}: gradient {gradient:?} vs finite differences {fd:?}");
             n += 1;
         }
@@ -233,7 +224,7 @@ fn every_shared_terrain_and_shape_model_loads_through_a_scenario() {
 }
 
 fn sd(w: &dyn World, p: P3) -> f64 {
-    match w.query(&v3(p)) {
+    match w.query(&to_vec3(p)) {
         DistanceQuery::Known { distance, .. } => distance as f64,
         DistanceQuery::Unknown => f64::NAN,
     }
@@ -278,7 +269,7 @@ fn marsyard_truncated_query_is_exact_within_its_limit() {
         }
         let exact = sd(w.as_ref(), p);
         for limit in [0.15f32, 0.3] {
-            let DistanceQuery::Known { distance, .. } = w.query_up_to(&v3(p), limit) else { panic!("{p:?}: unknown") };
+            let DistanceQuery::Known { distance, .. } = w.query_up_to(&to_vec3(p), limit) else { panic!("{p:?}: unknown") };
             let (d, l) = (distance as f64, limit as f64);
             if exact.abs() <= l {
                 assert_eq!(distance, exact as f32, "{p:?} limit {limit}: {d} vs exact {exact}");

@@ -115,7 +115,7 @@ use hal::Instant;
 use crate::config::map::{MapConfig, NAV_POINT_BATCH};
 use crate::config::nav::MAX_PLAN_ITERATIONS;
 use crate::exec::{Autonomy, PlanBuffer, PlanProgress, Refused, Scan};
-use crate::geom::{Pose3, Rot3, Vec3};
+use crate::geom::Vec3;
 use crate::map::{Block, Map, MapError};
 use crate::plan::tethered::{PlanBounds, RoverState};
 use crate::protocol::{Configure, GoalRequest, MapStatus, Motion, PlanState, PlannerChoice, Pose};
@@ -196,15 +196,6 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
     }
 }
 
-/// The protocol's pose as a rigid transform (the protocol validated it: finite, unit quaternion within tolerance).
-fn pose3(p: &Pose) -> Pose3 {
-    let q = nalgebra::Quaternion::new(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
-    Pose3::from_parts(
-        nalgebra::Translation3::new(p.position.x, p.position.y, p.position.z),
-        Rot3::from_quaternion(q),
-    )
-}
-
 fn add(counter: &mut u32, n: u32) {
     *counter = counter.saturating_add(n);
 }
@@ -219,7 +210,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
         self.pose = Some(scan.sensor_pose);
         // The map changes: the suspended search's motion checks no longer hold; the next step starts anew.
         planning::forget_search(&mut self.storage);
-        let sensor_pose = pose3(&scan.sensor_pose);
+        let sensor_pose = scan.sensor_pose.to_isometry();
         let mut status = self.status;
         let Some(mut map) = self.map() else {
             // Unreachable with storage that `new` accepted; counted rather than ignored.

@@ -11,7 +11,7 @@ use crate::config::protocol::MAX_ANCHORS_PER_WAYPOINT;
 use crate::config::rover::RoverParams;
 use crate::config::tether::ANCHOR_HISTORY_CAPACITY;
 use crate::exec::{PlanBuffer, PlanProgress};
-use crate::geom::{norm3, Real, Vec3};
+use crate::geom::{norm3, wrap_angle, Real, Vec3};
 use crate::map::{DistanceField, DistanceQuery, Map};
 use crate::plan::abit::{AbitArena, AbitParams, AbitStar, AbitSuspended};
 use crate::plan::space::{
@@ -220,13 +220,6 @@ pub(crate) fn map_bounds(map: &Map<'_>, start: &Vec3) -> Option<PlanBounds> {
     b.is_valid().then_some(b)
 }
 
-/// Yaw of a pose's x axis projected on the horizontal plane.
-fn heading(p: &Pose) -> Real {
-    let q = nalgebra::Quaternion::new(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
-    let x = crate::geom::Rot3::from_quaternion(q) * Vec3::x();
-    libm::atan2f(x.y, x.x)
-}
-
 /// Set up a goal: settle the start under the last known pose, check the goal, and return the problem.
 pub(crate) fn set_up(
     map: &Map<'_>,
@@ -247,7 +240,8 @@ pub(crate) fn set_up(
     rover.body_clearance_m += map.config().voxel_size;
     let space =
         TetherSpace::new(map, bounds, rover, TetherSpaceParams::DEFAULT).map_err(|_| GoalRefusal::PlannerRejected)?;
-    let start = space.settle_state(p.x, p.y, heading(pose)).map_err(|_| GoalRefusal::StartNotSettled)?;
+    let yaw = crate::geom::heading(&pose.to_isometry().rotation);
+    let start = space.settle_state(p.x, p.y, yaw).map_err(|_| GoalRefusal::StartNotSettled)?;
     let g = Vec3::new(goal.position.x, goal.position.y, goal.position.z);
     space.goal_state(g, 0.0).map_err(|_| GoalRefusal::GoalNotSettled)?;
     let mut abit = AbitParams::ompl_defaults();
@@ -289,18 +283,6 @@ impl<D: DistanceField> MotionValidator<TetherSpace<'_, D>> for CountedMotions<'_
         self.checks.set(self.checks.get().saturating_add(1));
         TetherMotionValidator.check_motion(space, from, from_attachment, to)
     }
-}
-
-/// `a - b` wrapped to `(-pi, pi]`.
-fn wrap_angle(a: Real) -> Real {
-    let tau = core::f32::consts::TAU;
-    let mut d = libm::fmodf(a, tau);
-    if d > core::f32::consts::PI {
-        d -= tau;
-    } else if d <= -core::f32::consts::PI {
-        d += tau;
-    }
-    d
 }
 
 /// The motion primitives of one path segment `a -> b` (Paton et al. V: turn in place to the drive heading, drive

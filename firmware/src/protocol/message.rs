@@ -147,7 +147,8 @@ impl Pose {
         orientation: Quat::IDENTITY,
     };
 
-    /// As an `nalgebra` isometry (the quaternion is renormalised; it was checked to be unit within tolerance).
+    /// As an `nalgebra` isometry (the quaternion is renormalised; it was checked to be unit within tolerance): the
+    /// one conversion from the wire pose, for the navigator and the simulator alike.
     pub fn to_isometry(&self) -> crate::geom::Pose3 {
         let q = nalgebra::Quaternion::new(
             self.orientation.w,

@@ -28,6 +28,7 @@
 //! point, so it always points away from the terrain; on the surface itself it is the face normal.
 //! Ray casts intersect every face exactly; a ray starting inside the terrain hits at distance 0.
 
+use firmware::geom::p3::{dist, dot, norm, sub, P3};
 use firmware::geom::{is_finite3, Real, Vec3};
 use firmware::map::{DistanceField, DistanceQuery};
 
@@ -47,18 +48,7 @@ pub const POLE_HEIGHT_M: f64 = 6.0;
 pub const POLE_CENTRE_XY: [f64; 2] = [-2.5, 0.0];
 
 /// A point or vector in f64, metres.
-type P = [f64; 3];
-
-fn sub(a: P, b: P) -> P {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn dot(a: P, b: P) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn dist(a: P, b: P) -> f64 {
-    let d = sub(a, b);
-    libm::sqrt(dot(d, d))
-}
+type P = P3;
 
 /// `tan(55 deg)`.
 fn slope_tan() -> f64 {
@@ -94,7 +84,7 @@ impl Face {
             n[1] += (a[2] - b[2]) * (a[0] + b[0]);
             n[2] += (a[0] - b[0]) * (a[1] + b[1]);
         }
-        let l = libm::sqrt(dot(n, n));
+        let l = norm(n);
         Face { verts, normal: [n[0] / l, n[1] / l, n[2] / l] }
     }
 

@@ -27,7 +27,8 @@ use core::fmt::Write;
 use rand_core::{SeedableRng, TryRng};
 
 use firmware::config::rover::RoverParams;
-use firmware::geom::{Real, Vec3};
+use firmware::geom::Real;
+use firmware::geom::p3::to_vec3;
 use firmware::map::DistanceField;
 use firmware::plan::abit::{AbitArena, AbitParams, AbitStar, ArenaUse, PathError};
 use firmware::plan::space::{Budget, Counters, GoalState, Planner, ProblemDefinition, Termination};
@@ -153,10 +154,6 @@ impl TryRng for Pcg64 {
     }
 }
 
-fn v3(p: [f64; 3]) -> Vec3 {
-    Vec3::new(p[0] as Real, p[1] as Real, p[2] as Real)
-}
-
 /// The planning bounds (as the campaign casts the scenario's).
 pub fn bounds() -> PlanBounds {
     PlanBounds { min: BOUNDS_MIN.map(|v| v as Real), max: BOUNDS_MAX.map(|v| v as Real) }
@@ -218,10 +215,10 @@ pub fn plan_ledge_pole<D: DistanceField, const NV: usize, const NQ: usize, const
     let start = space
         .settle_state(START[0] as Real, START[1] as Real, yaw)
         .map_err(|_| LedgePoleError::StartDoesNotSettle)?;
-    let goal = space.goal_state(v3(GOAL), 0.0).map_err(|_| LedgePoleError::GoalDoesNotSettle)?;
+    let goal = space.goal_state(to_vec3(GOAL), 0.0).map_err(|_| LedgePoleError::GoalDoesNotSettle)?;
     let pdef = ProblemDefinition {
         start,
-        start_attachment: AnchorHistory::new(Anchor::root(v3(ROOT_ANCHOR))),
+        start_attachment: AnchorHistory::new(Anchor::root(to_vec3(ROOT_ANCHOR))),
         goal: GoalState { state: goal, tolerance: GOAL_TOLERANCE_M },
         objective: TetherObjective,
     };

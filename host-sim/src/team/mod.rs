@@ -20,7 +20,8 @@ use firmware::plan::team::astar::AStarStatus;
 use firmware::plan::team::formation::Team;
 use firmware::plan::team::DefaultLocalPlanner;
 use rand_core::Rng;
-use terrain::{add, dist, scale, sub, unit, Surface, P3};
+use firmware::geom::p3::{add, cross, dist, from_vec3, scale, sub, to_vec3};
+use terrain::{unit, Surface, P3};
 
 /// Range sensor: `rays` directions spread over the sphere (Fibonacci lattice), range, Gaussian-ish noise.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -116,22 +117,15 @@ pub struct SimReport {
     pub plan_times: Vec<f64>,
 }
 
-fn v3(p: P3) -> Vec3 {
-    Vec3::new(p[0] as Real, p[1] as Real, p[2] as Real)
-}
-fn p3(v: &Vec3) -> P3 {
-    [v.x as f64, v.y as f64, v.z as f64]
-}
-
 /// Run the team from `start` (one grip point per robot) to `cfg.goal` on `surface`.
 pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig, rng: &mut R) -> SimReport {
     let params = cfg.params;
-    let mut team: Team<4> = Team::new(start.map(v3));
+    let mut team: Team<4> = Team::new(start.map(to_vec3));
     let mut planner: Box<DefaultLocalPlanner> = Box::default();
     let dirs = cfg.sensor.directions();
     let mut rep = SimReport { world: surface.name().to_string(), ..Default::default() };
     rep.paths = start.iter().map(|p| vec![*p]).collect();
-    rep.hub_path.push(p3(&team.hub));
+    rep.hub_path.push(from_vec3(&team.hub));
     let mut turns = [0usize; 4];
     let mut stalled = 0usize;
     let mut moved_this_round = false;
@@ -142,14 +136,14 @@ pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig,
         if new_round && !(round == 0 && rep.hops.is_empty() && turns.iter().all(|&t| t == 0)) {
             // end of the previous round: hub motion, then the referee checks every leg
             team.hub_motion(params.r_max);
-            rep.hub_path.push(p3(&team.hub));
+            rep.hub_path.push(from_vec3(&team.hub));
             for (k, r) in team.robots.iter().enumerate() {
-                let l = dist(p3(&r.pos), p3(&team.hub));
+                let l = dist(from_vec3(&r.pos), from_vec3(&team.hub));
                 if r.attached && l > params.r_max as f64 + 1e-4 {
                     rep.violations.push(format!("round {round}: robot {k} leg {l:.3} m > r_max {}", params.r_max));
                 }
             }
-            if dist(p3(&team.hub), cfg.goal) <= cfg.goal_tol {
+            if dist(from_vec3(&team.hub), cfg.goal) <= cfg.goal_tol {
                 rep.reached = true;
                 break;
             }
@@ -170,7 +164,7 @@ pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig,
             rep.lost.push(m);
             continue;
         }
-        let pos = p3(&team.robots[m].pos);
+        let pos = from_vec3(&team.robots[m].pos);
         let n_true = surface.normal_near(pos);
         let sensor = add(pos, scale(n_true, cfg.sensor.height));
         let hits = surface.scan(sensor, &dirs, cfg.sensor.range);
@@ -178,13 +172,13 @@ pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig,
         for (d, h) in dirs.iter().zip(hits) {
             if let Some(t) = h {
                 let e = (rng.next_u32() as f64 / u32::MAX as f64 * 2.0 - 1.0) * cfg.sensor.noise;
-                pts.push(v3(add(sensor, scale(*d, t + e))));
+                pts.push(to_vec3(add(sensor, scale(*d, t + e))));
             }
         }
         let leg = team.leg(m).unwrap_or_else(Vec3::zeros);
-        let goal = team.slot_goal(m, &v3(cfg.goal));
+        let goal = team.slot_goal(m, &to_vec3(cfg.goal));
         let t0 = std::time::Instant::now();
-        let plan = planner.plan(&pts, &v3(n_true), &team.robots[m].pos, &leg, &goal, 0.5 * cfg.goal_tol as Real, &params);
+        let plan = planner.plan(&pts, &to_vec3(n_true), &team.robots[m].pos, &leg, &goal, 0.5 * cfg.goal_tol as Real, &params);
         let dt = t0.elapsed().as_secs_f64();
         rep.plan_times.push(dt);
         let plan = match plan {
@@ -192,10 +186,10 @@ pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig,
             Err(_) => continue,
         };
         if rep.first_plans.len() < 4 && turn == 0 {
-            rep.first_plans.push(plan.hops.iter().map(p3).collect());
+            rep.first_plans.push(plan.hops.iter().map(from_vec3).collect());
             if m == 0 {
                 let g = &planner.graph;
-                let verts: Vec<P3> = g.vertices[..g.n_vertices].iter().map(|v| p3(&v.pos)).collect();
+                let verts: Vec<P3> = g.vertices[..g.n_vertices].iter().map(|v| from_vec3(&v.pos)).collect();
                 let mut edges = Vec::new();
                 for a in 0..g.n_vertices {
                     for e in g.out_edges(a) {
@@ -210,15 +204,15 @@ pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig,
         }
         let Some(target) = plan.hops.get(1) else { continue };
         // land on the true surface: cast along the scene normal through the planned anchor
-        let n = p3(&planner.scene.frame.n);
-        let tp = p3(target);
+        let n = from_vec3(&planner.scene.frame.n);
+        let tp = from_vec3(target);
         let o = add(tp, scale(n, 3.0));
         let landing = surface
             .raycast(o, scale(n, -1.0), 6.0)
             .map(|t| add(o, scale(n, -t)))
             .or_else(|| surface.raycast(tp, n, 3.0).map(|t| add(tp, scale(n, t))));
         let Some(to) = landing else { continue };
-        let hub = p3(&team.hub);
+        let hub = from_vec3(&team.hub);
         // the referee's checks (independent of the planner)
         let hop = dist(pos, to);
         if hop > params.h_max as f64 + 1e-4 {
@@ -228,7 +222,7 @@ pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig,
         if legl > params.r_max as f64 + 1e-4 {
             rep.violations.push(format!("robot {m} round {round}: landing {legl:.3} m from hub > r_max {}", params.r_max));
         }
-        team.hop(m, v3(to));
+        team.hop(m, to_vec3(to));
         rep.paths[m].push(to);
         rep.hops.push(HopRecord { robot: m, round, from: pos, to, hub, status: plan.status, plan_s: dt });
         if hop > 1e-3 {
@@ -236,7 +230,7 @@ pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig,
         }
     }
     rep.rounds = round + 1;
-    if !rep.reached && dist(p3(&team.hub), cfg.goal) <= cfg.goal_tol {
+    if !rep.reached && dist(from_vec3(&team.hub), cfg.goal) <= cfg.goal_tol {
         rep.reached = true;
     }
     rep
@@ -302,8 +296,8 @@ pub fn itokawa(path: &std::path::Path) -> Result<terrain::MeshSurface, String> {
 /// z; mesh: along the ray from the body's centre), on the true surface.
 pub fn x_start(surface: &dyn Surface, center: P3, body_center: P3, r: f64) -> Option<[P3; 4]> {
     let up = unit(sub(center, body_center));
-    let a = unit(if up[2].abs() < 0.9 { terrain::cross(up, [0.0, 0.0, 1.0]) } else { terrain::cross(up, [1.0, 0.0, 0.0]) });
-    let b = terrain::cross(up, a);
+    let a = unit(if up[2].abs() < 0.9 { cross(up, [0.0, 0.0, 1.0]) } else { cross(up, [1.0, 0.0, 0.0]) });
+    let b = cross(up, a);
     let mut out = [[0.0; 3]; 4];
     // the paper's order: (1,1), (1,0), (0,1), (0,0) around the hub at (0.5, 0.5)
     for (k, (sa, sb)) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)].iter().enumerate() {

@@ -3,46 +3,14 @@
 
 use crate::terrain::obj::TriMesh;
 use crate::terrain::Heightmap;
+use firmware::geom::p3::{add, cross, dist, dot, scale, sub, unit_or};
 
-/// A 3-vector in f64 (the simulator's truth works in f64).
-pub type P3 = [f64; 3];
+/// A 3-vector in f64 (the simulator's truth works in f64); the vector helpers are [`firmware::geom::p3`]'s.
+pub use firmware::geom::p3::P3;
 
-/// a - b
-pub fn sub(a: P3, b: P3) -> P3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-/// a + b
-pub fn add(a: P3, b: P3) -> P3 {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-/// a * s
-pub fn scale(a: P3, s: f64) -> P3 {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-/// a . b
-pub fn dot(a: P3, b: P3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-/// a x b
-pub fn cross(a: P3, b: P3) -> P3 {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-/// |a|
-pub fn norm(a: P3) -> f64 {
-    dot(a, a).sqrt()
-}
-/// a / |a| (z when zero)
+/// `a / |a|`, straight up (`+z`) for a zero vector.
 pub fn unit(a: P3) -> P3 {
-    let n = norm(a);
-    if n > 0.0 {
-        scale(a, 1.0 / n)
-    } else {
-        [0.0, 0.0, 1.0]
-    }
-}
-/// |a - b|
-pub fn dist(a: P3, b: P3) -> f64 {
-    norm(sub(a, b))
+    unit_or(a, [0.0, 0.0, 1.0])
 }
 
 /// A true surface.

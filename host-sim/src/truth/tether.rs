@@ -19,17 +19,7 @@ use crate::world::ledge::{
     toe_x, LedgeWorld, LEDGE_DEPTH_M, LEDGE_HEIGHT_M, POLE_CENTRE_XY, POLE_HEIGHT_M, POLE_RADIUS_M,
 };
 
-type P = [f64; 3];
-
-fn sub(a: P, b: P) -> P {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn norm(a: P) -> f64 {
-    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
-}
-fn lerp(a: P, b: P, t: f64) -> P {
-    [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])]
-}
+use firmware::geom::p3::{lerp, norm, sub, P3 as P};
 
 /// How the true tether runs.
 #[derive(Debug, Clone, PartialEq)]

@@ -1,23 +1,9 @@
 //! Exact distance helpers in `f64` for the ground-truth worlds.
 
-/// A 3D point / vector in `f64`.
-pub type P3 = [f64; 3];
+//! The vector helpers are [`firmware::geom::p3`]'s.
 
-pub(crate) fn sub(a: P3, b: P3) -> P3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-pub(crate) fn dot(a: P3, b: P3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-pub(crate) fn add_scaled(a: P3, b: P3, s: f64) -> P3 {
-    [a[0] + b[0] * s, a[1] + b[1] * s, a[2] + b[2] * s]
-}
-pub(crate) fn cross(a: P3, b: P3) -> P3 {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-pub(crate) fn norm(a: P3) -> f64 {
-    dot(a, a).sqrt()
-}
+pub use firmware::geom::p3::P3;
+use firmware::geom::p3::{add_scaled, dot, sub};
 
 /// Closest point to `p` on triangle `(a, b, c)` (Ericson, Real-Time Collision Detection, 5.1.5).
 pub fn closest_point_on_triangle(p: P3, a: P3, b: P3, c: P3) -> P3 {
@@ -110,6 +96,7 @@ pub fn sphere_trace(sdf: impl Fn(P3) -> f64, origin: P3, dir: P3, max_range: f64
 #[cfg(test)]
 mod tests {
     use super::*;
+    use firmware::geom::p3::norm;
 
     #[test]
     fn triangle_closest_point_matches_dense_sampling() {

@@ -19,7 +19,8 @@
 //! refine a sign change by 50 bisections: a feature thinner than a quarter post spacing along the ray can be
 //! missed (a height field has none thinner than one post except at grazing incidence).
 
-use super::geometry::{closest_point_on_triangle, dot, norm, sub, P3};
+use super::geometry::{closest_point_on_triangle, P3};
+use firmware::geom::p3::{cross, dot, norm, sub};
 use super::{Aabb, World};
 use crate::terrain::Heightmap;
 use firmware::geom::{Real, Vec3};
@@ -182,7 +183,7 @@ impl HeightmapWorld {
         let above = match self.height(p[0].clamp(self.x0, -self.x0), p[1].clamp(self.y0, -self.y0)) {
             Some(h) => p[2] >= h,
             None => {
-                let n = super::geometry::cross(sub(t[1], t[0]), sub(t[2], t[0]));
+                let n = cross(sub(t[1], t[0]), sub(t[2], t[0]));
                 dot(sub(p, q), n) >= 0.0
             }
         };

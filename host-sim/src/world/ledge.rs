@@ -18,6 +18,7 @@
 
 use super::{Aabb, World};
 use firmware::geom::{Real, Vec3};
+use firmware::geom::p3::from_vec3;
 use firmware::map::{DistanceField, DistanceQuery};
 use workloads::ledge::Ledge;
 
@@ -93,10 +94,6 @@ impl Default for LedgeWorld {
     }
 }
 
-fn to_p(v: &Vec3) -> P {
-    [f64::from(v.x), f64::from(v.y), f64::from(v.z)]
-}
-
 impl DistanceField for LedgeWorld {
     fn query(&self, p: &Vec3) -> DistanceQuery {
         self.ledge.query(p)
@@ -114,7 +111,7 @@ impl World for LedgeWorld {
     }
 
     fn raycast(&self, origin: &Vec3, dir: &Vec3, max_range: Real) -> Option<Real> {
-        self.raycast_f64(to_p(origin), to_p(dir), f64::from(max_range)).map(|t| t as Real)
+        self.raycast_f64(from_vec3(origin), from_vec3(dir), f64::from(max_range)).map(|t| t as Real)
     }
 
     fn height_at(&self, x: Real, y: Real) -> Option<Real> {
@@ -128,13 +125,7 @@ mod tests {
     use rand_core::Rng;
     use rand_pcg::Pcg64;
 
-    fn sub(a: P, b: P) -> P {
-        [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-    }
-    fn dist(a: P, b: P) -> f64 {
-        let d = sub(a, b);
-        (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
-    }
+    use firmware::geom::p3::{dist, sub};
 
     fn rng() -> Pcg64 {
         Pcg64::new(0xcafe_f00d_d15e_a5e5, 0xa02_bdbf_7bb3_c0a7)

@@ -33,7 +33,8 @@
 //! Parameters: [`LEAF_TRIANGLES`] = 4 (triangles per leaf; small leaves favour the many distance queries of the
 //! ESDF checks over build time, which is a few milliseconds for 16k triangles).
 
-use super::geometry::{add_scaled, cross, dot, norm, sub, P3};
+use super::geometry::P3;
+use firmware::geom::p3::{self, add_scaled, cross, dot, norm, sub, unit_or};
 use super::{Aabb, World};
 use crate::terrain::obj::TriMesh;
 use firmware::geom::{Real, Vec3};
@@ -102,25 +103,9 @@ pub struct MeshWorld {
     sign_mode: SignMode,
 }
 
-fn min3(a: P3, b: P3) -> P3 {
-    [a[0].min(b[0]), a[1].min(b[1]), a[2].min(b[2])]
-}
-fn max3(a: P3, b: P3) -> P3 {
-    [a[0].max(b[0]), a[1].max(b[1]), a[2].max(b[2])]
-}
-fn scale3(a: P3, s: f64) -> P3 {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-fn add3(a: P3, b: P3) -> P3 {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
+/// `a / |a|`, zero for a zero vector (a degenerate triangle's normal counts for nothing).
 fn unit(a: P3) -> P3 {
-    let n = norm(a);
-    if n > 0.0 {
-        scale3(a, 1.0 / n)
-    } else {
-        [0.0; 3]
-    }
+    unit_or(a, [0.0; 3])
 }
 
 /// Squared distance from `p` to the box `[lo, hi]` (0 inside).
@@ -241,7 +226,7 @@ impl MeshWorld {
         if mesh.triangles.len() >= u32::MAX as usize / 2 {
             return bad(format!("{} triangles is too many", mesh.triangles.len()));
         }
-        let verts: Vec<P3> = mesh.vertices.iter().map(|v| scale3(*v, scale)).collect();
+        let verts: Vec<P3> = mesh.vertices.iter().map(|v| p3::scale(*v, scale)).collect();
         if verts.iter().any(|v| !v.iter().all(|x| x.is_finite())) {
             return bad("a vertex is not finite after scaling".into());
         }
@@ -296,13 +281,13 @@ impl MeshWorld {
             if e - s != 2 {
                 open_edges += 1;
             }
-            let sum = edges[s..e].iter().fold([0.0; 3], |acc, x| add3(acc, face_n[x.2 as usize]));
+            let sum = edges[s..e].iter().fold([0.0; 3], |acc, x| p3::add(acc, face_n[x.2 as usize]));
             for x in &edges[s..e] {
                 edge_n[x.2 as usize][x.3 as usize] = sum;
             }
             s = e;
         }
-        let (lo, hi) = verts.iter().fold(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]), |(l, h), v| (min3(l, *v), max3(h, *v)));
+        let (lo, hi) = verts.iter().fold(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]), |(l, h), v| (p3::min(l, *v), p3::max(h, *v)));
         let mut w = MeshWorld {
             name: name.to_string(),
             verts,
@@ -331,7 +316,7 @@ impl MeshWorld {
         let cent: Vec<P3> = (0..n)
             .map(|t| {
                 let [a, b, c] = self.tri(t);
-                scale3(add3(add3(a, b), c), 1.0 / 3.0)
+                p3::scale(p3::add(p3::add(a, b), c), 1.0 / 3.0)
             })
             .collect();
         let mut order: Vec<u32> = (0..n as u32).collect();
@@ -345,11 +330,11 @@ impl MeshWorld {
             let (mut clo, mut chi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
             for &t in slice.iter() {
                 for p in self.tri(t as usize) {
-                    lo = min3(lo, p);
-                    hi = max3(hi, p);
+                    lo = p3::min(lo, p);
+                    hi = p3::max(hi, p);
                 }
-                clo = min3(clo, cent[t as usize]);
-                chi = max3(chi, cent[t as usize]);
+                clo = p3::min(clo, cent[t as usize]);
+                chi = p3::max(chi, cent[t as usize]);
             }
             if count <= LEAF_TRIANGLES {
                 nodes[ni] = Node { lo, hi, first: first as u32, count: count as u32, right: 0 };
@@ -607,7 +592,7 @@ mod tests {
             [g, 0.0, -1.0], [g, 0.0, 1.0], [-g, 0.0, -1.0], [-g, 0.0, 1.0],
         ]
         .iter()
-        .map(|p| scale3(unit(*p), r))
+        .map(|p| p3::scale(unit(*p), r))
         .collect();
         let mut f: Vec<[u32; 3]> = vec![
             [0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4], [11, 10, 2],
@@ -618,7 +603,7 @@ mod tests {
             let mut mid = std::collections::BTreeMap::new();
             let mut m = |a: u32, b: u32, v: &mut Vec<P3>| -> u32 {
                 *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                    v.push(scale3(unit(add3(v[a as usize], v[b as usize])), r));
+                    v.push(p3::scale(unit(p3::add(v[a as usize], v[b as usize])), r));
                     v.len() as u32 - 1
                 })
             };

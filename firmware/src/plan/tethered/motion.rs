@@ -3,14 +3,13 @@
 
 use crate::config::rover::RoverParams;
 use crate::config::tethered::{BOOM_REACH_CLEARANCE_M, MAX_MOTION_STATES, MAX_REFINE_SUBSTEPS};
-use crate::geom::{norm3, Real, Vec3};
+use crate::geom::{angle_diff, norm3, Real, Vec3};
 use crate::map::DistanceField;
 use crate::plan::space::{MotionCheck, MotionValidator};
 use crate::rover::{check_pose_stability, SettledPose};
 use crate::stability::StabilityOutcome;
 use crate::tether::{predict_anchors, AnchorHistory, TetherError};
 
-use super::space::angle_diff;
 use super::{RoverState, SettleFailure, TetherSpace, TetherSpaceParams};
 
 impl<D: DistanceField> TetherSpace<'_, D> {

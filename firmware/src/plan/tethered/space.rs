@@ -8,7 +8,7 @@ use rand_core::Rng;
 use crate::config::rover::RoverParams;
 use crate::config::tether::ANCHOR_HISTORY_CAPACITY;
 use crate::config::tethered::{CATCH_PAIR_ATTEMPTS, MAX_WHEEL_CONTACT_INCLINE_RAD, SURFACE_MIN_STEP_M, SURFACE_TRACE_STEPS};
-use crate::geom::{norm3, Real, Vec3};
+use crate::geom::{angle_diff, norm3, Real, Vec3};
 use crate::map::{DistanceField, DistanceQuery};
 use crate::plan::space::{uniform01, CatchSample, StateSpace, StateValidityChecker};
 use crate::rover::{settle, SettleOutcome, SettledPose};
@@ -36,8 +36,7 @@ impl RoverState {
     }
     /// Heading of the rover's x axis projected on the horizontal plane, radians.
     pub fn heading(&self) -> Real {
-        let x = self.settled.pose.rotation * Vec3::x();
-        libm::atan2f(x.y, x.x)
+        crate::geom::heading(&self.settled.pose.rotation)
     }
     /// Roll: the angle of the axle (rover y axis) above the horizontal, radians, in `[0, pi/2]`.
     pub fn roll(&self) -> Real {
@@ -331,18 +330,6 @@ pub fn wraps(h: &AnchorHistory, cluster_m: Real) -> heapless::Vec<Vec3, ANCHOR_H
         prev = Some(a.point);
     }
     out
-}
-
-/// `a - b` wrapped to `(-pi, pi]`.
-pub(super) fn angle_diff(a: Real, b: Real) -> Real {
-    let tau = core::f32::consts::TAU;
-    let mut d = libm::fmodf(a - b, tau);
-    if d > core::f32::consts::PI {
-        d -= tau;
-    } else if d <= -core::f32::consts::PI {
-        d += tau;
-    }
-    d
 }
 
 impl<D: DistanceField> StateSpace for TetherSpace<'_, D> {

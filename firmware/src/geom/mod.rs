@@ -2,6 +2,19 @@
 //!
 //! The 3D map, rover and tether work in `f32` ([`Real`]): the map's resolution (centimetres) is far coarser than
 //! `f32`'s precision over a few hundred metres, and the Cortex-M7 has a single-precision FPU.
+//!
+//! - [`p3`]: helpers over plain `[f64; 3]` points (`sub`, `dot`, `cross`, `norm`, `dist`, `lerp`, ...), for the
+//!   code that works in `f64` arrays (the workloads, the simulator's worlds, the team simulation).
+//! - [`angle`]: angle wrapping ([`wrap_angle`], [`angle_diff`]).
+//! - [`pose`]: rotations and poses ([`heading`]); the protocol's wire pose becomes a [`Pose3`] in
+//!   `protocol::Pose::to_isometry`, the one conversion (this layer sits below `protocol`).
+
+pub mod angle;
+pub mod p3;
+pub mod pose;
+
+pub use angle::{angle_diff, wrap_angle};
+pub use pose::heading;
 
 /// The scalar of the 3D world model.
 pub type Real = f32;
