@@ -72,25 +72,25 @@ fn one_of_every_kind() -> Vec<Message> {
             time_budget_ms: 2000,
         }),
         Message::Configure(Configure {
-            rover: RoverParams {
+            rover: RoverConfig {
                 mass_kg: 45.0,
                 wheel_radius_m: 0.35,
                 axle_length_m: 0.9,
                 boom_length_m: 0.6,
                 friction_coefficient: 0.7,
             },
-            tether: TetherParams {
+            tether: TetherConfig {
                 root_anchor: Point3::new(-4.9, 0.0, 6.0),
                 max_payout_m: 100.0,
                 max_tension_n: 800.0,
             },
-            planner: PlannerParams {
+            planner: PlannerConfig {
                 rng_seed: 0xDEAD_BEEF_0123_4567,
                 max_iterations: 750,
                 batch_size: 100,
                 goal_bias: 0.05,
             },
-            telemetry: TelemetryParams {
+            telemetry: TelemetryConfig {
                 period_ms: 250,
                 forward_log_level: LogLevel::Debug,
             },

@@ -12,7 +12,7 @@
 //! `steps_frame_budget_exhausted`.
 //!
 //! ## Diagnostics
-//! Events go to the `log` facade (the host prints them). With `TelemetryParams.forward_log_level` the executive
+//! Events go to the `log` facade (the host prints them). With `TelemetryConfig.forward_log_level` the executive
 //! also queues its own records (bounded, `LOG_QUEUE_LEN`) and sends them as `Log` frames, rate limited to
 //! `LOG_FRAMES_PER_SECOND` with a burst of `LOG_BURST`; board glue may push records from a global `log::Log`
 //! implementation through [`Executive::forward_log`].

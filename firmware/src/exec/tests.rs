@@ -59,25 +59,25 @@ fn exec<A: Autonomy>(a: A) -> Exec<A> {
 
 fn configure() -> Configure {
     Configure {
-        rover: RoverParams {
+        rover: RoverConfig {
             mass_kg: 20.0,
             wheel_radius_m: 0.25,
             axle_length_m: 0.6,
             boom_length_m: 0.5,
             friction_coefficient: 0.8,
         },
-        tether: TetherParams {
+        tether: TetherConfig {
             root_anchor: Point3::new(0.0, 0.0, 2.0),
             max_payout_m: 50.0,
             max_tension_n: 500.0,
         },
-        planner: PlannerParams {
+        planner: PlannerConfig {
             rng_seed: 7,
             max_iterations: 750,
             batch_size: 100,
             goal_bias: 0.05,
         },
-        telemetry: TelemetryParams {
+        telemetry: TelemetryConfig {
             period_ms: 0,
             forward_log_level: LogLevel::Info,
         },

@@ -58,8 +58,8 @@ fn full_pool_is_counted_not_fatal() {
 mod planning {
     use super::super::*;
     use crate::protocol::{
-        Configure, GoalRequest, LogLevel, PlannerParams, Point3, Quat, RoverParams as WireRover, TelemetryParams,
-        TetherParams,
+        Configure, GoalRequest, LogLevel, PlannerConfig, Point3, Quat, RoverConfig, TelemetryConfig,
+        TetherConfig,
     };
     use std::boxed::Box;
     use std::vec;
@@ -77,16 +77,16 @@ mod planning {
 
     fn configure(seed: u64) -> Configure {
         Configure {
-            rover: WireRover {
+            rover: RoverConfig {
                 mass_kg: 50.0,
                 wheel_radius_m: 0.35,
                 axle_length_m: 1.0,
                 boom_length_m: 1.0,
                 friction_coefficient: 0.6,
             },
-            tether: TetherParams { root_anchor: Point3 { x: -1.5, y: 0.0, z: 1.5 }, max_payout_m: 50.0, max_tension_n: 2000.0 },
-            planner: PlannerParams { rng_seed: seed, max_iterations: 750, batch_size: 100, goal_bias: 0.0 },
-            telemetry: TelemetryParams { period_ms: 0, forward_log_level: LogLevel::Off },
+            tether: TetherConfig { root_anchor: Point3 { x: -1.5, y: 0.0, z: 1.5 }, max_payout_m: 50.0, max_tension_n: 2000.0 },
+            planner: PlannerConfig { rng_seed: seed, max_iterations: 750, batch_size: 100, goal_bias: 0.0 },
+            telemetry: TelemetryConfig { period_ms: 0, forward_log_level: LogLevel::Off },
         }
     }
 

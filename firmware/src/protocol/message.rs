@@ -229,7 +229,7 @@ pub struct GoalRequest {
 
 /// Rover parameters (the Axel model).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct RoverParams {
+pub struct RoverConfig {
     /// Mass, kg (> 0).
     pub mass_kg: f32,
     /// Wheel radius, metres (> 0).
@@ -244,7 +244,7 @@ pub struct RoverParams {
 
 /// Tether parameters.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct TetherParams {
+pub struct TetherConfig {
     /// Root anchor, metres (world frame).
     pub root_anchor: Point3,
     /// Tether length on the spool, metres (> 0).
@@ -255,7 +255,7 @@ pub struct TetherParams {
 
 /// Planner parameters.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct PlannerParams {
+pub struct PlannerConfig {
     /// Seed of the planner's random generator (deterministic runs).
     pub rng_seed: u64,
     /// Default iteration budget (> 0).
@@ -266,7 +266,7 @@ pub struct PlannerParams {
     pub goal_bias: f32,
 }
 
-/// Severity of a log record (also the forwarding threshold in [`TelemetryParams`]).
+/// Severity of a log record (also the forwarding threshold in [`TelemetryConfig`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
 pub enum LogLevel {
     /// Nothing (as a threshold: forward no records).
@@ -285,7 +285,7 @@ pub enum LogLevel {
 
 /// Telemetry and log-forwarding parameters.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct TelemetryParams {
+pub struct TelemetryConfig {
     /// Period of unsolicited telemetry, milliseconds: 0 (only on request) or at least `MIN_TELEMETRY_PERIOD_MS`.
     pub period_ms: u32,
     /// Records at this level or more severe are forwarded as `Log` frames (`Off` = none).
@@ -296,13 +296,13 @@ pub struct TelemetryParams {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Configure {
     /// The rover.
-    pub rover: RoverParams,
+    pub rover: RoverConfig,
     /// The tether.
-    pub tether: TetherParams,
+    pub tether: TetherConfig,
     /// The planners.
-    pub planner: PlannerParams,
+    pub planner: PlannerConfig,
     /// Telemetry and log forwarding.
-    pub telemetry: TelemetryParams,
+    pub telemetry: TelemetryConfig,
 }
 
 /// Host -> flight: stop everything and enter `Safe` mode (the rover holds position).

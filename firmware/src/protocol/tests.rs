@@ -219,25 +219,25 @@ fn bad_enum_index_is_malformed_not_a_length_problem() {
 #[test]
 fn periodic_telemetry_faster_than_the_limit_is_out_of_range() {
     let mut c = Configure {
-        rover: RoverParams {
+        rover: RoverConfig {
             mass_kg: 1.0,
             wheel_radius_m: 0.1,
             axle_length_m: 0.5,
             boom_length_m: 0.4,
             friction_coefficient: 0.5,
         },
-        tether: TetherParams {
+        tether: TetherConfig {
             root_anchor: Point3::new(0.0, 0.0, 0.0),
             max_payout_m: 10.0,
             max_tension_n: 100.0,
         },
-        planner: PlannerParams {
+        planner: PlannerConfig {
             rng_seed: 1,
             max_iterations: 1,
             batch_size: 1,
             goal_bias: 0.0,
         },
-        telemetry: TelemetryParams {
+        telemetry: TelemetryConfig {
             period_ms: 0,
             forward_log_level: LogLevel::Off,
         },
