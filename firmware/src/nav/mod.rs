@@ -196,7 +196,8 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
     }
 }
 
-fn add(counter: &mut u32, n: u32) {
+/// Adds `n` to a telemetry counter, saturating at `u32::MAX` (a counter never wraps back to small values).
+fn count_up(counter: &mut u32, n: u32) {
     *counter = counter.saturating_add(n);
 }
 
@@ -214,7 +215,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
         let mut status = self.status;
         let Some(mut map) = self.map() else {
             // Unreachable with storage that `new` accepted; counted rather than ignored.
-            add(&mut status.pool_errors, 1);
+            count_up(&mut status.pool_errors, 1);
             self.status = status;
             return;
         };
@@ -225,21 +226,21 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
                 *dst = Vec3::new(p.x, p.y, p.z);
             }
             let out = map.integrate_points(&sensor_pose, batch.get(..chunk.len()).unwrap_or(&[]));
-            add(&mut status.points_integrated, out.points_integrated);
-            add(&mut status.points_rejected, out.points_rejected);
-            add(&mut status.voxels_dropped, out.voxels_dropped);
+            count_up(&mut status.points_integrated, out.points_integrated);
+            count_up(&mut status.points_rejected, out.points_rejected);
+            count_up(&mut status.voxels_dropped, out.voxels_dropped);
             pool_error |= out.pool_error.is_some();
         }
         if pool_error {
-            add(&mut status.pool_errors, 1);
+            count_up(&mut status.pool_errors, 1);
             log::warn!("map: pool full or index probe exhausted during scan {}", scan.scan_id);
         }
         if !map.update_esdf().converged {
-            add(&mut status.esdf_budget_exhausted, 1);
+            count_up(&mut status.esdf_budget_exhausted, 1);
         }
         let used = map.blocks_used();
         status.blocks_used = u32::try_from(used).unwrap_or(u32::MAX);
-        add(&mut status.scans_integrated, 1);
+        count_up(&mut status.scans_integrated, 1);
         self.used = used;
         self.status = status;
     }
