@@ -14,7 +14,7 @@ use firmware::plan::homotopy::plan::{
     feasibility_check, preplan, Blocked, Feasibility, PlanReport, PlannerParams, Verdict, Workspace,
 };
 use firmware::plan::homotopy::sleeve::{anchors, crossing_sequence, portal, shortest_homotopic_path, Sleeve};
-use firmware::plan::homotopy::terrain::{classify_slope, theta_max, PlaneClass};
+use firmware::plan::homotopy::planes::{classify_slope, theta_max, PlaneClass};
 use host_sim::homotopy::scenarios::*;
 use rand_core::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
@@ -653,7 +653,7 @@ fn bad_input_is_refused_with_a_reason() {
 
 #[test]
 fn three_plane_crater_model_classifies_and_frames() {
-    use firmware::plan::homotopy::terrain::{plane_intersection, TerrainPlane};
+    use firmware::plan::homotopy::planes::{plane_intersection, TerrainPlane};
     let a = 45f64.to_radians();
     let rim = TerrainPlane { origin: [0.0, 0.0, 10.0], normal: [0.0, 0.0, 1.0], traction_mu: 0.5 };
     let wall = TerrainPlane { origin: [0.0, 0.0, 0.0], normal: [0.0, -a.sin(), a.cos()], traction_mu: 0.5 };
@@ -679,7 +679,7 @@ fn loose_field(seed: u64) -> Scenario {
     let mut s = random_field(&mut rng, 18, 20.0);
     let keep = s.truth.len().saturating_sub(10);
     s.known.truncate(keep);
-    s.model.soil = firmware::plan::homotopy::terrain::SoilMap::uniform(0.55);
+    s.model.soil = firmware::plan::homotopy::planes::SoilMap::uniform(0.55);
     s
 }
 

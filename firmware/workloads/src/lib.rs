@@ -64,7 +64,7 @@ use firmware::geom::{Real, Vec3};
 use firmware::map::{DistanceField, DistanceQuery};
 use firmware::plan::abit::{AbitParams, AbitStar, DefaultAbitArena};
 use firmware::plan::homotopy::plan::PlanReport;
-use firmware::plan::homotopy::terrain::{HoldModel, SoilMap};
+use firmware::plan::homotopy::planes::{HoldModel, SoilMap};
 use firmware::plan::homotopy::{preplan, Btm, PlannerParams, Workspace};
 use firmware::plan::space::{Budget, GoalState, PathLength, Planner, PlannerStatus, ProblemDefinition};
 use firmware::plan::team::dstar_lite::{DStarArena, DStarOutcome};

@@ -168,7 +168,7 @@ pub fn main(a: &HomotopyArgs) -> ExitCode {
             let keep = s.truth.len().saturating_sub(a.hidden);
             s.known.truncate(keep);
             if let Some(mu) = a.mu {
-                s.model.soil = firmware::plan::homotopy::terrain::SoilMap::uniform(mu);
+                s.model.soil = firmware::plan::homotopy::planes::SoilMap::uniform(mu);
             }
             closed_loop(&s, &a.out, a.seed)
         }

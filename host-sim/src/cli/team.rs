@@ -75,11 +75,11 @@ pub struct TeamArgs {
 }
 
 /// The scenario set-up shared by the CLI, the tests and the benchmark: (surface, start, config, view, background).
-pub type TeamScenario = (Box<dyn crate::team::terrain::Surface>, [[f64; 3]; 4], crate::team::SimConfig, [f64; 3], Vec<[f64; 3]>);
+pub type TeamScenario = (Box<dyn crate::team::surface::Surface>, [[f64; 3]; 4], crate::team::SimConfig, [f64; 3], Vec<[f64; 3]>);
 
 /// Build a named team scenario.
 pub fn team_scenario(world: &str, data: &std::path::Path, fail: Option<(usize, usize)>, seed: u64) -> Result<TeamScenario, String> {
-    use crate::team::terrain::Surface;
+    use crate::team::surface::Surface;
     use crate::team::{cliff_from_hirise, itokawa, x_start, RangeSensor, SimConfig};
     use firmware::config::team::TeamParams;
     match world {

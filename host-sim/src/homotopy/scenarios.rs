@@ -10,7 +10,7 @@
 //! online variants add, remove and move obstacles during the descent.
 
 use firmware::plan::homotopy::geo::{pt, Pt};
-use firmware::plan::homotopy::terrain::{HoldModel, SoilMap};
+use firmware::plan::homotopy::planes::{HoldModel, SoilMap};
 
 /// A homotopy-planning scenario on one tether-demand plane.
 #[derive(Clone, Debug)]

@@ -5,7 +5,7 @@ use firmware::plan::homotopy::btm::Btm;
 use firmware::plan::homotopy::control::ControlGrid;
 use firmware::plan::homotopy::geo::Pt;
 use firmware::plan::homotopy::plan::Plan;
-use firmware::plan::homotopy::terrain::HoldModel;
+use firmware::plan::homotopy::planes::HoldModel;
 use core::fmt::Write as _;
 
 /// An SVG document under construction.

@@ -12,7 +12,7 @@
 //! [`itokawa`] (the Hayabusa shape model, metres; 30 m hops as in Fig. 16). Pictures: [`svg`].
 
 pub mod svg;
-pub mod terrain;
+pub mod surface;
 
 use firmware::config::team::TeamParams;
 use firmware::geom::{Real, Vec3};
@@ -21,7 +21,7 @@ use firmware::plan::team::formation::Team;
 use firmware::plan::team::DefaultLocalPlanner;
 use rand_core::Rng;
 use firmware::geom::p3::{add, cross, dist, from_vec3, scale, sub, to_vec3};
-use terrain::{unit, Surface, P3};
+use surface::{unit, Surface, P3};
 
 /// Range sensor: `rays` directions spread over the sphere (Fibonacci lattice), range, Gaussian-ish noise.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -238,7 +238,7 @@ pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig,
 
 /// The steepest `win` x `win` window of the HiRISE crop, horizontal spacing times `h_scale` and heights times
 /// `z_scale` (z_scale / h_scale > 1 steepens it into a cliff). Returns the surface and its mean slope (degrees).
-pub fn cliff_from_hirise(path: &std::path::Path, win: usize, h_scale: f64, z_scale: f64) -> Result<(terrain::HeightSurface, f64), String> {
+pub fn cliff_from_hirise(path: &std::path::Path, win: usize, h_scale: f64, z_scale: f64) -> Result<(surface::HeightSurface, f64), String> {
     use crate::terrain::npy::{load_npy, NpyOptions};
     let hm = load_npy(path, &NpyOptions::metres(1.01)).map_err(|e| e.to_string())?;
     let slope = |x: usize, y: usize| -> Option<f64> {
@@ -282,14 +282,14 @@ pub fn cliff_from_hirise(path: &std::path::Path, win: usize, h_scale: f64, z_sca
             }
         }
     }
-    Ok((terrain::HeightSurface::new("hirise-cliff", out), ss / n.max(1.0)))
+    Ok((surface::HeightSurface::new("hirise-cliff", out), ss / n.max(1.0)))
 }
 
 /// Itokawa in metres.
-pub fn itokawa(path: &std::path::Path) -> Result<terrain::MeshSurface, String> {
+pub fn itokawa(path: &std::path::Path) -> Result<surface::MeshSurface, String> {
     use crate::terrain::obj::{load_obj, ObjOptions};
     let m = load_obj(path, &ObjOptions::KILOMETRES).map_err(|e| e.to_string())?;
-    Ok(terrain::MeshSurface::new("itokawa", m))
+    Ok(surface::MeshSurface::new("itokawa", m))
 }
 
 /// Four grip points in an "x" of half-diagonal `r` around the surface point under `center` (height field: along

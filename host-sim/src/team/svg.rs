@@ -2,7 +2,7 @@
 //! hop graph of robot 1 (yellow vertices and edges), the four robots' paths (blue, black, brown, purple) and the
 //! hub's path (red), projected on the plane perpendicular to `view`.
 
-use super::terrain::{unit, P3};
+use super::surface::{unit, P3};
 use firmware::geom::p3::{cross, dot, sub};
 use super::SimReport;
 use core::fmt::Write as _;

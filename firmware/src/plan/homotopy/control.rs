@@ -13,7 +13,7 @@
 
 use super::btm::Btm;
 use super::geo::{orient_sign, Pt};
-use super::terrain::HoldModel;
+use super::planes::HoldModel;
 use crate::config::homotopy::CONTROL_GRID;
 
 const CELLS: usize = CONTROL_GRID * CONTROL_GRID;

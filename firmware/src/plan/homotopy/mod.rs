@@ -8,7 +8,7 @@
 //! tether) by the funnel algorithm and its intermediate anchors ([`sleeve`]); controllable sets decide passability
 //! ([`control`]); Alg. 2 (ascent feasibility) and Alg. 1 (pre-planning, ascent first then a descent in the same
 //! sleeve) are in [`plan`]; Alg. 3 (online replanning with local retriangulation) in [`online`]. The terrain model
-//! (plane classification, soil regions, `theta_max = asin(mu cot alpha)`) is [`terrain`].
+//! (plane classification, soil regions, `theta_max = asin(mu cot alpha)`) is [`planes`].
 //!
 //! Numbers are `f64` inside (complex logarithms of L-values and orientation tests need the headroom; see
 //! [`lvalue`]). All storage is fixed-size (capacities in [`crate::config::homotopy`]); the big pieces
@@ -26,7 +26,7 @@ pub mod lvalue;
 pub mod online;
 pub mod plan;
 pub mod sleeve;
-pub mod terrain;
+pub mod planes;
 
 pub use astar::{enumerate_classes, HomotopyClass, SearchArena, SearchOutcome, SearchStart};
 pub use btm::{Btm, BtmError, UpdateReport};
@@ -35,4 +35,4 @@ pub use lvalue::{polyline_lvalue, LValue};
 pub use online::{MapChange, OnlineAction, OnlinePlanner};
 pub use plan::{feasibility_check, preplan, Feasibility, Plan, PlannerParams, Workspace};
 pub use sleeve::{anchors, shortest_homotopic_path, Anchor, Path, Sleeve};
-pub use terrain::{theta_max, HoldModel, SoilMap};
+pub use planes::{theta_max, HoldModel, SoilMap};

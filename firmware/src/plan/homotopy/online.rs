@@ -19,7 +19,7 @@ use super::geo::Pt;
 use super::lvalue::{polyline_lvalue, LValue};
 use super::plan::{plan_from, Plan, PlanError, PlanReport, PlannerParams, Workspace};
 use super::sleeve::Path;
-use super::terrain::HoldModel;
+use super::planes::HoldModel;
 use crate::config::homotopy::{MAX_L_CONSTRAINTS, MAX_OBSTACLE_VERTICES, MAX_PATH, MAX_SLEEVE, MAX_UPDATES_PER_BATCH, REPLAN_BUDGET};
 use heapless::Vec as HVec;
 

@@ -12,7 +12,7 @@ use super::control::ControlGrid;
 use super::geo::{Pt, EPS};
 use super::lvalue::{polyline_lvalue, LValue};
 use super::sleeve::{anchors, crossing_sequence, shortest_homotopic_path, walk_segment, Anchor, Path, Sleeve, SleeveError};
-use super::terrain::HoldModel;
+use super::planes::HoldModel;
 use crate::config::homotopy::{MAX_CLASSES, MAX_L_CONSTRAINTS, MAX_PATH, REPLAN_BUDGET};
 use heapless::Vec as HVec;
 
