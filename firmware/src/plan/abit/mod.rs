@@ -142,7 +142,7 @@ use heapless::Vec;
 use rand_core::Rng;
 
 use super::space::{
-    Cost, Counters, GoalRegion, InvalidInput, MotionValidator, OptimizationObjective, Planner, PlannerStatus,
+    Cost, Counters, Ended, GoalRegion, InvalidInput, MotionValidator, OptimizationObjective, Planner, PlannerStatus,
     ProblemDefinition, StateSpace, StateValidityChecker, StepOutcome,
 };
 
@@ -553,11 +553,11 @@ where
         if let Some(e) = self.st.invalid {
             PlannerStatus::InvalidInput(e)
         } else if self.has_solution() {
-            PlannerStatus::ExactSolution { cost: self.st.best_cost }
+            PlannerStatus::Exact(self.st.best_cost)
         } else if self.st.params.track_approximate && self.st.approx_vertex != NONE {
-            PlannerStatus::ApproximateSolution { cost_to_go: self.st.approx_h }
+            PlannerStatus::Approximate(self.st.approx_h)
         } else {
-            PlannerStatus::NoSolutionWithinBudget
+            PlannerStatus::NoSolution(Ended::BudgetExhausted)
         }
     }
 

@@ -23,6 +23,7 @@ use super::lvalue::{segment_log, segment_lvalue, LValue};
 use super::sleeve::{push_reduced, Sleeve};
 use crate::config::homotopy::{ASTAR_EXPANSION_BUDGET, MAX_CLASSES, MAX_OBSTACLES, MAX_SEARCH_NODES, MAX_SLEEVE, MAX_TRIANGLES};
 use heapless::binary_heap::{BinaryHeap, Min};
+use crate::plan::status::{Detail, Ended, Enumeration, Never, Status};
 use heapless::Vec as HVec;
 
 /// One homotopy class from a0 to g.
@@ -38,17 +39,37 @@ pub struct HomotopyClass {
     pub cost: f64,
 }
 
-/// How the enumeration ended.
+/// The class enumeration's detail of a [`Status`]: `Exact(Enumeration::Enough)` — `max_classes` found;
+/// `Exact(Enumeration::AllClasses)` — every reachable state expanded, the list is all the classes A* can produce
+/// (possibly none); `Approximate(Ended::BudgetExhausted)` — the expansion budget ran out, and
+/// `Approximate(Ended::ArenaFull)` — the node arena filled up (the classes found so far are kept either way);
+/// `InvalidInput(SearchError)` — start or goal outside the BTM. There is no `NoSolution` case: an exhausted search
+/// that found no class is `Exact(AllClasses)` with an empty list.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SearchOutcome {
-    /// `max_classes` found.
-    Enough,
-    /// Every reachable state expanded: the list is all the classes A* can produce.
-    Exhausted,
-    /// The expansion budget ran out (classes found so far are kept).
-    BudgetExhausted,
-    /// The node arena filled up (classes found so far are kept).
-    ArenaFull,
+pub struct ClassSearch;
+
+impl Detail for ClassSearch {
+    type Exact = Enumeration;
+    type Approximate = Ended;
+    type NoSolution = Never;
+    type Invalid = SearchError;
+}
+
+/// How the enumeration ended: the shared [`Status`] with the [`ClassSearch`] detail.
+pub type SearchOutcome = Status<ClassSearch>;
+
+/// The word a report prints for `outcome`: `Enough`, `Exhausted`, `BudgetExhausted`, `ArenaFull`, or the
+/// input error's name.
+pub fn outcome_label(outcome: &SearchOutcome) -> &'static str {
+    match outcome {
+        Status::Exact(Enumeration::Enough) => "Enough",
+        Status::Exact(Enumeration::AllClasses) => "Exhausted",
+        Status::Approximate(Ended::ArenaFull) => "ArenaFull",
+        Status::Approximate(_) => "BudgetExhausted",
+        Status::NoSolution(n) => match *n {},
+        Status::InvalidInput(SearchError::StartNotInFreeSpace) => "StartNotInFreeSpace",
+        Status::InvalidInput(SearchError::GoalNotInFreeSpace) => "GoalNotInFreeSpace",
+    }
 }
 
 /// Bad search input.
@@ -163,7 +184,7 @@ pub struct SearchStart<'a> {
 
 /// Enumerates up to `max_classes` homotopy classes to `goal` whose L-values are not in `constraints` (the list
 /// `Lc`), appending them to `out` in order of A* cost. Classes whose full sleeve (prefix + searched part) is not
-/// simple are skipped.
+/// simple are skipped. A start or goal outside the BTM is `InvalidInput`.
 pub fn enumerate_classes(
     btm: &Btm,
     arena: &mut SearchArena,
@@ -172,12 +193,15 @@ pub fn enumerate_classes(
     constraints: &[LValue],
     max_classes: usize,
     out: &mut HVec<HomotopyClass, MAX_CLASSES>,
-) -> Result<SearchOutcome, SearchError> {
+) -> SearchOutcome {
     let t0 = match start.prefix.last() {
         Some(&t) if btm.tri(t).is_some() => t,
-        _ => btm.locate(start.point).ok_or(SearchError::StartNotInFreeSpace)?,
+        _ => match btm.locate(start.point) {
+            Some(t) => t,
+            None => return Status::InvalidInput(SearchError::StartNotInFreeSpace),
+        },
     };
-    let tg = btm.locate(goal).ok_or(SearchError::GoalNotInFreeSpace)?;
+    let Some(tg) = btm.locate(goal) else { return Status::InvalidInput(SearchError::GoalNotInFreeSpace) };
     arena.reset();
     let h0 = start.point.dist(goal);
     let Some(root) = arena.alloc(Node {
@@ -189,7 +213,7 @@ pub fn enumerate_classes(
         depth: 0,
         next_same_tri: NO_NODE,
     }) else {
-        return Ok(SearchOutcome::ArenaFull);
+        return Status::Approximate(Ended::ArenaFull);
     };
     let _ = arena.open.push((key(h0), root));
     let max_classes = max_classes.min(MAX_CLASSES);
@@ -197,7 +221,7 @@ pub fn enumerate_classes(
     let depth_limit = (2 * btm.triangle_count()).min(MAX_SLEEVE);
     let mut full = false;
     for _ in 0..ASTAR_EXPANSION_BUDGET {
-        let Some((_, ni)) = arena.open.pop() else { return Ok(SearchOutcome::Exhausted) };
+        let Some((_, ni)) = arena.open.pop() else { return Status::Exact(Enumeration::AllClasses) };
         let Some(n) = arena.node(ni).copied() else { continue };
         if n.tri == tg {
             let l = n.l.plus(segment_lvalue(btm, n.point, goal));
@@ -206,7 +230,7 @@ pub fn enumerate_classes(
                 if let Some(class) = build_class(btm, arena, ni, start, t0, goal, l, n.g + n.point.dist(goal)) {
                     let _ = out.push(class);
                     if out.len() >= max_classes {
-                        return Ok(SearchOutcome::Enough);
+                        return Status::Exact(Enumeration::Enough);
                     }
                 }
             }
@@ -238,10 +262,10 @@ pub fn enumerate_classes(
             }
         }
         if full {
-            return Ok(SearchOutcome::ArenaFull);
+            return Status::Approximate(Ended::ArenaFull);
         }
     }
-    Ok(SearchOutcome::BudgetExhausted)
+    Status::Approximate(Ended::BudgetExhausted)
 }
 
 #[allow(clippy::too_many_arguments)]

@@ -11,7 +11,7 @@
 //!
 //! Cost: the edge loss L'_ab; heuristic: straight-line distance to the goal region (admissible since
 //! L'_ab >= d_ab). When the goal region is unreachable within the scene (normal when the goal is in another
-//! scene) the result is the path to the expanded vertex closest to the goal ([`AStarStatus::Approximate`]).
+//! scene) the result is the path to the expanded vertex closest to the goal (`Approximate(Ended::SearchComplete)`).
 //!
 //! Parameters: `r_max` (default 15 m) minus `landing_margin` (0.5 m); `astar_budget` expansions (4096).
 //! Open-set selection is a linear scan over at most `V` vertices (V = 512 by default): simple and bounded.
@@ -19,21 +19,37 @@
 use super::graph::HopGraph;
 use crate::config::team::TeamParams;
 use crate::geom::{norm3, Real, Vec3};
+use crate::plan::status::{Detail, Ended, Status};
 use heapless::Vec as HVec;
 
-/// Status of a local plan (OMPL-style).
+/// The bounded-leg A*'s detail of a [`Status`]: `Exact(())` reaches the goal region;
+/// `Approximate(Ended::SearchComplete)`: the goal region is not reachable, the path ends at the reachable vertex
+/// closest to the goal; `Approximate(Ended::BudgetExhausted)`: the expansion budget ran out, the path is the best
+/// so far (closest to the goal; possibly the start alone); `NoSolution(Ended::SearchComplete)`: no hop from the
+/// start brings the robot closer to the goal; `InvalidInput(())`: the start vertex does not exist.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum AStarStatus {
-    /// A path reaching the goal region.
-    Exact,
-    /// The goal region is not reachable; the path ends at the reachable vertex closest to the goal.
-    Approximate,
-    /// No hop from the start brings the robot closer to the goal.
-    NoSolution,
-    /// The expansion budget ran out; the path is the best so far (closest to the goal).
-    BudgetExhausted,
-    /// The start vertex does not exist.
-    InvalidInput,
+pub struct HopSearch;
+
+impl Detail for HopSearch {
+    type Exact = ();
+    type Approximate = Ended;
+    type NoSolution = Ended;
+    type Invalid = ();
+}
+
+/// Status of a local plan: the shared [`Status`] with the [`HopSearch`] detail.
+pub type AStarStatus = Status<HopSearch>;
+
+/// The word a report prints for `status`: `Exact`, `Approximate`, `BudgetExhausted`, `NoSolution` or
+/// `InvalidInput`.
+pub fn status_label(status: &AStarStatus) -> &'static str {
+    match status {
+        Status::Exact(()) => "Exact",
+        Status::Approximate(Ended::BudgetExhausted) => "BudgetExhausted",
+        Status::Approximate(_) => "Approximate",
+        Status::NoSolution(_) => "NoSolution",
+        Status::InvalidInput(()) => "InvalidInput",
+    }
 }
 
 /// A* scratch arena for `V` vertices.
@@ -88,7 +104,7 @@ pub fn bounded_leg_astar<const V: usize, const E: usize, const H: usize>(
         assert!(V <= u16::MAX as usize, "bounded_leg_astar: V must fit u16 vertex indices");
     }
     let n = graph.n_vertices;
-    let mut out = LocalPath { status: AStarStatus::InvalidInput, vertices: HVec::new(), loss: 0.0, expansions: 0 };
+    let mut out = LocalPath { status: Status::InvalidInput(()), vertices: HVec::new(), loss: 0.0, expansions: 0 };
     if start as usize >= n {
         return out;
     }
@@ -113,7 +129,7 @@ pub fn bounded_leg_astar<const V: usize, const E: usize, const H: usize>(
     }
     let mut best = start as usize;
     let mut best_h = hdist(best);
-    let mut status = AStarStatus::Approximate;
+    let mut status = Status::Approximate(Ended::SearchComplete);
     let mut reached = None;
     loop {
         // pick the open vertex with the smallest f (ties: lower index)
@@ -132,7 +148,7 @@ pub fn bounded_leg_astar<const V: usize, const E: usize, const H: usize>(
             break;
         }
         if out.expansions >= params.astar_budget {
-            status = AStarStatus::BudgetExhausted;
+            status = Status::Approximate(Ended::BudgetExhausted);
             break;
         }
         out.expansions += 1;
@@ -147,7 +163,7 @@ pub fn bounded_leg_astar<const V: usize, const E: usize, const H: usize>(
         }
         if hu <= 0.0 {
             reached = Some(u);
-            status = AStarStatus::Exact;
+            status = Status::Exact(());
             break;
         }
         let gu = arena.g.get(u).copied().unwrap_or(Real::INFINITY);
@@ -177,7 +193,11 @@ pub fn bounded_leg_astar<const V: usize, const E: usize, const H: usize>(
     }
     let end = reached.unwrap_or(best);
     if end == start as usize {
-        out.status = if status == AStarStatus::BudgetExhausted { status } else { AStarStatus::NoSolution };
+        out.status = if status == Status::Approximate(Ended::BudgetExhausted) {
+            status
+        } else {
+            Status::NoSolution(Ended::SearchComplete)
+        };
         let _ = out.vertices.push(start);
         return out;
     }
@@ -262,7 +282,7 @@ mod tests {
             let path: LocalPath<64> = bounded_leg_astar(&g, &mut arena, 0, &goal, 1e-4, &c_m, &p);
             let best = oracle(&g, 0, goal_v, &c_m, r_eff);
             if best.is_finite() {
-                assert_eq!(path.status, AStarStatus::Exact, "seed {seed}");
+                assert_eq!(path.status, Status::Exact(()), "seed {seed}");
                 assert!((path.loss - best).abs() <= 1e-3 * best.max(1.0), "seed {seed}: {} vs {best}", path.loss);
                 for w in path.vertices.windows(2) {
                     let (a, b) = (g.vertices[w[0] as usize].pos, g.vertices[w[1] as usize].pos);
@@ -271,7 +291,7 @@ mod tests {
                 }
                 assert_eq!(*path.vertices.last().unwrap() as usize, goal_v);
             } else {
-                assert_ne!(path.status, AStarStatus::Exact, "seed {seed}");
+                assert_ne!(path.status, Status::Exact(()), "seed {seed}");
             }
         }
     }
@@ -287,13 +307,13 @@ mod tests {
         let goal = Vec3::new(27.0, 0.0, 0.0);
         let p = TeamParams { astar_budget: 2, ..TeamParams::DEFAULT };
         let r: LocalPath<16> = bounded_leg_astar(&g, &mut arena, 0, &goal, 0.1, &Vec3::zeros(), &p);
-        assert_eq!(r.status, AStarStatus::BudgetExhausted);
+        assert_eq!(r.status, Status::Approximate(Ended::BudgetExhausted));
         assert!(r.vertices.len() >= 2, "best-so-far path kept");
         let r: LocalPath<16> = bounded_leg_astar(&g, &mut arena, 12, &goal, 0.1, &Vec3::zeros(), &TeamParams::DEFAULT);
-        assert_eq!(r.status, AStarStatus::InvalidInput);
+        assert_eq!(r.status, Status::InvalidInput(()));
         // a leg already at the tether limit pointing away from the goal: no hop towards it is allowed
         let far = Vec3::new(14.4, 0.0, 0.0);
         let r: LocalPath<16> = bounded_leg_astar(&g, &mut arena, 0, &goal, 0.1, &far, &TeamParams::DEFAULT);
-        assert_eq!(r.status, AStarStatus::NoSolution);
+        assert_eq!(r.status, Status::NoSolution(Ended::SearchComplete));
     }
 }
