@@ -14,12 +14,14 @@
 //! scene) the result is the path to the expanded vertex closest to the goal (`Approximate(Ended::SearchComplete)`).
 //!
 //! Parameters: `r_max` (default 15 m) minus `landing_margin` (0.5 m); `astar_budget` expansions (4096).
-//! Open-set selection is a linear scan over at most `V` vertices (V = 512 by default): simple and bounded.
+//! Open list: a [`crate::plan::heap::IndexedHeap`] of at most `V` vertices (V = 512 by default) ordered by
+//! (f, vertex index); an open vertex whose f is not below infinity (infinite or NaN) is never expanded.
 
 use super::graph::HopGraph;
 use crate::config::team::TeamParams;
 use crate::geom::{norm3, Real, Vec3};
 use crate::plan::status::{Detail, Ended, Status};
+use crate::plan::heap::{HeapItems, IndexedHeap, NOT_IN_HEAP};
 use heapless::Vec as HVec;
 
 /// The bounded-leg A*'s detail of a [`Status`]: `Exact(())` reaches the goal region;
@@ -56,8 +58,45 @@ pub fn status_label(status: &AStarStatus) -> &'static str {
 pub struct AStarArena<const V: usize> {
     g: [Real; V],
     parent: [u16; V],
-    open: [bool; V],
     closed: [bool; V],
+    /// The open list's keys (f = g + h) and positions, by vertex.
+    keys: OpenKeys<V>,
+    open: IndexedHeap<V>,
+}
+
+/// f and open-list position per vertex.
+struct OpenKeys<const V: usize> {
+    f: [Real; V],
+    pos: [u32; V],
+}
+
+impl<const V: usize> OpenKeys<V> {
+    /// Can vertex `v` be expanded (`f` below infinity: not infinite, not NaN)?
+    fn selectable(&self, v: u32) -> bool {
+        self.f.get(v as usize).is_some_and(|&f| f < Real::INFINITY)
+    }
+}
+
+/// Least f first, ties to the lower index, vertices that cannot be expanded last: the vertex a scan over the open
+/// vertices in index order with `f < best` picks is the heap's front.
+impl<const V: usize> HeapItems for OpenKeys<V> {
+    fn before(&self, a: u32, b: u32) -> bool {
+        let (Some(&fa), Some(&fb)) = (self.f.get(a as usize), self.f.get(b as usize)) else { return false };
+        match (self.selectable(a), self.selectable(b)) {
+            (true, true) => fa < fb || (fa == fb && a < b),
+            (true, false) => true,
+            (false, true) => false,
+            (false, false) => a < b,
+        }
+    }
+    fn set_position(&mut self, id: u32, pos: u32) {
+        if let Some(p) = self.pos.get_mut(id as usize) {
+            *p = pos;
+        }
+    }
+    fn position(&self, id: u32) -> Option<u32> {
+        self.pos.get(id as usize).copied()
+    }
 }
 
 impl<const V: usize> AStarArena<V> {
@@ -66,7 +105,13 @@ impl<const V: usize> AStarArena<V> {
         const {
             assert!(V <= u16::MAX as usize, "AStarArena: V must fit u16 vertex indices");
         }
-        Self { g: [Real::INFINITY; V], parent: [u16::MAX; V], open: [false; V], closed: [false; V] }
+        Self {
+            g: [Real::INFINITY; V],
+            parent: [u16::MAX; V],
+            closed: [false; V],
+            keys: OpenKeys { f: [Real::INFINITY; V], pos: [NOT_IN_HEAP; V] },
+            open: IndexedHeap::new(),
+        }
     }
 }
 
@@ -114,46 +159,33 @@ pub fn bounded_leg_astar<const V: usize, const E: usize, const H: usize>(
         (norm3(&(p - goal)) - goal_tol).max(0.0)
     };
     for i in 0..n {
-        if let (Some(g), Some(p), Some(o), Some(c)) =
-            (arena.g.get_mut(i), arena.parent.get_mut(i), arena.open.get_mut(i), arena.closed.get_mut(i))
-        {
+        if let (Some(g), Some(p), Some(c)) = (arena.g.get_mut(i), arena.parent.get_mut(i), arena.closed.get_mut(i)) {
             *g = Real::INFINITY;
             *p = u16::MAX;
-            *o = false;
             *c = false;
         }
     }
-    if let (Some(g), Some(o)) = (arena.g.get_mut(start as usize), arena.open.get_mut(start as usize)) {
+    arena.open.clear();
+    if let (Some(g), Some(f)) = (arena.g.get_mut(start as usize), arena.keys.f.get_mut(start as usize)) {
         *g = 0.0;
-        *o = true;
+        *f = 0.0 + hdist(start as usize);
+        let _ = arena.open.push(u32::from(start), &mut arena.keys);
     }
     let mut best = start as usize;
     let mut best_h = hdist(best);
     let mut status = Status::Approximate(Ended::SearchComplete);
     let mut reached = None;
     loop {
-        // pick the open vertex with the smallest f (ties: lower index)
-        let mut u = usize::MAX;
-        let mut fu = Real::INFINITY;
-        for i in 0..n {
-            if arena.open.get(i) == Some(&true) {
-                let f = arena.g.get(i).copied().unwrap_or(Real::INFINITY) + hdist(i);
-                if f < fu {
-                    fu = f;
-                    u = i;
-                }
-            }
-        }
-        if u == usize::MAX {
-            break;
-        }
+        // the open vertex with the smallest f (ties: lower index); none left that can be expanded ends the search
+        let Some(top) = arena.open.peek().filter(|&v| arena.keys.selectable(v)) else { break };
+        let u = top as usize;
         if out.expansions >= params.astar_budget {
             status = Status::Approximate(Ended::BudgetExhausted);
             break;
         }
         out.expansions += 1;
-        if let (Some(o), Some(c)) = (arena.open.get_mut(u), arena.closed.get_mut(u)) {
-            *o = false;
+        let _ = arena.open.pop(&mut arena.keys);
+        if let Some(c) = arena.closed.get_mut(u) {
             *c = true;
         }
         let hu = hdist(u);
@@ -183,10 +215,16 @@ pub fn bounded_leg_astar<const V: usize, const E: usize, const H: usize>(
             }
             let cand = gu + e.loss;
             if cand < arena.g.get(b).copied().unwrap_or(Real::INFINITY) {
-                if let (Some(g), Some(p), Some(o)) = (arena.g.get_mut(b), arena.parent.get_mut(b), arena.open.get_mut(b)) {
+                if let (Some(g), Some(p), Some(f)) = (arena.g.get_mut(b), arena.parent.get_mut(b), arena.keys.f.get_mut(b)) {
                     *g = cand;
                     *p = u as u16;
-                    *o = true;
+                    *f = cand + hdist(b);
+                    // capacity V, each vertex queued at most once: the push always fits
+                    if !arena.open.contains(b as u32, &arena.keys) {
+                        let _ = arena.open.push(b as u32, &mut arena.keys);
+                    } else {
+                        arena.open.update(b as u32, &mut arena.keys);
+                    }
                 }
             }
         }
