@@ -175,9 +175,8 @@ pub fn bounded_leg_astar<const V: usize, const E: usize, const H: usize>(
     let mut best_h = hdist(best);
     let mut status = Status::Approximate(Ended::SearchComplete);
     let mut reached = None;
-    loop {
-        // the open vertex with the smallest f (ties: lower index); none left that can be expanded ends the search
-        let Some(top) = arena.open.peek().filter(|&v| arena.keys.selectable(v)) else { break };
+    // the open vertex with the smallest f (ties: lower index); none left that can be expanded ends the search
+    while let Some(top) = arena.open.peek().filter(|&v| arena.keys.selectable(v)) {
         let u = top as usize;
         if out.expansions >= params.astar_budget {
             status = Status::Approximate(Ended::BudgetExhausted);
