@@ -8,6 +8,7 @@ use firmware::plan::homotopy::btm::Btm;
 use firmware::plan::homotopy::geo::{pt, Pt};
 use firmware::plan::homotopy::lvalue::LValue;
 use firmware::plan::homotopy::sleeve::shortest_homotopic_path;
+use firmware::plan::status::Status;
 use host_sim::homotopy::scenarios::{random_field, Scenario};
 use rand_core::SeedableRng;
 
@@ -40,7 +41,7 @@ fn funnel(c: &mut Criterion) {
         let btm = build(&plane, &obs);
         let mut classes = heapless::Vec::new();
         let st = SearchStart { point: a0, l0: LValue::default(), prefix: &[] };
-        enumerate_classes(&btm, &mut arena, &st, goal, &[], 1, &mut classes).expect("search");
+        assert!(!matches!(enumerate_classes(&btm, &mut arena, &st, goal, &[], 1, &mut classes), Status::InvalidInput(_)), "search");
         let sleeve = classes[0].sleeve.clone();
         g.throughput(Throughput::Elements(sleeve.len() as u64));
         g.bench_with_input(BenchmarkId::new("sleeve_triangles", sleeve.len()), &sleeve, |b, s| {
@@ -59,12 +60,12 @@ fn classes_per_second(c: &mut Criterion) {
         let btm = build(&s.plane, &s.known);
         let st = SearchStart { point: s.a0, l0: LValue::default(), prefix: &[] };
         let mut out = heapless::Vec::new();
-        enumerate_classes(&btm, &mut arena, &st, s.g, &[], 16, &mut out).expect("search");
+        assert!(!matches!(enumerate_classes(&btm, &mut arena, &st, s.g, &[], 16, &mut out), Status::InvalidInput(_)), "search");
         g.throughput(Throughput::Elements(out.len() as u64));
         g.bench_with_input(BenchmarkId::new("obstacles", s.known.len()), &n, |b, _| {
             b.iter(|| {
                 let mut out = heapless::Vec::new();
-                enumerate_classes(&btm, &mut arena, &st, s.g, &[], 16, &mut out).expect("search");
+                assert!(!matches!(enumerate_classes(&btm, &mut arena, &st, s.g, &[], 16, &mut out), Status::InvalidInput(_)), "search");
                 out.len()
             })
         });

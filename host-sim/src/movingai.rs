@@ -8,7 +8,8 @@
 //! (straight 1, diagonal sqrt 2) with no corner cutting.
 
 use core::fmt;
-use firmware::plan::team::dstar_lite::{Cost, DStarLite, DStarOutcome, DStarStorage, HeapEntry};
+use firmware::plan::status::Status;
+use firmware::plan::team::dstar_lite::{Cost, DStarLite, DStarStorage, Found, HeapEntry, NoPath};
 use std::path::Path;
 
 /// A parsed `.map`.
@@ -314,11 +315,11 @@ pub fn run_scenarios(map: &GridMap, scens: &[Scenario], mut filter: impl FnMut(u
             .plan((s.start_x as i64, s.start_y as i64), (s.goal_x as i64, s.goal_y as i64), budget)
             .map_err(|e| format!("scenario line {}: {e:?}", s.line))?;
         let planned = match out {
-            DStarOutcome::Found { cost, expansions } => {
+            Status::Exact(Found { cost, expansions }) => {
                 summary.expansions += expansions as u64;
                 Some(cost)
             }
-            DStarOutcome::NoPath { expansions } | DStarOutcome::BudgetExhausted { expansions } => {
+            Status::NoSolution(NoPath { expansions, .. }) => {
                 summary.expansions += expansions as u64;
                 None
             }

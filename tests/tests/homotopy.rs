@@ -6,6 +6,7 @@
 //! T = n + 2h - 2 for a polygon with holes, and BTMs rebuilt from scratch.
 
 use firmware::plan::homotopy::astar::{enumerate_classes, HomotopyClass, SearchArena, SearchOutcome, SearchStart};
+use firmware::plan::status::{Ended, Enumeration, Status};
 use firmware::plan::homotopy::btm::Btm;
 use firmware::plan::homotopy::geo::{pt, Pt};
 use firmware::plan::homotopy::lvalue::{polyline_lvalue, LValue};
@@ -31,7 +32,8 @@ fn build(s: &Scenario) -> Box<Btm> {
 fn classes(btm: &Btm, arena: &mut SearchArena, a0: Pt, g: Pt, max: usize) -> (Classes, SearchOutcome) {
     let mut out = Classes::new();
     let st = SearchStart { point: a0, l0: LValue::default(), prefix: &[] };
-    let o = enumerate_classes(btm, arena, &st, g, &[], max, &mut out).expect("search");
+    let o = enumerate_classes(btm, arena, &st, g, &[], max, &mut out);
+    assert!(!matches!(o, Status::InvalidInput(_)), "search: {o:?}");
     (out, o)
 }
 
@@ -203,7 +205,7 @@ fn scenario_b_naive_path_rejected_and_only_one_class_has_passable_anchors() {
     let mut ws = Box::new(Workspace::default());
     // Every class A* can enumerate, each checked by Alg. 2.
     let (all, outcome) = classes(&btm, &mut ws.search, s.a0, s.g, 16);
-    assert_eq!(outcome, SearchOutcome::Exhausted);
+    assert_eq!(outcome, Status::Exact(Enumeration::AllClasses));
     assert!(all.len() >= 3, "expected several homotopy classes, got {}", all.len());
     let mut feasible = Vec::new();
     let mut naive_seen = false;
@@ -386,7 +388,7 @@ fn scenario_c_online_phantom_moved_and_batch() {
     };
     let (l1, l2) = (lens(&btm, &c1), lens(&fresh, &c2));
     assert!((l1[0] - l2[0]).abs() < 1e-9);
-    if o1 == SearchOutcome::Exhausted && o2 == SearchOutcome::Exhausted {
+    if o1 == Status::Exact(Enumeration::AllClasses) && o2 == Status::Exact(Enumeration::AllClasses) {
         assert_same_short_classes(&btm, &c1, &fresh, &c2, s.a0, s.g);
     }
 }
@@ -484,7 +486,7 @@ fn prop_shp_shorter_than_sampled_sleeve_paths_and_optimal_equals_visibility_grap
                 assert!(polyline_lvalue(&btm, &path).same_class(c.l));
             }
         }
-        if outcome != SearchOutcome::BudgetExhausted {
+        if outcome != Status::Approximate(Ended::BudgetExhausted) {
             assert!((best - vg).abs() < 1e-7, "optimal class SHP {best} != visibility graph {vg}");
             checked += 1;
         }
@@ -556,7 +558,7 @@ fn prop_local_updates_keep_invariants_and_match_rebuild() {
                     .fold(f64::INFINITY, f64::min)
             };
             assert!((best(&btm, &c1) - best(&fresh, &c2)).abs() < 1e-9);
-            if o1 == SearchOutcome::Exhausted && o2 == SearchOutcome::Exhausted {
+            if o1 == Status::Exact(Enumeration::AllClasses) && o2 == Status::Exact(Enumeration::AllClasses) {
                 assert_same_short_classes(&btm, &c1, &fresh, &c2, s.a0, s.g);
             }
         }
@@ -646,9 +648,9 @@ fn bad_input_is_refused_with_a_reason() {
     let mut out = Classes::new();
     let inside_rock = pt(8.5, 13.5);
     let st = SearchStart { point: inside_rock, l0: LValue::default(), prefix: &[] };
-    assert_eq!(enumerate_classes(&btm, &mut arena, &st, s.g, &[], 4, &mut out), Err(SearchError::StartNotInFreeSpace));
+    assert_eq!(enumerate_classes(&btm, &mut arena, &st, s.g, &[], 4, &mut out), Status::InvalidInput(SearchError::StartNotInFreeSpace));
     let st = SearchStart { point: s.a0, l0: LValue::default(), prefix: &[] };
-    assert_eq!(enumerate_classes(&btm, &mut arena, &st, pt(30.0, 1.0), &[], 4, &mut out), Err(SearchError::GoalNotInFreeSpace));
+    assert_eq!(enumerate_classes(&btm, &mut arena, &st, pt(30.0, 1.0), &[], 4, &mut out), Status::InvalidInput(SearchError::GoalNotInFreeSpace));
 }
 
 #[test]

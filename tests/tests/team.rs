@@ -101,7 +101,8 @@ fn itokawa_team_with_30m_hops_and_node_loss() {
     let _ = start;
 }
 
-use firmware::plan::team::dstar_lite::{DStarLite, DStarOutcome, DIRS};
+use firmware::plan::status::{Ended, Status};
+use firmware::plan::team::dstar_lite::{DStarLite, DStarOutcome, Found, NoPath, DIRS};
 use host_sim::movingai::OwnedDStarStorage;
 use proptest::prelude::*;
 
@@ -151,9 +152,9 @@ fn dijkstra(w: i64, h: i64, blocked: &[bool], walls: &[(Cell, Cell)], s: Cell, g
 
 fn cost(o: DStarOutcome) -> f64 {
     match o {
-        DStarOutcome::Found { cost, .. } => cost,
-        DStarOutcome::NoPath { .. } => f64::INFINITY,
-        DStarOutcome::BudgetExhausted { .. } => panic!("budget"),
+        Status::Exact(Found { cost, .. }) => cost,
+        Status::NoSolution(NoPath { ended: Ended::SearchComplete, .. }) => f64::INFINITY,
+        Status::NoSolution(NoPath { .. }) => panic!("budget"),
     }
 }
 
@@ -207,7 +208,6 @@ proptest! {
 
 use firmware::config::team::TeamParams;
 use firmware::geom::{Real, Vec3};
-use firmware::plan::team::astar::AStarStatus;
 use firmware::plan::team::DefaultLocalPlanner;
 
 /// Section V, Fig. 12, end to end: a grid of 30 m scenes; D* Lite routes (1,1) -> (1,2) -> (1,3) ("south" =
@@ -248,7 +248,7 @@ fn crevasse_reroute_with_the_local_planner_in_the_loop() {
         d.set_blocked(0, y, true).unwrap(); // the map edge, as in the figure
     }
     let goal = (1, 3);
-    assert!(matches!(d.plan((1, 1), goal, 10_000).unwrap(), DStarOutcome::Found { cost, .. } if cost == 2.0));
+    assert!(matches!(d.plan((1, 1), goal, 10_000).unwrap(), Status::Exact(Found { cost, .. }) if cost == 2.0));
     let params = TeamParams::DEFAULT;
     let mut planner: Box<DefaultLocalPlanner> = Box::default();
     let mut pos = centre((1, 1));
@@ -271,13 +271,13 @@ fn crevasse_reroute_with_the_local_planner_in_the_loop() {
         let before = (pos[0] - target[0]).hypot(pos[1] - target[1]);
         let hop = plan.hops.get(1).map(|h| [h.x as f64, h.y as f64]);
         let progress = hop.map(|h| before - (h[0] - target[0]).hypot(h[1] - target[1])).unwrap_or(0.0);
-        if plan.status == AStarStatus::NoSolution || progress < 0.5 {
+        if matches!(plan.status, Status::NoSolution(_)) || progress < 0.5 {
             stuck += 1;
             if stuck >= 2 {
                 // bounded-leg A* cannot cross: the edge between the two scenes becomes a wall
                 d.add_wall(here, next).unwrap();
                 walls.push((here, next));
-                assert!(matches!(d.replan(10_000).unwrap(), DStarOutcome::Found { .. }));
+                assert!(matches!(d.replan(10_000).unwrap(), Status::Exact(_)));
                 stuck = 0;
             }
             continue;
@@ -292,7 +292,7 @@ fn crevasse_reroute_with_the_local_planner_in_the_loop() {
         if c != here && (pos[0] - target[0]).hypot(pos[1] - target[1]) < 8.0 && c == next {
             visited.push(c);
             d.move_start(c).unwrap();
-            assert!(matches!(d.replan(10_000).unwrap(), DStarOutcome::Found { .. }));
+            assert!(matches!(d.replan(10_000).unwrap(), Status::Exact(_)));
         }
     }
     assert_eq!(walls, vec![((1, 2), (1, 3))]);

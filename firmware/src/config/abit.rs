@@ -18,6 +18,11 @@ pub const EDGE_QUEUE_CAPACITY: usize = 16384;
 /// A full memo only costs repeated edge evaluations; it is never an error.
 pub const EDGE_MEMO_CAPACITY: usize = 16384;
 
+/// Slots probed per memo lookup or insertion (open addressing, linear probing): 8. It bounds the work of one
+/// lookup; when all 8 slots of a run hold live entries an insertion replaces the home slot (the memo is a cache,
+/// so a lost entry only costs a repeated edge check).
+pub const MEMO_PROBES: usize = 8;
+
 /// Upper bound on the neighbours of one vertex (k-nearest `k`, or the r-disc neighbour list). OMPL's k for
 /// 10^4 states in R^2 is ~41; 64 leaves headroom. Larger `k` is clamped and counted in
 /// `Counters::neighbour_lists_truncated`.

@@ -401,7 +401,7 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
     stats.iterations_run = stats.iterations_run.saturating_add(u64::from(c.iterations.saturating_sub(first_new)));
     problem.done = problem.search_base.saturating_add(c.iterations);
     problem.best_cost = match report.status {
-        PlannerStatus::ExactSolution { cost } => Some(cost as f32),
+        PlannerStatus::Exact(cost) => Some(cost as f32),
         _ => None,
     };
     let done = out_of_time
@@ -411,9 +411,9 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
             Termination::Converged | Termination::ArenaFull(_) | Termination::ObjectiveSatisfied | Termination::InvalidInput
         );
     let state = match report.status {
-        PlannerStatus::ExactSolution { .. } => PlanState::ExactSolution,
-        PlannerStatus::ApproximateSolution { .. } => PlanState::ApproximateSolution,
-        PlannerStatus::NoSolutionWithinBudget => PlanState::NoSolutionWithinBudget,
+        PlannerStatus::Exact(_) => PlanState::ExactSolution,
+        PlannerStatus::Approximate(_) => PlanState::ApproximateSolution,
+        PlannerStatus::NoSolution(_) => PlanState::NoSolutionWithinBudget,
         PlannerStatus::InvalidInput(e) => {
             log::warn!("nav: planner rejected the problem: {e:?}");
             PlanState::InvalidInput

@@ -86,6 +86,11 @@ impl<const N: usize> IndexedHeap<N> {
         self.ids.get(pos).copied()
     }
 
+    /// Is `id` queued (its recorded position checked against the heap)?
+    pub fn contains<I: HeapItems + ?Sized>(&self, id: u32, items: &I) -> bool {
+        self.position_of(id, items).is_some()
+    }
+
     /// Empty the heap. O(1): the positions the items recorded become stale (see the module docs).
     pub fn clear(&mut self) {
         self.ids.clear();
@@ -320,6 +325,24 @@ mod tests {
         let order = drain(&mut heap, &mut items);
         let keys: StdVec<i32> = order.iter().map(|&i| items.key[i as usize]).collect();
         assert_eq!(keys, (0..16).collect::<StdVec<_>>());
+    }
+
+    #[test]
+    fn contains_checks_the_recorded_position() {
+        let mut items = Keys::new([4, 8, 1, 6, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
+        let mut heap: IndexedHeap<16> = IndexedHeap::new();
+        for id in 0..4 {
+            heap.push(id, &mut items).unwrap();
+        }
+        assert!((0..4).all(|id| heap.contains(id, &items)));
+        assert!(!heap.contains(4, &items), "never queued");
+        assert_eq!(heap.pop(&mut items), Some(2));
+        assert!(!heap.contains(2, &items), "popped");
+        // A stale position pointing at a slot another id holds is not membership.
+        items.pos[5] = 0;
+        assert!(!heap.contains(5, &items));
+        heap.clear();
+        assert!(!heap.contains(0, &items), "cleared: recorded positions are stale");
     }
 
     #[test]

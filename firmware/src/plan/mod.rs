@@ -4,6 +4,7 @@
 //!   objective, goal region, problem definition, budget, status) with non-Markovian attachments.
 //! - [`abit`]: ABIT* over settled SE(3) states with non-Markovian anchor histories (Paton et al. V).
 //! - [`heap`]: the fixed-capacity indexed binary min-heap, the open list of a search (ABIT*'s edge queue).
+//! - [`status`]: the status vocabulary every planner reports in (exact / approximate / no solution / invalid input).
 //! - [`homotopy`]: homotopy-based planning on tether-demand planes (Abad-Manterola et al.; Tanner et al.).
 //! - [`team`]: tethered climbing teams (Morad et al.).
 //! - [`tethered`]: the tether-aware state space of Paton et al. IV-V (settled SE(3) states, anchor histories,
@@ -18,6 +19,7 @@ pub mod heap;
 pub mod homotopy;
 pub mod rng;
 pub mod space;
+pub mod status;
 pub mod team;
 pub mod tethered;
 

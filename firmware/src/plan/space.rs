@@ -9,7 +9,7 @@
 //! | `GoalSampleableRegion` | [`GoalRegion`] |
 //! | `ProblemDefinition` | [`ProblemDefinition`] |
 //! | `PlannerTerminationCondition` | [`Budget`] plus an optional stop predicate |
-//! | `PlannerStatus` | [`PlannerStatus`] + [`Termination`] |
+//! | `PlannerStatus` | [`PlannerStatus`] (the shared [`crate::plan::status::Status`]) + [`Termination`] |
 //!
 //! ## Non-Markovian states (Paton et al. V-A, Fig. 7)
 //! A state may carry an **attachment** ([`StateSpace::Attachment`]): for the tethered rover, its anchor history.
@@ -42,6 +42,8 @@
 //!   `solve(&Budget::iterations(750))`; `write_path` gives the states with their anchor histories.
 
 use rand_core::Rng;
+
+pub use crate::plan::status::{Detail, Ended, Status};
 
 /// Path cost (OMPL `base::Cost`). Lower is better; `f64::INFINITY` means "no path".
 pub type Cost = f64;
@@ -356,31 +358,21 @@ pub enum InvalidInput {
     HeuristicNotAdmissible,
 }
 
-/// What a planner found (OMPL `PlannerStatus`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum PlannerStatus {
-    /// A path into the goal region, of this cost.
-    ExactSolution {
-        /// Cost of the best path.
-        cost: Cost,
-    },
-    /// No exact path; the best path ends this far (heuristic cost-to-go) from the goal.
-    ApproximateSolution {
-        /// Heuristic cost-to-go of the path's end.
-        cost_to_go: Cost,
-    },
-    /// No path within the budget.
-    NoSolutionWithinBudget,
-    /// The input was rejected.
-    InvalidInput(InvalidInput),
+/// The sampling planners' detail of a [`Status`] (OMPL `PlannerStatus`): `Exact(cost)` of the best path,
+/// `Approximate(cost_to_go)` (heuristic cost-to-go of the best path's end), `NoSolution(Ended::BudgetExhausted)`
+/// (no path within the budget), `InvalidInput(InvalidInput)`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Sampling;
+
+impl Detail for Sampling {
+    type Exact = Cost;
+    type Approximate = Cost;
+    type NoSolution = Ended;
+    type Invalid = InvalidInput;
 }
 
-impl PlannerStatus {
-    /// True for an exact solution.
-    pub fn is_exact(&self) -> bool {
-        matches!(self, Self::ExactSolution { .. })
-    }
-}
+/// What a sampling planner found: the shared [`Status`] with the [`Sampling`] detail.
+pub type PlannerStatus = Status<Sampling>;
 
 /// Why `solve` returned.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -497,7 +489,7 @@ pub trait Planner {
                 Some(Termination::BudgetExhausted(kind))
             } else if stop(&c) {
                 Some(Termination::Stopped)
-            } else if let PlannerStatus::InvalidInput(_) = self.status() {
+            } else if let Status::InvalidInput(_) = self.status() {
                 Some(Termination::InvalidInput)
             } else {
                 match self.step() {

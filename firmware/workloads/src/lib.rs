@@ -67,7 +67,9 @@ use firmware::plan::homotopy::plan::PlanReport;
 use firmware::plan::homotopy::planes::{HoldModel, SoilMap};
 use firmware::plan::homotopy::{preplan, Btm, PlannerParams, Workspace};
 use firmware::plan::space::{Budget, GoalState, PathLength, Planner, PlannerStatus, ProblemDefinition};
-use firmware::plan::team::dstar_lite::{DStarArena, DStarOutcome};
+use firmware::plan::status::Status;
+use firmware::plan::team::dstar_lite::{outcome_label, DStarArena, Found};
+use firmware::plan::team::astar::status_label;
 use firmware::plan::team::DefaultLocalPlanner;
 use firmware::plan::SplitMix64;
 use firmware::rover::{check_pose_stability, settle, SettleOutcome};
@@ -340,7 +342,7 @@ pub fn run_all(arenas: &mut Arenas<'_>, h: &mut impl Harness) {
         Some(r) => {
             let u = planner.arena_use();
             let (found, cost) = match r.status {
-                PlannerStatus::ExactSolution { cost } => (true, cost),
+                PlannerStatus::Exact(cost) => (true, cost),
                 _ => (false, planner.best_cost()),
             };
             line(format_args!(
@@ -369,8 +371,8 @@ pub fn run_all(arenas: &mut Arenas<'_>, h: &mut impl Harness) {
         Some(Ok(p)) => {
             let end = p.hops.last().copied().unwrap_or_default();
             line(format_args!(
-                "{:?} hops={} end=({},{},{}) loss={} expansions={}",
-                p.status,
+                "{} hops={} end=({},{},{}) loss={} expansions={}",
+                status_label(&p.status),
                 p.hops.len(),
                 end.x,
                 end.y,
@@ -387,10 +389,15 @@ pub fn run_all(arenas: &mut Arenas<'_>, h: &mut impl Harness) {
     let dstar = &mut *arenas.dstar;
     h.measure("team_dstar_replan", &mut || d = Some(dstar_workload(dstar)));
     let s = match &d {
-        Some(Ok(DStarOutcome::Found { cost, expansions })) => {
+        Some(Ok(Status::Exact(Found { cost, expansions }))) => {
             line(format_args!("Found cost={cost} expansions={expansions}"))
         }
-        Some(other) => line(format_args!("{other:?}")),
+        // As the `{:?}` of the result read before the shared status: `Ok(NoPath { expansions: 3 })`.
+        Some(Ok(o @ Status::NoSolution(n))) => {
+            line(format_args!("Ok({} {{ expansions: {} }})", outcome_label(o), n.expansions))
+        }
+        Some(Ok(Status::Approximate(n) | Status::InvalidInput(n))) => match *n {},
+        Some(Err(e)) => line(format_args!("Err({e:?})")),
         None => line(format_args!("not run")),
     };
     h.result("team_dstar_replan", &s);

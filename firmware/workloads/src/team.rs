@@ -65,7 +65,8 @@ pub fn dstar_workload(arena: &mut DStarArena<GLOBAL_GRID_MAX_CELLS>) -> Result<D
 #[cfg(test)]
 mod tests {
     use super::*;
-    use firmware::plan::team::astar::AStarStatus;
+    use firmware::plan::status::{Ended, Status};
+    use firmware::plan::team::dstar_lite::Found;
     use firmware::plan::team::DefaultLocalPlanner;
     use std::boxed::Box;
 
@@ -75,7 +76,7 @@ mod tests {
         let n = synthetic_scan(&mut scan);
         let mut p: Box<DefaultLocalPlanner> = Box::default();
         let plan = local_plan_workload(&mut p, &scan[..n]).unwrap();
-        assert!(matches!(plan.status, AStarStatus::Exact | AStarStatus::Approximate), "{:?}", plan.status);
+        assert!(matches!(plan.status, Status::Exact(()) | Status::Approximate(Ended::SearchComplete)), "{:?}", plan.status);
         // 40 m with 9.5 m hops needs at least 5 anchors (start included); the end is near the goal
         assert!(plan.hops.len() >= 5, "{} anchors", plan.hops.len());
         let end = plan.hops.last().unwrap();
@@ -86,7 +87,7 @@ mod tests {
         // the crevasse forces a detour: the replan expands vertices and the cost exceeds the octile distance
         // from the cell reached after three moves, (5, 5), to (60, 60) (55 diagonal moves)
         match out {
-            DStarOutcome::Found { cost, expansions } => {
+            Status::Exact(Found { cost, expansions }) => {
                 assert!(expansions > 0);
                 assert!(cost > 55.0 * core::f64::consts::SQRT_2 + 1.0, "{cost}");
             }
@@ -97,6 +98,8 @@ mod tests {
 #[cfg(test)]
 mod regression {
     use super::*;
+    use firmware::plan::status::Status;
+    use firmware::plan::team::dstar_lite::Found;
     use std::boxed::Box;
 
     /// Found by the workloads' determinism test (`workloads_do_real_work` in the crate root): a second planner on a reused arena saw the first
@@ -107,7 +110,7 @@ mod regression {
         let first = dstar_workload(&mut a).unwrap();
         let second = dstar_workload(&mut a).unwrap();
         assert_eq!(first, second);
-        assert!(matches!(first, DStarOutcome::Found { .. }), "{first:?}");
+        assert!(matches!(first, Status::Exact(_)), "{first:?}");
     }
 
     /// Found by the on-target workload: after the robot moved and a 50-cell crevasse was walled across its path,
@@ -117,7 +120,7 @@ mod regression {
     fn km_tie_rounding_hid_a_wall() {
         let mut a: Box<DStarArena<GLOBAL_GRID_MAX_CELLS>> = Box::default();
         let inc = match dstar_workload(&mut a).unwrap() {
-            DStarOutcome::Found { cost, .. } => cost,
+            Status::Exact(Found { cost, .. }) => cost,
             other => panic!("{other:?}"),
         };
         let mut b: Box<DStarArena<GLOBAL_GRID_MAX_CELLS>> = Box::default();
@@ -144,7 +147,7 @@ mod regression {
             cur = d0.next_cell(cur).unwrap();
         }
         let scratch = match d.plan(cur, (60, 60), 1_000_000).unwrap() {
-            DStarOutcome::Found { cost, .. } => cost,
+            Status::Exact(Found { cost, .. }) => cost,
             other => panic!("{other:?}"),
         };
         assert!((inc - scratch).abs() < 1e-9, "incremental {inc} vs scratch {scratch}");

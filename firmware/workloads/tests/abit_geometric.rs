@@ -11,7 +11,7 @@ use rand_pcg::Pcg64;
 
 use firmware::plan::abit::{AbitArena, AbitParams, AbitStar, DefaultAbitArena};
 use firmware::plan::space::{
-    uniform01, Arena, Budget, BudgetKind, CatchSample, GoalState, InvalidInput, MotionCheck, MotionValidator, PathLength,
+    uniform01, Arena, Budget, BudgetKind, CatchSample, Ended, GoalState, InvalidInput, MotionCheck, MotionValidator, PathLength,
     Planner, PlannerStatus, ProblemDefinition, SolveReport, StateSpace, StateValidityChecker, StepOutcome, Termination,
 };
 use workloads::geometric::{
@@ -246,10 +246,10 @@ fn budget_exhaustion_keeps_the_best_solution() {
     let r1 = planner.solve(&Budget::iterations(2000));
     assert_eq!(r1.termination, Termination::BudgetExhausted(BudgetKind::Iterations));
     assert_eq!(r1.counters.iterations, 2000);
-    let PlannerStatus::ExactSolution { cost: c1 } = r1.status else { panic!("{r1:?}") };
+    let PlannerStatus::Exact(c1) = r1.status else { panic!("{r1:?}") };
     // Continue: cumulative budget, the solution is kept and can only improve.
     let r2 = planner.solve(&Budget::iterations(3000));
-    let PlannerStatus::ExactSolution { cost: c2 } = r2.status else { panic!("{r2:?}") };
+    let PlannerStatus::Exact(c2) = r2.status else { panic!("{r2:?}") };
     assert!(c2 <= c1);
     // Other budgets.
     let r3 = planner.solve(&Budget { edges_evaluated: r2.counters.edges_evaluated, ..Budget::unlimited() });
@@ -259,7 +259,7 @@ fn budget_exhaustion_keeps_the_best_solution() {
     assert_eq!(r4.counters.batches, r2.counters.batches + 1);
     let r5 = planner.solve_until(&Budget::unlimited(), |c| c.iterations >= r4.counters.iterations + 10);
     assert_eq!(r5.termination, Termination::Stopped);
-    assert!(matches!(r5.status, PlannerStatus::ExactSolution { cost } if cost <= c2));
+    assert!(matches!(r5.status, PlannerStatus::Exact(cost) if cost <= c2));
 }
 
 #[test]
@@ -307,11 +307,11 @@ fn no_solution_within_budget_when_walled_off() {
     // Close the gap.
     p.obstacles.boxes[1].lo[1] = 0.0;
     let r = run(&p, 1, 600);
-    assert_eq!(r.report.status, PlannerStatus::NoSolutionWithinBudget);
+    assert_eq!(r.report.status, PlannerStatus::NoSolution(Ended::BudgetExhausted));
     assert!(r.path.is_empty());
     let params = AbitParams { track_approximate: true, ..AbitParams::ompl_defaults() };
     let r = run_with::<2, 4096, 16384>(&p, 1, Budget::iterations(600), params);
-    let PlannerStatus::ApproximateSolution { cost_to_go } = r.report.status else { panic!("{:?}", r.report) };
+    let PlannerStatus::Approximate(cost_to_go) = r.report.status else { panic!("{:?}", r.report) };
     // The closest reachable point is at the wall, at least 0.8 - 0.05 from the goal.
     assert!(cost_to_go >= 0.75 - 1e-9);
     assert_eq!(r.path.first(), Some(&p.start));
@@ -455,7 +455,7 @@ fn non_markovian_direct_edge_is_still_the_first_iteration() {
     let report = planner.solve(&Budget::iterations(750));
     assert_eq!(report.counters.first_solution_iteration, 1);
     assert_eq!(report.counters.edges_evaluated, 1);
-    assert_eq!(report.status, PlannerStatus::ExactSolution { cost: 1.1 });
+    assert_eq!(report.status, PlannerStatus::Exact(1.1));
     assert_eq!(report.termination, Termination::Converged);
 }
 

@@ -8,7 +8,8 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use firmware::plan::homotopy::astar::{enumerate_classes, SearchStart};
+use firmware::plan::homotopy::astar::{enumerate_classes, outcome_label, SearchStart};
+use firmware::plan::status::Status;
 use firmware::plan::homotopy::btm::Btm;
 use firmware::plan::homotopy::geo::Pt;
 use firmware::plan::homotopy::lvalue::LValue;
@@ -64,8 +65,11 @@ fn offline(s: &Scenario, out: &PathBuf) -> Result<bool, String> {
     // Every class, with Alg. 2's verdict.
     let mut classes = heapless::Vec::new();
     let st = SearchStart { point: s.a0, l0: LValue::default(), prefix: &[] };
-    let o = enumerate_classes(&btm, &mut ws.search, &st, s.g, &[], 16, &mut classes).map_err(|e| format!("{e:?}"))?;
-    println!("  A* enumerated {} homotopy classes ({o:?})", classes.len());
+    let o = enumerate_classes(&btm, &mut ws.search, &st, s.g, &[], 16, &mut classes);
+    if let Status::InvalidInput(e) = o {
+        return Err(format!("{e:?}"));
+    }
+    println!("  A* enumerated {} homotopy classes ({})", classes.len(), outcome_label(&o));
     let mut sv = Svg::for_plane(&btm, 30.0);
     svg::draw_btm(&mut sv, &btm);
     for (i, c) in classes.iter().enumerate() {

@@ -16,6 +16,7 @@ pub mod surface;
 
 use firmware::config::team::TeamParams;
 use firmware::geom::{Real, Vec3};
+use firmware::plan::status::Status;
 use firmware::plan::team::astar::AStarStatus;
 use firmware::plan::team::formation::Team;
 use firmware::plan::team::DefaultLocalPlanner;
@@ -199,7 +200,7 @@ pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig,
                 rep.first_graph = (verts, edges);
             }
         }
-        if !matches!(plan.status, AStarStatus::Exact | AStarStatus::Approximate | AStarStatus::BudgetExhausted) {
+        if !matches!(plan.status, Status::Exact(()) | Status::Approximate(_)) {
             continue;
         }
         let Some(target) = plan.hops.get(1) else { continue };

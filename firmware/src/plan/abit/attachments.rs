@@ -10,7 +10,7 @@ use crate::plan::space::{
     uniform01, Arena, CatchSample, GoalRegion, MotionValidator, OptimizationObjective, StateSpace,
     StateValidityChecker,
 };
-use super::graph::{F_FREE, F_GOAL, F_TWIN};
+use super::node::{F_FREE, F_GOAL, F_TWIN};
 use super::AbitStar;
 
 impl<'a, S, V, M, O, G, R, const NV: usize, const NQ: usize, const NM: usize> AbitStar<'a, S, V, M, O, G, R, NV, NQ, NM>

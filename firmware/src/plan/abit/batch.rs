@@ -11,7 +11,7 @@ use crate::plan::space::{
     uniform01, Arena, GoalRegion, InformedSample, MotionValidator, OptimizationObjective, StateSpace,
     StateValidityChecker,
 };
-use super::graph::{F_FREE, F_GOAL, F_INCONSISTENT, F_IN_TREE, F_START};
+use super::node::{F_FREE, F_GOAL, F_INCONSISTENT, F_IN_TREE, F_START};
 use super::{AbitStar, NONE};
 
 impl<'a, S, V, M, O, G, R, const NV: usize, const NQ: usize, const NM: usize> AbitStar<'a, S, V, M, O, G, R, NV, NQ, NM>

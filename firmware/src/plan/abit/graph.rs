@@ -1,5 +1,4 @@
-//! The implicit graph and the tree (OMPL's `ImplicitGraph` and `Vertex`): the arena of nodes (start, goals,
-//! samples, vertices), allocation and free list, nearest neighbours, parent / child bookkeeping, cost
+//! The implicit graph and the tree (OMPL's `ImplicitGraph`): node allocation in the arena and its free list, nearest neighbours, parent / child bookkeeping, cost
 //! propagation and the best goal.
 
 use heapless::Vec;
@@ -7,109 +6,11 @@ use rand_core::Rng;
 
 use crate::config::abit as cfg;
 
-use crate::plan::heap::IndexedHeap;
 use crate::plan::space::{
     Cost, GoalRegion, MotionValidator, OptimizationObjective, StateSpace, StateValidityChecker,
 };
-use super::memo::MemoEntry;
-use super::queue::QueueEdge;
+use super::node::{Node, F_FREE, F_GOAL, F_INCONSISTENT, F_IN_TREE, F_TWIN};
 use super::{AbitStar, Connection, NONE};
-
-pub(super) const F_IN_TREE: u8 = 1;
-pub(super) const F_FREE: u8 = 2;
-pub(super) const F_START: u8 = 4;
-pub(super) const F_GOAL: u8 = 8;
-pub(super) const F_INCONSISTENT: u8 = 16;
-/// A history twin (see `twin_target`): reached through the chain of its state's original node, never listed as a
-/// neighbour itself (twins at one state would otherwise crowd the k nearest out of the neighbour lists).
-pub(super) const F_TWIN: u8 = 32;
-
-/// A state of the implicit graph: a sample, or a vertex of the tree when `in_tree`.
-#[derive(Debug, Clone)]
-pub struct Node<St, A> {
-    /// The state.
-    pub state: St,
-    /// Its attachment: `None` while undetermined (unconnected sample that did not copy one).
-    pub attachment: Option<A>,
-    pub(super) parent: u32,
-    pub(super) first_child: u32,
-    pub(super) next_sibling: u32,
-    pub(super) edge_cost: Cost,
-    pub(super) cost: Cost,
-    pub(super) h_come: Cost,
-    pub(super) h_go: Cost,
-    pub(super) generation: u32,
-    pub(super) expanded_search: u32,
-    pub(super) first_out: u32,
-    pub(super) twin: u32,
-    pub(super) twin_generation: u32,
-    pub(super) flags: u8,
-}
-
-impl<St, A> Node<St, A> {
-    pub(super) fn has(&self, f: u8) -> bool {
-        self.flags & f != 0
-    }
-    /// Is this node a vertex of the tree?
-    pub fn in_tree(&self) -> bool {
-        self.has(F_IN_TREE)
-    }
-    /// Parent index in the arena, if connected and not the root.
-    pub fn parent(&self) -> Option<u32> {
-        (self.parent != NONE).then_some(self.parent)
-    }
-    /// Cost-to-come through the tree (`INFINITY` if not connected).
-    pub fn cost(&self) -> Cost {
-        self.cost
-    }
-}
-
-/// The planner's storage, owned by the caller (a `static` on the board, a `Box` on the host) and lent to
-/// [`AbitStar::new`]. Capacities: `NV` nodes, `NQ` queued edges, `NM` memo entries (see `config::abit`).
-pub struct AbitArena<St, A, const NV: usize, const NQ: usize, const NM: usize> {
-    pub(super) nodes: Vec<Node<St, A>, NV>,
-    /// Queued edges (a slab with a free list; slots are stable while queued).
-    pub(super) edges: Vec<QueueEdge, NQ>,
-    /// The indexed binary heap of slab indices, ordered by the edges' keys.
-    pub(super) heap: IndexedHeap<NQ>,
-    pub(super) memo: Vec<Option<MemoEntry<A>>, NM>,
-}
-
-impl<St, A, const NV: usize, const NQ: usize, const NM: usize> AbitArena<St, A, NV, NQ, NM> {
-    /// An empty arena (const, so it can be a `static`).
-    pub const fn new() -> Self {
-        Self { nodes: Vec::new(), edges: Vec::new(), heap: IndexedHeap::new(), memo: Vec::new() }
-    }
-    /// Nodes currently used (including freed slots awaiting reuse).
-    pub fn nodes_used(&self) -> usize {
-        self.nodes.len()
-    }
-    /// Edges currently queued.
-    pub fn queue_len(&self) -> usize {
-        self.heap.len()
-    }
-}
-
-/// An arena with the default capacities of `config::abit` (what the board uses).
-pub type DefaultAbitArena<St, A> =
-    AbitArena<St, A, { cfg::NODE_CAPACITY }, { cfg::EDGE_QUEUE_CAPACITY }, { cfg::EDGE_MEMO_CAPACITY }>;
-
-impl<St, A, const NV: usize, const NQ: usize, const NM: usize> Default for AbitArena<St, A, NV, NQ, NM> {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-/// High-water marks of the arenas (for sizing the board's arenas).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct ArenaUse {
-    /// Most node slots used.
-    pub nodes: usize,
-    /// Longest edge queue.
-    pub queue: usize,
-    /// Memo slots filled.
-    pub memo: usize,
-}
 
 impl<'a, S, V, M, O, G, R, const NV: usize, const NQ: usize, const NM: usize> AbitStar<'a, S, V, M, O, G, R, NV, NQ, NM>
 where

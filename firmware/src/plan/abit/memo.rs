@@ -3,13 +3,11 @@
 
 use rand_core::Rng;
 
+use crate::config::abit::MEMO_PROBES;
 use crate::plan::space::{
     GoalRegion, MotionCheck, MotionValidator, OptimizationObjective, StateSpace, StateValidityChecker,
 };
 use super::{AbitStar, NONE};
-
-/// Probes per memo lookup (open addressing, linear probing).
-const MEMO_PROBES: usize = 8;
 
 /// One memoised motion check.
 #[derive(Debug, Clone)]

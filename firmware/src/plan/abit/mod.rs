@@ -7,7 +7,9 @@
 //! |---|---|---|
 //! | `mod.rs` | [`AbitStar`]: set-up, the iteration (batch / final search / one edge), public API | `BITstar.cpp` |
 //! | `params.rs` | [`AbitParams`] and their defaults | the planner's parameters |
-//! | `graph.rs` | [`AbitArena`], [`Node`]: allocation, neighbours, tree bookkeeping, cost propagation, goals | `ImplicitGraph`, `Vertex` |
+//! | `node.rs` | [`Node`] and its flags | `Vertex` |
+//! | `arena.rs` | [`AbitArena`]: the node arena, the edge slab and heap, the memo; [`ArenaUse`] | (the planner's storage) |
+//! | `graph.rs` | allocation, neighbours, tree bookkeeping, cost propagation, goals | `ImplicitGraph` |
 //! | `queue.rs` | the edge queue over [`crate::plan::heap::IndexedHeap`], vertex expansion | `SearchQueue` |
 //! | `memo.rs` | the edge memo | the vertices' black / white lists |
 //! | `attachments.rs` | history twins, revealing edges, copied attachments, catch-boundary samples | (Paton et al. V-A) |
@@ -118,7 +120,7 @@
 //!
 //! The last five act only in non-Markovian spaces, so on R^n the planner is OMPL's ABIT* with OMPL's defaults.
 //! Capacities and bounds (`config::abit`): `NODE_CAPACITY` 4096, `EDGE_QUEUE_CAPACITY` 16384,
-//! `EDGE_MEMO_CAPACITY` 16384 (the [`DefaultAbitArena`]), `NEIGHBOUR_CAPACITY` 64, `GOAL_CAPACITY` 8,
+//! `EDGE_MEMO_CAPACITY` 16384 (the [`DefaultAbitArena`]), `MEMO_PROBES` 8, `NEIGHBOUR_CAPACITY` 64, `GOAL_CAPACITY` 8,
 //! `MAX_HISTORY_TWINS` 4, `CATCH_ATTACHMENT_CAPACITY` 8; `DEFAULT_ITERATION_BUDGET` 750 (Table I).
 //!
 //! ## Memory
@@ -126,10 +128,12 @@
 //! `NQ` queued edges, `NM` memo entries. A full node arena or edge queue ends `solve` with
 //! `Termination::ArenaFull` and keeps the best solution; a full memo only costs repeated edge checks.
 
+mod arena;
 mod attachments;
 mod batch;
 mod graph;
 mod memo;
+mod node;
 mod params;
 mod queue;
 mod suspend;
@@ -138,15 +142,16 @@ use heapless::Vec;
 use rand_core::Rng;
 
 use super::space::{
-    Cost, Counters, GoalRegion, InvalidInput, MotionValidator, OptimizationObjective, Planner, PlannerStatus,
+    Cost, Counters, Ended, GoalRegion, InvalidInput, MotionValidator, OptimizationObjective, Planner, PlannerStatus,
     ProblemDefinition, StateSpace, StateValidityChecker, StepOutcome,
 };
 
-pub use graph::{AbitArena, ArenaUse, DefaultAbitArena, Node};
+pub use arena::{AbitArena, ArenaUse, DefaultAbitArena};
+pub use node::Node;
 pub use params::{AbitParams, Connection};
 pub use suspend::AbitSuspended;
 
-use graph::{F_FREE, F_INCONSISTENT, F_IN_TREE, F_START};
+use node::{F_FREE, F_INCONSISTENT, F_IN_TREE, F_START};
 use queue::QueueEdge;
 
 /// "No node".
@@ -548,11 +553,11 @@ where
         if let Some(e) = self.st.invalid {
             PlannerStatus::InvalidInput(e)
         } else if self.has_solution() {
-            PlannerStatus::ExactSolution { cost: self.st.best_cost }
+            PlannerStatus::Exact(self.st.best_cost)
         } else if self.st.params.track_approximate && self.st.approx_vertex != NONE {
-            PlannerStatus::ApproximateSolution { cost_to_go: self.st.approx_h }
+            PlannerStatus::Approximate(self.st.approx_h)
         } else {
-            PlannerStatus::NoSolutionWithinBudget
+            PlannerStatus::NoSolution(Ended::BudgetExhausted)
         }
     }
 

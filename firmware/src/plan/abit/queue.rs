@@ -9,7 +9,7 @@ use crate::plan::heap::{HeapItems, NOT_IN_HEAP};
 use crate::plan::space::{
     Arena, Cost, GoalRegion, MotionValidator, OptimizationObjective, StateSpace, StateValidityChecker,
 };
-use super::graph::{F_FREE, F_INCONSISTENT, F_START, F_TWIN};
+use super::node::{F_FREE, F_INCONSISTENT, F_START, F_TWIN};
 use super::{AbitStar, NONE};
 
 /// A queued edge `parent -> child`: a slot of the arena's edge slab.

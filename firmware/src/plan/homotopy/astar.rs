@@ -15,14 +15,15 @@
 //!
 //! Parameters: `max_classes` (<= `MAX_CLASSES`, default 16), node arena `MAX_SEARCH_NODES` (4096), expansion
 //! budget `ASTAR_EXPANSION_BUDGET` (20 000). Cost: Euclidean length of the midpoint path; heuristic: straight-line
-//! distance to g.
+//! distance to g. Open list: a [`crate::plan::heap::IndexedHeap`] ordered by (f as its IEEE bits, node index).
 
 use super::btm::{Btm, Id, NONE};
 use super::geo::Pt;
 use super::lvalue::{segment_log, segment_lvalue, LValue};
 use super::sleeve::{push_reduced, Sleeve};
 use crate::config::homotopy::{ASTAR_EXPANSION_BUDGET, MAX_CLASSES, MAX_OBSTACLES, MAX_SEARCH_NODES, MAX_SLEEVE, MAX_TRIANGLES};
-use heapless::binary_heap::{BinaryHeap, Min};
+use crate::plan::heap::{HeapItems, IndexedHeap, NOT_IN_HEAP};
+use crate::plan::status::{Detail, Ended, Enumeration, Never, Status};
 use heapless::Vec as HVec;
 
 /// One homotopy class from a0 to g.
@@ -38,17 +39,37 @@ pub struct HomotopyClass {
     pub cost: f64,
 }
 
-/// How the enumeration ended.
+/// The class enumeration's detail of a [`Status`]: `Exact(Enumeration::Enough)` — `max_classes` found;
+/// `Exact(Enumeration::AllClasses)` — every reachable state expanded, the list is all the classes A* can produce
+/// (possibly none); `Approximate(Ended::BudgetExhausted)` — the expansion budget ran out, and
+/// `Approximate(Ended::ArenaFull)` — the node arena filled up (the classes found so far are kept either way);
+/// `InvalidInput(SearchError)` — start or goal outside the BTM. There is no `NoSolution` case: an exhausted search
+/// that found no class is `Exact(AllClasses)` with an empty list.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SearchOutcome {
-    /// `max_classes` found.
-    Enough,
-    /// Every reachable state expanded: the list is all the classes A* can produce.
-    Exhausted,
-    /// The expansion budget ran out (classes found so far are kept).
-    BudgetExhausted,
-    /// The node arena filled up (classes found so far are kept).
-    ArenaFull,
+pub struct ClassSearch;
+
+impl Detail for ClassSearch {
+    type Exact = Enumeration;
+    type Approximate = Ended;
+    type NoSolution = Never;
+    type Invalid = SearchError;
+}
+
+/// How the enumeration ended: the shared [`Status`] with the [`ClassSearch`] detail.
+pub type SearchOutcome = Status<ClassSearch>;
+
+/// The word a report prints for `outcome`: `Enough`, `Exhausted`, `BudgetExhausted`, `ArenaFull`, or the
+/// input error's name.
+pub fn outcome_label(outcome: &SearchOutcome) -> &'static str {
+    match outcome {
+        Status::Exact(Enumeration::Enough) => "Enough",
+        Status::Exact(Enumeration::AllClasses) => "Exhausted",
+        Status::Approximate(Ended::ArenaFull) => "ArenaFull",
+        Status::Approximate(_) => "BudgetExhausted",
+        Status::NoSolution(n) => match *n {},
+        Status::InvalidInput(SearchError::StartNotInFreeSpace) => "StartNotInFreeSpace",
+        Status::InvalidInput(SearchError::GoalNotInFreeSpace) => "GoalNotInFreeSpace",
+    }
 }
 
 /// Bad search input.
@@ -69,6 +90,10 @@ struct Node {
     parent: u16,
     depth: u16,
     next_same_tri: u16,
+    /// Open-list key: `key(f)` of f = g + h.
+    key: u64,
+    /// Position in the open list.
+    heap_pos: u32,
 }
 
 const NO_NODE: u16 = u16::MAX;
@@ -83,7 +108,26 @@ pub struct SearchArena {
     nodes: [Node; MAX_SEARCH_NODES],
     len: usize,
     head: [u16; MAX_TRIANGLES],
-    open: BinaryHeap<(u64, u16), Min, MAX_SEARCH_NODES>,
+    open: IndexedHeap<MAX_SEARCH_NODES>,
+}
+
+/// The open list's order: by `(key, node index)`, the order of the `(u64, u16)` pairs the search queued before
+/// it used [`IndexedHeap`] (a strict total order: node indices are unique, so there are no ties).
+impl HeapItems for [Node] {
+    fn before(&self, a: u32, b: u32) -> bool {
+        match (self.get(a as usize), self.get(b as usize)) {
+            (Some(x), Some(y)) => (x.key, a) < (y.key, b),
+            _ => false,
+        }
+    }
+    fn set_position(&mut self, id: u32, pos: u32) {
+        if let Some(n) = self.get_mut(id as usize) {
+            n.heap_pos = pos;
+        }
+    }
+    fn position(&self, id: u32) -> Option<u32> {
+        self.get(id as usize).map(|n| n.heap_pos)
+    }
 }
 
 impl Default for SearchArena {
@@ -103,8 +147,10 @@ impl SearchArena {
             parent: NO_NODE,
             depth: 0,
             next_same_tri: NO_NODE,
+            key: u64::MAX,
+            heap_pos: NOT_IN_HEAP,
         };
-        SearchArena { nodes: [N; MAX_SEARCH_NODES], len: 0, head: [NO_NODE; MAX_TRIANGLES], open: BinaryHeap::new() }
+        SearchArena { nodes: [N; MAX_SEARCH_NODES], len: 0, head: [NO_NODE; MAX_TRIANGLES], open: IndexedHeap::new() }
     }
     fn reset(&mut self) {
         self.len = 0;
@@ -128,6 +174,17 @@ impl SearchArena {
             }
         }
         Some(idx)
+    }
+    /// Queue node `i` with open-list key `k`.
+    fn push_open(&mut self, i: u16, k: u64) -> Result<(), crate::plan::heap::Full> {
+        if let Some(n) = self.nodes.get_mut(usize::from(i)) {
+            n.key = k;
+        }
+        self.open.push(u32::from(i), &mut self.nodes[..])
+    }
+    /// Take the open node with the least `(key, index)`.
+    fn pop_open(&mut self) -> Option<u16> {
+        self.open.pop(&mut self.nodes[..]).map(|i| i as u16)
     }
     fn has_state(&self, tri: Id, l: LValue) -> bool {
         let mut i = self.head.get(usize::from(tri)).copied().unwrap_or(NO_NODE);
@@ -163,7 +220,7 @@ pub struct SearchStart<'a> {
 
 /// Enumerates up to `max_classes` homotopy classes to `goal` whose L-values are not in `constraints` (the list
 /// `Lc`), appending them to `out` in order of A* cost. Classes whose full sleeve (prefix + searched part) is not
-/// simple are skipped.
+/// simple are skipped. A start or goal outside the BTM is `InvalidInput`.
 pub fn enumerate_classes(
     btm: &Btm,
     arena: &mut SearchArena,
@@ -172,12 +229,15 @@ pub fn enumerate_classes(
     constraints: &[LValue],
     max_classes: usize,
     out: &mut HVec<HomotopyClass, MAX_CLASSES>,
-) -> Result<SearchOutcome, SearchError> {
+) -> SearchOutcome {
     let t0 = match start.prefix.last() {
         Some(&t) if btm.tri(t).is_some() => t,
-        _ => btm.locate(start.point).ok_or(SearchError::StartNotInFreeSpace)?,
+        _ => match btm.locate(start.point) {
+            Some(t) => t,
+            None => return Status::InvalidInput(SearchError::StartNotInFreeSpace),
+        },
     };
-    let tg = btm.locate(goal).ok_or(SearchError::GoalNotInFreeSpace)?;
+    let Some(tg) = btm.locate(goal) else { return Status::InvalidInput(SearchError::GoalNotInFreeSpace) };
     arena.reset();
     let h0 = start.point.dist(goal);
     let Some(root) = arena.alloc(Node {
@@ -188,16 +248,18 @@ pub fn enumerate_classes(
         parent: NO_NODE,
         depth: 0,
         next_same_tri: NO_NODE,
+        key: u64::MAX,
+        heap_pos: NOT_IN_HEAP,
     }) else {
-        return Ok(SearchOutcome::ArenaFull);
+        return Status::Approximate(Ended::ArenaFull);
     };
-    let _ = arena.open.push((key(h0), root));
+    let _ = arena.push_open(root, key(h0));
     let max_classes = max_classes.min(MAX_CLASSES);
     // A simple sleeve visits each triangle at most once.
     let depth_limit = (2 * btm.triangle_count()).min(MAX_SLEEVE);
     let mut full = false;
     for _ in 0..ASTAR_EXPANSION_BUDGET {
-        let Some((_, ni)) = arena.open.pop() else { return Ok(SearchOutcome::Exhausted) };
+        let Some(ni) = arena.pop_open() else { return Status::Exact(Enumeration::AllClasses) };
         let Some(n) = arena.node(ni).copied() else { continue };
         if n.tri == tg {
             let l = n.l.plus(segment_lvalue(btm, n.point, goal));
@@ -206,7 +268,7 @@ pub fn enumerate_classes(
                 if let Some(class) = build_class(btm, arena, ni, start, t0, goal, l, n.g + n.point.dist(goal)) {
                     let _ = out.push(class);
                     if out.len() >= max_classes {
-                        return Ok(SearchOutcome::Enough);
+                        return Status::Exact(Enumeration::Enough);
                     }
                 }
             }
@@ -227,10 +289,20 @@ pub fn enumerate_classes(
                 continue;
             }
             let g = n.g + n.point.dist(m);
-            let node = Node { tri: s, point: m, g, l, parent: ni, depth: n.depth + 1, next_same_tri: NO_NODE };
+            let node = Node {
+                tri: s,
+                point: m,
+                g,
+                l,
+                parent: ni,
+                depth: n.depth + 1,
+                next_same_tri: NO_NODE,
+                key: u64::MAX,
+                heap_pos: NOT_IN_HEAP,
+            };
             match arena.alloc(node) {
                 Some(idx) => {
-                    if arena.open.push((key(g + m.dist(goal)), idx)).is_err() {
+                    if arena.push_open(idx, key(g + m.dist(goal))).is_err() {
                         full = true;
                     }
                 }
@@ -238,10 +310,10 @@ pub fn enumerate_classes(
             }
         }
         if full {
-            return Ok(SearchOutcome::ArenaFull);
+            return Status::Approximate(Ended::ArenaFull);
         }
     }
-    Ok(SearchOutcome::BudgetExhausted)
+    Status::Approximate(Ended::BudgetExhausted)
 }
 
 #[allow(clippy::too_many_arguments)]

@@ -14,6 +14,7 @@ use super::lvalue::{polyline_lvalue, LValue};
 use super::sleeve::{anchors, crossing_sequence, shortest_homotopic_path, walk_segment, Anchor, Path, Sleeve, SleeveError};
 use super::planes::HoldModel;
 use crate::config::homotopy::{MAX_CLASSES, MAX_L_CONSTRAINTS, MAX_PATH, REPLAN_BUDGET};
+use crate::plan::status::{Enumeration, Status};
 use heapless::Vec as HVec;
 
 /// Planner parameters (see module docs for defaults).
@@ -277,8 +278,10 @@ pub fn plan_from(
         report.rounds += 1;
         ws.classes.clear();
         let st = SearchStart { point: start, l0, prefix: &prefix };
-        let outcome = enumerate_classes(btm, &mut ws.search, &st, g, constraints, params.max_classes, &mut ws.classes)
-            .map_err(PlanError::Search)?;
+        let outcome = enumerate_classes(btm, &mut ws.search, &st, g, constraints, params.max_classes, &mut ws.classes);
+        if let Status::InvalidInput(e) = outcome {
+            return Err(PlanError::Search(e));
+        }
         report.search = Some(outcome);
         if ws.classes.is_empty() {
             return Ok(None);
@@ -326,7 +329,7 @@ pub fn plan_from(
             let _ = report.examined.push(verdict);
             let _ = constraints.push(class.l);
         }
-        if outcome != SearchOutcome::Enough {
+        if outcome != Status::Exact(Enumeration::Enough) {
             return Ok(None);
         }
     }

@@ -11,37 +11,92 @@
 //!
 //! Cost: the edge loss L'_ab; heuristic: straight-line distance to the goal region (admissible since
 //! L'_ab >= d_ab). When the goal region is unreachable within the scene (normal when the goal is in another
-//! scene) the result is the path to the expanded vertex closest to the goal ([`AStarStatus::Approximate`]).
+//! scene) the result is the path to the expanded vertex closest to the goal (`Approximate(Ended::SearchComplete)`).
 //!
 //! Parameters: `r_max` (default 15 m) minus `landing_margin` (0.5 m); `astar_budget` expansions (4096).
-//! Open-set selection is a linear scan over at most `V` vertices (V = 512 by default): simple and bounded.
+//! Open list: a [`crate::plan::heap::IndexedHeap`] of at most `V` vertices (V = 512 by default) ordered by
+//! (f, vertex index); an open vertex whose f is not below infinity (infinite or NaN) is never expanded.
 
 use super::graph::HopGraph;
 use crate::config::team::TeamParams;
 use crate::geom::{norm3, Real, Vec3};
+use crate::plan::status::{Detail, Ended, Status};
+use crate::plan::heap::{HeapItems, IndexedHeap, NOT_IN_HEAP};
 use heapless::Vec as HVec;
 
-/// Status of a local plan (OMPL-style).
+/// The bounded-leg A*'s detail of a [`Status`]: `Exact(())` reaches the goal region;
+/// `Approximate(Ended::SearchComplete)`: the goal region is not reachable, the path ends at the reachable vertex
+/// closest to the goal; `Approximate(Ended::BudgetExhausted)`: the expansion budget ran out, the path is the best
+/// so far (closest to the goal; possibly the start alone); `NoSolution(Ended::SearchComplete)`: no hop from the
+/// start brings the robot closer to the goal; `InvalidInput(())`: the start vertex does not exist.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum AStarStatus {
-    /// A path reaching the goal region.
-    Exact,
-    /// The goal region is not reachable; the path ends at the reachable vertex closest to the goal.
-    Approximate,
-    /// No hop from the start brings the robot closer to the goal.
-    NoSolution,
-    /// The expansion budget ran out; the path is the best so far (closest to the goal).
-    BudgetExhausted,
-    /// The start vertex does not exist.
-    InvalidInput,
+pub struct HopSearch;
+
+impl Detail for HopSearch {
+    type Exact = ();
+    type Approximate = Ended;
+    type NoSolution = Ended;
+    type Invalid = ();
+}
+
+/// Status of a local plan: the shared [`Status`] with the [`HopSearch`] detail.
+pub type AStarStatus = Status<HopSearch>;
+
+/// The word a report prints for `status`: `Exact`, `Approximate`, `BudgetExhausted`, `NoSolution` or
+/// `InvalidInput`.
+pub fn status_label(status: &AStarStatus) -> &'static str {
+    match status {
+        Status::Exact(()) => "Exact",
+        Status::Approximate(Ended::BudgetExhausted) => "BudgetExhausted",
+        Status::Approximate(_) => "Approximate",
+        Status::NoSolution(_) => "NoSolution",
+        Status::InvalidInput(()) => "InvalidInput",
+    }
 }
 
 /// A* scratch arena for `V` vertices.
 pub struct AStarArena<const V: usize> {
     g: [Real; V],
     parent: [u16; V],
-    open: [bool; V],
     closed: [bool; V],
+    /// The open list's keys (f = g + h) and positions, by vertex.
+    keys: OpenKeys<V>,
+    open: IndexedHeap<V>,
+}
+
+/// f and open-list position per vertex.
+struct OpenKeys<const V: usize> {
+    f: [Real; V],
+    pos: [u32; V],
+}
+
+impl<const V: usize> OpenKeys<V> {
+    /// Can vertex `v` be expanded (`f` below infinity: not infinite, not NaN)?
+    fn selectable(&self, v: u32) -> bool {
+        self.f.get(v as usize).is_some_and(|&f| f < Real::INFINITY)
+    }
+}
+
+/// Least f first, ties to the lower index, vertices that cannot be expanded last: the vertex a scan over the open
+/// vertices in index order with `f < best` picks is the heap's front.
+impl<const V: usize> HeapItems for OpenKeys<V> {
+    fn before(&self, a: u32, b: u32) -> bool {
+        let (Some(&fa), Some(&fb)) = (self.f.get(a as usize), self.f.get(b as usize)) else { return false };
+        match (self.selectable(a), self.selectable(b)) {
+            (true, true) => fa < fb || (fa == fb && a < b),
+            (true, false) => true,
+            (false, true) => false,
+            (false, false) => a < b,
+        }
+    }
+    fn set_position(&mut self, id: u32, pos: u32) {
+        if let Some(p) = self.pos.get_mut(id as usize) {
+            *p = pos;
+        }
+    }
+    fn position(&self, id: u32) -> Option<u32> {
+        self.pos.get(id as usize).copied()
+    }
 }
 
 impl<const V: usize> AStarArena<V> {
@@ -50,7 +105,13 @@ impl<const V: usize> AStarArena<V> {
         const {
             assert!(V <= u16::MAX as usize, "AStarArena: V must fit u16 vertex indices");
         }
-        Self { g: [Real::INFINITY; V], parent: [u16::MAX; V], open: [false; V], closed: [false; V] }
+        Self {
+            g: [Real::INFINITY; V],
+            parent: [u16::MAX; V],
+            closed: [false; V],
+            keys: OpenKeys { f: [Real::INFINITY; V], pos: [NOT_IN_HEAP; V] },
+            open: IndexedHeap::new(),
+        }
     }
 }
 
@@ -88,7 +149,7 @@ pub fn bounded_leg_astar<const V: usize, const E: usize, const H: usize>(
         assert!(V <= u16::MAX as usize, "bounded_leg_astar: V must fit u16 vertex indices");
     }
     let n = graph.n_vertices;
-    let mut out = LocalPath { status: AStarStatus::InvalidInput, vertices: HVec::new(), loss: 0.0, expansions: 0 };
+    let mut out = LocalPath { status: Status::InvalidInput(()), vertices: HVec::new(), loss: 0.0, expansions: 0 };
     if start as usize >= n {
         return out;
     }
@@ -98,46 +159,32 @@ pub fn bounded_leg_astar<const V: usize, const E: usize, const H: usize>(
         (norm3(&(p - goal)) - goal_tol).max(0.0)
     };
     for i in 0..n {
-        if let (Some(g), Some(p), Some(o), Some(c)) =
-            (arena.g.get_mut(i), arena.parent.get_mut(i), arena.open.get_mut(i), arena.closed.get_mut(i))
-        {
+        if let (Some(g), Some(p), Some(c)) = (arena.g.get_mut(i), arena.parent.get_mut(i), arena.closed.get_mut(i)) {
             *g = Real::INFINITY;
             *p = u16::MAX;
-            *o = false;
             *c = false;
         }
     }
-    if let (Some(g), Some(o)) = (arena.g.get_mut(start as usize), arena.open.get_mut(start as usize)) {
+    arena.open.clear();
+    if let (Some(g), Some(f)) = (arena.g.get_mut(start as usize), arena.keys.f.get_mut(start as usize)) {
         *g = 0.0;
-        *o = true;
+        *f = 0.0 + hdist(start as usize);
+        let _ = arena.open.push(u32::from(start), &mut arena.keys);
     }
     let mut best = start as usize;
     let mut best_h = hdist(best);
-    let mut status = AStarStatus::Approximate;
+    let mut status = Status::Approximate(Ended::SearchComplete);
     let mut reached = None;
-    loop {
-        // pick the open vertex with the smallest f (ties: lower index)
-        let mut u = usize::MAX;
-        let mut fu = Real::INFINITY;
-        for i in 0..n {
-            if arena.open.get(i) == Some(&true) {
-                let f = arena.g.get(i).copied().unwrap_or(Real::INFINITY) + hdist(i);
-                if f < fu {
-                    fu = f;
-                    u = i;
-                }
-            }
-        }
-        if u == usize::MAX {
-            break;
-        }
+    // the open vertex with the smallest f (ties: lower index); none left that can be expanded ends the search
+    while let Some(top) = arena.open.peek().filter(|&v| arena.keys.selectable(v)) {
+        let u = top as usize;
         if out.expansions >= params.astar_budget {
-            status = AStarStatus::BudgetExhausted;
+            status = Status::Approximate(Ended::BudgetExhausted);
             break;
         }
         out.expansions += 1;
-        if let (Some(o), Some(c)) = (arena.open.get_mut(u), arena.closed.get_mut(u)) {
-            *o = false;
+        let _ = arena.open.pop(&mut arena.keys);
+        if let Some(c) = arena.closed.get_mut(u) {
             *c = true;
         }
         let hu = hdist(u);
@@ -147,7 +194,7 @@ pub fn bounded_leg_astar<const V: usize, const E: usize, const H: usize>(
         }
         if hu <= 0.0 {
             reached = Some(u);
-            status = AStarStatus::Exact;
+            status = Status::Exact(());
             break;
         }
         let gu = arena.g.get(u).copied().unwrap_or(Real::INFINITY);
@@ -167,17 +214,27 @@ pub fn bounded_leg_astar<const V: usize, const E: usize, const H: usize>(
             }
             let cand = gu + e.loss;
             if cand < arena.g.get(b).copied().unwrap_or(Real::INFINITY) {
-                if let (Some(g), Some(p), Some(o)) = (arena.g.get_mut(b), arena.parent.get_mut(b), arena.open.get_mut(b)) {
+                if let (Some(g), Some(p), Some(f)) = (arena.g.get_mut(b), arena.parent.get_mut(b), arena.keys.f.get_mut(b)) {
                     *g = cand;
                     *p = u as u16;
-                    *o = true;
+                    *f = cand + hdist(b);
+                    // capacity V, each vertex queued at most once: the push always fits
+                    if !arena.open.contains(b as u32, &arena.keys) {
+                        let _ = arena.open.push(b as u32, &mut arena.keys);
+                    } else {
+                        arena.open.update(b as u32, &mut arena.keys);
+                    }
                 }
             }
         }
     }
     let end = reached.unwrap_or(best);
     if end == start as usize {
-        out.status = if status == AStarStatus::BudgetExhausted { status } else { AStarStatus::NoSolution };
+        out.status = if status == Status::Approximate(Ended::BudgetExhausted) {
+            status
+        } else {
+            Status::NoSolution(Ended::SearchComplete)
+        };
         let _ = out.vertices.push(start);
         return out;
     }
@@ -262,7 +319,7 @@ mod tests {
             let path: LocalPath<64> = bounded_leg_astar(&g, &mut arena, 0, &goal, 1e-4, &c_m, &p);
             let best = oracle(&g, 0, goal_v, &c_m, r_eff);
             if best.is_finite() {
-                assert_eq!(path.status, AStarStatus::Exact, "seed {seed}");
+                assert_eq!(path.status, Status::Exact(()), "seed {seed}");
                 assert!((path.loss - best).abs() <= 1e-3 * best.max(1.0), "seed {seed}: {} vs {best}", path.loss);
                 for w in path.vertices.windows(2) {
                     let (a, b) = (g.vertices[w[0] as usize].pos, g.vertices[w[1] as usize].pos);
@@ -271,7 +328,7 @@ mod tests {
                 }
                 assert_eq!(*path.vertices.last().unwrap() as usize, goal_v);
             } else {
-                assert_ne!(path.status, AStarStatus::Exact, "seed {seed}");
+                assert_ne!(path.status, Status::Exact(()), "seed {seed}");
             }
         }
     }
@@ -287,13 +344,13 @@ mod tests {
         let goal = Vec3::new(27.0, 0.0, 0.0);
         let p = TeamParams { astar_budget: 2, ..TeamParams::DEFAULT };
         let r: LocalPath<16> = bounded_leg_astar(&g, &mut arena, 0, &goal, 0.1, &Vec3::zeros(), &p);
-        assert_eq!(r.status, AStarStatus::BudgetExhausted);
+        assert_eq!(r.status, Status::Approximate(Ended::BudgetExhausted));
         assert!(r.vertices.len() >= 2, "best-so-far path kept");
         let r: LocalPath<16> = bounded_leg_astar(&g, &mut arena, 12, &goal, 0.1, &Vec3::zeros(), &TeamParams::DEFAULT);
-        assert_eq!(r.status, AStarStatus::InvalidInput);
+        assert_eq!(r.status, Status::InvalidInput(()));
         // a leg already at the tether limit pointing away from the goal: no hop towards it is allowed
         let far = Vec3::new(14.4, 0.0, 0.0);
         let r: LocalPath<16> = bounded_leg_astar(&g, &mut arena, 0, &goal, 0.1, &far, &TeamParams::DEFAULT);
-        assert_eq!(r.status, AStarStatus::NoSolution);
+        assert_eq!(r.status, Status::NoSolution(Ended::SearchComplete));
     }
 }

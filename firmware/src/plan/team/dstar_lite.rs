@@ -18,12 +18,15 @@
 //! touching every cell each time. A board uses [`DStarArena`] (capacity [`GLOBAL_GRID_MAX_CELLS`] by default).
 //!
 //! Parameters: the expansion budget per call (a caller's choice; [`DStarLite::plan`] and [`DStarLite::replan`]
-//! take it). Running out of budget is [`DStarOutcome::BudgetExhausted`]; calling `replan` again continues.
+//! take it). Running out of budget is `NoSolution(NoPath { ended: Ended::BudgetExhausted, .. })`; calling `replan`
+//! again continues.
 //!
 //! [`GLOBAL_GRID_MAX_CELLS`]: crate::config::team::GLOBAL_GRID_MAX_CELLS
 
 use core::cmp::Ordering;
 use core::f64::consts::SQRT_2;
+
+use crate::plan::status::{Detail, Ended, Never, Status};
 
 /// Octile direction offsets (dx, dy); index = direction id. Straight first, then diagonals.
 pub const DIRS: [(i32, i32); 8] = [(1, 0), (0, 1), (-1, 0), (0, -1), (1, 1), (-1, 1), (-1, -1), (1, -1)];
@@ -226,26 +229,49 @@ pub enum DStarError {
     NotPlanned,
 }
 
-/// Result of a (re)planning call.
+/// D* Lite's detail of a [`Status`]: `Exact(Found)` — the shortest path's cost; `NoSolution(NoPath)` — with
+/// [`Ended::SearchComplete`] the goal is not reachable from the start (search completed, or the start or goal cell
+/// is blocked), with [`Ended::BudgetExhausted`] the expansion budget ran out: the search state is kept, call
+/// `replan` to continue. D* Lite never returns an approximate path, and a bad call is a [`DStarError`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct GridSearch;
+
+impl Detail for GridSearch {
+    type Exact = Found;
+    type Approximate = Never;
+    type NoSolution = NoPath;
+    type Invalid = Never;
+}
+
+/// Result of a (re)planning call: the shared [`Status`] with the [`GridSearch`] detail.
+pub type DStarOutcome = Status<GridSearch>;
+
+/// A shortest path was found.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum DStarOutcome {
-    /// Shortest path found; its cost.
-    Found {
-        /// Octile cost from the start to the goal.
-        cost: f64,
-        /// Vertices expanded in this call.
-        expansions: u32,
-    },
-    /// The goal is not reachable from the start (search completed).
-    NoPath {
-        /// Vertices expanded in this call.
-        expansions: u32,
-    },
-    /// The expansion budget ran out; the search state is kept, call `replan` to continue.
-    BudgetExhausted {
-        /// Vertices expanded in this call.
-        expansions: u32,
-    },
+pub struct Found {
+    /// Octile cost from the start to the goal.
+    pub cost: f64,
+    /// Vertices expanded in this call.
+    pub expansions: u32,
+}
+
+/// No path: proved ([`Ended::SearchComplete`]) or not yet ([`Ended::BudgetExhausted`], call `replan`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct NoPath {
+    /// Why the search ended.
+    pub ended: Ended,
+    /// Vertices expanded in this call.
+    pub expansions: u32,
+}
+
+/// The word a report prints for `outcome`: `Found`, `NoPath` (search complete) or `BudgetExhausted`.
+pub fn outcome_label(outcome: &DStarOutcome) -> &'static str {
+    match outcome {
+        Status::Exact(_) => "Found",
+        Status::NoSolution(NoPath { ended: Ended::BudgetExhausted, .. }) => "BudgetExhausted",
+        Status::NoSolution(_) => "NoPath",
+        Status::Approximate(n) | Status::InvalidInput(n) => match *n {},
+    }
 }
 
 /// Result of a path extraction into a caller buffer.
@@ -703,7 +729,7 @@ impl<'a> DStarLite<'a> {
                 break;
             }
             if expansions >= budget {
-                return DStarOutcome::BudgetExhausted { expansions };
+                return Status::NoSolution(NoPath { ended: Ended::BudgetExhausted, expansions });
             }
             expansions += 1;
             let k_new = self.calc_key(u);
@@ -754,9 +780,9 @@ impl<'a> DStarLite<'a> {
         }
         let cost = self.rhs(self.start);
         if cost < INF {
-            DStarOutcome::Found { cost: cost.to_f64(), expansions }
+            Status::Exact(Found { cost: cost.to_f64(), expansions })
         } else {
-            DStarOutcome::NoPath { expansions }
+            Status::NoSolution(NoPath { ended: Ended::SearchComplete, expansions })
         }
     }
 
@@ -771,7 +797,7 @@ impl<'a> DStarLite<'a> {
         self.km = Cost::ZERO;
         self.planned = true;
         if self.is_blocked(goal.0, goal.1) || self.is_blocked(start.0, start.1) {
-            return Ok(DStarOutcome::NoPath { expansions: 0 });
+            return Ok(Status::NoSolution(NoPath { ended: Ended::SearchComplete, expansions: 0 }));
         }
         self.set_rhs(g, Cost::ZERO);
         let k = (self.h(s, g), Cost::ZERO);
@@ -786,7 +812,7 @@ impl<'a> DStarLite<'a> {
         }
         let (sx, sy) = self.coords(self.start);
         if self.is_blocked(sx, sy) {
-            return Ok(DStarOutcome::NoPath { expansions: 0 });
+            return Ok(Status::NoSolution(NoPath { ended: Ended::SearchComplete, expansions: 0 }));
         }
         Ok(self.compute_shortest_path(budget))
     }
@@ -984,7 +1010,7 @@ mod tests {
         let mut d = DStarLite::new(8, 8, arena.storage()).unwrap();
         let out = d.plan((0, 0), (7, 3), 10_000).unwrap();
         match out {
-            DStarOutcome::Found { cost, .. } => assert!((cost - (4.0 + 3.0 * SQRT_2)).abs() < 1e-12),
+            Status::Exact(Found { cost, .. }) => assert!((cost - (4.0 + 3.0 * SQRT_2)).abs() < 1e-12),
             other => panic!("{other:?}"),
         }
         assert_eq!(d.plan((0, 0), (9, 0), 10).err(), Some(DStarError::OutOfGrid { x: 9, y: 0 }));
@@ -995,9 +1021,9 @@ mod tests {
         let mut arena: DStarArena<64> = DStarArena::new();
         let mut d = DStarLite::new(8, 8, arena.storage()).unwrap();
         let out = d.plan((0, 0), (7, 7), 2).unwrap();
-        assert!(matches!(out, DStarOutcome::BudgetExhausted { expansions: 2 }));
+        assert!(matches!(out, Status::NoSolution(NoPath { ended: Ended::BudgetExhausted, expansions: 2 })));
         let out = d.replan(10_000).unwrap();
-        assert!(matches!(out, DStarOutcome::Found { cost, .. } if (cost - 7.0 * SQRT_2).abs() < 1e-12));
+        assert!(matches!(out, Status::Exact(Found { cost, .. }) if (cost - 7.0 * SQRT_2).abs() < 1e-12));
     }
 
     #[test]
@@ -1010,14 +1036,14 @@ mod tests {
             d.set_blocked(0, y, true).unwrap();
         }
         let out = d.plan((1, 1), (1, 3), 1000).unwrap();
-        assert!(matches!(out, DStarOutcome::Found { cost, .. } if cost == 2.0));
+        assert!(matches!(out, Status::Exact(Found { cost, .. }) if cost == 2.0));
         let mut p = [(0i64, 0i64); 16];
         assert_eq!(d.path(&mut p).unwrap(), PathOutcome::Complete(3));
         assert_eq!(&p[..3], &[(1, 1), (1, 2), (1, 3)]);
         d.move_start((1, 2)).unwrap();
         d.add_wall((1, 2), (1, 3)).unwrap();
         let out = d.replan(1000).unwrap();
-        assert!(matches!(out, DStarOutcome::Found { cost, .. } if cost == 3.0), "{out:?}");
+        assert!(matches!(out, Status::Exact(Found { cost, .. }) if cost == 3.0), "{out:?}");
         assert_eq!(d.path(&mut p).unwrap(), PathOutcome::Complete(4));
         assert_eq!(&p[..4], &[(1, 2), (2, 2), (2, 3), (1, 3)]);
     }
