@@ -3,7 +3,7 @@
 
 use core::hint::black_box;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use firmware::plan::homotopy::astar::{enumerate_classes, SearchArena, SearchStart};
+use firmware::plan::homotopy::classes::{enumerate_classes, SearchArena, SearchStart};
 use firmware::plan::homotopy::btm::Btm;
 use firmware::plan::homotopy::geo::{pt, Pt};
 use firmware::plan::homotopy::lvalue::LValue;

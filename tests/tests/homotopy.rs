@@ -5,14 +5,14 @@
 //! homotopy check (free-group words of crossings with upward rays from each obstacle), Euler's triangle count
 //! T = n + 2h - 2 for a polygon with holes, and BTMs rebuilt from scratch.
 
-use firmware::plan::homotopy::astar::{enumerate_classes, HomotopyClass, SearchArena, SearchOutcome, SearchStart};
+use firmware::plan::homotopy::classes::{enumerate_classes, HomotopyClass, SearchArena, SearchOutcome, SearchStart};
 use firmware::plan::status::{Ended, Enumeration, Status};
 use firmware::plan::homotopy::btm::Btm;
 use firmware::plan::homotopy::geo::{pt, Pt};
 use firmware::plan::homotopy::lvalue::{polyline_lvalue, LValue};
 use firmware::plan::homotopy::online::{MapChange, OnlineAction, OnlinePlanner};
 use firmware::plan::homotopy::plan::{
-    feasibility_check, preplan, Blocked, Feasibility, PlanReport, PlannerParams, Verdict, Workspace,
+    feasibility_check, preplan, Blocked, Feasibility, PlanReport, HomotopyParams, Verdict, Workspace,
 };
 use firmware::plan::homotopy::sleeve::{anchors, crossing_sequence, portal, shortest_homotopic_path, Sleeve};
 use firmware::plan::homotopy::planes::{classify_slope, theta_max, PlaneClass};
@@ -232,7 +232,7 @@ fn scenario_b_naive_path_rejected_and_only_one_class_has_passable_anchors() {
     // Alg. 1 picks that class, after rejecting the naive one.
     let mut lc = heapless::Vec::new();
     let mut rep = PlanReport::default();
-    let plan = preplan(&btm, &s.model, &PlannerParams::default(), &mut ws, s.a0, s.g, &mut lc, &mut rep)
+    let plan = preplan(&btm, &s.model, &HomotopyParams::default(), &mut ws, s.a0, s.g, &mut lc, &mut rep)
         .expect("plan")
         .expect("a feasible plan exists");
     assert!(plan.class.l.same_class(*l));
@@ -273,7 +273,7 @@ fn scenario_c_preplan_finds_feasible_sleeve_with_anchors() {
     let mut ws = Box::new(Workspace::default());
     let mut lc = heapless::Vec::new();
     let mut rep = PlanReport::default();
-    let plan = preplan(&btm, &s.model, &PlannerParams::default(), &mut ws, s.a0, s.g, &mut lc, &mut rep)
+    let plan = preplan(&btm, &s.model, &HomotopyParams::default(), &mut ws, s.a0, s.g, &mut lc, &mut rep)
         .expect("plan")
         .expect("feasible");
     assert!(!plan.anchors.is_empty(), "the SHP wraps obstacles (anchor points circled in Fig. 11b)");
@@ -301,7 +301,7 @@ fn online_setup() -> (Scenario, Box<Btm>, Box<Workspace>, OnlinePlanner) {
     let s = scenario_c();
     let btm = build(&s);
     let mut ws = Box::new(Workspace::default());
-    let mut p = OnlinePlanner::new(s.a0, s.g, s.model, PlannerParams::default());
+    let mut p = OnlinePlanner::new(s.a0, s.g, s.model, HomotopyParams::default());
     assert!(p.preplan(&btm, &mut ws, &mut PlanReport::default()).expect("preplan"));
     (s, btm, ws, p)
 }
@@ -351,7 +351,7 @@ fn scenario_c_online_phantom_moved_and_batch() {
     let (s, mut btm, mut ws, mut p) = {
         let btm = build(&so);
         let mut ws = Box::new(Workspace::default());
-        let mut p = OnlinePlanner::new(so.a0, so.g, so.model, PlannerParams::default());
+        let mut p = OnlinePlanner::new(so.a0, so.g, so.model, HomotopyParams::default());
         assert!(p.preplan(&btm, &mut ws, &mut PlanReport::default()).unwrap());
         (so.clone(), btm, ws, p)
     };
@@ -609,7 +609,7 @@ fn closed_loop_random_fields_reach_goal_or_prove_no_path() {
                 t.known = s.truth.clone();
                 let btm = build(&t);
                 let mut ws = Box::new(Workspace::default());
-                let plan = preplan(&btm, &s.model, &PlannerParams::default(), &mut ws, s.a0, s.g, &mut heapless::Vec::new(), &mut PlanReport::default()).unwrap();
+                let plan = preplan(&btm, &s.model, &HomotopyParams::default(), &mut ws, s.a0, s.g, &mut heapless::Vec::new(), &mut PlanReport::default()).unwrap();
                 assert!(plan.is_none() || r.outcome == SimOutcome::NoInitialPlan, "seed {seed}: gave up but a path exists");
             }
             SimOutcome::StepLimit => panic!("seed {seed}: step limit"),
@@ -622,7 +622,7 @@ fn closed_loop_random_fields_reach_goal_or_prove_no_path() {
 
 #[test]
 fn bad_input_is_refused_with_a_reason() {
-    use firmware::plan::homotopy::astar::SearchError;
+    use firmware::plan::homotopy::classes::SearchError;
     use firmware::plan::homotopy::btm::{BtmError, ObstacleReject};
     let s = scenario_c();
     let mut btm = build(&s);
@@ -720,7 +720,7 @@ fn closed_loop_loose_soil_gives_up_only_when_the_true_map_has_no_plan() {
                 t.known = s.truth.clone();
                 let btm = build(&t);
                 let mut ws = Box::new(Workspace::default());
-                let plan = preplan(&btm, &s.model, &PlannerParams::default(), &mut ws, s.a0, s.g, &mut heapless::Vec::new(), &mut PlanReport::default()).unwrap();
+                let plan = preplan(&btm, &s.model, &HomotopyParams::default(), &mut ws, s.a0, s.g, &mut heapless::Vec::new(), &mut PlanReport::default()).unwrap();
                 assert!(plan.is_none(), "seed {seed}: gave up but Alg. 1 on the true map finds a plan");
                 assert_eq!(*r.path.last().unwrap(), s.a0, "seed {seed}: retreated to a0");
             }

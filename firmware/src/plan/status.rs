@@ -6,9 +6,9 @@
 //! | planner | `Exact` | `Approximate` | `NoSolution` | `InvalidInput` |
 //! |---|---|---|---|---|
 //! | ABIT* ([`crate::plan::space::PlannerStatus`]) | cost of the best path | heuristic cost-to-go of the best path's end | always [`Ended::BudgetExhausted`] (an anytime planner never proves there is none) | [`crate::plan::space::InvalidInput`] |
-//! | bounded-leg A* ([`crate::plan::team::astar::AStarStatus`]) | the path reaches the goal region | path to the expanded vertex closest to the goal: [`Ended::SearchComplete`] (goal unreachable) or [`Ended::BudgetExhausted`] (best so far, possibly just the start) | no hop brings the robot closer ([`Ended::SearchComplete`]) | the start vertex does not exist |
+//! | bounded-leg A* ([`crate::plan::team::leg_astar::AStarStatus`]) | the path reaches the goal region | path to the expanded vertex closest to the goal: [`Ended::SearchComplete`] (goal unreachable) or [`Ended::BudgetExhausted`] (best so far, possibly just the start) | no hop brings the robot closer ([`Ended::SearchComplete`]) | the start vertex does not exist |
 //! | D* Lite ([`crate::plan::team::dstar_lite::DStarOutcome`]) | cost and expansions | — (never) | [`Ended::SearchComplete`]: the goal is unreachable; [`Ended::BudgetExhausted`]: the search state is kept, call `replan` to continue; with the expansions | — (bad calls are a `DStarError`) |
-//! | homotopy class enumeration ([`crate::plan::homotopy::astar::SearchOutcome`]) | [`Enumeration::Enough`] (`max_classes` found) or [`Enumeration::AllClasses`] (every reachable state expanded: the list is every class A* can produce, possibly empty) | [`Ended::BudgetExhausted`] or [`Ended::ArenaFull`]: the classes found so far are kept | — (never) | start or goal outside the free space |
+//! | homotopy class enumeration ([`crate::plan::homotopy::classes::SearchOutcome`]) | [`Enumeration::Enough`] (`max_classes` found) or [`Enumeration::AllClasses`] (every reachable state expanded: the list is every class A* can produce, possibly empty) | [`Ended::BudgetExhausted`] or [`Ended::ArenaFull`]: the classes found so far are kept | — (never) | start or goal outside the free space |
 //!
 //! A planner's old case names (`Found`, `NoPath`, `Enough`, `BudgetExhausted`, ...) are kept as the words its
 //! `label` prints, so reports read as before.

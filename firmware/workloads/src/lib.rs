@@ -65,11 +65,11 @@ use firmware::map::{DistanceField, DistanceQuery};
 use firmware::plan::abit::{AbitParams, AbitStar, DefaultAbitArena};
 use firmware::plan::homotopy::plan::PlanReport;
 use firmware::plan::homotopy::planes::{HoldModel, SoilMap};
-use firmware::plan::homotopy::{preplan, Btm, PlannerParams, Workspace};
+use firmware::plan::homotopy::{preplan, Btm, HomotopyParams, Workspace};
 use firmware::plan::space::{Budget, GoalState, PathLength, Planner, PlannerStatus, ProblemDefinition};
 use firmware::plan::status::Status;
 use firmware::plan::team::dstar_lite::{outcome_label, DStarArena, Found};
-use firmware::plan::team::astar::status_label;
+use firmware::plan::team::leg_astar::status_label;
 use firmware::plan::team::DefaultLocalPlanner;
 use firmware::plan::SplitMix64;
 use firmware::rover::{check_pose_stability, settle, SettleOutcome};
@@ -427,7 +427,7 @@ pub fn run_all(arenas: &mut Arenas<'_>, h: &mut impl Harness) {
             out = Some(preplan(
                 btm,
                 &model,
-                &PlannerParams::default(),
+                &HomotopyParams::default(),
                 ws,
                 scenario_c::a0(),
                 scenario_c::g(),

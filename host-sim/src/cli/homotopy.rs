@@ -8,12 +8,12 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use firmware::plan::homotopy::astar::{enumerate_classes, outcome_label, SearchStart};
+use firmware::plan::homotopy::classes::{enumerate_classes, outcome_label, SearchStart};
 use firmware::plan::status::Status;
 use firmware::plan::homotopy::btm::Btm;
 use firmware::plan::homotopy::geo::Pt;
 use firmware::plan::homotopy::lvalue::LValue;
-use firmware::plan::homotopy::plan::{feasibility_check, preplan, PlanReport, PlannerParams, Workspace};
+use firmware::plan::homotopy::plan::{feasibility_check, preplan, PlanReport, HomotopyParams, Workspace};
 use firmware::plan::homotopy::sleeve::{anchors, shortest_homotopic_path};
 use rand_core::SeedableRng;
 
@@ -97,7 +97,7 @@ fn offline(s: &Scenario, out: &PathBuf) -> Result<bool, String> {
     }
     let mut lc = heapless::Vec::new();
     let mut rep = PlanReport::default();
-    let plan = preplan(&btm, &s.model, &PlannerParams::default(), &mut ws, s.a0, s.g, &mut lc, &mut rep)
+    let plan = preplan(&btm, &s.model, &HomotopyParams::default(), &mut ws, s.a0, s.g, &mut lc, &mut rep)
         .map_err(|e| format!("{e:?}"))?;
     for v in rep.examined.iter() {
         println!("  Alg. 1 examined: SHP {:.2} m, {} anchors -> {:?}", v.shp_length, v.anchors, v.verdict);

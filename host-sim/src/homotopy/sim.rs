@@ -12,7 +12,7 @@ use firmware::plan::homotopy::btm::Btm;
 use firmware::plan::homotopy::geo::{point_in_polygon, Pt};
 use firmware::plan::homotopy::lvalue::polyline_lvalue;
 use firmware::plan::homotopy::online::{MapChange, OnlineAction, OnlinePlanner};
-use firmware::plan::homotopy::plan::{PlanReport, PlannerParams, Workspace};
+use firmware::plan::homotopy::plan::{PlanReport, HomotopyParams, Workspace};
 use rand_core::SeedableRng;
 use rand_pcg::Pcg64;
 
@@ -125,7 +125,7 @@ pub fn run(s: &Scenario, cfg: &SimConfig) -> SimResult {
     let obs: Vec<&[Pt]> = s.known.iter().map(|o| o.as_slice()).collect();
     let _ = btm.build(&s.plane, &obs);
     let mut ws = Box::new(Workspace::default());
-    let mut planner = OnlinePlanner::new(s.a0, s.g, s.model, PlannerParams::default());
+    let mut planner = OnlinePlanner::new(s.a0, s.g, s.model, HomotopyParams::default());
     // Map slot per known obstacle, and which truth obstacle each known one is.
     let mut slot_truth: Vec<(u8, Option<usize>)> = Vec::new();
     for (k, o) in btm.obstacles() {

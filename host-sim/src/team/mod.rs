@@ -17,7 +17,7 @@ pub mod surface;
 use firmware::config::team::TeamParams;
 use firmware::geom::{Real, Vec3};
 use firmware::plan::status::Status;
-use firmware::plan::team::astar::AStarStatus;
+use firmware::plan::team::leg_astar::AStarStatus;
 use firmware::plan::team::formation::Team;
 use firmware::plan::team::DefaultLocalPlanner;
 use rand_core::Rng;

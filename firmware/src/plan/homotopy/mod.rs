@@ -4,7 +4,7 @@
 //!
 //! The tether-demand plane (2D frame: `x` across, `y` upslope) minus its polygonal obstacles is triangulated into a
 //! BTM ([`btm`]); paths are classified by L-values ([`lvalue`]); an L-value-constrained A* over triangles
-//! enumerates homotopy classes a0 -> g ([`astar`]); each class's sleeve gives its shortest homotopic path (the taut
+//! enumerates homotopy classes a0 -> g ([`classes`]); each class's sleeve gives its shortest homotopic path (the taut
 //! tether) by the funnel algorithm and its intermediate anchors ([`sleeve`]); controllable sets decide passability
 //! ([`control`]); Alg. 2 (ascent feasibility) and Alg. 1 (pre-planning, ascent first then a descent in the same
 //! sleeve) are in [`plan`]; Alg. 3 (online replanning with local retriangulation) in [`online`]. The terrain model
@@ -18,7 +18,7 @@
 //! Deviation from the brief: capacities are plain consts rather than const generics (one consistent set sized for
 //! the papers' problems; change them in `config::homotopy`).
 
-pub mod astar;
+pub mod classes;
 pub mod btm;
 pub mod control;
 pub mod geo;
@@ -28,11 +28,11 @@ pub mod plan;
 pub mod sleeve;
 pub mod planes;
 
-pub use astar::{enumerate_classes, HomotopyClass, SearchArena, SearchOutcome, SearchStart};
+pub use classes::{enumerate_classes, HomotopyClass, SearchArena, SearchOutcome, SearchStart};
 pub use btm::{Btm, BtmError, UpdateReport};
 pub use geo::{pt, Pt};
 pub use lvalue::{polyline_lvalue, LValue};
 pub use online::{MapChange, OnlineAction, OnlinePlanner};
-pub use plan::{feasibility_check, preplan, Feasibility, Plan, PlannerParams, Workspace};
+pub use plan::{feasibility_check, preplan, Feasibility, Plan, HomotopyParams, Workspace};
 pub use sleeve::{anchors, shortest_homotopic_path, Anchor, Path, Sleeve};
 pub use planes::{theta_max, HoldModel, SoilMap};

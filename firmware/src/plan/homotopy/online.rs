@@ -17,7 +17,7 @@
 use super::btm::{Btm, BtmError, Id, UpdateReport};
 use super::geo::Pt;
 use super::lvalue::{polyline_lvalue, LValue};
-use super::plan::{plan_from, Plan, PlanError, PlanReport, PlannerParams, Workspace};
+use super::plan::{plan_from, Plan, PlanError, PlanReport, HomotopyParams, Workspace};
 use super::sleeve::Path;
 use super::planes::HoldModel;
 use crate::config::homotopy::{MAX_L_CONSTRAINTS, MAX_OBSTACLE_VERTICES, MAX_PATH, MAX_SLEEVE, MAX_UPDATES_PER_BATCH, REPLAN_BUDGET};
@@ -98,7 +98,7 @@ pub struct OnlinePlanner {
     /// Holding model.
     pub model: HoldModel,
     /// Parameters.
-    pub params: PlannerParams,
+    pub params: HomotopyParams,
     /// Current plan.
     pub plan: Option<Plan>,
     /// Travelled tether: a0 and the waypoints passed.
@@ -112,7 +112,7 @@ pub struct OnlinePlanner {
 
 impl OnlinePlanner {
     /// New planner (no plan yet).
-    pub fn new(a0: Pt, g: Pt, model: HoldModel, params: PlannerParams) -> Self {
+    pub fn new(a0: Pt, g: Pt, model: HoldModel, params: HomotopyParams) -> Self {
         let mut traveled = HVec::new();
         let _ = traveled.push(a0);
         OnlinePlanner {

@@ -1,12 +1,12 @@
 //! Ascent feasibility (Tanner Alg. 2), safe descent inside a feasible ascent sleeve, and pre-planning (Tanner
 //! Alg. 1 = Abad-Manterola Fig. 6): ascent first, then a descent homotopic to it, so the robot can always retreat.
 //!
-//! Parameters ([`PlannerParams`]): `max_classes` (16) classes per A* round; `descent_clearance_m` (0.15 m) by which
+//! Parameters ([`HomotopyParams`]): `max_classes` (16) classes per A* round; `descent_clearance_m` (0.15 m) by which
 //! the descent path keeps off the obstacle corners where the SHP bends (the descent is the SHP with its bends pushed
 //! outward, then halved, then zero if blocked); `descent_sample_m` (0.2 m) spacing of the holding checks along the
 //! descent. Rounds are bounded by `REPLAN_BUDGET` (24).
 
-use super::astar::{enumerate_classes, HomotopyClass, SearchArena, SearchError, SearchOutcome, SearchStart};
+use super::classes::{enumerate_classes, HomotopyClass, SearchArena, SearchError, SearchOutcome, SearchStart};
 use super::btm::Btm;
 use super::control::ControlGrid;
 use super::geo::{Pt, EPS};
@@ -19,7 +19,7 @@ use heapless::Vec as HVec;
 
 /// Planner parameters (see module docs for defaults).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PlannerParams {
+pub struct HomotopyParams {
     /// Classes per A* round (<= `MAX_CLASSES`). Default 16.
     pub max_classes: usize,
     /// Clearance of the descent path from SHP bend corners (m). Default 0.15.
@@ -28,9 +28,9 @@ pub struct PlannerParams {
     pub descent_sample_m: f64,
 }
 
-impl Default for PlannerParams {
+impl Default for HomotopyParams {
     fn default() -> Self {
-        PlannerParams { max_classes: 16, descent_clearance_m: 0.15, descent_sample_m: 0.2 }
+        HomotopyParams { max_classes: 16, descent_clearance_m: 0.15, descent_sample_m: 0.2 }
     }
 }
 
@@ -260,7 +260,7 @@ pub enum PlanError {
 pub fn plan_from(
     btm: &Btm,
     model: &HoldModel,
-    params: &PlannerParams,
+    params: &HomotopyParams,
     ws: &mut Workspace,
     tether: &[Pt],
     g: Pt,
@@ -341,7 +341,7 @@ pub fn plan_from(
 pub fn preplan(
     btm: &Btm,
     model: &HoldModel,
-    params: &PlannerParams,
+    params: &HomotopyParams,
     ws: &mut Workspace,
     a0: Pt,
     g: Pt,

@@ -9,7 +9,7 @@
 //! 2. [`score`]: anchor-point score r per surface vertex (relative height, flatness; lower is safer).
 //! 3. [`cull`]: keep the best fraction (15 %).
 //! 4. [`graph`]: directed hop graph, edge weights d_ab and L'_ab = L_b + r_b.
-//! 5. [`astar`]: bounded-leg A* (hop <= h_max, |c_m + h| <= r_max).
+//! 5. [`leg_astar`]: bounded-leg A* (hop <= h_max, |c_m + h| <= r_max).
 //!
 //! [`LocalPlanner`] chains 1-5 over one fixed arena. [`formation`] holds the team: climbing order, hub motion,
 //! node loss. [`dstar_lite`] is the global planner over a grid of scenes (a local failure between two cells
@@ -18,7 +18,7 @@
 //! Parameters: [`TeamParams`] (every field documented with its default); capacities in [`crate::config::team`].
 //! Every loop is bounded by a capacity or a budget; a full arena or exhausted budget is a typed outcome.
 
-pub mod astar;
+pub mod leg_astar;
 pub mod cull;
 pub mod dstar_lite;
 pub mod formation;
@@ -28,7 +28,7 @@ pub mod score;
 
 use crate::config::team::{TeamParams, PATH_MAX_HOPS, SURFACE_MAX_VERTICES};
 use crate::geom::{Real, Vec3};
-use astar::{bounded_leg_astar, AStarArena, AStarStatus};
+use leg_astar::{bounded_leg_astar, AStarArena, AStarStatus};
 use cull::{cull, CullOutcome};
 use graph::{AnchorVertex, GraphOutcome, HopGraph};
 use heapless::Vec as HVec;
@@ -101,7 +101,7 @@ impl<const P: usize, const V: usize, const E: usize> LocalPlanner<P, V, E> {
             }
         }
         let g = self.graph.build_edges(params);
-        let p: astar::LocalPath<PATH_MAX_HOPS> =
+        let p: leg_astar::LocalPath<PATH_MAX_HOPS> =
             bounded_leg_astar(&self.graph, &mut self.astar, 0, goal, goal_tol, c_m, params);
         let mut hops = HVec::new();
         for &v in &p.vertices {
