@@ -42,3 +42,13 @@ pub const CONTROL_GRID: usize = 72;
 pub const MAX_UPDATES_PER_BATCH: usize = 8;
 /// Most replanning rounds (backtrack targets tried) per online update. Default 24.
 pub const REPLAN_BUDGET: usize = 24;
+
+/// Default of `HomotopyParams::max_classes`: classes per A* round. Default [`MAX_CLASSES`] (16), every class the
+/// class list can hold.
+pub const DEFAULT_CLASSES_PER_ROUND: usize = MAX_CLASSES;
+/// Default of `HomotopyParams::descent_clearance_m`: how far the descent path is pushed off the SHP's bend corners,
+/// metres (then halved, then zero if blocked). Default 0.15.
+pub const DEFAULT_DESCENT_CLEARANCE_M: f64 = 0.15;
+/// Default of `HomotopyParams::descent_sample_m`: spacing of the holding checks along the descent, metres.
+/// Default 0.2 (finer than the controllable-set grid's 0.28 m cells on a 20 m plane).
+pub const DEFAULT_DESCENT_SAMPLE_M: f64 = 0.2;

@@ -13,7 +13,10 @@ use super::geo::{Pt, EPS};
 use super::lvalue::{polyline_lvalue, LValue};
 use super::sleeve::{anchors, crossing_sequence, shortest_homotopic_path, walk_segment, Anchor, Path, Sleeve, SleeveError};
 use super::planes::HoldModel;
-use crate::config::homotopy::{MAX_CLASSES, MAX_L_CONSTRAINTS, MAX_PATH, REPLAN_BUDGET};
+use crate::config::homotopy::{
+    DEFAULT_CLASSES_PER_ROUND, DEFAULT_DESCENT_CLEARANCE_M, DEFAULT_DESCENT_SAMPLE_M, MAX_CLASSES, MAX_L_CONSTRAINTS,
+    MAX_PATH, REPLAN_BUDGET,
+};
 use crate::plan::status::{Enumeration, Status};
 use heapless::Vec as HVec;
 
@@ -30,7 +33,11 @@ pub struct HomotopyParams {
 
 impl Default for HomotopyParams {
     fn default() -> Self {
-        HomotopyParams { max_classes: 16, descent_clearance_m: 0.15, descent_sample_m: 0.2 }
+        HomotopyParams {
+            max_classes: DEFAULT_CLASSES_PER_ROUND,
+            descent_clearance_m: DEFAULT_DESCENT_CLEARANCE_M,
+            descent_sample_m: DEFAULT_DESCENT_SAMPLE_M,
+        }
     }
 }
 
