@@ -53,11 +53,6 @@ impl<St> AbitSuspended<St> {
 impl<'a, S, V, M, O, G, R, const NV: usize, const NQ: usize, const NM: usize> AbitStar<'a, S, V, M, O, G, R, NV, NQ, NM>
 where
     S: StateSpace,
-    V: StateValidityChecker<S>,
-    M: MotionValidator<S>,
-    O: OptimizationObjective<S>,
-    G: GoalRegion<S>,
-    R: Rng,
 {
     /// Release the borrows and keep the search: the graph, queue and memo stay in the arena, the rest is
     /// returned. Resume it with [`Self::resume`]; a new problem starts with [`Self::new`] instead.
