@@ -1,14 +1,10 @@
 //! Suspending and resuming a search: [`AbitSuspended`] holds everything the planner keeps outside its arena.
 
 use heapless::Vec;
-use rand_core::Rng;
 
 use crate::config::abit as cfg;
 
-use crate::plan::space::{
-    Arena, Cost, Counters, GoalRegion, InvalidInput, MotionValidator, OptimizationObjective, ProblemDefinition,
-    StateSpace, StateValidityChecker,
-};
+use crate::plan::space::{Arena, Cost, Counters, InvalidInput, ProblemDefinition, StateSpace};
 use super::{AbitArena, AbitParams, AbitStar, ArenaUse};
 
 /// The search state of a suspended [`AbitStar`]: everything the planner keeps outside its arena (inflation and
