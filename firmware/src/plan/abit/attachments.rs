@@ -30,7 +30,7 @@ where
     /// it holds? From the memo when the motion was checked, else from the space's prediction
     /// ([`StateSpace::predict_attachment`]); `false` when neither knows.
     pub(super) fn reveals_attachment(&mut self, u: u32, w: u32) -> bool {
-        let predicted = match self.memo_get(u, w) {
+        let predicted = match self.arena.memo_get(u, w) {
             Some(known) => known,
             None => {
                 let (Some(un), Some(wn)) = (self.node(u), self.node(w)) else { return false };

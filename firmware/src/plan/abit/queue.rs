@@ -244,7 +244,7 @@ where
         let conflict = self.twins_enabled() && self.histories_conflict(parent, child);
         if conflict {
             // The edge will go to a twin of the child; only a known-invalid motion rules it out.
-            if matches!(self.memo_get(parent, child), Some(None)) {
+            if matches!(self.arena.memo_get(parent, child), Some(None)) {
                 return;
             }
         } else if self.blacklisted(parent, child) {
