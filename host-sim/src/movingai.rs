@@ -9,7 +9,7 @@
 
 use core::fmt;
 use firmware::plan::status::Status;
-use firmware::plan::team::dstar_lite::{Cost, DStarLite, DStarStorage, Found, HeapEntry, NoPath};
+use firmware::plan::team::dstar_lite::{Cost, DStarLite, DStarStorage, Found, Key, NoPath};
 use std::path::Path;
 
 /// A parsed `.map`.
@@ -225,8 +225,9 @@ pub struct OwnedDStarStorage {
     g: Vec<Cost>,
     rhs: Vec<Cost>,
     stamp: Vec<u32>,
+    key: Vec<Key>,
     heap_pos: Vec<u32>,
-    heap: Vec<HeapEntry>,
+    heap: Vec<u32>,
     blocked: Vec<bool>,
     walls: Vec<u8>,
     moves: Vec<u8>,
@@ -239,8 +240,9 @@ impl OwnedDStarStorage {
             g: vec![Cost::INF; cells],
             rhs: vec![Cost::INF; cells],
             stamp: vec![0; cells],
+            key: vec![(Cost::ZERO, Cost::ZERO); cells],
             heap_pos: vec![0; cells],
-            heap: vec![HeapEntry::default(); cells],
+            heap: vec![0; cells],
             blocked: vec![false; cells],
             walls: vec![0; cells],
             moves: vec![0; cells],
@@ -253,6 +255,7 @@ impl OwnedDStarStorage {
             g: &mut self.g,
             rhs: &mut self.rhs,
             stamp: &mut self.stamp,
+            key: &mut self.key,
             heap_pos: &mut self.heap_pos,
             heap: &mut self.heap,
             blocked: &mut self.blocked,

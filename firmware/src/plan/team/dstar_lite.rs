@@ -12,9 +12,10 @@
 //! (`block_cell`, `add_wall`), only the affected vertices are updated (`km` keeps old queue keys valid) and
 //! `compute_shortest_path` repairs the search incrementally.
 //!
-//! Storage is lent by the caller ([`DStarStorage`]): per cell `g`, `rhs`, an epoch stamp, a heap slot, the
-//! occupancy, wall and allowed-move bits, plus a binary heap of one entry per cell. Planning from scratch starts a new epoch
-//! instead of clearing the arrays, so a host can run thousands of Moving AI scenarios on a 512 x 512 map without
+//! Storage is lent by the caller ([`DStarStorage`]): per cell `g`, `rhs`, an epoch stamp, a queue key, a heap
+//! slot, the occupancy, wall and allowed-move bits, plus the open list's id slots (one per cell), which a
+//! [`LentHeap`] (the one heap of [`crate::plan::heap`]) orders by the cells' keys. Planning from scratch starts a new
+//! epoch instead of clearing the arrays, so a host can run thousands of Moving AI scenarios on a 512 x 512 map without
 //! touching every cell each time. A board uses [`DStarArena`] (capacity [`GLOBAL_GRID_MAX_CELLS`] by default).
 //!
 //! Parameters: the expansion budget per call (a caller's choice; [`DStarLite::plan`] and [`DStarLite::replan`]
@@ -26,12 +27,12 @@
 use core::cmp::Ordering;
 use core::f64::consts::SQRT_2;
 
+use crate::plan::heap::{HeapItems, LentHeap, NOT_IN_HEAP};
 use crate::plan::status::{Detail, Ended, Never, Status};
 
 /// Octile direction offsets (dx, dy); index = direction id. Straight first, then diagonals.
 pub const DIRS: [(i32, i32); 8] = [(1, 0), (0, 1), (-1, 0), (0, -1), (1, 1), (-1, 1), (-1, -1), (1, -1)];
 
-const NOT_IN_HEAP: u32 = u32::MAX;
 const INF: Cost = Cost::INF;
 
 /// An octile path cost a + b * sqrt(2) (a straight moves' worth, b diagonals' worth), held exactly in integers.
@@ -128,13 +129,8 @@ impl Ord for Cost {
     }
 }
 
-/// One entry of the priority queue.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct HeapEntry {
-    k1: Cost,
-    k2: Cost,
-    cell: u32,
-}
+/// A cell's queue key (k1, k2), compared lexicographically.
+pub type Key = (Cost, Cost);
 
 /// Storage lent to the planner; every slice must hold at least `width * height` entries.
 pub struct DStarStorage<'a> {
@@ -144,10 +140,12 @@ pub struct DStarStorage<'a> {
     pub rhs: &'a mut [Cost],
     /// Epoch stamp per cell (lazy reset).
     pub stamp: &'a mut [u32],
+    /// Queue key per cell (meaningful while the cell is queued).
+    pub key: &'a mut [Key],
     /// Heap slot per cell.
     pub heap_pos: &'a mut [u32],
-    /// The priority queue.
-    pub heap: &'a mut [HeapEntry],
+    /// The open list's id slots (the queued cells, in heap order).
+    pub heap: &'a mut [u32],
     /// Occupancy: `true` = blocked cell.
     pub blocked: &'a mut [bool],
     /// Wall bits per cell: bit d set = the edge in direction `DIRS[d]` is walled.
@@ -161,8 +159,9 @@ pub struct DStarArena<const N: usize> {
     g: [Cost; N],
     rhs: [Cost; N],
     stamp: [u32; N],
+    key: [Key; N],
     heap_pos: [u32; N],
-    heap: [HeapEntry; N],
+    heap: [u32; N],
     blocked: [bool; N],
     walls: [u8; N],
     moves: [u8; N],
@@ -175,8 +174,9 @@ impl<const N: usize> DStarArena<N> {
             g: [INF; N],
             rhs: [INF; N],
             stamp: [0; N],
+            key: [(Cost::ZERO, Cost::ZERO); N],
             heap_pos: [NOT_IN_HEAP; N],
-            heap: [HeapEntry { k1: Cost::ZERO, k2: Cost::ZERO, cell: 0 }; N],
+            heap: [0; N],
             blocked: [false; N],
             walls: [0; N],
             moves: [0; N],
@@ -189,6 +189,7 @@ impl<const N: usize> DStarArena<N> {
             g: &mut self.g,
             rhs: &mut self.rhs,
             stamp: &mut self.stamp,
+            key: &mut self.key,
             heap_pos: &mut self.heap_pos,
             heap: &mut self.heap,
             blocked: &mut self.blocked,
@@ -289,9 +290,8 @@ pub enum PathOutcome {
 pub struct DStarLite<'a> {
     width: u32,
     height: u32,
-    s: DStarStorage<'a>,
-    epoch: u32,
-    heap_len: usize,
+    s: Cells<'a>,
+    open: LentHeap<'a>,
     km: Cost,
     start: u32,
     last: u32,
@@ -300,8 +300,54 @@ pub struct DStarLite<'a> {
 }
 
 #[inline]
-fn key_less(a: (Cost, Cost), b: (Cost, Cost)) -> bool {
+fn key_less(a: Key, b: Key) -> bool {
     a < b
+}
+
+/// The per-cell arrays of [`DStarStorage`] (all but the heap's id slots) and the current epoch: the items the open
+/// list orders ([`HeapItems`]: by [`key_less`] on the cells' keys).
+struct Cells<'a> {
+    g: &'a mut [Cost],
+    rhs: &'a mut [Cost],
+    stamp: &'a mut [u32],
+    key: &'a mut [Key],
+    heap_pos: &'a mut [u32],
+    blocked: &'a mut [bool],
+    walls: &'a mut [u8],
+    moves: &'a mut [u8],
+    epoch: u32,
+}
+
+impl Cells<'_> {
+    #[inline]
+    fn fresh(&self, c: u32) -> bool {
+        self.stamp.get(c as usize).copied() == Some(self.epoch)
+    }
+}
+
+impl HeapItems for Cells<'_> {
+    #[inline]
+    fn before(&self, a: u32, b: u32) -> bool {
+        match (self.key.get(a as usize), self.key.get(b as usize)) {
+            (Some(&ka), Some(&kb)) => key_less(ka, kb),
+            _ => false,
+        }
+    }
+    #[inline]
+    fn set_position(&mut self, id: u32, pos: u32) {
+        if let Some(p) = self.heap_pos.get_mut(id as usize) {
+            *p = pos;
+        }
+    }
+    /// A cell not touched in this epoch is not queued.
+    #[inline]
+    fn position(&self, id: u32) -> Option<u32> {
+        if self.fresh(id) {
+            self.heap_pos.get(id as usize).copied()
+        } else {
+            None
+        }
+    }
 }
 
 impl<'a> DStarLite<'a> {
@@ -319,6 +365,7 @@ impl<'a> DStarLite<'a> {
             storage.g.len(),
             storage.rhs.len(),
             storage.stamp.len(),
+            storage.key.len(),
             storage.heap_pos.len(),
             storage.heap.len(),
             storage.blocked.len(),
@@ -331,7 +378,10 @@ impl<'a> DStarLite<'a> {
         if have < cells {
             return Err(DStarError::StorageTooSmall { needed: cells, have });
         }
-        let mut me = Self { width, height, s: storage, epoch: 0, heap_len: 0, km: Cost::ZERO, start: 0, last: 0, goal: 0, planned: false };
+        let DStarStorage { g, rhs, stamp, key, heap_pos, heap, blocked, walls, moves } = storage;
+        let s = Cells { g, rhs, stamp, key, heap_pos, blocked, walls, moves, epoch: 0 };
+        let open = LentHeap::lent(heap);
+        let mut me = Self { width, height, s, open, km: Cost::ZERO, start: 0, last: 0, goal: 0, planned: false };
         // Stamps left by an earlier planner on the same storage would make its stale g / rhs look current (its
         // epochs start at 1 like ours): clear them (bounded by the cell count).
         for st in me.s.stamp.iter_mut().take(cells) {
@@ -374,15 +424,15 @@ impl<'a> DStarLite<'a> {
     }
 
     fn new_epoch(&mut self) {
-        if self.epoch == u32::MAX {
+        if self.s.epoch == u32::MAX {
             let n = self.cells();
             for st in self.s.stamp.iter_mut().take(n) {
                 *st = 0;
             }
-            self.epoch = 0;
+            self.s.epoch = 0;
         }
-        self.epoch += 1;
-        self.heap_len = 0;
+        self.s.epoch += 1;
+        self.open.clear();
     }
 
     /// Cell index of (x, y), if inside the grid.
@@ -497,7 +547,7 @@ impl<'a> DStarLite<'a> {
     }
 
     fn fresh(&self, c: u32) -> bool {
-        self.s.stamp.get(c as usize).copied() == Some(self.epoch)
+        self.s.fresh(c)
     }
 
     /// g of a cell in the current search (cost to the goal), as f64.
@@ -534,7 +584,7 @@ impl<'a> DStarLite<'a> {
                 *v = NOT_IN_HEAP;
             }
             if let Some(v) = self.s.stamp.get_mut(i) {
-                *v = self.epoch;
+                *v = self.s.epoch;
             }
         }
     }
@@ -553,136 +603,40 @@ impl<'a> DStarLite<'a> {
         }
     }
 
-    fn calc_key(&self, c: u32) -> (Cost, Cost) {
+    fn calc_key(&self, c: u32) -> Key {
         let m = self.gc(c).min(self.rhs(c));
         (m.plus(self.h(self.start, c)).plus(self.km), m)
     }
 
-    // ---- indexed binary heap ----
-    fn heap_key(&self, i: usize) -> (Cost, Cost) {
-        self.s.heap.get(i).map(|e| (e.k1, e.k2)).unwrap_or((INF, INF))
-    }
-
-    fn heap_swap(&mut self, i: usize, j: usize) {
-        if i >= self.heap_len || j >= self.heap_len {
-            return;
-        }
-        self.s.heap.swap(i, j);
-        for k in [i, j] {
-            if let Some(e) = self.s.heap.get(k).copied() {
-                if let Some(p) = self.s.heap_pos.get_mut(e.cell as usize) {
-                    *p = k as u32;
-                }
-            }
-        }
-    }
-
-    fn sift_up(&mut self, mut i: usize) {
-        // bounded by the heap depth (< 32 for u32 cell counts)
-        for _ in 0..64 {
-            if i == 0 {
-                break;
-            }
-            let parent = (i - 1) / 2;
-            if key_less(self.heap_key(i), self.heap_key(parent)) {
-                self.heap_swap(i, parent);
-                i = parent;
-            } else {
-                break;
-            }
-        }
-    }
-
-    fn sift_down(&mut self, mut i: usize) {
-        for _ in 0..64 {
-            let l = 2 * i + 1;
-            let r = l + 1;
-            let mut m = i;
-            if l < self.heap_len && key_less(self.heap_key(l), self.heap_key(m)) {
-                m = l;
-            }
-            if r < self.heap_len && key_less(self.heap_key(r), self.heap_key(m)) {
-                m = r;
-            }
-            if m == i {
-                break;
-            }
-            self.heap_swap(i, m);
-            i = m;
-        }
-    }
-
-    fn heap_pos_of(&self, c: u32) -> Option<usize> {
-        if !self.fresh(c) {
-            return None;
-        }
-        match self.s.heap_pos.get(c as usize).copied() {
-            Some(NOT_IN_HEAP) | None => None,
-            Some(p) => Some(p as usize),
-        }
-    }
-
-    fn heap_insert_or_update(&mut self, c: u32, k: (Cost, Cost)) {
+    // ---- the open list: a LentHeap of cells, ordered by their keys ----
+    /// Queue `c` with key `k`, or move it to its new place if it is queued already.
+    fn heap_insert_or_update(&mut self, c: u32, k: Key) {
         self.touch(c);
-        match self.heap_pos_of(c) {
-            Some(p) => {
-                let old = self.heap_key(p);
-                if let Some(e) = self.s.heap.get_mut(p) {
-                    e.k1 = k.0;
-                    e.k2 = k.1;
-                }
-                if key_less(k, old) {
-                    self.sift_up(p);
-                } else {
-                    self.sift_down(p);
-                }
-            }
-            None => {
-                let p = self.heap_len;
-                // capacity = cells, and each cell is in the heap at most once, so this always fits
-                if let Some(e) = self.s.heap.get_mut(p) {
-                    *e = HeapEntry { k1: k.0, k2: k.1, cell: c };
-                    self.heap_len += 1;
-                    if let Some(hp) = self.s.heap_pos.get_mut(c as usize) {
-                        *hp = p as u32;
-                    }
-                    self.sift_up(p);
-                }
-            }
+        if let Some(e) = self.s.key.get_mut(c as usize) {
+            *e = k;
+        }
+        if self.open.contains(c, &self.s) {
+            self.open.update(c, &mut self.s);
+        } else {
+            // capacity = cells, and each cell is in the heap at most once, so this always fits; were it full, the
+            // cell would stay unqueued (no panic)
+            let _ = self.open.push(c, &mut self.s);
         }
     }
 
     fn heap_remove(&mut self, c: u32) {
-        if let Some(p) = self.heap_pos_of(c) {
-            let last = self.heap_len - 1;
-            self.heap_swap(p, last);
-            self.heap_len -= 1;
-            if let Some(hp) = self.s.heap_pos.get_mut(c as usize) {
-                *hp = NOT_IN_HEAP;
-            }
-            if p < self.heap_len {
-                let parent_less = p > 0 && key_less(self.heap_key(p), self.heap_key((p - 1) / 2));
-                if parent_less {
-                    self.sift_up(p);
-                } else {
-                    self.sift_down(p);
-                }
-            }
-        }
+        self.open.remove(c, &mut self.s);
     }
 
-    fn top(&self) -> Option<(u32, (Cost, Cost))> {
-        if self.heap_len == 0 {
-            None
-        } else {
-            self.s.heap.first().map(|e| (e.cell, (e.k1, e.k2)))
-        }
+    fn top(&self) -> Option<(u32, Key)> {
+        let c = self.open.peek()?;
+        self.s.key.get(c as usize).map(|&k| (c, k))
     }
 
     // ---- D* Lite proper ----
     fn update_vertex(&mut self, u: u32) {
         let (g, r) = (self.gc(u), self.rhs(u));
-        let in_heap = self.heap_pos_of(u).is_some();
+        let in_heap = self.open.contains(u, &self.s);
         if g != r {
             let k = self.calc_key(u);
             self.heap_insert_or_update(u, k);
@@ -948,8 +902,9 @@ mod tests {
         g: [Cost; 64],
         rhs: [Cost; 64],
         stamp: [u32; 64],
+        key: [Key; 64],
         pos: [u32; 64],
-        heap: [HeapEntry; 64],
+        heap: [u32; 64],
         blocked: [bool; 64],
         walls: [u8; 64],
         moves: [u8; 64],
@@ -985,8 +940,9 @@ mod tests {
             g: [Cost::ZERO; 64],
             rhs: [Cost::ZERO; 64],
             stamp: [0; 64],
+            key: [(Cost::ZERO, Cost::ZERO); 64],
             pos: [0; 64],
-            heap: [HeapEntry::default(); 64],
+            heap: [0; 64],
             blocked: [false; 64],
             walls: [0; 64],
             moves: [0; 64],
@@ -995,6 +951,7 @@ mod tests {
             g: &mut o.g,
             rhs: &mut o.rhs,
             stamp: &mut o.stamp,
+            key: &mut o.key,
             heap_pos: &mut o.pos,
             heap: &mut o.heap[..10],
             blocked: &mut o.blocked,
