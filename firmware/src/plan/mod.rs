@@ -3,7 +3,8 @@
 //! - [`space`]: the planner abstractions (OMPL's split: state space, validity checker, motion validator,
 //!   objective, goal region, problem definition, budget, status) with non-Markovian attachments.
 //! - [`abit`]: ABIT* over settled SE(3) states with non-Markovian anchor histories (Paton et al. V).
-//! - [`heap`]: the fixed-capacity indexed binary min-heap, the open list of a search (ABIT*'s edge queue).
+//! - [`heap`]: the one indexed binary min-heap (fixed capacity, or over lent storage): the open list of every
+//!   search (ABIT*'s edge queue, the homotopy and bounded-leg A*, D* Lite).
 //! - [`status`]: the status vocabulary every planner reports in (exact / approximate / no solution / invalid input).
 //! - [`homotopy`]: homotopy-based planning on tether-demand planes (Abad-Manterola et al.; Tanner et al.).
 //! - [`team`]: tethered climbing teams (Morad et al.).
