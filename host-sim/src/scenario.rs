@@ -253,6 +253,10 @@ pub struct Scenario {
     /// Planning region (the `campaign` command and the onboard planner's bounds).
     #[serde(default)]
     pub plan: PlanSection,
+    /// The closed-loop mission's models (`tetherbot mission`; all optional, defaults in
+    /// [`crate::mission::params::MissionSection`]).
+    #[serde(default)]
+    pub mission: crate::mission::params::MissionSection,
     /// The file it came from (set by [`load`]).
     #[serde(skip)]
     pub file: PathBuf,
@@ -512,6 +516,7 @@ impl Scenario {
             return Err(self.err("map.pool_blocks", format!("must be in 1..=1048576, got {}", self.map.pool_blocks)));
         }
         self.sensor.validate().map_err(|(f, r)| self.err(&format!("sensor.{f}"), r))?;
+        self.mission.validate().map_err(|(f, r)| self.err(&format!("mission.{f}"), r))?;
         self.map_config()?;
         match (&self.plan.bounds_min, &self.plan.bounds_max) {
             (None, None) => {}

@@ -10,5 +10,6 @@
 
 pub mod executor;
 pub mod params;
+pub mod sensing;
 pub mod truth;
 pub mod world;

@@ -79,8 +79,8 @@ pub struct MissionSection {
     /// Take an overview scan from a sensor on the root anchor's mast before the goal (Paton et al. VI: the lander
     /// or mother rover that holds the tether surveys the descent). Default true.
     pub overview_scan: bool,
-    /// Overview sensor's angular resolution, degrees (its field of view is 120 x 90 degrees, pointed at the goal).
-    /// Default 1.5.
+    /// Overview sensor's angular resolution, degrees (`mission::sensing::overview_sensor`). Default 0.5 (5 cm
+    /// between rays at 6 m: the onboard map's voxel).
     pub overview_resolution_deg: f64,
     /// Allow the flight software to drive an approximate solution up to its last safe state. Default false.
     pub allow_approximate: bool,
@@ -123,7 +123,7 @@ impl Default for MissionSection {
             winch_limit_n: 2000.0,
             time_limit_s: 3600.0,
             overview_scan: true,
-            overview_resolution_deg: 1.5,
+            overview_resolution_deg: 0.5,
             allow_approximate: false,
             replan_cross_track_m: None,
             payout_tolerance_m: None,
@@ -195,11 +195,8 @@ impl MissionSection {
         if self.turn_step_deg > 30.0 {
             return Err(("turn_step_deg".into(), format!("must be at most 30 degrees, got {}", self.turn_step_deg)));
         }
-        if self.overview_resolution_deg < 1.2 {
-            return Err((
-                "overview_resolution_deg".into(),
-                format!("must be >= 1.2 (a 120 x 90 degree scan within the protocol's 8192 points), got {}", self.overview_resolution_deg),
-            ));
+        if self.overview_resolution_deg < 0.05 {
+            return Err(("overview_resolution_deg".into(), format!("must be >= 0.05, got {}", self.overview_resolution_deg)));
         }
         if self.pretension_n >= self.winch_limit_n {
             return Err(("pretension_n".into(), format!("must be below winch_limit_n ({})", self.winch_limit_n)));
@@ -245,7 +242,7 @@ mod tests {
             (MissionSection { speed_mps: 0.0, ..Default::default() }, "speed_mps"),
             (MissionSection { loc_noise_m: f64::NAN, ..Default::default() }, "loc_noise_m"),
             (MissionSection { drive_step_m: 2.0, ..Default::default() }, "drive_step_m"),
-            (MissionSection { overview_resolution_deg: 0.5, ..Default::default() }, "overview_resolution_deg"),
+            (MissionSection { overview_resolution_deg: 0.01, ..Default::default() }, "overview_resolution_deg"),
             (MissionSection { min_margin_n: Some(-1.0), ..Default::default() }, "min_margin_n"),
             (
                 MissionSection {
