@@ -208,6 +208,9 @@ pub struct MapSection {
     pub esdf_max_distance_m: f64,
     /// Pool size in blocks. Default `FLIGHT_BLOCKS` (the flight board's pool, 3072).
     pub pool_blocks: usize,
+    /// Free space carved along each ray in front of its return, metres (`MapConfig::max_carve_length`). Default
+    /// 4.0; bounded by `budgets.max_ray_voxels` voxels per ray.
+    pub max_carve_length_m: Option<f64>,
 }
 
 impl Default for MapSection {
@@ -217,6 +220,7 @@ impl Default for MapSection {
             truncation_m: None,
             esdf_max_distance_m: 1.5,
             pool_blocks: firmware::config::map::FLIGHT_BLOCKS,
+            max_carve_length_m: None,
         }
     }
 }
@@ -469,6 +473,9 @@ impl Scenario {
             c.truncation = t as Real;
         }
         c.esdf_max_distance = self.map.esdf_max_distance_m as Real;
+        if let Some(l) = self.map.max_carve_length_m {
+            c.max_carve_length = l as Real;
+        }
         c.esdf_max_sweeps = self.budgets.esdf_max_sweeps;
         c.max_ray_voxels = self.budgets.max_ray_voxels;
         c.validate().map_err(|e| {
@@ -478,6 +485,7 @@ impl Scenario {
                 "esdf_max_distance" => "map.esdf_max_distance_m".to_string(),
                 "esdf_max_sweeps" => "budgets.esdf_max_sweeps".to_string(),
                 "max_ray_voxels" => "budgets.max_ray_voxels".to_string(),
+                "max_carve_length" => "map.max_carve_length_m".to_string(),
                 f => format!("map.{f}"),
             };
             self.err(&field, e.reason)

@@ -20,7 +20,7 @@
 //! planning bounds) and at the root anchor (the tether sweep of anchor prediction). A rover-mounted sensor alone
 //! does not observe either. So, before the goal, a sensor 0.3 m above the root anchor (on the mast or lander that
 //! holds the tether; its pose is surveyed, so it is sent without localisation error) scans 60 degrees wide
-//! towards the goal, from 10 degrees above the goal's direction down past the nadir (100 degrees below the
+//! towards the goal, from [`OVERVIEW_ABOVE_GOAL_DEG`] above the goal's direction down past the nadir (100 degrees below the
 //! horizon: the ground under the mast, where the rover starts), at `overview_resolution_deg` (0.5: one ray per
 //! 5 cm voxel at 6 m), out to 1.5 times the goal's distance (at least the rover sensor's range), in tiles of at
 //! most 8000 rays (one scan each). The rover's own sensor is the scenario's `[sensor]`; the
@@ -122,13 +122,15 @@ pub fn rover_scan(world: &dyn World, sensor: &RangeSensorParams, truth: &Pose3, 
 
 /// Points per overview tile at most (within the protocol's 8192-point scan).
 pub const OVERVIEW_TILE_POINTS: usize = 8000;
+/// The overview looks this far above the goal's direction, degrees (rays past the goal observe the space above it).
+pub const OVERVIEW_ABOVE_GOAL_DEG: f64 = 25.0;
 /// Horizontal field of view of the overview, degrees.
 pub const OVERVIEW_H_FOV_DEG: f64 = 60.0;
 /// The overview looks down to this depression below the horizon, degrees (past the nadir: the ground under and
 /// just behind the mast, where the rover starts).
 pub const OVERVIEW_MAX_DEPRESSION_DEG: f64 = 100.0;
 
-/// The overview sensor's tiles (module docs): on the mast 0.3 m above `root`, facing the goal, from 10 degrees
+/// The overview sensor's tiles (module docs): on the mast 0.3 m above `root`, facing the goal, from 25 degrees
 /// above the goal's direction down past the nadir ([`OVERVIEW_MAX_DEPRESSION_DEG`]), [`OVERVIEW_H_FOV_DEG`] wide,
 /// at `overview_resolution_deg`, split into tiles of at most [`OVERVIEW_TILE_POINTS`] rays (one scan each).
 pub fn overview_sensor(root: P3, goal: P3, rover_sensor: &RangeSensorParams, m: &MissionSection) -> Vec<(RangeSensorParams, Pose3)> {
@@ -136,7 +138,7 @@ pub fn overview_sensor(root: P3, goal: P3, rover_sensor: &RangeSensorParams, m: 
     let d = sub(goal, eye);
     let yaw = d[1].atan2(d[0]);
     let goal_depression = (-d[2]).atan2((d[0] * d[0] + d[1] * d[1]).sqrt()).to_degrees();
-    let top = (goal_depression - 10.0).max(-10.0);
+    let top = (goal_depression - OVERVIEW_ABOVE_GOAL_DEG).max(-10.0);
     let far = firmware::geom::p3::dist(eye, goal);
     let r = m.overview_resolution_deg;
     let nh = (OVERVIEW_H_FOV_DEG / r).floor() as usize + 1;
