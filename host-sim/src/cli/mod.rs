@@ -8,6 +8,7 @@ pub mod export;
 pub mod homotopy;
 pub mod inspect;
 pub mod map;
+pub mod mission;
 pub mod replay;
 pub mod run;
 pub mod team;

@@ -79,6 +79,9 @@ pub struct MissionSection {
     /// Take an overview scan from a sensor on the root anchor's mast before the goal (Paton et al. VI: the lander
     /// or mother rover that holds the tether surveys the descent). Default true.
     pub overview_scan: bool,
+    /// Where the overview sensor sits, world frame (a survey mast on the lander that holds the tether). Default:
+    /// 0.3 m above the root anchor.
+    pub overview_eye: Option<[f64; 3]>,
     /// Overview sensor's angular resolution, degrees (`mission::sensing::overview_sensor`). Default 0.5 (5 cm
     /// between rays at 6 m: the onboard map's voxel).
     pub overview_resolution_deg: f64,
@@ -123,6 +126,7 @@ impl Default for MissionSection {
             winch_limit_n: 2000.0,
             time_limit_s: 3600.0,
             overview_scan: true,
+            overview_eye: None,
             overview_resolution_deg: 0.5,
             allow_approximate: false,
             replan_cross_track_m: None,
@@ -214,6 +218,11 @@ impl MissionSection {
         if let Some(v) = self.min_margin_n {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(("min_margin_n".into(), format!("must be finite and >= 0, got {v}")));
+            }
+        }
+        if let Some(e) = self.overview_eye {
+            if !e.iter().all(|v| v.is_finite()) {
+                return Err(("overview_eye".into(), format!("must be three finite numbers, got {e:?}")));
             }
         }
         for (i, o) in self.obstacles.iter().enumerate() {

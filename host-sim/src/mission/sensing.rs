@@ -19,10 +19,10 @@
 //! The onboard planner needs observed space above the terrain (its surface search starts at the top of the
 //! planning bounds) and at the root anchor (the tether sweep of anchor prediction). A rover-mounted sensor alone
 //! does not observe either. So, before the goal, a sensor 0.3 m above the root anchor (on the mast or lander that
-//! holds the tether; its pose is surveyed, so it is sent without localisation error) scans 60 degrees wide
+//! holds the tether, or at `overview_eye`: a survey mast on the lander; its pose is surveyed, so it is sent without localisation error) scans 60 degrees wide
 //! towards the goal, from [`OVERVIEW_ABOVE_GOAL_DEG`] above the goal's direction down past the nadir (100 degrees below the
 //! horizon: the ground under the mast, where the rover starts), at `overview_resolution_deg` (0.5: one ray per
-//! 5 cm voxel at 6 m), out to 1.5 times the goal's distance (at least the rover sensor's range), in tiles of at
+//! 5 cm voxel at 6 m), out to 3 times the goal's distance (at least 15 m), in tiles of at
 //! most 8000 rays (one scan each). The rover's own sensor is the scenario's `[sensor]`; the
 //! mission scenarios mount it on a mast (`mount_xyz_m`).
 
@@ -124,17 +124,22 @@ pub fn rover_scan(world: &dyn World, sensor: &RangeSensorParams, truth: &Pose3, 
 pub const OVERVIEW_TILE_POINTS: usize = 8000;
 /// The overview looks this far above the goal's direction, degrees (rays past the goal observe the space above it).
 pub const OVERVIEW_ABOVE_GOAL_DEG: f64 = 25.0;
+/// The overview's range: this many times the goal's distance from the mast (rays beyond the goal carve the space above
+/// it), at least [`OVERVIEW_MIN_RANGE_M`].
+pub const OVERVIEW_RANGE_FACTOR: f64 = 3.0;
+/// Smallest range of the overview, metres.
+pub const OVERVIEW_MIN_RANGE_M: f64 = 15.0;
 /// Horizontal field of view of the overview, degrees.
 pub const OVERVIEW_H_FOV_DEG: f64 = 60.0;
 /// The overview looks down to this depression below the horizon, degrees (past the nadir: the ground under and
 /// just behind the mast, where the rover starts).
 pub const OVERVIEW_MAX_DEPRESSION_DEG: f64 = 100.0;
 
-/// The overview sensor's tiles (module docs): on the mast 0.3 m above `root`, facing the goal, from 25 degrees
+/// The overview sensor's tiles (module docs): at `[mission] overview_eye` (default: on the mast 0.3 m above `root`), facing the goal, from 25 degrees
 /// above the goal's direction down past the nadir ([`OVERVIEW_MAX_DEPRESSION_DEG`]), [`OVERVIEW_H_FOV_DEG`] wide,
 /// at `overview_resolution_deg`, split into tiles of at most [`OVERVIEW_TILE_POINTS`] rays (one scan each).
 pub fn overview_sensor(root: P3, goal: P3, rover_sensor: &RangeSensorParams, m: &MissionSection) -> Vec<(RangeSensorParams, Pose3)> {
-    let eye = [root[0], root[1], root[2] + 0.3];
+    let eye = m.overview_eye.unwrap_or([root[0], root[1], root[2] + 0.3]);
     let d = sub(goal, eye);
     let yaw = d[1].atan2(d[0]);
     let goal_depression = (-d[2]).atan2((d[0] * d[0] + d[1] * d[1]).sqrt()).to_degrees();
@@ -153,7 +158,7 @@ pub fn overview_sensor(root: P3, goal: P3, rover_sensor: &RangeSensorParams, m: 
             h_fov_deg: OVERVIEW_H_FOV_DEG,
             v_fov_deg: span,
             resolution_deg: r,
-            max_range_m: (1.5 * far).max(rover_sensor.max_range_m),
+            max_range_m: (OVERVIEW_RANGE_FACTOR * far).max(OVERVIEW_MIN_RANGE_M),
             mount_xyz_m: [0.0, 0.0, 0.0],
             mount_pitch_down_deg: 0.0,
             ..rover_sensor.clone()
