@@ -184,7 +184,7 @@ pub fn render(rep: &MissionReport, world: &dyn World) -> String {
     let _ = writeln!(out, r#"<path d="M{:.1},{:.1} l5,9 l-10,0 z" fill="black"/>"#, rx, ry - 6.0);
     let _ = writeln!(
         out,
-        r#"<text x="{}" y="{}">profile along start -> goal; path colour = true margin (green >= 50 N, yellow >= 20, orange >= 0, red < 0); blue dashed = plan, orange dashed = replans; purple = true tether</text>"#,
+        r#"<text x="{}" y="{}">profile along start -&gt; goal; path colour = true margin (green >= 50 N, yellow >= 20, orange >= 0, red &lt; 0); blue dashed = plan, orange dashed = replans; purple = true tether</text>"#,
         2.0 * PAD + W,
         PAD + H + 14.0
     );
