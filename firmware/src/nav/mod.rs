@@ -102,10 +102,14 @@
 //! `host-sim/doc/nav.md` has the on-target storage and stack figures and how the navigator came to its design.
 //!
 
+mod mission;
 mod planning;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod mission_tests;
 
+pub use mission::{BodyPose, Mission, MissionCounters};
 pub use planning::{segment_motions, GoalRefusal, NavArena, NavPlanStats, NavPlanStorage};
 
 use core::borrow::BorrowMut;
@@ -114,11 +118,14 @@ use hal::Instant;
 
 use crate::config::map::{MapConfig, NAV_POINT_BATCH};
 use crate::config::nav::MAX_PLAN_ITERATIONS;
-use crate::exec::{Autonomy, PlanBuffer, PlanProgress, Refused, Scan};
+use crate::exec::{Autonomy, DriveStep, PlanBuffer, PlanProgress, Refused, Scan};
 use crate::geom::Vec3;
 use crate::map::{Block, Map, MapError};
 use crate::plan::tethered::{PlanBounds, RoverState};
-use crate::protocol::{Configure, GoalRequest, MapStatus, Motion, PlanState, PlannerChoice, Pose};
+use crate::protocol::{
+    Configure, GoalRequest, MapStatus, MissionStatus, Motion, MotionReport, PlanState, PlannerChoice, Pose,
+    TetherReading,
+};
 use crate::tether::AnchorHistory;
 
 use planning::{PlanSetup, Problem};
@@ -136,6 +143,8 @@ pub struct Navigator<B, I, P> {
     problem: Option<Problem>,
     next_motion: usize,
     stats: NavPlanStats,
+    mission: Mission,
+    replan_pending: bool,
 }
 
 impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> Navigator<B, I, P> {
@@ -159,6 +168,8 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
             problem: None,
             next_motion: 0,
             stats: NavPlanStats::default(),
+            mission: Mission::new(),
+            replan_pending: false,
         })
     }
 
@@ -204,10 +215,18 @@ fn count_up(counter: &mut u32, n: u32) {
 impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> Autonomy for Navigator<B, I, P> {
     fn configure(&mut self, cfg: &Configure) -> Result<(), Refused> {
         self.setup = Some(PlanSetup::from_configure(cfg));
+        self.mission.configure(cfg);
         Ok(())
     }
 
+    fn tether_reading(&mut self, reading: &TetherReading, _now: Instant) {
+        self.mission_tether(reading);
+    }
+
     fn scan(&mut self, scan: &Scan<'_>, _now: Instant) {
+        if !self.mission_scan_accepted(&scan.sensor_pose) {
+            return;
+        }
         self.pose = Some(scan.sensor_pose);
         // The map changes: the suspended search's motion checks no longer hold; the next step starts anew.
         planning::forget_search(&mut self.storage);
@@ -252,8 +271,15 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
         if goal.planner != PlannerChoice::Abit {
             return PlanState::PlannerUnavailable;
         }
-        let Some(setup) = self.setup else { return self.refuse(GoalRefusal::NotConfigured) };
-        let Some(pose) = self.pose else { return self.refuse(GoalRefusal::NoPose) };
+        self.replan_pending = false;
+        let Some(setup) = self.setup else {
+            self.mission_goal(goal, false);
+            return self.refuse(GoalRefusal::NotConfigured);
+        };
+        let Some(pose) = self.start_pose() else {
+            self.mission_goal(goal, false);
+            return self.refuse(GoalRefusal::NoPose);
+        };
         let budget = goal.max_iterations.min(MAX_PLAN_ITERATIONS);
         let (cfg, used) = (self.cfg, self.used);
         let set_up = match Map::reattach(cfg, self.blocks.borrow_mut(), self.index.borrow_mut(), used) {
@@ -264,9 +290,13 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
             Ok(problem) => {
                 self.problem = Some(problem);
                 self.stats.goals_accepted = self.stats.goals_accepted.saturating_add(1);
+                self.mission_goal(goal, true);
                 PlanState::Accepted
             }
-            Err(why) => self.refuse(why),
+            Err(why) => {
+                self.mission_goal(goal, false);
+                self.refuse(why)
+            }
         }
     }
 
@@ -286,6 +316,9 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
             }
         };
         self.problem = Some(problem);
+        if let PlanProgress::Finished { state, .. } = progress {
+            self.mission_planned(state);
+        }
         progress
     }
 
@@ -295,6 +328,27 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
         Some(m)
     }
 
+    fn drive_step(&mut self, now: Instant) -> DriveStep {
+        self.mission_drive(now)
+    }
+
+    fn motion_report(&mut self, report: &MotionReport, motion: Motion, _now: Instant) {
+        self.mission_report(report, motion);
+    }
+
+    fn motion_timeout(&mut self, _command_id: u32, _now: Instant) {
+        self.mission_timeout();
+    }
+
+    fn cancel(&mut self, _goal_id: u32, _now: Instant) -> Result<(), Refused> {
+        self.mission_cancel();
+        Ok(())
+    }
+
+    fn mission_status(&self) -> Option<MissionStatus> {
+        Some(self.mission.status())
+    }
+
     fn abort(&mut self) {
         if let Some(p) = self.problem.as_mut() {
             if p.finished.is_none() {
@@ -302,6 +356,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
             }
         }
         self.next_motion = usize::MAX;
+        self.mission_abort();
     }
 
     fn map_status(&self) -> MapStatus {
