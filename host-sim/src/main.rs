@@ -17,7 +17,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// A closed-loop mission with the flight software in the loop (the main job; default: the Mars Yard descent).
+    /// A closed-loop mission with the flight software in the loop (the main job; default: a crater-wall descent).
     Mission(cli::mission::MissionArgs),
     /// Run a scenario against the flight software on the in-process link (the main job).
     Run(cli::run::RunArgs),

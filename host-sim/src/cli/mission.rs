@@ -5,7 +5,9 @@
 //! output directory (`--out`, default `mission-out/`) the field log (`<name>.fieldlog`, or `-o LOG`), its MCAP
 //! export (`<name>.mcap`), the picture (`<name>.svg`) and the JSON summary (`<name>.json`). With `--seeds N`: N
 //! seeds in parallel (in-process) and the campaign table, plus `<name>-campaign.json`.
-//! Without a scenario: the embedded default, `host-sim/scenarios/mission_marsyard.toml` (the Mars Yard wall).
+//! Without a scenario: the embedded default, `host-sim/scenarios/mission_crater_rocks.toml` (a crater wall with
+//! rocks hidden until seen). The real-terrain Mars Yard descent (`mission_marsyard.toml`) is refused by today's
+//! onboard map (`host-sim/doc/mission.md`, "What the onboard map must observe"), so it is not the default.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -20,9 +22,9 @@ use crate::replay::RunConfig;
 use crate::scenario::{self, Scenario};
 
 /// The embedded default scenario (its terrain path is relative to `host-sim/scenarios/`).
-pub const DEFAULT_SCENARIO: &str = include_str!("../../scenarios/mission_marsyard.toml");
+pub const DEFAULT_SCENARIO: &str = include_str!("../../scenarios/mission_crater_rocks.toml");
 /// The file name the embedded default stands for.
-pub const DEFAULT_SCENARIO_FILE: &str = "mission_marsyard.toml";
+pub const DEFAULT_SCENARIO_FILE: &str = "mission_crater_rocks.toml";
 
 /// Tracking mode on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -45,7 +47,7 @@ impl From<TrackingArg> for Tracking {
 /// Arguments of `mission`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct MissionArgs {
-    /// Scenario file (default: the embedded Mars Yard descent, `host-sim/scenarios/mission_marsyard.toml`).
+    /// Scenario file (default: the embedded crater-wall descent, `host-sim/scenarios/mission_crater_rocks.toml`).
     pub scenario: Option<PathBuf>,
     /// Flight software: the in-process executive, or the board binary in QEMU (lockstep; one seed only).
     #[arg(long, value_enum, default_value_t = LinkKind::Inproc)]
@@ -157,7 +159,11 @@ fn one(args: &MissionArgs, sc: &Scenario) -> Result<(MissionReport, Vec<PathBuf>
     let rep = match args.link {
         LinkKind::Inproc => {
             let mut link = crate::mission::link::mission_link(sc)?;
-            run(&mut link)?
+            let rep = run(&mut link)?;
+            if std::env::var_os("TETHERBOT_PLAN_STATS").is_some() {
+                eprintln!("navigator planning counters: {:?}", link.executive().autonomy().plan_stats());
+            }
+            rep
         }
         LinkKind::Qemu => {
             if !crate::mission::link::board_equivalent(sc) {

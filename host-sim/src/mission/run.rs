@@ -318,7 +318,7 @@ impl<L: FlightLink> Sim<'_, L> {
     /// Handles what the flight software sent during a link call of `host_s` seconds.
     fn absorb(&mut self, msgs: Vec<Message>, host_s: f64) {
         let now = self.s.link().now_us();
-        if self.planning || msgs.iter().any(|m| matches!(m, Message::PlanStatus(p) if p.state == PlanState::Accepted)) {
+        if self.planning || msgs.iter().any(|m| matches!(m, Message::PlanStatus(_))) {
             self.plan_host_s += host_s;
         }
         for msg in msgs {
