@@ -243,7 +243,6 @@ pub fn mission_configure(sc: &Scenario, opts: &MissionOptions) -> Configure {
         replan_cross_track_m: m.replan_cross_track_m.map_or(d.replan_cross_track_m, |v| v as f32),
         payout_tolerance_m: m.payout_tolerance_m.map_or(d.payout_tolerance_m, |v| v as f32),
         min_margin_n: m.min_margin_n.map_or(d.min_margin_n, |v| v as f32),
-        ..d
     };
     c
 }

@@ -3,7 +3,7 @@
 //! sensor), the root anchor, the true tether at key moments with its contacts, and a chart of the true margin and
 //! tension along the distance driven.
 
-use std::fmt::Write as _;
+use core::fmt::Write as _;
 
 use firmware::geom::p3::P3;
 use firmware::geom::Real;
