@@ -366,3 +366,58 @@ fn closed_loop_tracking_corrects_a_lateral_tether_drift_that_open_loop_does_not(
     assert!(gain > 0.0, "the drift toward the tether was learned: {gain}");
     assert!(horizontal(&w_closed.pose(), 4.0, 0.0) <= 0.3);
 }
+
+#[test]
+fn a_scan_whose_pose_disagrees_with_odometry_is_not_integrated() {
+    let mut nav = mapped(ROOT, MissionConfig::DEFAULT);
+    nav.goal(&goal(1, 3.0, 0.0), Instant::from_micros(0));
+    let mut world = World::new(ROOT, 0.0);
+    plan(&mut nav);
+    // one motion, so the navigator has a body pose from a report
+    let DriveStep::Motion(m) = nav.drive_step(Instant::from_micros(0)) else { panic!("no motion") };
+    let r = world.report(0, m);
+    nav.motion_report(&r, m, Instant::from_micros(0));
+    let before = nav.map_status().scans_integrated;
+    // a scan said to be taken 10 m away from where odometry puts the rover
+    scan_down(&mut nav, 99, 10.0);
+    assert_eq!(nav.map_status().scans_integrated, before, "the disagreeing scan was integrated");
+    assert_eq!(nav.mission_status().unwrap().scans_rejected, 1);
+    // a scan from above the rover is integrated
+    scan_down(&mut nav, 100, world.x);
+    assert_eq!(nav.map_status().scans_integrated, before + 1);
+    assert_ne!(nav.mission_status().unwrap().state, MissionState::Safe);
+}
+
+#[test]
+fn no_waypoint_below_the_minimum_margin_is_sent_or_driven() {
+    // a minimum margin no state on this map can have (the rover's whole weight)
+    let mission = MissionConfig { min_margin_n: 1.0e6, ..MissionConfig::DEFAULT };
+    let mut nav = mapped(ROOT, mission);
+    assert_eq!(nav.goal(&goal(1, 3.0, 0.0), Instant::from_micros(0)), PlanState::Accepted);
+    let mut buf = PlanBuffer::new();
+    let mut last = None;
+    for k in 0..2000u64 {
+        let p = nav.plan_step(Instant::from_micros(k * 1000), 8, &mut buf);
+        if let PlanProgress::Finished { state, .. } = p {
+            last = Some(state);
+            break;
+        }
+    }
+    assert_eq!(last, Some(PlanState::NoSolutionWithinBudget));
+    assert!(buf.is_empty(), "{} waypoints sent", buf.len());
+    let st = nav.mission_status().unwrap();
+    assert_eq!((st.state, st.reason), (MissionState::Safe, StopReason::NoSolution));
+    assert_eq!(nav.drive_step(Instant::from_micros(0)), DriveStep::Finished);
+    // the same world with the default minimum plans and every sent waypoint has a margin at or above it
+    let mut nav = mapped(ROOT, MissionConfig::DEFAULT);
+    nav.goal(&goal(1, 3.0, 0.0), Instant::from_micros(0));
+    let mut buf = PlanBuffer::new();
+    for k in 0..2000u64 {
+        if let PlanProgress::Finished { state, .. } = nav.plan_step(Instant::from_micros(k * 1000), 8, &mut buf) {
+            assert_eq!(state, PlanState::ExactSolution);
+            break;
+        }
+    }
+    assert!(buf.len() >= 2);
+    assert!(buf.iter().all(|w| w.stability_margin >= 0.0), "{buf:?}");
+}
