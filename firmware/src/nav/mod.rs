@@ -70,8 +70,9 @@
 //!   reading whose payout changed by more than `MAX_PAYOUT_RATE_M_PER_S * dt + PAYOUT_JUMP_SLACK_M` since the last
 //!   accepted one is rejected (`tether_rejected`). With no motion in flight, a payout more than
 //!   `payout_tolerance_m` from the prediction re-estimates the history (Alg. 1 from the root along the last
-//!   `EXECUTED_CAPACITY` executed positions on the current map, which may now show the snag), and stops safe if
-//!   still inconsistent.
+//!   `EXECUTED_CAPACITY` executed positions on the current map, which may now show the snag; `REESTIMATE_PER_STEP`
+//!   predictions per executive step, the rover waiting); then it stops safe (`TetherInconsistent`) if the last
+//!   payout still disagrees, else replans from the re-estimated history.
 //! - **Re-checks and replans**: after each report the next `RECHECK_AFTER_MOTION` segments are re-checked
 //!   (the current state's margin and the motion from it to the segment's end, then the planned motions, each a
 //!   full motion check on the current map: collision, settling, anchors, stability), after each scan the whole
@@ -94,11 +95,12 @@
 //! - Parameters (`config::mission`): `TRACK_SEGMENT_M` 0.5, `HEADING_TOLERANCE_RAD` 0.03, `SEGMENT_DONE_M` 0.08,
 //!   `MAX_REPLANS` 8, `MAX_STALLS` 2, `POSE_JUMP_BASE_M` 0.5, `POSE_JUMP_PER_M` 0.5, `POSE_JUMP_YAW_RAD` 0.6,
 //!   `MAX_POSE_JUMPS` 3, `SCAN_POSE_TOLERANCE_M` 2.0, `MAX_SCAN_REJECTS` 3, `MAX_PAYOUT_RATE_M_PER_S` 1.0,
-//!   `PAYOUT_JUMP_SLACK_M` 0.3, `RECHECK_AFTER_MOTION` 2, `EXECUTED_CAPACITY` 64, `DRIFT_GAIN_LIMIT` 1.0,
+//!   `PAYOUT_JUMP_SLACK_M` 0.3, `RECHECK_AFTER_MOTION` 2, `EXECUTED_CAPACITY` 64, `REESTIMATE_PER_STEP` 4,
+//!   `DRIFT_GAIN_LIMIT` 1.0,
 //!   `MIN_DRIFT_SAMPLE_M` 0.05, `STANDARD_GRAVITY` 9.81; `MissionConfig::DEFAULT`: ClosedLoop, 0.3 m, 0.5 m, 0 N.
-//! - Bounds: each report does one settle-free Alg. 1 prediction; each `Verifying` step one settle, one
-//!   stability check and one motion check; a re-estimate up to `EXECUTED_CAPACITY - 1` predictions in one call
-//!   (not split across steps yet).
+//! - Bounds: each report does one Alg. 1 prediction; each `Verifying` step one settle, one stability check and one
+//!   motion check; each re-estimate step `REESTIMATE_PER_STEP` predictions; each closed-loop step one pass over
+//!   the path's segments (`PATH_CAPACITY`).
 //!
 //! ## Suspended between steps, restarted after a map change (no heap, no `unsafe`)
 //! [`AbitStar`](crate::plan::abit::AbitStar) borrows its arena, the space (which borrows the map), the validators,
