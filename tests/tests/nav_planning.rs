@@ -7,7 +7,7 @@
 //! equivalent in-process and on the flight computer.
 
 use firmware::protocol::{
-    DriveCommand, GoalRequest, Message, Mode, Motion, MotionOutcome, MotionReport, PlanState, PlanStatus,
+    DriveCommand, GoalRequest, Message, MissionState, Mode, Motion, MotionOutcome, MotionReport, PlanState, PlanStatus,
     PlannerChoice, Point3, Pose, Quat, SensorChunk,
 };
 use firmware::config::protocol::{
@@ -196,6 +196,11 @@ fn goal_over_the_link_is_planned_on_board_and_driven() {
     let d = ((x - 3.0).powi(2) + y * y).sqrt();
     assert!(d <= 0.5 + 0.05, "drive commands end at ({x}, {y}), {d} m from the goal");
     assert_eq!(s.telemetry().expect("t").mode, Mode::Mapping);
+    // protocol v2: the mission status went Planning -> Driving -> ... -> Arrived
+    let states: Vec<MissionState> =
+        got.iter().filter_map(|m| if let Message::MissionStatus(st) = m { Some(st.state) } else { None }).collect();
+    assert!(states.contains(&MissionState::Planning) && states.contains(&MissionState::Driving), "{states:?}");
+    assert_eq!(states.last(), Some(&MissionState::Arrived), "{states:?}");
 }
 
 #[test]

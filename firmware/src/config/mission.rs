@@ -68,3 +68,6 @@ pub const EXECUTED_CAPACITY: usize = 64;
 pub const DRIFT_GAIN_LIMIT: f32 = 1.0;
 /// Straight drives shorter than this do not update the drift estimate, metres. Default 0.05 m.
 pub const MIN_DRIFT_SAMPLE_M: f32 = 0.05;
+/// Alg. 1 predictions of a tether re-estimate per executive step (the re-estimate propagates from the root along
+/// up to `EXECUTED_CAPACITY - 1` executed moves; the rover waits until it is done). Default 4.
+pub const REESTIMATE_PER_STEP: usize = 4;

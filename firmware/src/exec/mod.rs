@@ -24,7 +24,8 @@
 //! command id is `Nack(UnknownCommand)`. With no report within `MOTION_REPORT_TIMEOUT_US` of flight time it sends
 //! `Stop`, forgets the command, counts `motion_report_timeouts` and calls [`Autonomy::motion_timeout`].
 //! [`Autonomy::mission_status`] is polled each step; a `MissionStatus` frame goes out when its goal, state or
-//! reason changed, after every accepted motion report, and after every `Telemetry` frame.
+//! reason changed, after every accepted motion report, and after every `Telemetry` frame; a change to `Safe` or
+//! `Arrived` while a report is awaited also sends `Stop`.
 //!
 //! ## Determinism
 //! Output bytes depend only on the input bytes and the clock readings: no randomness, no hash iteration; the time
@@ -633,6 +634,11 @@ where
         };
         if self.last_mission != Some((m.goal_id, m.state, m.reason)) {
             self.send_mission_status();
+            // A safe stop (or arrival) decided between reports, e.g. on a tether reading: stop the motion in
+            // flight now (its report is still awaited).
+            if matches!(m.state, MissionState::Safe | MissionState::Arrived) && self.awaiting.is_some() {
+                self.send_motion(Motion::Stop);
+            }
         }
     }
 

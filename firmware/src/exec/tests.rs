@@ -615,3 +615,22 @@ fn log_frames_are_rate_limited_and_the_queue_is_bounded() {
         "{logs}"
     );
 }
+
+#[test]
+fn a_safe_stop_between_reports_stops_the_motion_in_flight() {
+    let (mut e, id) = mission_exec();
+    // the autonomy decides to stop (here: its status turns Safe) while the motion is in flight
+    e.autonomy_mut().cancels.push(9);
+    let r = exchange(&mut e, &[]);
+    assert!(r.iter().any(|m| matches!(m, Message::MissionStatus(s) if s.state == MissionState::Safe)));
+    assert!(r.iter().any(|m| matches!(
+        m,
+        Message::DriveCommand(DriveCommand {
+            motion: Motion::Stop,
+            ..
+        })
+    )));
+    // the interrupted motion's report is still accepted
+    let r = exchange(&mut e, &[report(id)]);
+    assert_eq!(r[0], Message::Ack(Ack { seq: 100 }));
+}

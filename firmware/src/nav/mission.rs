@@ -94,6 +94,9 @@ pub struct Mission {
     recheck_at: usize,
     approximate: bool,
     tracked: AnchorHistory,
+    /// Re-estimate in progress: the next executed position to propagate to (0 = none), and the history so far.
+    reestimate_at: usize,
+    reestimate_h: AnchorHistory,
     executed: heapless::Vec<Vec3, { mcfg::EXECUTED_CAPACITY }>,
     payout: Option<(f32, f32, u64)>,
     distance_driven_m: f32,
@@ -136,6 +139,8 @@ impl Mission {
             recheck_at: 0,
             approximate: false,
             tracked: AnchorHistory::empty(),
+            reestimate_at: 0,
+            reestimate_h: AnchorHistory::empty(),
             executed: heapless::Vec::new(),
             payout: None,
             distance_driven_m: 0.0,
@@ -187,6 +192,7 @@ impl Mission {
         self.state = MissionState::Safe;
         self.reason = reason;
         self.recheck_left = 0;
+        self.reestimate_at = 0;
     }
 
     /// A `Configure`: the tether starts at the root anchor.
@@ -377,44 +383,54 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
             m.stop(StopReason::TensionLimit);
             return;
         }
-        // While a motion is in flight the tracked pose is the motion's start: no comparison.
-        if m.in_flight.is_some() || m.body.is_none() {
+        // While a motion is in flight the tracked pose is the motion's start: no comparison (nor while a
+        // re-estimate runs).
+        if m.in_flight.is_some() || m.body.is_none() || m.reestimate_at != 0 {
             return;
         }
         if libm::fabsf(r.payout_m - m.predicted_payout()) <= m.cfg.payout_tolerance_m {
             return;
         }
-        self.reestimate_tether();
-        let m = &mut self.mission;
-        if libm::fabsf(r.payout_m - m.predicted_payout()) > m.cfg.payout_tolerance_m {
-            m.stop(StopReason::TetherInconsistent);
+        // Re-estimate (in bounded parts, see `reestimate_step`); the rover drives no further until it is done.
+        if m.reestimate_at == 0 {
+            if let Some(root) = m.root {
+                m.counters.tether_reestimates = m.counters.tether_reestimates.saturating_add(1);
+                m.reestimate_h = AnchorHistory::new(Anchor::root(root));
+                m.reestimate_at = 1;
+                log::info!("mission: payout {} m vs tracked {} m: re-estimating the anchors", r.payout_m, m.predicted_payout());
+            }
         }
     }
 
-    /// Re-predict the anchor history from the root along the executed positions on the current map (Alg. 1,
-    /// one prediction per kept move).
-    fn reestimate_tether(&mut self) {
-        let Some(root) = self.mission.root else { return };
-        self.mission.counters.tether_reestimates = self.mission.counters.tether_reestimates.saturating_add(1);
+    /// Continue the re-estimate of the anchor history from the root along the executed positions on the current
+    /// map (Alg. 1, at most `REESTIMATE_PER_STEP` predictions per call). `Some(consistent)` when it finished.
+    fn reestimate_step(&mut self) -> Option<bool> {
         let Ok(map) = Map::reattach(self.cfg, self.blocks.borrow_mut(), self.index.borrow_mut(), self.used) else {
-            return;
+            self.mission.reestimate_at = 0;
+            return Some(false);
         };
         let m = &mut self.mission;
-        let mut h = AnchorHistory::new(Anchor::root(root));
         let mut out = AnchorHistory::empty();
-        let mut prev: Option<Vec3> = None;
-        for p in m.executed.iter() {
-            if let Some(a) = prev {
-                if predict_anchors(&map, &h, &a, p, &mut out).is_ok() {
-                    h.clone_from(&out);
-                } else {
-                    m.counters.propagation_failures = m.counters.propagation_failures.saturating_add(1);
-                }
+        for _ in 0..mcfg::REESTIMATE_PER_STEP {
+            let k = m.reestimate_at;
+            let (Some(a), Some(b)) = (m.executed.get(k.wrapping_sub(1)).copied(), m.executed.get(k).copied()) else {
+                break;
+            };
+            if predict_anchors(&map, &m.reestimate_h, &a, &b, &mut out).is_ok() {
+                m.reestimate_h.clone_from(&out);
+            } else {
+                m.counters.propagation_failures = m.counters.propagation_failures.saturating_add(1);
             }
-            prev = Some(*p);
+            m.reestimate_at = k + 1;
         }
-        m.tracked = h;
+        if m.reestimate_at < m.executed.len() {
+            return None;
+        }
+        m.reestimate_at = 0;
+        m.tracked.clone_from(&m.reestimate_h);
         log::info!("mission: anchor history re-estimated: {} anchors", m.tracked.len());
+        let measured = m.payout.map_or(0.0, |(p, _, _)| p);
+        Some(libm::fabsf(measured - m.predicted_payout()) <= m.cfg.payout_tolerance_m)
     }
 
     /// A scan: `false` when its pose disagrees with the tracked body pose (not integrated, counted).
@@ -587,6 +603,17 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         }
         if self.mission.in_flight.is_some() {
             return DriveStep::Wait;
+        }
+        if self.mission.reestimate_at != 0 {
+            return match self.reestimate_step() {
+                None => DriveStep::Wait,
+                Some(false) => {
+                    self.mission.stop(StopReason::TetherInconsistent);
+                    DriveStep::Finished
+                }
+                // the tether lies otherwise than the plan assumed: plan again from the re-estimated history
+                Some(true) => self.replan(now),
+            };
         }
         if self.replan_pending || self.mission.cross_track_m > self.mission.cfg.replan_cross_track_m {
             self.replan_pending = false;

@@ -49,12 +49,19 @@ fn goal(id: u32, x: f32, y: f32) -> GoalRequest {
 }
 
 fn scan_down(nav: &mut TestNav, id: u32, cx: f32) {
+    scan_ground(nav, id, cx, &|_| true);
+}
+
+/// A downward scan from above `(cx, 0)` of the flat ground where `seen(x)` (elsewhere no return: unknown).
+fn scan_ground(nav: &mut TestNav, id: u32, cx: f32, seen: &dyn Fn(f32) -> bool) {
     let step = 0.5 * VOXEL;
     let mut pts = Vec::new();
     for i in -20..=20 {
         for j in -44..=44 {
             let (x, y) = (i as f32 * step, j as f32 * step);
-            pts.push(Point3 { x, y, z: Z0 - SENSOR_H });
+            if seen(cx + x) {
+                pts.push(Point3 { x, y, z: Z0 - SENSOR_H });
+            }
         }
     }
     let pose = Pose { position: Point3 { x: cx, y: 0.0, z: SENSOR_H }, orientation: Quat { x: 0.0, y: 0.0, z: 0.0, w: 1.0 } };
@@ -64,6 +71,10 @@ fn scan_down(nav: &mut TestNav, id: u32, cx: f32) {
 /// A navigator configured with `root` and `mission`, the flat world mapped over x in [-1, 5], y in [-2.2, 2.2]; the
 /// last scan from above the origin (the rover's first pose).
 fn mapped(root: Point3, mission: MissionConfig) -> TestNav {
+    mapped_where(root, mission, &|_| true)
+}
+
+fn mapped_where(root: Point3, mission: MissionConfig, seen: &dyn Fn(f32) -> bool) -> TestNav {
     let mut nav =
         Navigator::new(MapConfig::with_voxel_size(VOXEL), vec![Block::EMPTY; 4096], vec![0u32; 8192], Box::default())
             .unwrap();
@@ -72,10 +83,10 @@ fn mapped(root: Point3, mission: MissionConfig) -> TestNav {
     let mut x = -1.0;
     while x <= 5.0 + 1e-3 {
         id += 1;
-        scan_down(&mut nav, id, x);
+        scan_ground(&mut nav, id, x, seen);
         x += 0.5;
     }
-    scan_down(&mut nav, id + 1, 0.0);
+    scan_ground(&mut nav, id + 1, 0.0, seen);
     assert_eq!(nav.map_status().pool_errors, 0);
     nav
 }
@@ -365,4 +376,85 @@ fn closed_loop_tracking_corrects_a_lateral_tether_drift_that_open_loop_does_not(
     assert!(open.max_cross_track > 2.0 * closed.max_cross_track, "open {open:?} closed {closed:?}");
     assert!(gain > 0.0, "the drift toward the tether was learned: {gain}");
     assert!(horizontal(&w_closed.pose(), 4.0, 0.0) <= 0.3);
+}
+
+#[test]
+fn a_scan_whose_pose_disagrees_with_odometry_is_not_integrated() {
+    let mut nav = mapped(ROOT, MissionConfig::DEFAULT);
+    nav.goal(&goal(1, 3.0, 0.0), Instant::from_micros(0));
+    let mut world = World::new(ROOT, 0.0);
+    plan(&mut nav);
+    // one motion, so the navigator has a body pose from a report
+    let DriveStep::Motion(m) = nav.drive_step(Instant::from_micros(0)) else { panic!("no motion") };
+    let r = world.report(0, m);
+    nav.motion_report(&r, m, Instant::from_micros(0));
+    let before = nav.map_status().scans_integrated;
+    // a scan said to be taken 10 m away from where odometry puts the rover
+    scan_down(&mut nav, 99, 10.0);
+    assert_eq!(nav.map_status().scans_integrated, before, "the disagreeing scan was integrated");
+    assert_eq!(nav.mission_status().unwrap().scans_rejected, 1);
+    // a scan from above the rover is integrated
+    scan_down(&mut nav, 100, world.x);
+    assert_eq!(nav.map_status().scans_integrated, before + 1);
+    assert_ne!(nav.mission_status().unwrap().state, MissionState::Safe);
+}
+
+#[test]
+fn no_waypoint_below_the_minimum_margin_is_sent_or_driven() {
+    // a minimum margin no state on this map can have (the rover's whole weight)
+    let mission = MissionConfig { min_margin_n: 1.0e6, ..MissionConfig::DEFAULT };
+    let mut nav = mapped(ROOT, mission);
+    assert_eq!(nav.goal(&goal(1, 3.0, 0.0), Instant::from_micros(0)), PlanState::Accepted);
+    let mut buf = PlanBuffer::new();
+    let mut last = None;
+    for k in 0..2000u64 {
+        let p = nav.plan_step(Instant::from_micros(k * 1000), 8, &mut buf);
+        if let PlanProgress::Finished { state, .. } = p {
+            last = Some(state);
+            break;
+        }
+    }
+    assert_eq!(last, Some(PlanState::NoSolutionWithinBudget));
+    assert!(buf.is_empty(), "{} waypoints sent", buf.len());
+    let st = nav.mission_status().unwrap();
+    assert_eq!((st.state, st.reason), (MissionState::Safe, StopReason::NoSolution));
+    assert_eq!(nav.drive_step(Instant::from_micros(0)), DriveStep::Finished);
+    // the same world with the default minimum plans and every sent waypoint has a margin at or above it
+    let mut nav = mapped(ROOT, MissionConfig::DEFAULT);
+    nav.goal(&goal(1, 3.0, 0.0), Instant::from_micros(0));
+    let mut buf = PlanBuffer::new();
+    for k in 0..2000u64 {
+        if let PlanProgress::Finished { state, .. } = nav.plan_step(Instant::from_micros(k * 1000), 8, &mut buf) {
+            assert_eq!(state, PlanState::ExactSolution);
+            break;
+        }
+    }
+    assert!(buf.len() >= 2);
+    assert!(buf.iter().all(|w| w.stability_margin >= 0.0), "{buf:?}");
+}
+
+#[test]
+fn an_approximate_solution_is_driven_only_when_allowed_and_only_to_its_last_state() {
+    // ground unobserved for x in [1.2, 2.4]: the goal at x = 3.5 cannot be reached
+    let seen = |x: f32| !(1.2..=2.4).contains(&x);
+    for allow in [false, true] {
+        let mut nav = mapped_where(ROOT, MissionConfig::DEFAULT, &seen);
+        let mut g = goal(1, 3.5, 0.0);
+        g.allow_approximate = allow;
+        g.max_iterations = 24;
+        assert_eq!(nav.goal(&g, Instant::from_micros(0)), PlanState::Accepted);
+        let p = plan(&mut nav);
+        let PlanProgress::Finished { state, .. } = p else { unreachable!() };
+        let mut world = World::new(ROOT, 0.0);
+        let run = drive(&mut nav, &mut world, 400, &mut |_, _, _| {});
+        let st = nav.mission_status().unwrap();
+        std::println!("allow {allow}: {state:?} {run:?} {st:?}");
+        assert_eq!((st.state, st.reason), (MissionState::Safe, StopReason::NoSolution));
+        if state == PlanState::ApproximateSolution && allow {
+            assert!(run.motions > 0, "an allowed approximate plan is driven");
+            assert!(world.x < 1.2, "driven past the last safe state: x = {}", world.x);
+        } else {
+            assert_eq!(run.motions, 0, "{state:?} driven without allow_approximate");
+        }
+    }
 }
