@@ -170,6 +170,12 @@ pub fn map_check(a: &MapCheckArgs) -> Result<(), String> {
         cfg.map.max_carve_length
     );
     println!("scans {}  points {}  sensor {} rays/scan  seed {}", rep.scans, rep.points, cfg.sensor.ray_count(), cfg.seed);
+    if rep.non_finite_points > 0 || rep.scans_refused > 0 {
+        println!(
+            "dropped on the host: {} non-finite points, {} scans that could not be chunked",
+            rep.non_finite_points, rep.scans_refused
+        );
+    }
     println!(
         "integration (thread CPU time): {:.3} s total, {:.0} points/s, {:.2} ms/scan (wall {:.3} s)",
         rep.integrate_s,
