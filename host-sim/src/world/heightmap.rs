@@ -119,7 +119,7 @@ impl HeightmapWorld {
         if !lo.is_finite() {
             return bad("every post is 'no data'".into());
         }
-        if !(hi - lo <= MAX_EXTENT_M) {
+        if hi - lo > MAX_EXTENT_M {
             return bad(format!(
                 "heights span {:.3e} m, above {MAX_EXTENT_M:.0e} m: check height_scale / vertical_scale",
                 hi - lo
@@ -301,7 +301,7 @@ impl World for HeightmapWorld {
                 t_hi = t_hi.min(ta.max(tb));
             }
         }
-        if !(t_lo <= t_hi) {
+        if t_lo.is_nan() || t_hi.is_nan() || t_lo > t_hi {
             return None;
         }
         // The same steps k * step as a march from the origin, from one before the entry to one after the exit.
