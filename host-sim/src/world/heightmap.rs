@@ -19,12 +19,13 @@
 //! refine a sign change by 50 bisections: a feature thinner than a quarter post spacing along the ray can be
 //! missed (a height field has none thinner than one post except at grazing incidence). The march covers only the
 //! part of the ray over the grid and not above its highest post (elsewhere there is no surface to hit), on the
-//! same grid of steps as a march from the origin, so the result is the same; that part is at most the diagonal
-//! of the grid's box, and [`HeightmapWorld::new`] rejects a grid whose diagonal is more than
-//! [`RAYCAST_MAX_STEPS`] steps, so every ray cast is bounded.
+//! same grid of steps as a march from the origin, so the result is the same. A march stops after
+//! [`RAYCAST_MAX_STEPS`] steps: [`HeightmapWorld::new`] rejects a grid whose box diagonal is longer, so a ray over
+//! posts hits or leaves the box within the budget (below the lowest post every sample over a post is a hit); only a
+//! ray that stays over a hole (no data) for the whole budget ends as a miss.
 //!
 //! Limits checked at load (absurd scales are errors, not hangs or NaN): post spacing at least
-//! [`MIN_POST_SPACING_M`] (1 mm), every height finite, extent and height span at most [`MAX_EXTENT_M`] (1000 km),
+//! [`MIN_POST_SPACING_M`] (1 mm), every height finite, extent and height span at most [`MAX_EXTENT_M`] (10 000 km),
 //! and the ray-cast budget above.
 
 use super::geometry::{closest_point_on_triangle, P3};
@@ -37,9 +38,9 @@ use firmware::map::{DistanceField, DistanceQuery};
 /// Smallest post spacing after `horizontal_scale`, metres. Default 1 mm: finer than any DEM (the HiRISE DTMs are
 /// 1 m, the Mars Yard 5 cm); a smaller one is a scale mistake.
 pub const MIN_POST_SPACING_M: f64 = 1e-3;
-/// Largest horizontal extent and height span of a grid, metres. Default 1000 km (larger than any planetary
-/// relief); keeps every distance and its square finite.
-pub const MAX_EXTENT_M: f64 = 1e6;
+/// Largest horizontal extent and height span of a grid, metres. Default 10 000 km (more than Mars' diameter; the
+/// LOLA south-polar DEM spans 1218 km); keeps every distance and its square finite.
+pub const MAX_EXTENT_M: f64 = 1e7;
 /// Budget of one ray cast, in march steps (a quarter post spacing each). Default 2^20: a grid whose box diagonal
 /// is longer than this many steps is rejected at load (about 185 000 posts on a side, or a height span of
 /// 260 000 post spacings).
@@ -307,10 +308,9 @@ impl World for HeightmapWorld {
         // The same steps k * step as a march from the origin, from one before the entry to one after the exit.
         let k0 = ((t_lo / step).floor() - 1.0).max(0.0);
         let k1 = ((t_hi / step).ceil() + 1.0).min(n);
-        if k1 - k0 > RAYCAST_MAX_STEPS as f64 {
-            // Cannot happen for a grid accepted by `new` (its diagonal is within the budget).
-            return None;
-        }
+        // The budget: within the box a ray hits or leaves it in fewer steps (checked in `new`); below the lowest
+        // post every sample over a post is a hit, so only a ray still over a hole can reach it (a miss).
+        let k1 = k1.min(k0 + RAYCAST_MAX_STEPS as f64);
         let (k0, k1) = (k0 as usize, k1 as usize);
         let mut prev: Option<(f64, f64)> = None;
         for k in k0..k1 {
@@ -439,6 +439,11 @@ mod tests {
             hits += usize::from(got.is_some());
         }
         assert!(hits > 50, "{hits} hits");
+        // A long vertical ray (range 1e6 m: 4e7 steps if it did not hit) hits like the full march.
+        let (o, down) = (Vec3::new(0.13, -0.21, (w.z_max + 5.0) as Real), Vec3::new(0.0, 0.0, -1.0));
+        let got = w.raycast(&o, &down, 1e6);
+        assert!(got.is_some());
+        assert_eq!(got, full(&w, o, down, 1e6));
     }
 
     /// Regression (issue 24): a horizontal scale of 1e-9 made every ray cast take 3e10 steps (map-check never
