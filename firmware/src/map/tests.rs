@@ -57,6 +57,10 @@ fn sensor_pose_beyond_the_map_bounds_is_rejected_and_counted() {
     let (mut b, mut i) = slices(16, 32);
     let mut map = Map::from_slices(MapConfig::DEFAULT, &mut b, &mut i).unwrap();
     let vs = map.config().voxel_size;
+    // 2e8 m: the voxel index (4e9) saturates i32 while the point, 16 m ahead, has a valid depth; this is the
+    // path that overflowed (`(ga + 1)` on i32::MAX).
+    let out = map.integrate_points(&Pose3::translation(2e8, 0.0, 0.0), &[Vec3::new(16.0, 0.0, 0.0)]);
+    assert_eq!((out.points_rejected, out.points_out_of_bounds, out.voxels_updated), (1, 1, 0));
     let far = Pose3::translation(1e30, -1e30, 1e30);
     let out = map.integrate_points(&far, &[Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0)]);
     assert_eq!((out.points_rejected, out.points_out_of_bounds, out.points_integrated), (2, 2, 0));
