@@ -79,6 +79,12 @@ pub struct CampaignSpec {
     pub bounds: PlanBounds,
     /// Voxel edge of the planning map, metres.
     pub voxel_m: f64,
+    /// Block capacity of the planning map (the scenario's `map.pool_blocks` when it gives one); `None`: as many
+    /// blocks as the planning box needs.
+    pub pool_blocks: Option<usize>,
+    /// Tether available, metres (the scenario's `tether.length_m`): a found path whose tether, along the anchor
+    /// history of any of its states, is longer does not count as found stable.
+    pub tether_length_m: f64,
     /// Planner iterations per trial.
     pub iterations: u32,
     /// Trials.
@@ -124,6 +130,18 @@ impl PlanningMap {
     /// Fill a map of voxel `voxel_m` from `world`'s signed distance over the box `[lo, hi]` (exact up to the TSDF
     /// truncation, [`World::query_up_to`]), then converge the ESDF.
     pub fn from_world(world: &dyn World, lo: [f64; 3], hi: [f64; 3], voxel_m: f64) -> Result<PlanningMap, String> {
+        Self::from_world_in_pool(world, lo, hi, voxel_m, None)
+    }
+
+    /// [`Self::from_world`] in a pool of at most `pool_blocks` blocks: a box that needs more is an error naming
+    /// the pool, not a map with holes.
+    pub fn from_world_in_pool(
+        world: &dyn World,
+        lo: [f64; 3],
+        hi: [f64; 3],
+        voxel_m: f64,
+        pool_blocks: Option<usize>,
+    ) -> Result<PlanningMap, String> {
         let t0 = Instant::now();
         let cfg = MapConfig::with_voxel_size(voxel_m as Real);
         cfg.validate().map_err(|e| format!("planning map: {}: {}", e.field, e.reason))?;
@@ -133,6 +151,7 @@ impl PlanningMap {
         if blocks_needed > 1 << 20 {
             return Err(format!("planning map: {blocks_needed} blocks needed; use a larger --voxel"));
         }
+        let blocks_needed = pool_blocks.map_or(blocks_needed, |p| p.min(blocks_needed));
         let mut blocks = vec![Block::EMPTY; blocks_needed];
         let mut index = vec![0u32; (2 * blocks_needed).next_power_of_two()];
         let (used, voxels, esdf_calls) = {
@@ -148,7 +167,14 @@ impl PlanningMap {
                         let DistanceQuery::Known { distance, .. } = world.query_up_to(&c, cfg.truncation) else {
                             continue;
                         };
-                        map.set_voxel(g, distance, 1.0).map_err(|e| format!("planning map: {e:?}"))?;
+                        map.set_voxel(g, distance, 1.0).map_err(|e| match pool_blocks {
+                            Some(p) => format!(
+                                "planning map: {e:?}: the pool of {p} blocks (map.pool_blocks) cannot hold the \
+                                 planning box at {voxel_m} m voxels; raise map.pool_blocks, use a larger voxel or \
+                                 a smaller [plan] box"
+                            ),
+                            None => format!("planning map: {e:?}"),
+                        })?;
                         voxels += 1;
                     }
                 }
@@ -389,11 +415,20 @@ pub fn run_trial<D: DistanceField>(
     drop(planner);
     let stats: MotionStats = space.stats();
     let states: Vec<RoverState> = out.iter().map(|(s, _)| *s).collect();
-    let path = out
+    let path: Vec<PathState> = out
         .iter()
         .map(|(s, h)| PathState { axle: from_vec3(&s.axle()), ground: from_vec3(&s.ground), theta: f64::from(s.theta), anchors: anchors_of(h) })
         .collect();
-    let revalidation = found.then(|| revalidate(spec.world.as_ref(), spec, &states));
+    let revalidation = found.then(|| {
+        let mut r = revalidate(spec.world.as_ref(), spec, &states);
+        if let Some(why) = tether_too_short(spec, &path) {
+            if r.stable {
+                r.stable = false;
+                r.failure = Some(why);
+            }
+        }
+        r
+    });
     Ok(TrialResult {
         trial,
         seed,
@@ -420,6 +455,24 @@ pub fn run_trial<D: DistanceField>(
         arena_queue: arena_use.queue,
         path,
         revalidation,
+    })
+}
+
+/// The longest tether a path needs (root, then the anchors of each state's history, then its axle centre),
+/// against `spec.tether_length_m`: the reason, when some state needs more tether than there is.
+fn tether_too_short(spec: &CampaignSpec, path: &[PathState]) -> Option<String> {
+    let dist = |a: &[f64; 3], b: &[f64; 3]| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
+    let (k, need) = path
+        .iter()
+        .map(|p| {
+            let mut pts: Vec<&[f64; 3]> = p.anchors.iter().collect();
+            pts.push(&p.axle);
+            pts.windows(2).map(|w| dist(w[0], w[1])).sum::<f64>()
+        })
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(&b.1))?;
+    (need > spec.tether_length_m).then(|| {
+        format!("state {k} needs {need:.2} m of tether along its anchors; the tether is {:.2} m (tether.length_m)", spec.tether_length_m)
     })
 }
 
@@ -565,6 +618,9 @@ impl CampaignResult {
 /// called after every finished trial with (done, total).
 pub fn run(spec: &CampaignSpec, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<CampaignResult, String> {
     let t0 = Instant::now();
+    if spec.first_seed.checked_add(u64::from(spec.trials.saturating_sub(1))).is_none() {
+        return Err(format!("seed {} with {} trials: the trial seeds would pass u64::MAX", spec.first_seed, spec.trials));
+    }
     let b = spec.bounds;
     let lo = [
         f64::from(b.min[0]).min(spec.root[0] - 1.0),
@@ -577,7 +633,7 @@ pub fn run(spec: &CampaignSpec, progress: &(dyn Fn(usize, usize) + Sync)) -> Res
         f64::from(b.max[2]).max(spec.root[2] + 1.0),
     ];
     let mut storage = match spec.field {
-        PlanningField::Map => Some(PlanningMap::from_world(spec.world.as_ref(), lo, hi, spec.voxel_m)?),
+        PlanningField::Map => Some(PlanningMap::from_world_in_pool(spec.world.as_ref(), lo, hi, spec.voxel_m, spec.pool_blocks)?),
         PlanningField::Truth => None,
     };
     let (map_blocks, map_build_s) = storage.as_ref().map_or((0, 0.0), |m| (m.blocks_used(), m.build_s));

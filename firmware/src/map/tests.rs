@@ -48,6 +48,42 @@ fn full_pool_is_an_outcome_and_keeps_work() {
     assert_eq!(map.blocks_used(), 2);
 }
 
+/// Regression (issue 24): a sensor pose of 1e30 m overflowed the voxel index (`i32` saturating, then `+ 1`). Points
+/// and origins beyond the map bounds are rejected and counted; nothing is written; a valid point alongside still
+/// lands; a sensor exactly inside the bound integrates.
+#[test]
+fn sensor_pose_beyond_the_map_bounds_is_rejected_and_counted() {
+    use crate::config::map::MAX_VOXEL_COORD;
+    let (mut b, mut i) = slices(16, 32);
+    let mut map = Map::from_slices(MapConfig::DEFAULT, &mut b, &mut i).unwrap();
+    let vs = map.config().voxel_size;
+    // 2e8 m: the voxel index (4e9) saturates i32 while the point, 16 m ahead, has a valid depth; this is the
+    // path that overflowed (`(ga + 1)` on i32::MAX).
+    let out = map.integrate_points(&Pose3::translation(2e8, 0.0, 0.0), &[Vec3::new(16.0, 0.0, 0.0)]);
+    assert_eq!((out.points_rejected, out.points_out_of_bounds, out.voxels_updated), (1, 1, 0));
+    let far = Pose3::translation(1e30, -1e30, 1e30);
+    let out = map.integrate_points(&far, &[Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0)]);
+    assert_eq!((out.points_rejected, out.points_out_of_bounds, out.points_integrated), (2, 2, 0));
+    assert_eq!((out.voxels_updated, map.blocks_used()), (0, 0));
+    // The point beyond the bound is rejected, the near one integrated (the sensor is at the origin).
+    let beyond = Vec3::new(0.0, 0.0, 1.01 * MAX_VOXEL_COORD * vs);
+    let out = map.integrate_points(&Pose3::identity(), &[beyond, Vec3::new(1.0, 0.0, 0.0)]);
+    assert_eq!((out.points_rejected, out.points_out_of_bounds, out.points_integrated), (1, 1, 1));
+    assert!(out.voxels_updated > 0);
+    // A sensor near the bound (inside it) with a point 1 m ahead integrates; the indices do not wrap.
+    let edge = 0.999 * MAX_VOXEL_COORD * vs;
+    let (mut b, mut i) = slices(16, 32);
+    let mut map = Map::from_slices(MapConfig::DEFAULT, &mut b, &mut i).unwrap();
+    let out = map.integrate_points(&Pose3::translation(edge, edge, -edge), &[Vec3::new(1.0, 0.0, 0.0)]);
+    assert_eq!((out.points_rejected, out.points_integrated), (0, 1));
+    let slot = map.blocks_used().checked_sub(1).unwrap();
+    let c = map.block_coord(slot).unwrap();
+    assert!(c[0] > 0 && c[1] > 0 && c[2] < 0, "{c:?}");
+    // NaN is rejected as not finite, not as out of bounds.
+    let out = map.integrate_points(&Pose3::identity(), &[Vec3::new(Real::NAN, 0.0, 1.0)]);
+    assert_eq!((out.points_rejected, out.points_out_of_bounds), (1, 0));
+}
+
 /// Points on the plane z = 0 seen from a sensor at `origin`, on a grid of directions (a synthetic scan).
 fn plane_scan(origin: Vec3, n: usize) -> Vec<Vec3> {
     let mut pts = Vec::new();
