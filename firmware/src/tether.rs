@@ -64,6 +64,10 @@ pub struct AnchorHistory {
 }
 
 impl AnchorHistory {
+    /// An empty history (const, for storage in `.bss`).
+    pub const fn empty() -> Self {
+        AnchorHistory { anchors: heapless::Vec::new() }
+    }
     /// A history holding only the root anchor.
     pub fn new(root: Anchor) -> Self {
         let mut anchors = heapless::Vec::new();

@@ -30,6 +30,9 @@ pub fn message_json(m: &Message) -> serde_json::Value {
         Message::DriveCommand(b) => serde_json::to_value(b),
         Message::Telemetry(b) => serde_json::to_value(b),
         Message::Log(b) => serde_json::to_value(b),
+        Message::MotionReport(b) => serde_json::to_value(b),
+        Message::GoalCancel(b) => serde_json::to_value(b),
+        Message::MissionStatus(b) => serde_json::to_value(b),
     };
     body.unwrap_or(serde_json::Value::Null)
 }

@@ -109,6 +109,7 @@ pub fn default_configure(seed: u64) -> Configure {
             period_ms: 500,
             forward_log_level: LogLevel::Info,
         },
+        mission: MissionConfig::DEFAULT,
     }
 }
 
@@ -236,6 +237,7 @@ pub fn run_protocol(link: impl FlightLink, seed: u64) -> Result<ScenarioReport, 
         planner: PlannerChoice::Abit,
         max_iterations: 750,
         time_budget_ms: 0,
+        allow_approximate: false,
     };
     let seq = s.send(&Message::GoalRequest(goal))?;
     let r = s.recv()?;
@@ -257,7 +259,7 @@ pub fn run_protocol(link: impl FlightLink, seed: u64) -> Result<ScenarioReport, 
     let body = [0xE8, 0x07];
     let n = build_raw(
         Header {
-            version: 1,
+            version: firmware::config::protocol::PROTOCOL_VERSION,
             kind: MessageKind::TimeTick as u8,
             seq,
         },

@@ -9,6 +9,7 @@
 //! end the scan that was in progress throughout is completed, proving the reassembly state survived.
 
 use firmware::config::protocol::{
+    PROTOCOL_VERSION,
     MAX_CHUNKS_PER_SCAN, MAX_ENCODED_FRAME_LEN, MAX_POINTS_PER_CHUNK,
 };
 use firmware::protocol::*;
@@ -164,7 +165,7 @@ fn chunk_prefix() -> Vec<u8> {
 
 /// Builds the wire bytes of every case for sequence number `seq`.
 fn cases(seq: u32) -> Vec<(&'static str, NackReason, Vec<u8>)> {
-    let h2f = |kind: MessageKind, body: &[u8]| raw_frame(1, kind as u8, seq, body);
+    let h2f = |kind: MessageKind, body: &[u8]| raw_frame(PROTOCOL_VERSION, kind as u8, seq, body);
     let tick = body_of(&Message::TimeTick(TimeTick {
         host_time_us: 123_456,
     }));
@@ -201,12 +202,12 @@ fn cases(seq: u32) -> Vec<(&'static str, NackReason, Vec<u8>)> {
     v.push((
         "unknown kind",
         NackReason::UnknownKind,
-        wire(&raw_frame(1, 0x42, seq, &tick)),
+        wire(&raw_frame(PROTOCOL_VERSION, 0x42, seq, &tick)),
     ));
     v.push((
-        "wrong version",
+        "wrong version (a version-1 frame)",
         NackReason::WrongVersion,
-        wire(&raw_frame(2, 0x01, seq, &tick)),
+        wire(&raw_frame(1, 0x01, seq, &tick)),
     ));
     v.push((
         "wrong direction (Ack to flight)",
@@ -285,6 +286,7 @@ fn cases(seq: u32) -> Vec<(&'static str, NackReason, Vec<u8>)> {
         planner: PlannerChoice::Abit,
         max_iterations: 10,
         time_budget_ms: 0,
+        allow_approximate: false,
     };
     v.push((
         "infinite goal",

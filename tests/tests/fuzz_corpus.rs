@@ -24,6 +24,7 @@ fn seeds() -> Vec<(String, Vec<u8>)> {
             planner: PlannerChoice::Abit,
             max_iterations: 10,
             time_budget_ms: 0,
+            allow_approximate: false,
         }),
         Message::Configure(default_configure(1)),
         Message::Shutdown(Shutdown),

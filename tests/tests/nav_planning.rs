@@ -7,8 +7,8 @@
 //! equivalent in-process and on the flight computer.
 
 use firmware::protocol::{
-    DriveCommand, GoalRequest, Message, Mode, Motion, PlanState, PlanStatus, PlannerChoice, Point3, Pose, Quat,
-    SensorChunk,
+    DriveCommand, GoalRequest, Message, MissionState, Mode, Motion, MotionOutcome, MotionReport, PlanState, PlanStatus,
+    PlannerChoice, Point3, Pose, Quat, SensorChunk,
 };
 use firmware::config::protocol::{
     MAX_POINTS_PER_CHUNK,
@@ -85,19 +85,66 @@ fn goal(x: f32, max_iterations: u32) -> GoalRequest {
         planner: PlannerChoice::Abit,
         max_iterations,
         time_budget_ms: 0,
+        allow_approximate: true,
     }
 }
 
 /// Scans every 0.4 m along x in [-1.2, 4].
 const XS: [f32; 14] = [-1.2, -0.8, -0.4, 0.0, 0.4, 0.8, 1.2, 1.6, 2.0, 2.4, 2.8, 3.2, 3.6, 4.0];
 
-/// Sends `goal` and lets the flight software plan and drive; returns everything it sent from the goal on.
+/// Sends `goal` and lets the flight software plan and drive; returns everything it sent from the goal on. Protocol
+/// v2: each drive command is answered with a `MotionReport` of the commanded motion executed exactly, the pose
+/// dead-reckoned on the ground plane from the plan's first waypoint (a stand-in for the simulator).
 fn plan_goal<L: FlightLink>(s: &mut HostSession<L>, goal: GoalRequest) -> Vec<Message> {
     let mut got = s.exchange(&Message::GoalRequest(goal)).expect("goal");
+    let mut seen = 0;
+    let mut pose: Option<(f32, f32, f32, f32)> = None; // x, y, z, yaw
     // let the executive plan (8 iterations per 1 ms step) and send plan and drive commands
-    for _ in 0..200 {
+    for _ in 0..400 {
         let t = s.link().now_us() + 10_000;
         got.extend(s.advance_to(t).expect("advance"));
+        while seen < got.len() {
+            let m = got[seen].clone();
+            seen += 1;
+            match m {
+                Message::Plan(p) if pose.is_none() => {
+                    if let Some(w) = p.waypoints.first() {
+                        let o = w.pose.orientation;
+                        let yaw = (2.0 * (o.w * o.z + o.x * o.y)).atan2(1.0 - 2.0 * (o.y * o.y + o.z * o.z));
+                        pose = Some((w.pose.position.x, w.pose.position.y, w.pose.position.z, yaw));
+                    }
+                }
+                Message::DriveCommand(DriveCommand { command_id, motion }) if motion != Motion::Stop => {
+                    let (mut x, mut y, z, mut yaw) = pose.expect("a plan before the first drive command");
+                    let (mut dyaw, mut dist) = (0.0, 0.0);
+                    match motion {
+                        Motion::Turn { yaw_rad } => {
+                            yaw += yaw_rad;
+                            dyaw = yaw_rad;
+                        }
+                        Motion::Straight { distance_m } => {
+                            x += distance_m * yaw.cos();
+                            y += distance_m * yaw.sin();
+                            dist = distance_m;
+                        }
+                        Motion::Stop => {}
+                    }
+                    pose = Some((x, y, z, yaw));
+                    let report = MotionReport {
+                        command_id,
+                        outcome: MotionOutcome::Completed,
+                        achieved_yaw_rad: dyaw,
+                        achieved_distance_m: dist,
+                        pose: Pose {
+                            position: Point3::new(x, y, z),
+                            orientation: Quat { x: 0.0, y: 0.0, z: (0.5 * yaw).sin(), w: (0.5 * yaw).cos() },
+                        },
+                    };
+                    got.extend(s.exchange(&Message::MotionReport(report)).expect("report"));
+                }
+                _ => {}
+            }
+        }
         if got.iter().any(|m| matches!(m, Message::DriveCommand(_))) && s.telemetry().expect("t").mode == Mode::Mapping {
             break;
         }
@@ -149,6 +196,11 @@ fn goal_over_the_link_is_planned_on_board_and_driven() {
     let d = ((x - 3.0).powi(2) + y * y).sqrt();
     assert!(d <= 0.5 + 0.05, "drive commands end at ({x}, {y}), {d} m from the goal");
     assert_eq!(s.telemetry().expect("t").mode, Mode::Mapping);
+    // protocol v2: the mission status went Planning -> Driving -> ... -> Arrived
+    let states: Vec<MissionState> =
+        got.iter().filter_map(|m| if let Message::MissionStatus(st) = m { Some(st.state) } else { None }).collect();
+    assert!(states.contains(&MissionState::Planning) && states.contains(&MissionState::Driving), "{states:?}");
+    assert_eq!(states.last(), Some(&MissionState::Arrived), "{states:?}");
 }
 
 #[test]

@@ -2,7 +2,7 @@
 //! random byte strings into the deframer and decoder without a panic.
 
 use firmware::config::protocol::{
-    MAX_ENCODED_FRAME_LEN, MAX_POINTS_PER_CHUNK, MAX_WAYPOINTS_PER_PLAN_FRAME,
+    MAX_ENCODED_FRAME_LEN, MAX_POINTS_PER_CHUNK, MAX_WAYPOINTS_PER_PLAN_FRAME, PROTOCOL_VERSION,
 };
 use firmware::protocol::*;
 use proptest::prelude::*;
@@ -70,6 +70,7 @@ fn one_of_every_kind() -> Vec<Message> {
             planner: PlannerChoice::Homotopy,
             max_iterations: 750,
             time_budget_ms: 2000,
+            allow_approximate: false,
         }),
         Message::Configure(Configure {
             rover: RoverConfig {
@@ -94,6 +95,7 @@ fn one_of_every_kind() -> Vec<Message> {
                 period_ms: 250,
                 forward_log_level: LogLevel::Debug,
             },
+            mission: MissionConfig::DEFAULT,
         }),
         Message::Shutdown(Shutdown),
         Message::TelemetryRequest(TelemetryRequest),
@@ -136,6 +138,9 @@ fn one_of_every_kind() -> Vec<Message> {
             scan_next_chunk: 11,
             tether_readings: 12,
             goals_received: 13,
+            motion_reports: 33,
+            motion_report_timeouts: 34,
+            goal_cancels: 35,
             plan_state: PlanState::Searching,
             log_dropped: 14,
             tx_dropped: 15,
@@ -164,6 +169,32 @@ fn one_of_every_kind() -> Vec<Message> {
         Message::Log(Log {
             level: LogLevel::Warn,
             text: heapless::String::try_from("scan 3 abandoned: ünïcode ok").unwrap(),
+        }),
+        Message::MotionReport(MotionReport {
+            command_id: 9,
+            outcome: MotionOutcome::Stalled,
+            achieved_yaw_rad: -1.2,
+            achieved_distance_m: 0.0,
+            pose: Pose::IDENTITY,
+        }),
+        Message::GoalCancel(GoalCancel { goal_id: 4 }),
+        Message::MissionStatus(MissionStatus {
+            goal_id: 4,
+            state: MissionState::Driving,
+            reason: StopReason::None,
+            distance_driven_m: 1.0,
+            predicted_payout_m: 2.0,
+            measured_payout_m: 2.1,
+            tension_n: 30.0,
+            margin_n: 5.0,
+            cross_track_m: 0.1,
+            replans: 1,
+            anchors: 2,
+            motions_done: 3,
+            tether_rejected: 4,
+            pose_jumps: 5,
+            scans_rejected: 6,
+            tether_reestimates: 7,
         }),
     ]
 }
@@ -210,7 +241,7 @@ fn every_kind_round_trips_through_frame_and_deframe() {
     assert_eq!(frames.len(), msgs.len());
     for (i, (f, m)) in frames.iter().zip(&msgs).enumerate() {
         let (h, back) = decode_frame(f.as_ref().unwrap()).unwrap();
-        assert_eq!(h.version, 1);
+        assert_eq!(h.version, PROTOCOL_VERSION);
         assert_eq!(h.kind, m.kind() as u8);
         assert_eq!(h.seq, 1000 + i as u32);
         assert_eq!(&back, m);
@@ -220,7 +251,8 @@ fn every_kind_round_trips_through_frame_and_deframe() {
 #[test]
 fn kind_codes_are_exactly_the_documented_ones() {
     let documented = [
-        0x01u8, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x81, 0x82, 0x83, 0x84, 0x85, 0x86, 0x87,
+        0x01u8, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08, 0x09, 0x81, 0x82, 0x83, 0x84, 0x85, 0x86,
+        0x87, 0x88,
     ];
     for b in 0..=255u8 {
         assert_eq!(

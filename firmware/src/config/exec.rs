@@ -15,6 +15,7 @@
 //! | [`PLAN_WAYPOINTS_CAPACITY`] | 256 | waypoints of one plan kept for transmission (22 `Plan` frames of 12) |
 //! | [`PLANNER_ITERATIONS_PER_STEP`] | 8 | planner iterations granted per `step` in planning mode |
 //! | [`PLAN_FRAMES_PER_STEP`] | 1 | `Plan` / `DriveCommand` frames emitted per `step` |
+//! | [`MOTION_REPORT_TIMEOUT_US`] | 120_000_000 | flight time to wait for a drive command's `MotionReport` before stopping and giving it up |
 
 use super::protocol::MAX_ENCODED_FRAME_LEN;
 
@@ -47,3 +48,9 @@ pub const PLAN_FRAMES_PER_STEP: usize = 1;
 
 const _: () = assert!(TX_QUEUE_LEN > TX_RESERVE);
 const _: () = assert!(RX_STAGING_LEN <= RX_BYTES_PER_STEP);
+
+/// Flight time the executive waits for the `MotionReport` of a drive command, microseconds. Default 120 s: a
+/// straight drive of a few metres at Axel's ~0.1 m/s with margin. On timeout the executive sends `Stop`, forgets
+/// the command (a late report is `Nack(UnknownCommand)`), counts it and tells the autonomy
+/// (`Autonomy::motion_timeout`).
+pub const MOTION_REPORT_TIMEOUT_US: u64 = 120_000_000;

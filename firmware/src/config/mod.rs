@@ -19,6 +19,7 @@ pub mod abit;
 pub mod exec;
 pub mod homotopy;
 pub mod map;
+pub mod mission;
 pub mod nav;
 pub mod protocol;
 pub mod rover;

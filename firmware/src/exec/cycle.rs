@@ -3,8 +3,9 @@
 //! [`Executive::step`] reads the clock once, kicks the watchdog, flushes queued output, then reads at most
 //! `RX_BYTES_PER_STEP` bytes and dispatches at most `FRAMES_PER_STEP` frames (only while `TX_RESERVE` bytes of
 //! transmit room are free, so replies are never dropped), runs `PLANNER_ITERATIONS_PER_STEP` planner iterations,
-//! emits at most `PLAN_FRAMES_PER_STEP` plan / drive frames and one rate-limited `Log` frame, sends telemetry when
-//! due, and flushes again (at most `TX_BYTES_PER_STEP` bytes per flush). [`StepReport`] says what the step did.
+//! emits at most `PLAN_FRAMES_PER_STEP` plan / drive frames (one drive command, and none while its report is
+//! awaited), a `MissionStatus` when the mission changed, one rate-limited `Log` frame, sends telemetry (and the
+//! mission status with it) when due, and flushes again (at most `TX_BYTES_PER_STEP` bytes per flush). [`StepReport`] says what the step did.
 //!
 //! Accounting: the counters and high-water marks of every `Telemetry` frame ([`Executive::telemetry`]) are kept
 //! here; a full transmit queue drops the frame and counts it (`tx_dropped`), a link or watchdog error counts as
@@ -20,7 +21,7 @@
 //! Parameters (`config::exec`): `RX_BYTES_PER_STEP` 1024, `FRAMES_PER_STEP` 4, `RX_STAGING_LEN` 256,
 //! `TX_QUEUE_LEN` 8192, `TX_RESERVE` 4116, `TX_BYTES_PER_STEP` 4096, `LOG_QUEUE_LEN` 8, `LOG_FRAMES_PER_SECOND`
 //! 10, `LOG_BURST` 4, `DEFAULT_TELEMETRY_PERIOD_US` 1 s, `PLAN_WAYPOINTS_CAPACITY` 256,
-//! `PLANNER_ITERATIONS_PER_STEP` 8, `PLAN_FRAMES_PER_STEP` 1.
+//! `PLANNER_ITERATIONS_PER_STEP` 8, `PLAN_FRAMES_PER_STEP` 1, `MOTION_REPORT_TIMEOUT_US` 120 s.
 
 use core::borrow::BorrowMut;
 use core::fmt::Write as _;
@@ -66,6 +67,9 @@ pub(super) struct Counters {
     pub(super) scans_abandoned: u32,
     pub(super) tether_readings: u32,
     pub(super) goals_received: u32,
+    pub(super) motion_reports: u32,
+    pub(super) motion_report_timeouts: u32,
+    pub(super) goal_cancels: u32,
     pub(super) log_dropped: u32,
     pub(super) tx_dropped: u32,
     pub(super) device_errors: u32,
@@ -109,6 +113,9 @@ where
             scan_next_chunk,
             tether_readings: c.tether_readings,
             goals_received: c.goals_received,
+            motion_reports: c.motion_reports,
+            motion_report_timeouts: c.motion_report_timeouts,
+            goal_cancels: c.goal_cancels,
             plan_state: self.goal.map_or(PlanState::NoGoal, |g| g.state),
             log_dropped: c.log_dropped,
             tx_dropped: c.tx_dropped,
@@ -159,6 +166,7 @@ where
         self.receive(&mut report);
         self.run_planning(now);
         self.emit_plan_or_motion(now);
+        self.emit_mission_change();
         self.emit_log(now);
         if self.telemetry_period_us > 0
             && self
@@ -174,7 +182,7 @@ where
             || !self.tx.is_empty()
             || self.mode == Mode::Planning
             || self.plan_tx.is_some()
-            || self.mode == Mode::Driving
+            || self.mode == Mode::Driving && self.awaiting.is_none()
             || !self.log_queue.is_empty();
         report
     }
@@ -283,6 +291,7 @@ where
         self.last_telemetry = Some(now);
         let t = self.telemetry();
         self.send(&Message::Telemetry(t));
+        self.send_mission_status();
     }
 
     /// Encodes and queues one frame; a frame that does not fit the queue is dropped and counted.

@@ -13,12 +13,21 @@
 //! `solve(termination)` split into steps) and fills the [`PlanBuffer`] when it finishes;
 //! [`Autonomy::next_motion`] hands out the motion primitives to drive; [`Autonomy::abort`] on `Shutdown`;
 //! [`Autonomy::map_status`] for each `Telemetry` frame.
+//!
+//! Protocol v2 (the closed-loop mission): the executive sends one drive command at a time and asks
+//! [`Autonomy::drive_step`] for the next only after [`Autonomy::motion_report`] delivered the report of the last
+//! (the executive itself rejects reports for commands it is not awaiting, `Nack(UnknownCommand)`);
+//! [`Autonomy::motion_timeout`] when no report came within `MOTION_REPORT_TIMEOUT_US`; [`Autonomy::cancel`] on a
+//! `GoalCancel` for the current goal; [`Autonomy::goal`] is also called while driving (the new goal replaces the
+//! old: the executive stops the rover first); [`Autonomy::mission_status`] is polled every step and sent on
+//! every change, after every accepted motion report and with every `Telemetry` frame.
 
 use hal::Instant;
 
 use crate::config::exec::PLAN_WAYPOINTS_CAPACITY;
 use crate::protocol::{
-    Configure, GoalRequest, MapStatus, Motion, PlanState, Point3, Pose, TetherReading, Waypoint,
+    Configure, GoalRequest, MapStatus, MissionStatus, Motion, MotionReport, PlanState, Point3, Pose,
+    TetherReading, Waypoint,
 };
 
 /// A complete, reassembled range scan, lent to [`Autonomy::scan`] for the duration of the call.
@@ -60,6 +69,20 @@ pub enum PlanProgress {
     },
 }
 
+/// What the autonomy wants while driving, asked once per step when no motion report is awaited.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum DriveStep {
+    /// Send this motion as the next drive command (then wait for its report).
+    Motion(Motion),
+    /// Nothing to send this step (e.g. re-checking the remaining plan in bounded parts); stay in `Driving`.
+    Wait,
+    /// Plan again from the current state: the executive goes to `Planning` and calls `plan_step` (a new
+    /// `PlanStatus` / `Plan` follows).
+    Replan,
+    /// Driving is over (arrived, or stopped safe): the executive goes back to `Mapping`.
+    Finished,
+}
+
 /// Planning modules as the executive sees them. All methods get the time passed in and must bound their work.
 pub trait Autonomy {
     /// A validated `Configure` (Idle / Mapping modes). `Err` -> `Nack(Refused)`, configuration unchanged.
@@ -88,8 +111,29 @@ pub trait Autonomy {
             best_cost: None,
         }
     }
-    /// The next motion primitive while driving; `None` ends driving (back to Mapping).
+    /// The next motion primitive while driving; `None` ends driving (back to Mapping). Used by the default
+    /// [`Self::drive_step`].
     fn next_motion(&mut self, _now: Instant) -> Option<Motion> {
+        None
+    }
+    /// What to do next while driving (no report awaited). Default: [`Self::next_motion`], `None` = `Finished`.
+    fn drive_step(&mut self, now: Instant) -> DriveStep {
+        match self.next_motion(now) {
+            Some(m) => DriveStep::Motion(m),
+            None => DriveStep::Finished,
+        }
+    }
+    /// The validated report of the awaited drive command `motion` (the executive checked the command id).
+    fn motion_report(&mut self, _report: &MotionReport, _motion: Motion, _now: Instant) {}
+    /// No report for drive command `command_id` within `MOTION_REPORT_TIMEOUT_US`; the executive has sent `Stop`.
+    fn motion_timeout(&mut self, _command_id: u32, _now: Instant) {}
+    /// A `GoalCancel` for the current goal (the executive stops the rover and returns to `Mapping`). `Err` ->
+    /// `Nack(Refused)`, nothing changed. Default: refused (no mission to cancel).
+    fn cancel(&mut self, _goal_id: u32, _now: Instant) -> Result<(), Refused> {
+        Err(Refused)
+    }
+    /// The mission's state for `MissionStatus` frames; `None` (the default) sends none.
+    fn mission_status(&self) -> Option<MissionStatus> {
         None
     }
     /// Shutdown: stop planning and driving.

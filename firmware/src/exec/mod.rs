@@ -7,7 +7,9 @@
 //!
 //! ## Modes
 //! `Idle` (booted) -> `Mapping` (first scan chunk) -> `Planning` (goal accepted) -> `Driving` (plan sent) ->
-//! `Mapping`; any mode -> `Safe` on `Shutdown`. The allowed transitions are [`Mode::can_become`]; anything else is
+//! `Mapping`; any mode -> `Safe` on `Shutdown`. A `GoalRequest` is also accepted in `Planning` and `Driving` (v2:
+//! it replaces the current goal; a motion in flight is stopped with `DriveCommand{Stop}` and its report still
+//! awaited), a `GoalCancel` for the current goal stops the rover and returns to `Mapping`. The allowed transitions are [`Mode::can_become`]; anything else is
 //! refused and counted (`illegal_transitions`).
 //!
 //! ## One step
@@ -15,6 +17,15 @@
 //! `config::exec` (`cycle.rs` documents the order, the budgets and the log forwarding). Every host frame gets
 //! exactly one `Ack` or `Nack`; a rejected frame changes nothing but its rejection counter (and byte counters /
 //! high-water marks).
+//!
+//! ## One drive command at a time (protocol v2)
+//! In `Driving` the executive asks [`Autonomy::drive_step`] for the next motion only when no `MotionReport` is
+//! awaited; it sends a `Turn` / `Straight` and awaits its report (a `Stop` is not reported). A report for any other
+//! command id is `Nack(UnknownCommand)`. With no report within `MOTION_REPORT_TIMEOUT_US` of flight time it sends
+//! `Stop`, forgets the command, counts `motion_report_timeouts` and calls [`Autonomy::motion_timeout`].
+//! [`Autonomy::mission_status`] is polled each step; a `MissionStatus` frame goes out when its goal, state or
+//! reason changed, after every accepted motion report, and after every `Telemetry` frame; a change to `Safe` or
+//! `Arrived` while a report is awaited also sends `Stop`.
 //!
 //! ## Determinism
 //! Output bytes depend only on the input bytes and the clock readings: no randomness, no hash iteration; the time
@@ -36,7 +47,7 @@ use hal::{ByteLink, Instant, MonotonicClock, Watchdog};
 use heapless::{Deque, Vec};
 
 pub use cycle::StepReport;
-pub use hooks::{Autonomy, NoAutonomy, PlanBuffer, PlanProgress, Refused, Scan};
+pub use hooks::{Autonomy, DriveStep, NoAutonomy, PlanBuffer, PlanProgress, Refused, Scan};
 
 use cycle::Counters;
 
@@ -44,9 +55,9 @@ use crate::config::exec::*;
 use crate::config::protocol::SCAN_POINTS_CAPACITY;
 use crate::config::protocol::{HEADER_LEN, MAX_WAYPOINTS_PER_PLAN_FRAME};
 use crate::protocol::{
-    self, Ack, Configure, Deframer, Direction, DriveCommand, Frame, GoalRequest, Log, LogLevel,
-    Message, Mode, Motion, Nack, NackReason, Plan, PlanState, PlanStatus, Point3, ScanAssembler,
-    SensorChunk,
+    self, Ack, Configure, Deframer, Direction, DriveCommand, Frame, GoalCancel, GoalRequest, Log,
+    LogLevel, Message, MissionState, Mode, Motion, MotionReport, Nack, NackReason, Plan, PlanState,
+    PlanStatus, Point3, ScanAssembler, SensorChunk, StopReason,
 };
 
 impl Mode {
@@ -106,12 +117,23 @@ struct PlanTx {
     parts: u16,
 }
 
+/// The drive command whose `MotionReport` is awaited.
+#[derive(Debug, Clone, Copy)]
+struct Awaiting {
+    command_id: u32,
+    motion: Motion,
+    sent_at: Instant,
+}
+
 /// What a dispatched frame asks to send after its `Ack`.
 enum Reply {
     None,
     Telemetry,
     PlanStatus,
+    /// `PlanStatus`, then `Stop` (a goal replaced while a motion was in flight).
+    PlanStatusAndStop,
     Stop,
+    MissionStatus,
 }
 
 /// The flight executive. See the module docs.
@@ -134,6 +156,8 @@ pub struct Executive<L, C, W, A, S> {
     goal: Option<ActiveGoal>,
     plan_tx: Option<PlanTx>,
     drive_command_id: u32,
+    awaiting: Option<Awaiting>,
+    last_mission: Option<(u32, MissionState, StopReason)>,
     last_host_time_us: u64,
     telemetry_period_us: u64,
     last_telemetry: Option<Instant>,
@@ -173,6 +197,8 @@ where
             goal: None,
             plan_tx: None,
             drive_command_id: 0,
+            awaiting: None,
+            last_mission: None,
             last_host_time_us: 0,
             telemetry_period_us: DEFAULT_TELEMETRY_PERIOD_US,
             last_telemetry: None,
@@ -249,7 +275,12 @@ where
                     Reply::None => {}
                     Reply::Telemetry => self.send_telemetry(self.now),
                     Reply::PlanStatus => self.send_plan_status(),
+                    Reply::PlanStatusAndStop => {
+                        self.send_plan_status();
+                        self.send_motion(Motion::Stop);
+                    }
                     Reply::Stop => self.send_motion(Motion::Stop),
+                    Reply::MissionStatus => self.send_mission_status(),
                 }
             }
             Err(reason) => self.reject(seq, reason),
@@ -299,6 +330,8 @@ where
                 Ok(Reply::None)
             }
             Message::GoalRequest(g) => self.on_goal(g),
+            Message::MotionReport(r) => self.on_motion_report(r),
+            Message::GoalCancel(c) => self.on_cancel(c),
             Message::Shutdown(_) => {
                 self.autonomy.abort();
                 if let Some(g) = self.goal.as_mut() {
@@ -307,6 +340,7 @@ where
                     }
                 }
                 self.plan_tx = None;
+                self.awaiting = None;
                 if self.mode != Mode::Safe {
                     self.set_mode(Mode::Safe);
                 }
@@ -320,7 +354,8 @@ where
             | Message::Plan(_)
             | Message::DriveCommand(_)
             | Message::Telemetry(_)
-            | Message::Log(_) => Err(NackReason::WrongDirection),
+            | Message::Log(_)
+            | Message::MissionStatus(_) => Err(NackReason::WrongDirection),
         }
     }
 
@@ -357,22 +392,63 @@ where
         Ok(Reply::None)
     }
 
-    fn on_goal(&mut self, g: &GoalRequest) -> Result<Reply, NackReason> {
-        match self.mode {
-            Mode::Safe | Mode::Planning | Mode::Driving => {
-                return Err(NackReason::NotAllowedInMode)
+    fn on_motion_report(&mut self, r: &MotionReport) -> Result<Reply, NackReason> {
+        if self.mode == Mode::Safe {
+            return Err(NackReason::NotAllowedInMode);
+        }
+        let Some(a) = self.awaiting.filter(|a| a.command_id == r.command_id) else {
+            return Err(NackReason::UnknownCommand);
+        };
+        self.awaiting = None;
+        self.counters.motion_reports += 1;
+        self.autonomy.motion_report(r, a.motion, self.now);
+        Ok(Reply::MissionStatus)
+    }
+
+    fn on_cancel(&mut self, c: &GoalCancel) -> Result<Reply, NackReason> {
+        if self.mode == Mode::Safe {
+            return Err(NackReason::NotAllowedInMode);
+        }
+        let current = self.goal.is_some_and(|g| g.goal_id == c.goal_id);
+        if !current || !matches!(self.mode, Mode::Planning | Mode::Driving) {
+            return Err(NackReason::UnknownGoal);
+        }
+        self.autonomy
+            .cancel(c.goal_id, self.now)
+            .map_err(|Refused| NackReason::Refused)?;
+        if let Some(g) = self.goal.as_mut() {
+            if matches!(g.state, PlanState::Accepted | PlanState::Searching) {
+                g.state = PlanState::Aborted;
             }
-            Mode::Idle | Mode::Mapping => {}
+        }
+        self.plan_tx = None;
+        self.counters.goal_cancels += 1;
+        self.set_mode(Mode::Mapping);
+        self.note(LogLevel::Info, format_args!("goal {} cancelled", c.goal_id));
+        Ok(Reply::Stop)
+    }
+
+    fn on_goal(&mut self, g: &GoalRequest) -> Result<Reply, NackReason> {
+        if self.mode == Mode::Safe {
+            return Err(NackReason::NotAllowedInMode);
         }
         if self.config.is_none() {
             return Err(NackReason::NotConfigured);
         }
         self.counters.goals_received += 1;
+        // A goal while planning or driving replaces the current one: nothing more of the old plan goes out, and a
+        // motion in flight is stopped (its report is still awaited, so the next command starts from where the
+        // rover stopped).
+        let replacing = matches!(self.mode, Mode::Planning | Mode::Driving);
+        self.plan_tx = None;
+        let stop = replacing && self.awaiting.is_some();
         let state = self.autonomy.goal(g, self.now);
         let state = match state {
             PlanState::Accepted | PlanState::Searching => {
                 self.storage.borrow_mut().plan.clear();
-                self.set_mode(Mode::Planning);
+                if self.mode != Mode::Planning {
+                    self.set_mode(Mode::Planning);
+                }
                 PlanState::Accepted
             }
             PlanState::ExactSolution | PlanState::ApproximateSolution | PlanState::NoGoal => {
@@ -389,13 +465,20 @@ where
             LogLevel::Info,
             format_args!("goal {}: {state:?}", g.goal_id),
         );
+        if replacing && state != PlanState::Accepted {
+            self.set_mode(Mode::Mapping);
+        }
         self.goal = Some(ActiveGoal {
             goal_id: g.goal_id,
             state,
             iterations: 0,
             best_cost: None,
         });
-        Ok(Reply::PlanStatus)
+        Ok(if stop {
+            Reply::PlanStatusAndStop
+        } else {
+            Reply::PlanStatus
+        })
     }
 
     fn set_mode(&mut self, to: Mode) {
@@ -477,7 +560,24 @@ where
         }
     }
 
+    /// Gives up the awaited report after `MOTION_REPORT_TIMEOUT_US` (any mode but `Safe`, which clears it).
+    fn check_report_timeout(&mut self, now: Instant) {
+        let Some(a) = self.awaiting else { return };
+        if now.micros_since(a.sent_at) < MOTION_REPORT_TIMEOUT_US {
+            return;
+        }
+        self.awaiting = None;
+        self.counters.motion_report_timeouts += 1;
+        self.note(
+            LogLevel::Warn,
+            format_args!("no report for drive command {}: stop", a.command_id),
+        );
+        self.send_motion(Motion::Stop);
+        self.autonomy.motion_timeout(a.command_id, now);
+    }
+
     fn emit_plan_or_motion(&mut self, now: Instant) {
+        self.check_report_timeout(now);
         for _ in 0..PLAN_FRAMES_PER_STEP {
             if let Some(mut tx) = self.plan_tx {
                 let start = usize::from(tx.next_part) * MAX_WAYPOINTS_PER_PLAN_FRAME;
@@ -501,15 +601,52 @@ where
                 } else {
                     Some(tx)
                 };
-            } else if self.mode == Mode::Driving {
-                match self.autonomy.next_motion(now) {
-                    Some(m) => self.send_motion(m),
-                    None => {
+            } else if self.mode == Mode::Driving && self.awaiting.is_none() {
+                match self.autonomy.drive_step(now) {
+                    DriveStep::Motion(m) => {
+                        self.send_motion(m);
+                        return;
+                    }
+                    DriveStep::Wait => return,
+                    DriveStep::Replan => {
+                        if let Some(g) = self.goal.as_mut() {
+                            g.state = PlanState::Accepted;
+                            g.iterations = 0;
+                            g.best_cost = None;
+                        }
+                        self.storage.borrow_mut().plan.clear();
+                        self.set_mode(Mode::Planning);
+                        return;
+                    }
+                    DriveStep::Finished => {
                         self.set_mode(Mode::Mapping);
                         return;
                     }
                 }
             }
+        }
+    }
+
+    /// Sends a `MissionStatus` when the autonomy's mission goal, state or reason changed since the last one sent.
+    fn emit_mission_change(&mut self) {
+        let Some(m) = self.autonomy.mission_status() else {
+            return;
+        };
+        if self.last_mission != Some((m.goal_id, m.state, m.reason)) {
+            self.send_mission_status();
+            // A safe stop (or arrival) decided between reports, e.g. on a tether reading: stop the motion in
+            // flight now (its report is still awaited).
+            if matches!(m.state, MissionState::Safe | MissionState::Arrived) && self.awaiting.is_some() {
+                self.send_motion(Motion::Stop);
+            }
+        }
+    }
+
+    /// Sends the autonomy's `MissionStatus` (none without a mission).
+    pub(super) fn send_mission_status(&mut self) {
+        if let Some(m) = self.autonomy.mission_status() {
+            self.last_mission = Some((m.goal_id, m.state, m.reason));
+            self.send(&Message::MissionStatus(m));
         }
     }
 
@@ -527,6 +664,13 @@ where
     fn send_motion(&mut self, motion: Motion) {
         let command_id = self.drive_command_id;
         self.drive_command_id = self.drive_command_id.wrapping_add(1);
+        if motion != Motion::Stop {
+            self.awaiting = Some(Awaiting {
+                command_id,
+                motion,
+                sent_at: self.now,
+            });
+        }
         self.send(&Message::DriveCommand(DriveCommand { command_id, motion }));
     }
 }

@@ -81,6 +81,7 @@ fn configure() -> Configure {
             period_ms: 0,
             forward_log_level: LogLevel::Info,
         },
+        mission: MissionConfig::DEFAULT,
     }
 }
 
@@ -92,6 +93,7 @@ fn goal() -> GoalRequest {
         planner: PlannerChoice::Abit,
         max_iterations: 100,
         time_budget_ms: 0,
+        allow_approximate: false,
     }
 }
 
@@ -241,12 +243,277 @@ fn planning_sends_status_plan_parts_and_drive_commands_then_returns_to_mapping()
         })
         .collect();
     assert_eq!(parts, [(0, 2, 12), (1, 2, 2)]);
-    let drives = r
-        .iter()
-        .filter(|m| matches!(m, Message::DriveCommand(_)))
-        .count();
-    assert_eq!(drives, 2);
+    // v2: one drive command, then nothing until its report
+    let drives = drive_ids(&r);
+    assert_eq!(drives.len(), 1);
+    assert_eq!(e.mode(), Mode::Driving);
+    let r = exchange(&mut e, &[report(drives[0])]);
+    assert_eq!(r[0], Message::Ack(Ack { seq: 100 }));
+    let second = drive_ids(&r);
+    assert_eq!(second, [drives[0] + 1]);
+    let r = exchange(&mut e, &[report(second[0])]);
+    assert!(drive_ids(&r).is_empty());
     assert_eq!(e.mode(), Mode::Mapping);
+    assert_eq!(e.telemetry().motion_reports, 2);
+}
+
+fn drive_ids(r: &[Message]) -> StdVec<u32> {
+    r.iter()
+        .filter_map(|m| match m {
+            Message::DriveCommand(d) if d.motion != Motion::Stop => Some(d.command_id),
+            _ => None,
+        })
+        .collect()
+}
+
+fn report(command_id: u32) -> Message {
+    Message::MotionReport(MotionReport {
+        command_id,
+        outcome: MotionOutcome::Completed,
+        achieved_yaw_rad: 0.0,
+        achieved_distance_m: 1.0,
+        pose: Pose::IDENTITY,
+    })
+}
+
+/// Plans like [`Scripted`] and drives forever; records what the v2 hooks saw.
+#[derive(Default)]
+struct Mission {
+    inner: Scripted,
+    reports: StdVec<(u32, Motion)>,
+    timeouts: StdVec<u32>,
+    cancels: StdVec<u32>,
+    goals: StdVec<u32>,
+}
+
+impl Autonomy for Mission {
+    fn goal(&mut self, g: &GoalRequest, _now: Instant) -> PlanState {
+        self.goals.push(g.goal_id);
+        self.inner.steps = 0;
+        PlanState::Accepted
+    }
+    fn plan_step(&mut self, now: Instant, iterations: u32, plan: &mut PlanBuffer) -> PlanProgress {
+        self.inner.plan_step(now, iterations, plan)
+    }
+    fn next_motion(&mut self, _now: Instant) -> Option<Motion> {
+        Some(Motion::Turn { yaw_rad: 0.5 })
+    }
+    fn motion_report(&mut self, r: &MotionReport, m: Motion, _now: Instant) {
+        self.reports.push((r.command_id, m));
+    }
+    fn motion_timeout(&mut self, id: u32, _now: Instant) {
+        self.timeouts.push(id);
+    }
+    fn cancel(&mut self, goal_id: u32, _now: Instant) -> Result<(), Refused> {
+        self.cancels.push(goal_id);
+        Ok(())
+    }
+    fn mission_status(&self) -> Option<MissionStatus> {
+        Some(MissionStatus {
+            goal_id: self.goals.last().copied().unwrap_or(0),
+            state: if self.cancels.is_empty() {
+                MissionState::Driving
+            } else {
+                MissionState::Safe
+            },
+            reason: if self.cancels.is_empty() {
+                StopReason::None
+            } else {
+                StopReason::Cancelled
+            },
+            distance_driven_m: 0.0,
+            predicted_payout_m: 0.0,
+            measured_payout_m: 0.0,
+            tension_n: 0.0,
+            margin_n: 0.0,
+            cross_track_m: 0.0,
+            replans: 0,
+            anchors: 1,
+            motions_done: self.reports.len() as u32,
+            tether_rejected: 0,
+            pose_jumps: 0,
+            scans_rejected: 0,
+            tether_reestimates: 0,
+        })
+    }
+}
+
+fn mission_exec() -> (Exec<Mission>, u32) {
+    let mut e = exec(Mission::default());
+    let mut cfg = configure();
+    cfg.telemetry.forward_log_level = LogLevel::Off;
+    exchange(&mut e, &[Message::Configure(cfg)]);
+    let r = exchange(&mut e, &[Message::GoalRequest(goal())]);
+    let ids = drive_ids(&r);
+    assert_eq!(ids.len(), 1, "{r:?}");
+    (e, ids[0])
+}
+
+#[test]
+fn reports_for_unknown_or_reported_commands_are_refused_and_counted() {
+    let (mut e, id) = mission_exec();
+    let r = exchange(&mut e, &[report(id + 7)]);
+    assert_eq!(
+        r,
+        [Message::Nack(Nack {
+            seq: 100,
+            reason: NackReason::UnknownCommand
+        })]
+    );
+    assert!(e.autonomy().reports.is_empty());
+    let r = exchange(&mut e, &[report(id)]);
+    assert_eq!(r[0], Message::Ack(Ack { seq: 100 }));
+    assert!(matches!(r[1], Message::MissionStatus(m) if m.motions_done == 1));
+    assert_eq!(e.autonomy().reports, [(id, Motion::Turn { yaw_rad: 0.5 })]);
+    let next = drive_ids(&r);
+    assert_eq!(next, [id + 1]);
+    // the same report again: already reported
+    let r = exchange(&mut e, &[report(id)]);
+    assert_eq!(
+        r[0],
+        Message::Nack(Nack {
+            seq: 100,
+            reason: NackReason::UnknownCommand
+        })
+    );
+    let t = e.telemetry();
+    assert_eq!(t.frames_rejected[NackReason::UnknownCommand.index()], 2);
+    assert_eq!(t.motion_reports, 1);
+}
+
+#[test]
+fn a_missing_report_times_out_with_a_stop() {
+    let (mut e, id) = mission_exec();
+    e.clock_mut().0 += MOTION_REPORT_TIMEOUT_US;
+    let r = exchange(&mut e, &[]);
+    assert!(r.iter().any(|m| matches!(
+        m,
+        Message::DriveCommand(DriveCommand {
+            motion: Motion::Stop,
+            ..
+        })
+    )));
+    assert_eq!(e.autonomy().timeouts, [id]);
+    assert_eq!(e.telemetry().motion_report_timeouts, 1);
+    // the late report is refused
+    let r = exchange(&mut e, &[report(id)]);
+    assert_eq!(
+        r[0],
+        Message::Nack(Nack {
+            seq: 100,
+            reason: NackReason::UnknownCommand
+        })
+    );
+}
+
+#[test]
+fn a_goal_while_driving_replaces_it_and_stops_the_motion_in_flight() {
+    let (mut e, id) = mission_exec();
+    let mut g2 = goal();
+    g2.goal_id = 10;
+    let r = exchange(&mut e, &[Message::GoalRequest(g2)]);
+    assert_eq!(r[0], Message::Ack(Ack { seq: 100 }));
+    assert!(matches!(r[1], Message::PlanStatus(p) if p.goal_id == 10 && p.state == PlanState::Accepted));
+    assert!(matches!(
+        r[2],
+        Message::DriveCommand(DriveCommand {
+            motion: Motion::Stop,
+            ..
+        })
+    ));
+    assert_eq!(e.autonomy().goals, [9, 10]);
+    // the new plan is sent, but no drive command before the interrupted motion is reported
+    assert!(r.iter().any(|m| matches!(m, Message::Plan(p) if p.goal_id == 10)));
+    assert!(drive_ids(&r).is_empty());
+    assert_eq!(e.mode(), Mode::Driving);
+    let mut stopped = report(id);
+    if let Message::MotionReport(m) = &mut stopped {
+        m.outcome = MotionOutcome::Stopped;
+    }
+    let r = exchange(&mut e, &[stopped]);
+    assert_eq!(r[0], Message::Ack(Ack { seq: 100 }));
+    assert_eq!(drive_ids(&r).len(), 1);
+    assert_eq!(e.telemetry().illegal_transitions, 0);
+}
+
+#[test]
+fn a_cancel_stops_and_returns_to_mapping() {
+    let (mut e, _id) = mission_exec();
+    let r = exchange(&mut e, &[Message::GoalCancel(GoalCancel { goal_id: 3 })]);
+    assert_eq!(
+        r,
+        [Message::Nack(Nack {
+            seq: 100,
+            reason: NackReason::UnknownGoal
+        })]
+    );
+    let r = exchange(&mut e, &[Message::GoalCancel(GoalCancel { goal_id: 9 })]);
+    assert_eq!(r[0], Message::Ack(Ack { seq: 100 }));
+    assert!(matches!(
+        r[1],
+        Message::DriveCommand(DriveCommand {
+            motion: Motion::Stop,
+            ..
+        })
+    ));
+    assert!(r.iter().any(|m| matches!(m, Message::MissionStatus(s) if s.reason == StopReason::Cancelled)));
+    assert_eq!(e.mode(), Mode::Mapping);
+    assert_eq!(e.autonomy().cancels, [9]);
+    assert_eq!(e.telemetry().goal_cancels, 1);
+    // nothing more to cancel
+    let r = exchange(&mut e, &[Message::GoalCancel(GoalCancel { goal_id: 9 })]);
+    assert_eq!(
+        r[0],
+        Message::Nack(Nack {
+            seq: 100,
+            reason: NackReason::UnknownGoal
+        })
+    );
+}
+
+#[test]
+fn without_a_mission_cancel_is_refused_and_no_mission_status_is_sent() {
+    let mut e = exec(NoAutonomy);
+    exchange(&mut e, &[Message::Configure(configure())]);
+    let r = exchange(
+        &mut e,
+        &[
+            Message::GoalCancel(GoalCancel { goal_id: 9 }),
+            Message::TelemetryRequest(TelemetryRequest),
+        ],
+    );
+    assert_eq!(
+        r[0],
+        Message::Nack(Nack {
+            seq: 100,
+            reason: NackReason::UnknownGoal
+        })
+    );
+    assert!(!r.iter().any(|m| matches!(m, Message::MissionStatus(_))));
+}
+
+#[test]
+fn a_version_1_frame_is_wrong_version_and_changes_nothing() {
+    let mut e = exec(NoAutonomy);
+    exchange(&mut e, &[Message::Configure(configure())]);
+    let before = e.telemetry();
+    // the v1 document's TimeTick example, byte for byte
+    let v1 = [0x01u8, 0x01, 0x01, 0x00, 0x00, 0x00, 0xE8, 0x07, 0xA1, 0xEB, 0x60, 0xCC];
+    let mut w = [0u8; 32];
+    let n = stuff(&v1, &mut w).unwrap();
+    e.link_mut().to_flight.extend(&w[..n]);
+    let r = exchange(&mut e, &[]);
+    assert_eq!(
+        r,
+        [Message::Nack(Nack {
+            seq: 1,
+            reason: NackReason::WrongVersion
+        })]
+    );
+    let after = e.telemetry();
+    assert_eq!(after.frames_rejected[NackReason::WrongVersion.index()], 1);
+    assert_eq!(after.frames_accepted, before.frames_accepted);
+    assert_eq!(after.mode, before.mode);
 }
 
 #[test]
@@ -347,4 +614,23 @@ fn log_frames_are_rate_limited_and_the_queue_is_bounded() {
         logs >= LOG_BURST as usize && logs <= LOG_BURST as usize + 1,
         "{logs}"
     );
+}
+
+#[test]
+fn a_safe_stop_between_reports_stops_the_motion_in_flight() {
+    let (mut e, id) = mission_exec();
+    // the autonomy decides to stop (here: its status turns Safe) while the motion is in flight
+    e.autonomy_mut().cancels.push(9);
+    let r = exchange(&mut e, &[]);
+    assert!(r.iter().any(|m| matches!(m, Message::MissionStatus(s) if s.state == MissionState::Safe)));
+    assert!(r.iter().any(|m| matches!(
+        m,
+        Message::DriveCommand(DriveCommand {
+            motion: Motion::Stop,
+            ..
+        })
+    )));
+    // the interrupted motion's report is still accepted
+    let r = exchange(&mut e, &[report(id)]);
+    assert_eq!(r[0], Message::Ack(Ack { seq: 100 }));
 }

@@ -8,11 +8,13 @@
 //! ## Goals: tethered ABIT* on the onboard map (Paton et al. V)
 //! A `GoalRequest` for [`PlannerChoice::Abit`] sets up the problem of [`crate::plan::tethered`] on the onboard map
 //! ([`Autonomy::goal`]):
-//! - **start**: the rover settled ([`crate::rover::settle`]) on the map under the last scan's sensor position,
-//!   with the sensor's heading as yaw (the flight software knows no other pose; the sensor mount's horizontal
-//!   offset from the axle is not known on board and is ignored);
-//! - **anchor history**: the root anchor of the last `Configure` (`tether.root_anchor`) alone, i.e. a straight
-//!   tether from the root (the encoder readings carry no anchor positions);
+//! - **start**: the rover settled ([`crate::rover::settle`]) on the map under the tracked body pose (the last
+//!   accepted `MotionReport` pose, see the mission below); before the first report under the last scan's sensor
+//!   position, with the sensor's heading as yaw (the sensor mount's horizontal offset from the axle is not known on
+//!   board and is ignored);
+//! - **anchor history**: the mission's tracked anchor history once the rover has moved (replans and goal changes
+//!   start from the tether as it lies); before that the root anchor of the last `Configure`
+//!   (`tether.root_anchor`) alone, i.e. a straight tether from the root;
 //! - **rover**: the Axel model ([`crate::config::rover::RoverParams::AXEL`]) with `Configure.rover`'s wheel radius,
 //!   track (`axle_length_m`), boom length, mass (split body / boom by `BOOM_MASS_FRACTION`), friction and the
 //!   tether's tension limit; one voxel of extra body clearance, as the campaign plans on a map;
@@ -40,6 +42,65 @@
 //! its motion primitives in order: per path segment an in-place turn to the drive heading, a straight drive (negative
 //! when Axel drives the segment backwards) and a turn to the next state's yaw ([`segment_motions`], exactly the
 //! motions [`crate::plan::tethered::MotionPlan`] interpolated and the validator checked).
+//!
+//! **No waypoint below the minimum margin or beyond the spool.** When a plan is filled, the path is cut before its
+//! first state whose stability margin on the map (`TetherSpace::stable_with`, a fraction of the rover's weight,
+//! times `mass_kg * STANDARD_GRAVITY`) is below `Configure.mission.min_margin_n` or fails the check, or whose
+//! tether (anchor history length to the axle) exceeds `Configure.tether.max_payout_m`; a cut plan is reported
+//! `ApproximateSolution` (it no longer reaches the goal), a plan cut to the start alone `NoSolutionWithinBudget`.
+//! The planner itself is unchanged (its own stability check already rejects unstable states).
+//!
+//! ## The mission (protocol v2; issue 18; `nav/mission.rs`)
+//! The navigator runs the closed loop Paton et al. (section VII) drove with a person in it:
+//! - **State machine** ([`MissionState`](crate::protocol::MissionState), in every `MissionStatus`): `Idle` ->
+//!   `Planning` (goal accepted) -> `Driving` (one drive command at a time) -> `Verifying` (after each report and
+//!   each scan: re-checks of the remaining plan) -> `Driving` ... -> `Arrived` (the tracked pose horizontally
+//!   within `tolerance_m` of the goal position), or `Safe` with a [`StopReason`](crate::protocol::StopReason): a
+//!   refused goal (`GoalRefused`), no path or an approximate one without `allow_approximate` (`NoSolution`; an
+//!   approximate plan that is allowed is driven to its last (safe) state, then `NoSolution`), a cancel, a
+//!   shutdown, the current state's margin below `min_margin_n` (`MarginBelowMinimum`), tension over
+//!   `max_tension_n` (`TensionLimit`), tracked tether and encoder inconsistent after a re-estimate
+//!   (`TetherInconsistent`), `MAX_POSE_JUMPS` rejected poses in a row (`PoseJump`), `MAX_STALLS` stalls in a row
+//!   (`MotionStalled`), more than `MAX_REPLANS` replans (`ReplanLimit`), no report in time (`MotionTimeout`),
+//!   `MAX_SCAN_REJECTS` rejected scans in a row (`ScanInconsistent`). A goal request while driving replaces the
+//!   goal (the executive stops the motion in flight); a cancel stops safe (`Cancelled`).
+//! - **Tracked tether**: the anchor history starts at the root on `Configure` and is propagated with Alg. 1
+//!   ([`crate::tether::predict_anchors`]) along each executed motion (previous -> reported axle position) on the
+//!   onboard map. The predicted payout is its length to the axle centre (the tether end the planner uses). A
+//!   reading whose payout changed by more than `MAX_PAYOUT_RATE_M_PER_S * dt + PAYOUT_JUMP_SLACK_M` since the last
+//!   accepted one is rejected (`tether_rejected`). With no motion in flight, a payout more than
+//!   `payout_tolerance_m` from the prediction re-estimates the history (Alg. 1 from the root along the last
+//!   `EXECUTED_CAPACITY` executed positions on the current map, which may now show the snag; `REESTIMATE_PER_STEP`
+//!   predictions per executive step, the rover waiting); then it stops safe (`TetherInconsistent`) if the last
+//!   payout still disagrees, else replans from the re-estimated history.
+//! - **Re-checks and replans**: after each report the next `RECHECK_AFTER_MOTION` segments are re-checked
+//!   (the current state's margin and the motion from it to the segment's end, then the planned motions, each a
+//!   full motion check on the current map: collision, settling, anchors, stability), after each scan the whole
+//!   remaining plan; one check per executive step (`Wait`). A failed check, a stall, a cross-track distance over
+//!   `replan_cross_track_m`, or the end of an exact plan short of the goal replans from the tracked pose and
+//!   history (a new seed per replan).
+//! - **Tracking** (`Configure.mission.tracking`): `OpenLoop` hands out the plan's motions as planned (the
+//!   baseline). `ClosedLoop` is the tether-aware path-tracking controller: along the current segment it aims at
+//!   the point `TRACK_SEGMENT_M` ahead of the rover's projection, turns when the heading error exceeds
+//!   `HEADING_TOLERANCE_RAD`, else drives at most `TRACK_SEGMENT_M`; the feed-forward turns the aim by
+//!   `-atan(k * s)`, where `s` is the sine from the drive direction to the tracked tether's last anchor (the
+//!   tether's lateral pull) and `k` the drift gain learned online by least squares from the lateral displacement
+//!   of each reported straight drive (`k = sum(lat * s) / sum(s^2 * |d|)`, bounded by `DRIFT_GAIN_LIMIT`). The
+//!   simulator's drift model is not used.
+//! - **Bad input in the loop**: a report for an unknown command is the executive's `Nack(UnknownCommand)`; a
+//!   pose farther than `POSE_JUMP_BASE_M + POSE_JUMP_PER_M * |d|` (or `POSE_JUMP_YAW_RAD`) from odometry is
+//!   replaced by odometry and counted (`pose_jumps`); a scan whose sensor is more than `SCAN_POSE_TOLERANCE_M`
+//!   from the tracked pose is not integrated (`scans_rejected`); counters in `MissionStatus` and
+//!   [`MissionCounters`].
+//! - Parameters (`config::mission`): `TRACK_SEGMENT_M` 0.5, `HEADING_TOLERANCE_RAD` 0.03, `SEGMENT_DONE_M` 0.08,
+//!   `MAX_REPLANS` 8, `MAX_STALLS` 2, `POSE_JUMP_BASE_M` 0.5, `POSE_JUMP_PER_M` 0.5, `POSE_JUMP_YAW_RAD` 0.6,
+//!   `MAX_POSE_JUMPS` 3, `SCAN_POSE_TOLERANCE_M` 2.0, `MAX_SCAN_REJECTS` 3, `MAX_PAYOUT_RATE_M_PER_S` 1.0,
+//!   `PAYOUT_JUMP_SLACK_M` 0.3, `RECHECK_AFTER_MOTION` 2, `EXECUTED_CAPACITY` 64, `REESTIMATE_PER_STEP` 4,
+//!   `DRIFT_GAIN_LIMIT` 1.0,
+//!   `MIN_DRIFT_SAMPLE_M` 0.05, `STANDARD_GRAVITY` 9.81; `MissionConfig::DEFAULT`: ClosedLoop, 0.3 m, 0.5 m, 0 N.
+//! - Bounds: each report does one Alg. 1 prediction; each `Verifying` step one settle, one stability check and one
+//!   motion check; each re-estimate step `REESTIMATE_PER_STEP` predictions; each closed-loop step one pass over
+//!   the path's segments (`PATH_CAPACITY`).
 //!
 //! ## Suspended between steps, restarted after a map change (no heap, no `unsafe`)
 //! [`AbitStar`](crate::plan::abit::AbitStar) borrows its arena, the space (which borrows the map), the validators,
@@ -94,6 +155,9 @@
 //! its new iterations and `MOTION_CHECKS_PER_STEP`, each iteration bounded by the planner's own budgets.
 //!
 //! ## Tests
+//! Mission tests (`nav::mission_tests`, a kinematic world in the test): a mission that arrives, a cancel, a goal
+//! change while driving, a disagreeing tether reading (re-estimate, then `TetherInconsistent`), a payout jump and
+//! a tension limit, a pose jump, and closed-loop tracking against open loop under a lateral tether drift.
 //! Unit tests (`nav::tests`): plans on mapped flat and 12-degree worlds whose motions, dead-reckoned, end in the goal
 //! region; a goal behind an unobserved gap ends approximate or unsolved; every refusal; per-step and goal budgets;
 //! the time budget; the same plan for the same inputs whatever the step size (resumed), with no motion check or
@@ -102,10 +166,14 @@
 //! `host-sim/doc/nav.md` has the on-target storage and stack figures and how the navigator came to its design.
 //!
 
+mod mission;
 mod planning;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod mission_tests;
 
+pub use mission::{BodyPose, Mission, MissionCounters};
 pub use planning::{segment_motions, GoalRefusal, NavArena, NavPlanStats, NavPlanStorage};
 
 use core::borrow::BorrowMut;
@@ -114,11 +182,14 @@ use hal::Instant;
 
 use crate::config::map::{MapConfig, NAV_POINT_BATCH};
 use crate::config::nav::MAX_PLAN_ITERATIONS;
-use crate::exec::{Autonomy, PlanBuffer, PlanProgress, Refused, Scan};
+use crate::exec::{Autonomy, DriveStep, PlanBuffer, PlanProgress, Refused, Scan};
 use crate::geom::Vec3;
 use crate::map::{Block, Map, MapError};
 use crate::plan::tethered::{PlanBounds, RoverState};
-use crate::protocol::{Configure, GoalRequest, MapStatus, Motion, PlanState, PlannerChoice, Pose};
+use crate::protocol::{
+    Configure, GoalRequest, MapStatus, MissionStatus, Motion, MotionReport, PlanState, PlannerChoice, Pose,
+    TetherReading,
+};
 use crate::tether::AnchorHistory;
 
 use planning::{PlanSetup, Problem};
@@ -136,6 +207,8 @@ pub struct Navigator<B, I, P> {
     problem: Option<Problem>,
     next_motion: usize,
     stats: NavPlanStats,
+    mission: Mission,
+    replan_pending: bool,
 }
 
 impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> Navigator<B, I, P> {
@@ -159,6 +232,8 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
             problem: None,
             next_motion: 0,
             stats: NavPlanStats::default(),
+            mission: Mission::new(),
+            replan_pending: false,
         })
     }
 
@@ -204,10 +279,18 @@ fn count_up(counter: &mut u32, n: u32) {
 impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> Autonomy for Navigator<B, I, P> {
     fn configure(&mut self, cfg: &Configure) -> Result<(), Refused> {
         self.setup = Some(PlanSetup::from_configure(cfg));
+        self.mission.configure(cfg);
         Ok(())
     }
 
+    fn tether_reading(&mut self, reading: &TetherReading, _now: Instant) {
+        self.mission_tether(reading);
+    }
+
     fn scan(&mut self, scan: &Scan<'_>, _now: Instant) {
+        if !self.mission_scan_accepted(&scan.sensor_pose) {
+            return;
+        }
         self.pose = Some(scan.sensor_pose);
         // The map changes: the suspended search's motion checks no longer hold; the next step starts anew.
         planning::forget_search(&mut self.storage);
@@ -252,8 +335,15 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
         if goal.planner != PlannerChoice::Abit {
             return PlanState::PlannerUnavailable;
         }
-        let Some(setup) = self.setup else { return self.refuse(GoalRefusal::NotConfigured) };
-        let Some(pose) = self.pose else { return self.refuse(GoalRefusal::NoPose) };
+        self.replan_pending = false;
+        let Some(setup) = self.setup else {
+            self.mission_goal(goal, false);
+            return self.refuse(GoalRefusal::NotConfigured);
+        };
+        let Some(pose) = self.start_pose() else {
+            self.mission_goal(goal, false);
+            return self.refuse(GoalRefusal::NoPose);
+        };
         let budget = goal.max_iterations.min(MAX_PLAN_ITERATIONS);
         let (cfg, used) = (self.cfg, self.used);
         let set_up = match Map::reattach(cfg, self.blocks.borrow_mut(), self.index.borrow_mut(), used) {
@@ -264,9 +354,13 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
             Ok(problem) => {
                 self.problem = Some(problem);
                 self.stats.goals_accepted = self.stats.goals_accepted.saturating_add(1);
+                self.mission_goal(goal, true);
                 PlanState::Accepted
             }
-            Err(why) => self.refuse(why),
+            Err(why) => {
+                self.mission_goal(goal, false);
+                self.refuse(why)
+            }
         }
     }
 
@@ -286,6 +380,9 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
             }
         };
         self.problem = Some(problem);
+        if let PlanProgress::Finished { state, .. } = progress {
+            self.mission_planned(state);
+        }
         progress
     }
 
@@ -295,6 +392,27 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
         Some(m)
     }
 
+    fn drive_step(&mut self, now: Instant) -> DriveStep {
+        self.mission_drive(now)
+    }
+
+    fn motion_report(&mut self, report: &MotionReport, motion: Motion, _now: Instant) {
+        self.mission_report(report, motion);
+    }
+
+    fn motion_timeout(&mut self, _command_id: u32, _now: Instant) {
+        self.mission_timeout();
+    }
+
+    fn cancel(&mut self, _goal_id: u32, _now: Instant) -> Result<(), Refused> {
+        self.mission_cancel();
+        Ok(())
+    }
+
+    fn mission_status(&self) -> Option<MissionStatus> {
+        Some(self.mission.status())
+    }
+
     fn abort(&mut self) {
         if let Some(p) = self.problem.as_mut() {
             if p.finished.is_none() {
@@ -302,6 +420,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
             }
         }
         self.next_motion = usize::MAX;
+        self.mission_abort();
     }
 
     fn map_status(&self) -> MapStatus {

@@ -39,14 +39,17 @@ pub type NavArena = AbitArena<
 pub struct NavPlanStorage {
     /// The ABIT* arena (nodes, edge queue, ABIT*'s own edge memo).
     pub arena: NavArena,
-    path: heapless::Vec<(RoverState, AnchorHistory), { cfg::PATH_CAPACITY }>,
-    motions: heapless::Vec<Motion, { cfg::MOTION_CAPACITY }>,
+    pub(crate) path: heapless::Vec<(RoverState, AnchorHistory), { cfg::PATH_CAPACITY }>,
+    pub(crate) motions: heapless::Vec<Motion, { cfg::MOTION_CAPACITY }>,
     /// The goal's search between executive steps ([`AbitStar::suspend`]), at most one; empty when the next step
     /// starts a new search (a new goal, a changed map). A vector rather than an `Option`, so the empty storage
     /// stays all zero bytes.
     suspended: heapless::Vec<AbitSuspended<RoverState>, 1>,
     /// The generator's state when the search was suspended.
     rng_state: u64,
+    /// The anchor history of the start state (the mission's tracked history when replanning mid-mission); empty =
+    /// the root anchor alone.
+    pub(crate) start_history: AnchorHistory,
 }
 
 impl NavPlanStorage {
@@ -58,6 +61,7 @@ impl NavPlanStorage {
             motions: heapless::Vec::new(),
             suspended: heapless::Vec::new(),
             rng_state: 0,
+            start_history: AnchorHistory::empty(),
         }
     }
     /// Bytes of the storage (for the board's memory report).
@@ -144,6 +148,12 @@ pub(crate) struct PlanSetup {
     pub rover: RoverParams,
     pub seed: u64,
     pub samples_per_batch: u32,
+    /// `Configure.mission.min_margin_n`: no waypoint below it is sent.
+    pub min_margin_n: f32,
+    /// `Configure.tether.max_payout_m`: no waypoint needing more tether is sent.
+    pub max_payout_m: f32,
+    /// The rover's weight, newtons (`mass_kg * STANDARD_GRAVITY`): margins are fractions of it.
+    pub weight_n: f32,
 }
 
 impl PlanSetup {
@@ -164,6 +174,9 @@ impl PlanSetup {
             rover,
             seed: c.planner.rng_seed,
             samples_per_batch: c.planner.batch_size.clamp(1, cfg::SAMPLES_PER_BATCH),
+            min_margin_n: c.mission.min_margin_n,
+            max_payout_m: c.tether.max_payout_m,
+            weight_n: c.rover.mass_kg * crate::config::mission::STANDARD_GRAVITY,
         }
     }
 }
@@ -187,6 +200,12 @@ pub(crate) struct Problem {
     pub search_base: u32,
     pub best_cost: Option<f32>,
     pub finished: Option<PlanState>,
+    /// Smallest margin of a sent waypoint, newtons; the rover's weight; the tether on the spool.
+    pub min_margin_n: f32,
+    pub weight_n: f32,
+    pub max_payout_m: f32,
+    /// Waypoints cut from the end of the last plan (margin below the minimum or more tether than the spool).
+    pub cut: u32,
 }
 
 /// The planning bounds of the map: the extent of its **surface blocks** (blocks whose centre is known to lie
@@ -264,6 +283,10 @@ pub(crate) fn set_up(
         search_base: 0,
         best_cost: None,
         finished: None,
+        min_margin_n: setup.min_margin_n,
+        weight_n: setup.weight_n,
+        max_payout_m: setup.max_payout_m,
+        cut: 0,
     })
 }
 
@@ -360,9 +383,14 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
             return finished(problem, PlanState::InvalidInput);
         }
     };
+    let start_attachment = if store.start_history.is_empty() {
+        AnchorHistory::new(Anchor::root(problem.root))
+    } else {
+        store.start_history.clone()
+    };
     let pdef = ProblemDefinition {
         start: problem.start,
-        start_attachment: AnchorHistory::new(Anchor::root(problem.root)),
+        start_attachment,
         goal: GoalState { state: goal_state, tolerance: problem.tolerance },
         objective: TetherObjective,
     };
@@ -431,7 +459,17 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
             state = PlanState::NoSolutionWithinBudget;
             store.path.clear();
         } else {
-            fill_plan(&space, &store.path, &mut store.motions, stats, plan);
+            problem.cut = fill_plan(&space, problem, &mut store.path, &mut store.motions, stats, plan);
+            if store.path.len() < 2 {
+                log::warn!("nav: no waypoint after the start passes the margin and payout checks");
+                state = PlanState::NoSolutionWithinBudget;
+                store.path.clear();
+                store.motions.clear();
+                plan.clear();
+            } else if problem.cut > 0 {
+                // The plan no longer reaches the goal: honestly approximate.
+                state = PlanState::ApproximateSolution;
+            }
         }
     }
     stats.last_step = space.stats();
@@ -453,31 +491,52 @@ fn finished(problem: &Problem, state: PlanState) -> PlanProgress {
     }
 }
 
-/// Waypoints (with stability margins from the map) and motion primitives of the stored path.
+/// Waypoints (with stability margins from the map) and motion primitives of the stored path. The path is cut
+/// before its first on-map state whose stability margin on the map is below `min_margin_n` (or fails the check),
+/// or whose tether (its anchor history to the axle) is longer than `max_payout_m`: such a waypoint is never sent
+/// nor driven. Returns the number of states cut.
 fn fill_plan<D: DistanceField>(
     space: &TetherSpace<'_, D>,
-    path: &[(RoverState, AnchorHistory)],
+    problem: &Problem,
+    path: &mut heapless::Vec<(RoverState, AnchorHistory), { cfg::PATH_CAPACITY }>,
     motions: &mut heapless::Vec<Motion, { cfg::MOTION_CAPACITY }>,
     stats: &mut NavPlanStats,
     plan: &mut PlanBuffer,
-) {
+) -> u32 {
     plan.clear();
     motions.clear();
-    let on_map = || path.iter().filter(|(s, _)| !s.off_map);
-    for (s, h) in on_map() {
+    let mut keep = path.len();
+    for (k, (s, h)) in path.iter().enumerate() {
+        if s.off_map {
+            continue;
+        }
         let margin = match space.stable_with(&s.settled, h) {
-            Ok(m) => m as f32,
+            Ok(m) if (m as f32) * problem.weight_n >= problem.min_margin_n => m as f32,
+            Ok(m) => {
+                log::warn!("nav: plan cut at state {k}: margin {} N below the minimum", m as f32 * problem.weight_n);
+                keep = k;
+                break;
+            }
             Err(e) => {
-                log::warn!("nav: plan state not stable by the margin check: {e:?}");
-                -1.0
+                log::warn!("nav: plan cut at state {k}: not stable by the margin check: {e:?}");
+                keep = k;
+                break;
             }
         };
+        if h.length_to(&s.axle()) > problem.max_payout_m {
+            log::warn!("nav: plan cut at state {k}: needs more tether than max_payout_m");
+            keep = k;
+            break;
+        }
         if plan.push(waypoint(s, h, margin, &mut stats.anchors_truncated)).is_err() {
+            keep = k;
             break;
         }
     }
+    let cut = path.len().saturating_sub(keep) as u32;
+    path.truncate(keep);
     let mut prev: Option<&RoverState> = None;
-    for (s, _) in on_map() {
+    for (s, _) in path.iter().filter(|(s, _)| !s.off_map) {
         if let Some(a) = prev {
             for m in segment_motions(a, s, space.params()).into_iter().flatten() {
                 if motions.push(m).is_err() {
@@ -487,6 +546,7 @@ fn fill_plan<D: DistanceField>(
         }
         prev = Some(s);
     }
+    cut
 }
 
 /// The motion primitive at `index` of the last plan.
@@ -499,12 +559,14 @@ pub(crate) fn forget_search<P: BorrowMut<NavPlanStorage>>(storage: &mut P) {
     storage.borrow_mut().suspended.clear();
 }
 
-/// Forget the last plan (a new goal).
+/// Forget the last plan (a new goal); the next plan starts from the root anchor alone unless a start history is
+/// set again.
 pub(crate) fn clear_plan<P: BorrowMut<NavPlanStorage>>(storage: &mut P) {
     let s = storage.borrow_mut();
     s.suspended.clear();
     s.path.clear();
     s.motions.clear();
+    s.start_history = AnchorHistory::empty();
 }
 
 /// The states and anchor histories of the last plan (start first), for tests and pictures.

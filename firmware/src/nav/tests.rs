@@ -58,7 +58,7 @@ fn full_pool_is_counted_not_fatal() {
 mod planning {
     use super::super::*;
     use crate::protocol::{
-        Configure, GoalRequest, LogLevel, PlannerConfig, Point3, Quat, RoverConfig, TelemetryConfig,
+        Configure, GoalRequest, LogLevel, MissionConfig, PlannerConfig, Point3, Quat, RoverConfig, TelemetryConfig,
         TetherConfig,
     };
     use std::boxed::Box;
@@ -87,6 +87,7 @@ mod planning {
             tether: TetherConfig { root_anchor: Point3 { x: -1.5, y: 0.0, z: 1.5 }, max_payout_m: 50.0, max_tension_n: 2000.0 },
             planner: PlannerConfig { rng_seed: seed, max_iterations: 750, batch_size: 100, goal_bias: 0.0 },
             telemetry: TelemetryConfig { period_ms: 0, forward_log_level: LogLevel::Off },
+        mission: MissionConfig::DEFAULT,
         }
     }
 
@@ -98,6 +99,7 @@ mod planning {
             planner: PlannerChoice::Abit,
             max_iterations,
             time_budget_ms: 0,
+            allow_approximate: true,
         }
     }
 

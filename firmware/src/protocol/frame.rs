@@ -273,6 +273,8 @@ pub fn decode<T: AsRef<[u8]>>(frame: &Frame<T>) -> Result<(Header, Message), Dec
         MessageKind::Configure => Message::Configure(body(kind, b)?),
         MessageKind::Shutdown => Message::Shutdown(body(kind, b)?),
         MessageKind::TelemetryRequest => Message::TelemetryRequest(body(kind, b)?),
+        MessageKind::MotionReport => Message::MotionReport(body(kind, b)?),
+        MessageKind::GoalCancel => Message::GoalCancel(body(kind, b)?),
         MessageKind::Ack => Message::Ack(body(kind, b)?),
         MessageKind::Nack => Message::Nack(body(kind, b)?),
         MessageKind::PlanStatus => Message::PlanStatus(body(kind, b)?),
@@ -280,6 +282,7 @@ pub fn decode<T: AsRef<[u8]>>(frame: &Frame<T>) -> Result<(Header, Message), Dec
         MessageKind::DriveCommand => Message::DriveCommand(body(kind, b)?),
         MessageKind::Telemetry => Message::Telemetry(body(kind, b)?),
         MessageKind::Log => Message::Log(body(kind, b)?),
+        MessageKind::MissionStatus => Message::MissionStatus(body(kind, b)?),
     };
     m.validate().map_err(DecodeError::Invalid)?;
     Ok((h, m))

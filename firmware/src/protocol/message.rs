@@ -1,4 +1,8 @@
-//! Message set v1: the bodies of frames, as serde types encoded with postcard.
+//! Message set v2: the bodies of frames, as serde types encoded with postcard.
+//!
+//! Version 2 adds the closed-loop mission: `GoalRequest.allow_approximate`, `Configure.mission`
+//! ([`MissionConfig`]), the host -> flight [`MotionReport`] and [`GoalCancel`], and the flight -> host
+//! [`MissionStatus`] (see `firmware/PROTOCOL.md`).
 //!
 //! Every float is validated on decode ([`Validate`]): NaN and infinities are an error everywhere, pose quaternions
 //! must be unit within [`QUATERNION_NORM_TOLERANCE`], lengths and counts must be inside their `config::protocol`
@@ -8,6 +12,7 @@
 use heapless::{String, Vec};
 use serde::{Deserialize, Serialize};
 
+use crate::config::mission as mission_cfg;
 use crate::config::protocol::{
     MAX_ANCHORS_PER_WAYPOINT, MAX_LOG_TEXT, MAX_POINTS_PER_CHUNK, MAX_WAYPOINTS_PER_PLAN_FRAME,
     MIN_TELEMETRY_PERIOD_MS, QUATERNION_NORM_TOLERANCE,
@@ -40,6 +45,10 @@ pub enum MessageKind {
     Shutdown = 0x06,
     /// [`TelemetryRequest`] (host -> flight).
     TelemetryRequest = 0x07,
+    /// [`MotionReport`] (host -> flight, v2).
+    MotionReport = 0x08,
+    /// [`GoalCancel`] (host -> flight, v2).
+    GoalCancel = 0x09,
     /// [`Ack`] (flight -> host).
     Ack = 0x81,
     /// [`Nack`] (flight -> host).
@@ -54,11 +63,13 @@ pub enum MessageKind {
     Telemetry = 0x86,
     /// [`Log`] (flight -> host).
     Log = 0x87,
+    /// [`MissionStatus`] (flight -> host, v2).
+    MissionStatus = 0x88,
 }
 
 impl MessageKind {
     /// Every kind, in code order.
-    pub const ALL: [MessageKind; 14] = [
+    pub const ALL: [MessageKind; 17] = [
         Self::TimeTick,
         Self::SensorChunk,
         Self::TetherReading,
@@ -66,6 +77,8 @@ impl MessageKind {
         Self::Configure,
         Self::Shutdown,
         Self::TelemetryRequest,
+        Self::MotionReport,
+        Self::GoalCancel,
         Self::Ack,
         Self::Nack,
         Self::PlanStatus,
@@ -73,6 +86,7 @@ impl MessageKind {
         Self::DriveCommand,
         Self::Telemetry,
         Self::Log,
+        Self::MissionStatus,
     ];
 
     /// The kind for a header byte; `None` for every value not listed in the spec.
@@ -225,6 +239,9 @@ pub struct GoalRequest {
     pub max_iterations: u32,
     /// Wall-time budget, milliseconds of flight time (0 = none).
     pub time_budget_ms: u32,
+    /// Drive an approximate solution (the planner's state closest to the goal) up to its last safe state. When
+    /// false an approximate solution ends the mission safe with `StopReason::NoSolution`.
+    pub allow_approximate: bool,
 }
 
 /// Rover parameters (the Axel model).
@@ -303,6 +320,51 @@ pub struct Configure {
     pub planner: PlannerConfig,
     /// Telemetry and log forwarding.
     pub telemetry: TelemetryConfig,
+    /// The closed-loop mission (v2). Defaults: `MissionConfig::DEFAULT` (`firmware::config::mission`).
+    pub mission: MissionConfig,
+}
+
+/// How straight drives are executed (v2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Tracking {
+    /// The plan's motions as they are (the v1 executor; the comparison baseline).
+    OpenLoop,
+    /// The tether-aware path-tracking controller: straight drives in closed-loop sub-segments that correct heading
+    /// and cross-track error from the reported pose, with the tether's pull as feed-forward.
+    ClosedLoop,
+}
+
+/// Mission parameters of a `Configure` (v2). Defaults: `MissionConfig::DEFAULT` in `firmware::config::mission`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct MissionConfig {
+    /// Open-loop or closed-loop execution of straight drives.
+    pub tracking: Tracking,
+    /// Replan from the current pose when it is farther than this from the plan being driven, metres (> 0).
+    pub replan_cross_track_m: f32,
+    /// Largest allowed difference between the tracked tether length and the encoder's payout, metres (> 0).
+    pub payout_tolerance_m: f32,
+    /// Smallest stability margin a waypoint or the current state may have, newtons (>= 0).
+    pub min_margin_n: f32,
+}
+
+impl MissionConfig {
+    /// The defaults of `firmware::config::mission`.
+    pub const DEFAULT: MissionConfig = MissionConfig {
+        tracking: if mission_cfg::DEFAULT_CLOSED_LOOP {
+            Tracking::ClosedLoop
+        } else {
+            Tracking::OpenLoop
+        },
+        replan_cross_track_m: mission_cfg::DEFAULT_REPLAN_CROSS_TRACK_M,
+        payout_tolerance_m: mission_cfg::DEFAULT_PAYOUT_TOLERANCE_M,
+        min_margin_n: mission_cfg::DEFAULT_MIN_MARGIN_N,
+    };
+}
+
+impl Default for MissionConfig {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
 }
 
 /// Host -> flight: stop everything and enter `Safe` mode (the rover holds position).
@@ -370,10 +432,15 @@ pub enum NackReason {
     NotConfigured,
     /// The planning hooks refused the message (see the flight log).
     Refused,
+    /// A `MotionReport` for a command that is not awaiting a report: never sent, a `Stop`, already reported, or
+    /// given up after the report timeout (v2).
+    UnknownCommand,
+    /// A `GoalCancel` for a goal that is not the one being planned or driven (v2).
+    UnknownGoal,
 }
 
 /// Number of [`NackReason`] values (the length of the rejection counters).
-pub const NACK_REASON_COUNT: usize = 23;
+pub const NACK_REASON_COUNT: usize = 25;
 
 impl NackReason {
     /// Every reason, in wire order.
@@ -401,6 +468,8 @@ impl NackReason {
         Self::NotAllowedInMode,
         Self::NotConfigured,
         Self::Refused,
+        Self::UnknownCommand,
+        Self::UnknownGoal,
     ];
 
     /// Index into rejection counters (equals the wire value).
@@ -496,13 +565,145 @@ pub enum Motion {
     },
 }
 
-/// Flight -> host: a drive command for the rover (the simulator executes it).
+/// Flight -> host: a drive command for the rover (the simulator executes it). v2: the flight software sends one
+/// `Turn` / `Straight` and the next only after the [`MotionReport`] for it (or after the report timeout,
+/// `config::exec::MOTION_REPORT_TIMEOUT_US`); a `Stop` is never reported and may interrupt the motion in flight,
+/// whose report then follows (outcome `Stopped`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct DriveCommand {
     /// Increases with every command.
     pub command_id: u32,
     /// The motion.
     pub motion: Motion,
+}
+
+/// How a commanded motion ended (v2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum MotionOutcome {
+    /// The commanded amount was executed.
+    Completed,
+    /// The wheels stopped before the commanded amount (blocked, tether limit).
+    Stalled,
+    /// The rover moved off the commanded motion by more than the simulator's slip threshold.
+    Slipped,
+    /// A `DriveCommand{Stop}` interrupted the motion (flight addition: a goal change, a cancel or a safe stop).
+    Stopped,
+}
+
+/// Host -> flight: what a commanded motion achieved (v2). Exactly one per `Turn` / `Straight` command.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct MotionReport {
+    /// The `DriveCommand.command_id` this reports.
+    pub command_id: u32,
+    /// How it ended.
+    pub outcome: MotionOutcome,
+    /// Yaw change achieved, radians (positive counter-clockwise).
+    pub achieved_yaw_rad: f32,
+    /// Distance achieved along the drive direction, metres (negative = reverse).
+    pub achieved_distance_m: f32,
+    /// Localisation estimate of the body frame (axle centre, x forward, z up) in the world frame after the motion.
+    pub pose: Pose,
+}
+
+/// Host -> flight: stop driving and planning for a goal (v2). The rover is stopped; the mission ends `Safe` with
+/// reason `Cancelled` and the executive returns to `Mapping` (a new goal may follow).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct GoalCancel {
+    /// The goal to cancel (must be the goal being planned or driven, else `Nack(UnknownGoal)`).
+    pub goal_id: u32,
+}
+
+/// State of the closed-loop mission (v2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum MissionState {
+    /// No goal yet.
+    Idle,
+    /// Integrating scans, no goal being pursued.
+    Mapping,
+    /// Planning (or replanning) toward the goal.
+    Planning,
+    /// A motion is being driven (one drive command at a time).
+    Driving,
+    /// Re-checking the remaining plan on the updated map after a motion or a scan.
+    Verifying,
+    /// The current pose is within the goal tolerance.
+    Arrived,
+    /// Stopped and holding; `MissionStatus.reason` says why.
+    Safe,
+}
+
+/// Why a mission is `Safe` (v2). Each reason's doc says what a person can do about it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum StopReason {
+    /// Not stopped.
+    None,
+    /// A `Shutdown` was received; reboot or reconfigure to continue.
+    Shutdown,
+    /// The host cancelled the goal; send a new `GoalRequest` to continue.
+    Cancelled,
+    /// The goal was refused when set up (see the `PlanStatus` and the flight log: no map, start or goal does not
+    /// settle); map more or move the goal.
+    GoalRefused,
+    /// The planner found no path within budget (or only an approximate one while `allow_approximate` is false);
+    /// raise the budget, allow approximate solutions, or map the gap.
+    NoSolution,
+    /// The current state's stability margin on the map is below `min_margin_n`; recover by hand (winch in).
+    MarginBelowMinimum,
+    /// Tracked tether length and encoder payout disagree beyond `payout_tolerance_m` even after re-predicting the
+    /// anchors on the current map (e.g. a snag on an unmapped rock); inspect the tether.
+    TetherInconsistent,
+    /// The encoder tension exceeded `Configure.tether.max_tension_n`; check for a snag or lower the slope.
+    TensionLimit,
+    /// The remaining plan needs more tether than `max_payout_m`; move the goal or use a longer tether.
+    PayoutLimit,
+    /// A reported pose jumped against odometry more than physically possible; check localisation.
+    PoseJump,
+    /// A motion stalled and no replan made progress; inspect the terrain ahead.
+    MotionStalled,
+    /// More replans than `config::mission::MAX_REPLANS` for one goal; the map or the goal needs a look.
+    ReplanLimit,
+    /// No `MotionReport` arrived within the report timeout (flight addition); check the link and the rover.
+    MotionTimeout,
+    /// Scans kept disagreeing with odometry (flight addition); check localisation.
+    ScanInconsistent,
+}
+
+/// Flight -> host: the mission's state (v2). Sent on every mission-state change, after every accepted motion
+/// report, and with each `Telemetry` frame.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct MissionStatus {
+    /// The goal being pursued (0 before the first goal).
+    pub goal_id: u32,
+    /// Mission state.
+    pub state: MissionState,
+    /// Why the mission is `Safe` (`StopReason::None` otherwise).
+    pub reason: StopReason,
+    /// Distance driven on this goal (sum of the reported achieved distances), metres.
+    pub distance_driven_m: f32,
+    /// Length of the tracked anchor history's tether to the current pose, metres.
+    pub predicted_payout_m: f32,
+    /// Last accepted encoder payout, metres.
+    pub measured_payout_m: f32,
+    /// Last accepted encoder tension, newtons.
+    pub tension_n: f32,
+    /// Stability margin of the current state on the onboard map, newtons.
+    pub margin_n: f32,
+    /// Distance of the current pose from the plan being driven, metres.
+    pub cross_track_m: f32,
+    /// Replans for this goal.
+    pub replans: u32,
+    /// Length of the tracked anchor history.
+    pub anchors: u8,
+    /// Motion reports accepted for this goal.
+    pub motions_done: u32,
+    /// Tether readings rejected by the navigator (payout jump larger than physically possible) (flight addition).
+    pub tether_rejected: u32,
+    /// Motion reports whose pose jumped against odometry, rejected (flight addition).
+    pub pose_jumps: u32,
+    /// Scans whose pose disagreed with odometry, not integrated (flight addition).
+    pub scans_rejected: u32,
+    /// Re-estimates of the anchor history after an encoder disagreement (flight addition).
+    pub tether_reestimates: u32,
 }
 
 /// Flight executive mode.
@@ -597,6 +798,12 @@ pub struct Telemetry {
     pub tether_readings: u32,
     /// Goal requests accepted.
     pub goals_received: u32,
+    /// Motion reports accepted (v2).
+    pub motion_reports: u32,
+    /// Drive commands whose report did not arrive within the report timeout (v2).
+    pub motion_report_timeouts: u32,
+    /// Goal cancels accepted (v2).
+    pub goal_cancels: u32,
     /// State of the latest goal.
     pub plan_state: PlanState,
     /// Log records dropped (queue full or rate limit).
@@ -622,7 +829,7 @@ pub struct Log {
     pub text: String<MAX_LOG_TEXT>,
 }
 
-/// Any message of set v1.
+/// Any message of set v2.
 #[derive(Debug, Clone, PartialEq)]
 #[allow(missing_docs)]
 pub enum Message {
@@ -633,6 +840,8 @@ pub enum Message {
     Configure(Configure),
     Shutdown(Shutdown),
     TelemetryRequest(TelemetryRequest),
+    MotionReport(MotionReport),
+    GoalCancel(GoalCancel),
     Ack(Ack),
     Nack(Nack),
     PlanStatus(PlanStatus),
@@ -640,6 +849,7 @@ pub enum Message {
     DriveCommand(DriveCommand),
     Telemetry(Telemetry),
     Log(Log),
+    MissionStatus(MissionStatus),
 }
 
 /// Why a decoded body is not a valid message (narrow: only what validation can find).
@@ -771,7 +981,38 @@ impl Validate for Configure {
         if period != 0 && period < MIN_TELEMETRY_PERIOD_MS {
             return Err(Invalid::OutOfRange);
         }
-        Ok(())
+        self.mission.validate()
+    }
+}
+
+impl Validate for MissionConfig {
+    fn validate(&self) -> Result<(), Invalid> {
+        positive(self.replan_cross_track_m)?;
+        positive(self.payout_tolerance_m)?;
+        non_negative(self.min_margin_n)
+    }
+}
+
+impl Validate for MotionReport {
+    fn validate(&self) -> Result<(), Invalid> {
+        finite(self.achieved_yaw_rad)?;
+        finite(self.achieved_distance_m)?;
+        self.pose.validate()
+    }
+}
+
+impl Validate for MissionStatus {
+    fn validate(&self) -> Result<(), Invalid> {
+        [
+            self.distance_driven_m,
+            self.predicted_payout_m,
+            self.measured_payout_m,
+            self.tension_n,
+            self.margin_n,
+            self.cross_track_m,
+        ]
+        .into_iter()
+        .try_for_each(finite)
     }
 }
 
@@ -814,7 +1055,10 @@ impl Validate for Message {
             Message::PlanStatus(m) => m.validate(),
             Message::Plan(m) => m.validate(),
             Message::DriveCommand(m) => m.validate(),
+            Message::MotionReport(m) => m.validate(),
+            Message::MissionStatus(m) => m.validate(),
             Message::TimeTick(_)
+            | Message::GoalCancel(_)
             | Message::Shutdown(_)
             | Message::TelemetryRequest(_)
             | Message::Ack(_)
@@ -836,6 +1080,8 @@ impl Message {
             Message::Configure(_) => MessageKind::Configure,
             Message::Shutdown(_) => MessageKind::Shutdown,
             Message::TelemetryRequest(_) => MessageKind::TelemetryRequest,
+            Message::MotionReport(_) => MessageKind::MotionReport,
+            Message::GoalCancel(_) => MessageKind::GoalCancel,
             Message::Ack(_) => MessageKind::Ack,
             Message::Nack(_) => MessageKind::Nack,
             Message::PlanStatus(_) => MessageKind::PlanStatus,
@@ -843,6 +1089,7 @@ impl Message {
             Message::DriveCommand(_) => MessageKind::DriveCommand,
             Message::Telemetry(_) => MessageKind::Telemetry,
             Message::Log(_) => MessageKind::Log,
+            Message::MissionStatus(_) => MessageKind::MissionStatus,
         }
     }
 
@@ -856,6 +1103,8 @@ impl Message {
             Message::Configure(m) => postcard::to_slice(m, buf),
             Message::Shutdown(m) => postcard::to_slice(m, buf),
             Message::TelemetryRequest(m) => postcard::to_slice(m, buf),
+            Message::MotionReport(m) => postcard::to_slice(m, buf),
+            Message::GoalCancel(m) => postcard::to_slice(m, buf),
             Message::Ack(m) => postcard::to_slice(m, buf),
             Message::Nack(m) => postcard::to_slice(m, buf),
             Message::PlanStatus(m) => postcard::to_slice(m, buf),
@@ -863,6 +1112,7 @@ impl Message {
             Message::DriveCommand(m) => postcard::to_slice(m, buf),
             Message::Telemetry(m) => postcard::to_slice(m, buf),
             Message::Log(m) => postcard::to_slice(m, buf),
+            Message::MissionStatus(m) => postcard::to_slice(m, buf),
         }?;
         Ok(out.len())
     }

@@ -32,7 +32,7 @@ fn spec_example_time_tick() {
     let mut raw = [0u8; 64];
     let n = build_raw(
         Header {
-            version: 1,
+            version: 2,
             kind: 1,
             seq: 1,
         },
@@ -72,7 +72,7 @@ fn frame_with_body(kind: MessageKind, body: &[u8]) -> std::vec::Vec<u8> {
     let mut raw = [0u8; 2100];
     let n = build_raw(
         Header {
-            version: 1,
+            version: crate::config::protocol::PROTOCOL_VERSION,
             kind: kind as u8,
             seq: 3,
         },
@@ -141,23 +141,26 @@ fn header_errors_and_nonfinite_values() {
         Err(NackReason::Truncated)
     );
     let mut raw = [0u8; 64];
+    for version in [0u8, 1, 3, 0xFF] {
+        let n = build_raw(
+            Header {
+                version,
+                kind: 1,
+                seq: 0,
+            },
+            &[0],
+            &mut raw,
+        )
+        .unwrap();
+        assert_eq!(
+            decode_frame(&raw[..n]).map(|_| ()),
+            Err(NackReason::WrongVersion),
+            "version {version}"
+        );
+    }
     let n = build_raw(
         Header {
             version: 2,
-            kind: 1,
-            seq: 0,
-        },
-        &[0],
-        &mut raw,
-    )
-    .unwrap();
-    assert_eq!(
-        decode_frame(&raw[..n]).map(|_| ()),
-        Err(NackReason::WrongVersion)
-    );
-    let n = build_raw(
-        Header {
-            version: 1,
             kind: 0x42,
             seq: 0,
         },
@@ -198,6 +201,7 @@ fn bad_enum_index_is_malformed_not_a_length_problem() {
         planner: PlannerChoice::Team,
         max_iterations: 3,
         time_budget_ms: 0,
+        allow_approximate: false,
     });
     let mut b = [0u8; 64];
     let n = g.encode_body(&mut b).unwrap();
@@ -241,6 +245,7 @@ fn periodic_telemetry_faster_than_the_limit_is_out_of_range() {
             period_ms: 0,
             forward_log_level: LogLevel::Off,
         },
+        mission: MissionConfig::DEFAULT,
     };
     for (period, ok) in [
         (0, true),
@@ -252,4 +257,225 @@ fn periodic_telemetry_faster_than_the_limit_is_out_of_range() {
         c.telemetry.period_ms = period;
         assert_eq!(c.validate().is_ok(), ok, "period {period} ms");
     }
+}
+
+fn sample_configure() -> Configure {
+    Configure {
+        rover: RoverConfig {
+            mass_kg: 50.0,
+            wheel_radius_m: 0.25,
+            axle_length_m: 0.6,
+            boom_length_m: 0.5,
+            friction_coefficient: 0.8,
+        },
+        tether: TetherConfig {
+            root_anchor: Point3::new(0.0, 0.0, 2.0),
+            max_payout_m: 40.0,
+            max_tension_n: 500.0,
+        },
+        planner: PlannerConfig {
+            rng_seed: 3,
+            max_iterations: 750,
+            batch_size: 100,
+            goal_bias: 0.0,
+        },
+        telemetry: TelemetryConfig {
+            period_ms: 0,
+            forward_log_level: LogLevel::Off,
+        },
+        mission: MissionConfig {
+            tracking: Tracking::OpenLoop,
+            replan_cross_track_m: 0.25,
+            payout_tolerance_m: 0.4,
+            min_margin_n: 1.5,
+        },
+    }
+}
+
+fn round_trip(m: &Message) -> Message {
+    let w = wire(11, m);
+    let mut d = Deframer::new();
+    let (n, ev) = d.push(&w);
+    assert_eq!(n, w.len());
+    let (h, back) = decode_frame(ev.unwrap().unwrap()).unwrap();
+    assert_eq!(h.version, 2);
+    assert_eq!(h.kind, m.kind() as u8);
+    back
+}
+
+#[test]
+fn v2_messages_round_trip() {
+    let pose = Pose {
+        position: Point3::new(1.5, -2.0, 0.25),
+        orientation: Quat {
+            x: 0.0,
+            y: 0.0,
+            z: 0.6,
+            w: 0.8,
+        },
+    };
+    let msgs = [
+        Message::Configure(sample_configure()),
+        Message::GoalRequest(GoalRequest {
+            goal_id: 5,
+            position: Point3::new(4.0, 1.0, -1.0),
+            tolerance_m: 0.5,
+            planner: PlannerChoice::Abit,
+            max_iterations: 700,
+            time_budget_ms: 0,
+            allow_approximate: true,
+        }),
+        Message::MotionReport(MotionReport {
+            command_id: 17,
+            outcome: MotionOutcome::Slipped,
+            achieved_yaw_rad: -0.1,
+            achieved_distance_m: 0.9,
+            pose,
+        }),
+        Message::GoalCancel(GoalCancel { goal_id: 5 }),
+        Message::MissionStatus(MissionStatus {
+            goal_id: 5,
+            state: MissionState::Safe,
+            reason: StopReason::TetherInconsistent,
+            distance_driven_m: 3.5,
+            predicted_payout_m: 6.0,
+            measured_payout_m: 7.1,
+            tension_n: 120.0,
+            margin_n: 4.0,
+            cross_track_m: 0.05,
+            replans: 2,
+            anchors: 3,
+            motions_done: 9,
+            tether_rejected: 1,
+            pose_jumps: 0,
+            scans_rejected: 2,
+            tether_reestimates: 1,
+        }),
+    ];
+    for m in &msgs {
+        assert_eq!(&round_trip(m), m);
+    }
+    // every kind is listed once, and each new kind has its documented code and direction
+    assert_eq!(MessageKind::from_u8(0x08), Some(MessageKind::MotionReport));
+    assert_eq!(MessageKind::from_u8(0x09), Some(MessageKind::GoalCancel));
+    assert_eq!(MessageKind::from_u8(0x88), Some(MessageKind::MissionStatus));
+    assert_eq!(MessageKind::MotionReport.direction(), Direction::HostToFlight);
+    assert_eq!(MessageKind::MissionStatus.direction(), Direction::FlightToHost);
+    assert_eq!(MessageKind::from_u8(0x0A), None);
+    assert_eq!(MessageKind::from_u8(0x89), None);
+}
+
+#[test]
+fn spec_examples_v2() {
+    assert_eq!(
+        wire(2, &Message::GoalCancel(GoalCancel { goal_id: 7 })),
+        spec_bytes("example-goal-cancel-wire")
+    );
+    let report = Message::MotionReport(MotionReport {
+        command_id: 3,
+        outcome: MotionOutcome::Completed,
+        achieved_yaw_rad: 0.0,
+        achieved_distance_m: 1.0,
+        pose: Pose {
+            position: Point3::new(1.0, 0.0, 0.0),
+            orientation: Quat::IDENTITY,
+        },
+    });
+    let frame = spec_bytes("example-motion-report-frame");
+    let (h, back) = decode_frame(&frame).unwrap();
+    assert_eq!((h.seq, &back), (3, &report));
+    // the encoder's wire bytes un-stuff to the same frame
+    let w = wire(3, &report);
+    let mut d = Deframer::new();
+    let (_, ev) = d.push(&w);
+    assert_eq!(ev.unwrap().unwrap(), &frame[..]);
+    // a real version-1 frame (the v1 document's example) is a wrong version, not a CRC or kind error
+    assert_eq!(
+        decode_frame(&spec_bytes("example-v1-time-tick-frame")).map(|_| ()),
+        Err(NackReason::WrongVersion)
+    );
+}
+
+#[test]
+fn v2_bad_values_have_their_reasons() {
+    let mut c = sample_configure();
+    assert!(c.validate().is_ok());
+    for (field, v, want) in [
+        (0, 0.0, Invalid::OutOfRange),
+        (0, -0.1, Invalid::OutOfRange),
+        (0, f32::NAN, Invalid::NonFinite),
+        (1, 0.0, Invalid::OutOfRange),
+        (1, f32::INFINITY, Invalid::NonFinite),
+        (2, -1.0, Invalid::OutOfRange),
+        (2, f32::NAN, Invalid::NonFinite),
+    ] {
+        let mut bad = c;
+        match field {
+            0 => bad.mission.replan_cross_track_m = v,
+            1 => bad.mission.payout_tolerance_m = v,
+            _ => bad.mission.min_margin_n = v,
+        }
+        assert_eq!(bad.validate(), Err(want), "field {field} = {v}");
+    }
+    c.mission.min_margin_n = 0.0;
+    assert!(c.validate().is_ok(), "a zero minimum margin is allowed");
+    // over the wire: a Configure with a NaN tolerance is NonFinite
+    let mut nan = sample_configure();
+    nan.mission.payout_tolerance_m = f32::NAN;
+    let mut b = [0u8; 256];
+    let n = Message::Configure(nan).encode_body(&mut b).unwrap();
+    assert_eq!(
+        decode_frame(&frame_with_body(MessageKind::Configure, &b[..n])).map(|_| ()),
+        Err(NackReason::NonFinite)
+    );
+    // a motion report with a non-unit quaternion, a NaN distance, and an unknown outcome index
+    let mut r = MotionReport {
+        command_id: 1,
+        outcome: MotionOutcome::Completed,
+        achieved_yaw_rad: 0.0,
+        achieved_distance_m: 0.5,
+        pose: Pose::IDENTITY,
+    };
+    r.pose.orientation.w = 0.9;
+    let n = Message::MotionReport(r).encode_body(&mut b).unwrap();
+    assert_eq!(
+        decode_frame(&frame_with_body(MessageKind::MotionReport, &b[..n])).map(|_| ()),
+        Err(NackReason::NotUnitQuaternion)
+    );
+    r.pose = Pose::IDENTITY;
+    r.achieved_distance_m = f32::NAN;
+    let n = Message::MotionReport(r).encode_body(&mut b).unwrap();
+    assert_eq!(
+        decode_frame(&frame_with_body(MessageKind::MotionReport, &b[..n])).map(|_| ()),
+        Err(NackReason::NonFinite)
+    );
+    r.achieved_distance_m = 0.5;
+    let n = Message::MotionReport(r).encode_body(&mut b).unwrap();
+    b[1] = 4; // MotionOutcome has 4 variants
+    assert_eq!(
+        decode_frame(&frame_with_body(MessageKind::MotionReport, &b[..n])).map(|_| ()),
+        Err(NackReason::MalformedBody)
+    );
+    // a GoalRequest whose allow_approximate byte is not a bool
+    let g = GoalRequest {
+        goal_id: 1,
+        position: Point3::new(1.0, 2.0, 3.0),
+        tolerance_m: 0.5,
+        planner: PlannerChoice::Abit,
+        max_iterations: 3,
+        time_budget_ms: 0,
+        allow_approximate: true,
+    };
+    let n = Message::GoalRequest(g).encode_body(&mut b).unwrap();
+    assert_eq!(b[n - 1], 1);
+    b[n - 1] = 2;
+    assert_eq!(
+        decode_frame(&frame_with_body(MessageKind::GoalRequest, &b[..n])).map(|_| ()),
+        Err(NackReason::MalformedBody)
+    );
+    // a v1 GoalRequest body (no allow_approximate byte) under a v2 header is cut short
+    assert_eq!(
+        decode_frame(&frame_with_body(MessageKind::GoalRequest, &b[..n - 1])).map(|_| ()),
+        Err(NackReason::BodyTooShort)
+    );
 }

@@ -1,0 +1,842 @@
+//! The closed-loop mission (issue 18, Paton et al. section VII's descent with the loop closed on board): the mission
+//! state machine, the tracked tether state, the path-tracking controller and the checks of the loop's input.
+//! The design and every parameter are in the module docs of [`crate::nav`]; the constants are `config::mission`.
+
+use core::borrow::BorrowMut;
+
+use hal::Instant;
+
+use crate::config::mission as mcfg;
+use crate::config::nav::MAX_PLAN_ITERATIONS;
+use crate::exec::DriveStep;
+use crate::geom::{wrap_angle, Real, Vec3};
+use crate::map::{Block, Map};
+use crate::plan::tethered::{TetherSpace, TetherSpaceParams};
+use crate::protocol::{
+    GoalRequest, MissionConfig, MissionState, MissionStatus, Motion, MotionOutcome, MotionReport, PlanState,
+    Point3, Pose, Quat, StopReason, Tracking, TetherReading,
+};
+use crate::tether::{predict_anchors, Anchor, AnchorHistory};
+
+use super::planning::{self, NavPlanStorage};
+use super::Navigator;
+
+/// The rover's body pose as the mission tracks it: axle centre and heading.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyPose {
+    /// Axle centre, world frame, metres.
+    pub position: Vec3,
+    /// Heading of the body x axis, radians.
+    pub yaw: Real,
+}
+
+impl BodyPose {
+    fn from_wire(p: &Pose) -> Self {
+        let iso = p.to_isometry();
+        BodyPose { position: iso.translation.vector, yaw: crate::geom::heading(&iso.rotation) }
+    }
+    /// As a wire pose (yaw-only orientation: the planner's start takes the position and the heading).
+    fn to_wire(self) -> Pose {
+        let (s, c) = (libm::sinf(0.5 * self.yaw), libm::cosf(0.5 * self.yaw));
+        Pose {
+            position: Point3::new(self.position.x, self.position.y, self.position.z),
+            orientation: Quat { x: 0.0, y: 0.0, z: s, w: c },
+        }
+    }
+}
+
+/// A drive command handed out and not yet reported.
+#[derive(Debug, Clone, Copy)]
+struct InFlight {
+    from: BodyPose,
+    /// Lateral tether direction at the start (see [`lateral_pull`]), for the drift estimate.
+    pull: Real,
+}
+
+/// Counters of the mission's input checks (also in `MissionStatus`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct MissionCounters {
+    /// Tether readings rejected (payout jump beyond the physically possible).
+    pub tether_rejected: u32,
+    /// Motion-report poses rejected (jump against odometry).
+    pub pose_jumps: u32,
+    /// Scans not integrated (sensor pose disagrees with odometry).
+    pub scans_rejected: u32,
+    /// Re-estimates of the anchor history after an encoder disagreement.
+    pub tether_reestimates: u32,
+    /// Remaining-plan motion checks run after motions and scans.
+    pub rechecks: u32,
+    /// Re-checks that failed (each triggers a replan).
+    pub recheck_failures: u32,
+    /// Anchor predictions along executed motions that failed (the history was kept).
+    pub propagation_failures: u32,
+}
+
+/// The mission's state (see the `nav` module docs).
+#[derive(Debug, Clone)]
+pub struct Mission {
+    cfg: MissionConfig,
+    max_payout_m: f32,
+    max_tension_n: f32,
+    weight_n: f32,
+    root: Option<Vec3>,
+    goal: Option<GoalRequest>,
+    state: MissionState,
+    reason: StopReason,
+    body: Option<BodyPose>,
+    in_flight: Option<InFlight>,
+    /// Path segment being driven (`path[seg] -> path[seg + 1]`).
+    seg: usize,
+    /// Next motion of the plan's motion list (open loop).
+    next_open: usize,
+    /// Segments left to re-check, starting at `recheck_at` (0 = nothing to re-check).
+    recheck_left: usize,
+    recheck_at: usize,
+    approximate: bool,
+    tracked: AnchorHistory,
+    /// Re-estimate in progress: the next executed position to propagate to (0 = none), and the history so far.
+    reestimate_at: usize,
+    reestimate_h: AnchorHistory,
+    executed: heapless::Vec<Vec3, { mcfg::EXECUTED_CAPACITY }>,
+    payout: Option<(f32, f32, u64)>,
+    distance_driven_m: f32,
+    margin_n: f32,
+    cross_track_m: f32,
+    replans: u32,
+    motions_done: u32,
+    stalls: u32,
+    pose_jump_run: u32,
+    scan_reject_run: u32,
+    drift_num: f32,
+    drift_den: f32,
+    /// Counters of rejected input.
+    pub counters: MissionCounters,
+}
+
+impl Default for Mission {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Mission {
+    /// No mission yet.
+    pub const fn new() -> Self {
+        Mission {
+            cfg: MissionConfig::DEFAULT,
+            max_payout_m: 0.0,
+            max_tension_n: 0.0,
+            weight_n: 0.0,
+            root: None,
+            goal: None,
+            state: MissionState::Idle,
+            reason: StopReason::None,
+            body: None,
+            in_flight: None,
+            seg: 0,
+            next_open: 0,
+            recheck_left: 0,
+            recheck_at: 0,
+            approximate: false,
+            tracked: AnchorHistory::empty(),
+            reestimate_at: 0,
+            reestimate_h: AnchorHistory::empty(),
+            executed: heapless::Vec::new(),
+            payout: None,
+            distance_driven_m: 0.0,
+            margin_n: 0.0,
+            cross_track_m: 0.0,
+            replans: 0,
+            motions_done: 0,
+            stalls: 0,
+            pose_jump_run: 0,
+            scan_reject_run: 0,
+            drift_num: 0.0,
+            drift_den: 0.0,
+            counters: MissionCounters { tether_rejected: 0, pose_jumps: 0, scans_rejected: 0, tether_reestimates: 0, rechecks: 0, recheck_failures: 0, propagation_failures: 0 },
+        }
+    }
+
+    /// Mission state and stop reason.
+    pub fn state(&self) -> (MissionState, StopReason) {
+        (self.state, self.reason)
+    }
+
+    /// The tracked body pose (from motion reports), if any.
+    pub fn body(&self) -> Option<BodyPose> {
+        self.body
+    }
+
+    /// The tracked anchor history (root first).
+    pub fn tracked(&self) -> &AnchorHistory {
+        &self.tracked
+    }
+
+    /// The learned drift gain (lateral metres per metre per unit of lateral tether direction).
+    pub fn drift_gain(&self) -> f32 {
+        if self.drift_den > 1e-6 {
+            (self.drift_num / self.drift_den).clamp(-mcfg::DRIFT_GAIN_LIMIT, mcfg::DRIFT_GAIN_LIMIT)
+        } else {
+            0.0
+        }
+    }
+
+    fn active(&self) -> bool {
+        matches!(self.state, MissionState::Planning | MissionState::Driving | MissionState::Verifying)
+    }
+
+    fn stop(&mut self, reason: StopReason) {
+        if self.state != MissionState::Safe {
+            log::warn!("mission: safe stop: {reason:?}");
+        }
+        self.state = MissionState::Safe;
+        self.reason = reason;
+        self.recheck_left = 0;
+        self.reestimate_at = 0;
+    }
+
+    /// A `Configure`: the tether starts at the root anchor.
+    pub(crate) fn configure(&mut self, cfg: &crate::protocol::Configure) {
+        self.cfg = cfg.mission;
+        self.max_payout_m = cfg.tether.max_payout_m;
+        self.max_tension_n = cfg.tether.max_tension_n;
+        self.weight_n = cfg.rover.mass_kg * mcfg::STANDARD_GRAVITY;
+        let r = cfg.tether.root_anchor;
+        let root = Vec3::new(r.x, r.y, r.z);
+        self.root = Some(root);
+        self.tracked = AnchorHistory::new(Anchor::root(root));
+        self.executed.clear();
+        if let Some(b) = self.body {
+            let _ = self.executed.push(b.position);
+        }
+    }
+
+    fn predicted_payout(&self) -> f32 {
+        match self.body {
+            Some(b) if !self.tracked.is_empty() => self.tracked.length_to(&b.position),
+            _ => 0.0,
+        }
+    }
+
+    fn remember_executed(&mut self, p: Vec3) {
+        if self.executed.is_full() {
+            // keep every other position: bounded, still a chain of moves from the first
+            let mut k = 0;
+            let n = self.executed.len();
+            for i in (0..n).step_by(2) {
+                if let Some(v) = self.executed.get(i).copied() {
+                    if let Some(slot) = self.executed.get_mut(k) {
+                        *slot = v;
+                    }
+                    k += 1;
+                }
+            }
+            self.executed.truncate(k);
+        }
+        let _ = self.executed.push(p);
+    }
+
+    /// The status frame.
+    pub fn status(&self) -> MissionStatus {
+        let fin = |v: f32| if v.is_finite() { v } else { 0.0 };
+        let (payout, tension) = self.payout.map_or((0.0, 0.0), |(p, t, _)| (p, t));
+        MissionStatus {
+            goal_id: self.goal.map_or(0, |g| g.goal_id),
+            state: self.state,
+            reason: self.reason,
+            distance_driven_m: fin(self.distance_driven_m),
+            predicted_payout_m: fin(self.predicted_payout()),
+            measured_payout_m: payout,
+            tension_n: tension,
+            margin_n: fin(self.margin_n),
+            cross_track_m: fin(self.cross_track_m),
+            replans: self.replans,
+            anchors: u8::try_from(self.tracked.len()).unwrap_or(u8::MAX),
+            motions_done: self.motions_done,
+            tether_rejected: self.counters.tether_rejected,
+            pose_jumps: self.counters.pose_jumps,
+            scans_rejected: self.counters.scans_rejected,
+            tether_reestimates: self.counters.tether_reestimates,
+        }
+    }
+}
+
+/// Signed lateral direction of the tether's pull for a motion along `dir` (unit, horizontal) at `p`: the sine of
+/// the angle from `dir` to the horizontal direction toward the last anchor (positive = the tether pulls to the
+/// left). Zero when the anchor is (horizontally) at the rover.
+fn lateral_pull(tracked: &AnchorHistory, p: &Vec3, dir: (Real, Real)) -> Real {
+    let Some(a) = tracked.last() else { return 0.0 };
+    let (tx, ty) = (a.point.x - p.x, a.point.y - p.y);
+    let n = libm::sqrtf(tx * tx + ty * ty);
+    if n < 1e-3 {
+        return 0.0;
+    }
+    (dir.0 * ty - dir.1 * tx) / n
+}
+
+/// Horizontal distance of `p` from the segment `a -> b`, and the signed lateral offset (left positive).
+fn segment_offset(a: &Vec3, b: &Vec3, p: &Vec3) -> (Real, Real, Real, Real) {
+    let (dx, dy) = (b.x - a.x, b.y - a.y);
+    let len = libm::sqrtf(dx * dx + dy * dy);
+    let (px, py) = (p.x - a.x, p.y - a.y);
+    if len < 1e-6 {
+        return (libm::sqrtf(px * px + py * py), 0.0, 0.0, 0.0);
+    }
+    let (ux, uy) = (dx / len, dy / len);
+    let along = px * ux + py * uy;
+    let lat = ux * py - uy * px;
+    let t = along.clamp(0.0, len);
+    let (cx, cy) = (px - t * ux, py - t * uy);
+    (libm::sqrtf(cx * cx + cy * cy), lat, along, len)
+}
+
+impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> Navigator<B, I, P> {
+    /// The mission (state, counters, tracked tether), for tests and pictures.
+    pub fn mission(&self) -> &Mission {
+        &self.mission
+    }
+
+    /// The pose the next plan starts from: the tracked body pose, else the last scan's sensor pose.
+    pub(super) fn start_pose(&self) -> Option<Pose> {
+        self.mission.body.map(BodyPose::to_wire).or(self.pose)
+    }
+
+    /// A goal request was set up (`accepted`) or refused; a motion in flight is being stopped by the executive.
+    pub(super) fn mission_goal(&mut self, goal: &GoalRequest, accepted: bool) {
+        let m = &mut self.mission;
+        m.goal = Some(*goal);
+        m.replans = 0;
+        m.distance_driven_m = 0.0;
+        m.motions_done = 0;
+        m.stalls = 0;
+        m.seg = 0;
+        m.next_open = 0;
+        m.recheck_left = 0;
+        m.cross_track_m = 0.0;
+        m.reason = StopReason::None;
+        if accepted {
+            m.state = MissionState::Planning;
+            // plan from the tracked tether, not a straight one from the root
+            if m.tracked.len() > 1 {
+                self.storage.borrow_mut().start_history.clone_from(&m.tracked);
+            }
+        } else {
+            m.stop(StopReason::GoalRefused);
+        }
+    }
+
+    /// Planning finished with `state` (the path is in the storage when solved).
+    pub(super) fn mission_planned(&mut self, state: PlanState) {
+        if !self.mission.active() {
+            return;
+        }
+        let m = &mut self.mission;
+        m.seg = 0;
+        m.next_open = 0;
+        match state {
+            PlanState::ExactSolution => {
+                m.approximate = false;
+                m.state = MissionState::Driving;
+            }
+            PlanState::ApproximateSolution => {
+                if m.goal.is_some_and(|g| g.allow_approximate) {
+                    m.approximate = true;
+                    m.state = MissionState::Driving;
+                } else {
+                    m.stop(StopReason::NoSolution);
+                }
+            }
+            PlanState::InvalidInput => m.stop(StopReason::GoalRefused),
+            _ => m.stop(StopReason::NoSolution),
+        }
+        if self.mission.state == MissionState::Driving && self.arrived() {
+            self.mission.state = MissionState::Arrived;
+        }
+    }
+
+    fn arrived(&self) -> bool {
+        match (self.mission.goal, self.mission.body) {
+            (Some(g), Some(b)) => {
+                let (dx, dy) = (b.position.x - g.position.x, b.position.y - g.position.y);
+                libm::sqrtf(dx * dx + dy * dy) <= g.tolerance_m
+            }
+            _ => false,
+        }
+    }
+
+    /// A tether-encoder reading: reject impossible jumps, stop on tension, reconcile payout with the tracked tether.
+    pub(super) fn mission_tether(&mut self, r: &TetherReading) {
+        let m = &mut self.mission;
+        if let Some((p, _, t)) = m.payout {
+            let dt = r.time_us.saturating_sub(t) as f32 * 1e-6;
+            if libm::fabsf(r.payout_m - p) > mcfg::MAX_PAYOUT_RATE_M_PER_S * dt + mcfg::PAYOUT_JUMP_SLACK_M {
+                m.counters.tether_rejected = m.counters.tether_rejected.saturating_add(1);
+                log::warn!("mission: tether reading rejected: payout {} m after {} m in {dt} s", r.payout_m, p);
+                return;
+            }
+        }
+        m.payout = Some((r.payout_m, r.tension_n, r.time_us));
+        if !m.active() {
+            return;
+        }
+        if r.tension_n > m.max_tension_n {
+            m.stop(StopReason::TensionLimit);
+            return;
+        }
+        // While a motion is in flight the tracked pose is the motion's start: no comparison (nor while a
+        // re-estimate runs).
+        if m.in_flight.is_some() || m.body.is_none() || m.reestimate_at != 0 {
+            return;
+        }
+        if libm::fabsf(r.payout_m - m.predicted_payout()) <= m.cfg.payout_tolerance_m {
+            return;
+        }
+        // Re-estimate (in bounded parts, see `reestimate_step`); the rover drives no further until it is done.
+        if m.reestimate_at == 0 {
+            if let Some(root) = m.root {
+                m.counters.tether_reestimates = m.counters.tether_reestimates.saturating_add(1);
+                m.reestimate_h = AnchorHistory::new(Anchor::root(root));
+                m.reestimate_at = 1;
+                log::info!("mission: payout {} m vs tracked {} m: re-estimating the anchors", r.payout_m, m.predicted_payout());
+            }
+        }
+    }
+
+    /// Continue the re-estimate of the anchor history from the root along the executed positions on the current
+    /// map (Alg. 1, at most `REESTIMATE_PER_STEP` predictions per call). `Some(consistent)` when it finished.
+    fn reestimate_step(&mut self) -> Option<bool> {
+        let Ok(map) = Map::reattach(self.cfg, self.blocks.borrow_mut(), self.index.borrow_mut(), self.used) else {
+            self.mission.reestimate_at = 0;
+            return Some(false);
+        };
+        let m = &mut self.mission;
+        let mut out = AnchorHistory::empty();
+        for _ in 0..mcfg::REESTIMATE_PER_STEP {
+            let k = m.reestimate_at;
+            let (Some(a), Some(b)) = (m.executed.get(k.wrapping_sub(1)).copied(), m.executed.get(k).copied()) else {
+                break;
+            };
+            if predict_anchors(&map, &m.reestimate_h, &a, &b, &mut out).is_ok() {
+                m.reestimate_h.clone_from(&out);
+            } else {
+                m.counters.propagation_failures = m.counters.propagation_failures.saturating_add(1);
+            }
+            m.reestimate_at = k + 1;
+        }
+        if m.reestimate_at < m.executed.len() {
+            return None;
+        }
+        m.reestimate_at = 0;
+        m.tracked.clone_from(&m.reestimate_h);
+        log::info!("mission: anchor history re-estimated: {} anchors", m.tracked.len());
+        let measured = m.payout.map_or(0.0, |(p, _, _)| p);
+        Some(libm::fabsf(measured - m.predicted_payout()) <= m.cfg.payout_tolerance_m)
+    }
+
+    /// A scan: `false` when its pose disagrees with the tracked body pose (not integrated, counted).
+    pub(super) fn mission_scan_accepted(&mut self, sensor: &Pose) -> bool {
+        let m = &mut self.mission;
+        let Some(b) = m.body else { return true };
+        let (dx, dy) = (sensor.position.x - b.position.x, sensor.position.y - b.position.y);
+        if libm::sqrtf(dx * dx + dy * dy) <= mcfg::SCAN_POSE_TOLERANCE_M {
+            m.scan_reject_run = 0;
+            // the map changes: re-check the whole remaining plan
+            if matches!(m.state, MissionState::Driving | MissionState::Verifying) {
+                m.recheck_at = m.seg;
+                m.recheck_left = usize::MAX;
+                m.state = MissionState::Verifying;
+            }
+            return true;
+        }
+        m.counters.scans_rejected = m.counters.scans_rejected.saturating_add(1);
+        m.scan_reject_run = m.scan_reject_run.saturating_add(1);
+        log::warn!("mission: scan rejected: sensor {} m from the body pose", libm::sqrtf(dx * dx + dy * dy));
+        if m.scan_reject_run >= mcfg::MAX_SCAN_REJECTS && m.active() {
+            m.stop(StopReason::ScanInconsistent);
+        }
+        false
+    }
+
+    /// The report of the motion in flight (the executive checked the command id).
+    pub(super) fn mission_report(&mut self, r: &MotionReport, motion: Motion) {
+        let flight = self.mission.in_flight.take();
+        let reported = BodyPose::from_wire(&r.pose);
+        let prev = flight.map(|f| f.from).or(self.mission.body);
+        // odometry: the last pose moved by the achieved motion
+        let body = match prev {
+            Some(p) => {
+                let pred = Vec3::new(
+                    p.position.x + r.achieved_distance_m * libm::cosf(p.yaw),
+                    p.position.y + r.achieved_distance_m * libm::sinf(p.yaw),
+                    p.position.z,
+                );
+                let (dx, dy) = (reported.position.x - pred.x, reported.position.y - pred.y);
+                let off = libm::sqrtf(dx * dx + dy * dy);
+                let dyaw = libm::fabsf(wrap_angle(reported.yaw - (p.yaw + r.achieved_yaw_rad)));
+                let limit = mcfg::POSE_JUMP_BASE_M + mcfg::POSE_JUMP_PER_M * libm::fabsf(r.achieved_distance_m);
+                if off > limit || dyaw > mcfg::POSE_JUMP_YAW_RAD {
+                    let m = &mut self.mission;
+                    m.counters.pose_jumps = m.counters.pose_jumps.saturating_add(1);
+                    m.pose_jump_run = m.pose_jump_run.saturating_add(1);
+                    log::warn!("mission: pose rejected: {off} m / {dyaw} rad from odometry");
+                    if m.pose_jump_run >= mcfg::MAX_POSE_JUMPS && m.active() {
+                        m.stop(StopReason::PoseJump);
+                    }
+                    BodyPose { position: pred, yaw: wrap_angle(p.yaw + r.achieved_yaw_rad) }
+                } else {
+                    self.mission.pose_jump_run = 0;
+                    reported
+                }
+            }
+            None => reported,
+        };
+        // the drift estimate: lateral displacement of a straight drive against the tether's lateral pull
+        if let (Some(f), Motion::Straight { .. }) = (flight, motion) {
+            let d = r.achieved_distance_m;
+            let sgn = if d < 0.0 { -1.0 } else { 1.0 };
+            let dir = (sgn * libm::cosf(f.from.yaw), sgn * libm::sinf(f.from.yaw));
+            let (mx, my) = (body.position.x - f.from.position.x, body.position.y - f.from.position.y);
+            let lat = dir.0 * my - dir.1 * mx;
+            if libm::fabsf(d) >= mcfg::MIN_DRIFT_SAMPLE_M && libm::fabsf(f.pull) > 0.05 {
+                let m = &mut self.mission;
+                m.drift_num += lat * f.pull;
+                m.drift_den += f.pull * f.pull * libm::fabsf(d);
+            }
+        }
+        let from = self.mission.body.map(|b| b.position);
+        {
+            let m = &mut self.mission;
+            m.body = Some(body);
+            m.distance_driven_m += libm::fabsf(r.achieved_distance_m);
+            m.motions_done = m.motions_done.saturating_add(1);
+        }
+        self.propagate_tether(from, body.position);
+        let m = &mut self.mission;
+        match r.outcome {
+            MotionOutcome::Stalled => {
+                m.stalls = m.stalls.saturating_add(1);
+                if m.stalls >= mcfg::MAX_STALLS && m.active() {
+                    m.stop(StopReason::MotionStalled);
+                }
+            }
+            MotionOutcome::Completed | MotionOutcome::Slipped | MotionOutcome::Stopped => m.stalls = 0,
+        }
+        if matches!(m.state, MissionState::Driving | MissionState::Verifying) {
+            m.state = MissionState::Verifying;
+            m.recheck_at = m.seg;
+            m.recheck_left = m.recheck_left.max(mcfg::RECHECK_AFTER_MOTION);
+            if r.outcome == MotionOutcome::Stalled {
+                // a stall: the plan ahead is blocked in a way the map may not show; plan again
+                m.recheck_left = 0;
+                m.state = MissionState::Driving;
+                self.replan_pending = true;
+            }
+        }
+        self.update_cross_track();
+        if matches!(self.mission.state, MissionState::Driving | MissionState::Verifying) && self.arrived() {
+            self.mission.state = MissionState::Arrived;
+        }
+    }
+
+    /// Alg. 1 along the executed motion, from the tracked history (an error keeps the history, counted).
+    fn propagate_tether(&mut self, from: Option<Vec3>, to: Vec3) {
+        self.mission.remember_executed(to);
+        let Some(from) = from else { return };
+        let (dx, dy, dz) = (to.x - from.x, to.y - from.y, to.z - from.z);
+        if dx * dx + dy * dy + dz * dz < 1e-6 || self.mission.tracked.is_empty() {
+            return;
+        }
+        let Ok(map) = Map::reattach(self.cfg, self.blocks.borrow_mut(), self.index.borrow_mut(), self.used) else {
+            return;
+        };
+        let m = &mut self.mission;
+        let mut out = AnchorHistory::empty();
+        if predict_anchors(&map, &m.tracked, &from, &to, &mut out).is_ok() {
+            m.tracked = out;
+        } else {
+            m.counters.propagation_failures = m.counters.propagation_failures.saturating_add(1);
+        }
+    }
+
+    fn update_cross_track(&mut self) {
+        let Some(b) = self.mission.body else { return };
+        let path = planning::path(&mut self.storage);
+        let seg = self.mission.seg;
+        let closed = self.mission.cfg.tracking == Tracking::ClosedLoop;
+        let mut best = Real::INFINITY;
+        for (k, w) in path.windows(2).enumerate() {
+            if closed && k < seg {
+                continue;
+            }
+            if let [a, c] = w {
+                best = best.min(segment_offset(&a.0.axle(), &c.0.axle(), &b.position).0);
+            }
+        }
+        self.mission.cross_track_m = if best.is_finite() { best } else { 0.0 };
+    }
+
+    /// No report within the timeout: the executive stopped the rover.
+    pub(super) fn mission_timeout(&mut self) {
+        self.mission.in_flight = None;
+        if self.mission.active() {
+            self.mission.stop(StopReason::MotionTimeout);
+        }
+    }
+
+    /// A cancel of the current goal.
+    pub(super) fn mission_cancel(&mut self) {
+        self.problem = None;
+        self.mission.stop(StopReason::Cancelled);
+    }
+
+    /// Shutdown.
+    pub(super) fn mission_abort(&mut self) {
+        self.mission.in_flight = None;
+        self.mission.stop(StopReason::Shutdown);
+    }
+
+    /// One drive step (see [`DriveStep`]).
+    pub(super) fn mission_drive(&mut self, now: Instant) -> DriveStep {
+        match self.mission.state {
+            MissionState::Driving | MissionState::Verifying => {}
+            _ => return DriveStep::Finished,
+        }
+        if self.mission.in_flight.is_some() {
+            return DriveStep::Wait;
+        }
+        if self.mission.reestimate_at != 0 {
+            return match self.reestimate_step() {
+                None => DriveStep::Wait,
+                Some(false) => {
+                    self.mission.stop(StopReason::TetherInconsistent);
+                    DriveStep::Finished
+                }
+                // the tether lies otherwise than the plan assumed: plan again from the re-estimated history
+                Some(true) => self.replan(now),
+            };
+        }
+        if self.replan_pending || self.mission.cross_track_m > self.mission.cfg.replan_cross_track_m {
+            self.replan_pending = false;
+            return self.replan(now);
+        }
+        if self.mission.state == MissionState::Verifying {
+            return self.recheck_one(now);
+        }
+        let next = match self.mission.cfg.tracking {
+            Tracking::OpenLoop => self.open_loop_motion(),
+            Tracking::ClosedLoop => self.closed_loop_motion(),
+        };
+        match next {
+            Some(m) => {
+                let Some(b) = self.mission.body.or_else(|| self.plan_start().map(|s| BodyPose { position: s.axle(), yaw: s.heading() })) else {
+                    self.mission.stop(StopReason::GoalRefused);
+                    return DriveStep::Finished;
+                };
+                if self.mission.body.is_none() {
+                    self.mission.body = Some(b);
+                    self.mission.remember_executed(b.position);
+                }
+                let dir = match m {
+                    Motion::Straight { distance_m } if distance_m < 0.0 => (-libm::cosf(b.yaw), -libm::sinf(b.yaw)),
+                    _ => (libm::cosf(b.yaw), libm::sinf(b.yaw)),
+                };
+                let pull = lateral_pull(&self.mission.tracked, &b.position, dir);
+                self.mission.in_flight = Some(InFlight { from: b, pull });
+                DriveStep::Motion(m)
+            }
+            None => {
+                if self.arrived() {
+                    self.mission.state = MissionState::Arrived;
+                    DriveStep::Finished
+                } else if self.mission.approximate {
+                    // an approximate plan is driven up to its last safe state, and no farther
+                    self.mission.stop(StopReason::NoSolution);
+                    DriveStep::Finished
+                } else {
+                    self.replan(now)
+                }
+            }
+        }
+    }
+
+    fn open_loop_motion(&mut self) -> Option<Motion> {
+        let k = self.mission.next_open;
+        let m = planning::motion_at(&mut self.storage, k)?;
+        self.mission.next_open = k.saturating_add(1);
+        Some(m)
+    }
+
+    /// The tether-aware path-tracking controller: aim at a point `TRACK_SEGMENT_M` ahead on the current segment,
+    /// with a heading feed-forward that cancels the drift the learned model predicts for the tether's lateral pull.
+    fn closed_loop_motion(&mut self) -> Option<Motion> {
+        let b = self.mission.body.or_else(|| self.plan_start().map(|s| BodyPose { position: s.axle(), yaw: s.heading() }))?;
+        let gain = self.mission.drift_gain();
+        let tracked = self.mission.tracked.clone();
+        let params = TetherSpaceParams::DEFAULT;
+        let path = planning::path(&mut self.storage);
+        let mut seg = self.mission.seg;
+        let mut out = None;
+        // bounded: at most one pass over the path's segments
+        for _ in 0..path.len() {
+            let (Some((a, _)), Some((c, _))) = (path.get(seg), path.get(seg + 1)) else { break };
+            if c.off_map {
+                break;
+            }
+            let (pa, pc) = (a.axle(), c.axle());
+            let (_, _, along, len) = segment_offset(&pa, &pc, &b.position);
+            if len - along < mcfg::SEGMENT_DONE_M || len < 1e-3 {
+                seg += 1;
+                continue;
+            }
+            // the planner's drive direction for this segment (Axel drives either way)
+            let reverse = super::segment_motions(a, c, &params)
+                .iter()
+                .flatten()
+                .any(|m| matches!(m, Motion::Straight { distance_m } if *distance_m < 0.0));
+            let t = (along.max(0.0) + mcfg::TRACK_SEGMENT_M).min(len);
+            let (ux, uy) = ((pc.x - pa.x) / len, (pc.y - pa.y) / len);
+            let target = (pa.x + t * ux - b.position.x, pa.y + t * uy - b.position.y);
+            let dist = libm::sqrtf(target.0 * target.0 + target.1 * target.1);
+            if dist < 1e-3 {
+                seg += 1;
+                continue;
+            }
+            let dir = (target.0 / dist, target.1 / dist);
+            let psi = libm::atan2f(dir.1, dir.0);
+            let pull = lateral_pull(&tracked, &b.position, dir);
+            // drift per metre is gain * pull to the left: aim right of the target by its angle
+            let ff = -libm::atanf(gain * pull);
+            let want = if reverse { psi + ff + core::f32::consts::PI } else { psi + ff };
+            let e = wrap_angle(want - b.yaw);
+            out = Some(if libm::fabsf(e) > mcfg::HEADING_TOLERANCE_RAD {
+                Motion::Turn { yaw_rad: e }
+            } else {
+                let d = dist.min(mcfg::TRACK_SEGMENT_M);
+                Motion::Straight { distance_m: if reverse { -d } else { d } }
+            });
+            break;
+        }
+        self.mission.seg = seg;
+        out
+    }
+
+    /// One motion check of the remaining plan on the current map (bounded: one per step), from the current state
+    /// for the segment being driven; the current state's stability margin first.
+    fn recheck_one(&mut self, now: Instant) -> DriveStep {
+        if self.mission.recheck_left == 0 {
+            self.mission.state = MissionState::Driving;
+            return DriveStep::Wait;
+        }
+        let Some(problem) = self.problem else {
+            self.mission.state = MissionState::Driving;
+            return DriveStep::Wait;
+        };
+        let Some(b) = self.mission.body else {
+            self.mission.recheck_left = 0;
+            self.mission.state = MissionState::Driving;
+            return DriveStep::Wait;
+        };
+        let (cfg, used) = (self.cfg, self.used);
+        let Ok(map) = Map::reattach(cfg, self.blocks.borrow_mut(), self.index.borrow_mut(), used) else {
+            self.mission.recheck_left = 0;
+            self.mission.state = MissionState::Driving;
+            return DriveStep::Wait;
+        };
+        let Ok(space) = TetherSpace::new(&map, problem.bounds, problem.rover, TetherSpaceParams::DEFAULT) else {
+            self.mission.recheck_left = 0;
+            self.mission.state = MissionState::Driving;
+            return DriveStep::Wait;
+        };
+        let m = &mut self.mission;
+        let path = &self.storage.borrow_mut().path;
+        let k = m.recheck_at;
+        m.counters.rechecks = m.counters.rechecks.saturating_add(1);
+        let ok = if k == m.seg {
+            // from the current state: its margin, then the motion to the end of the current segment
+            match space.settle_state(b.position.x, b.position.y, b.yaw) {
+                Ok(cur) => {
+                    match space.stable_with(&cur.settled, &m.tracked) {
+                        Ok(margin) => {
+                            m.margin_n = margin as f32 * m.weight_n;
+                            if m.margin_n < m.cfg.min_margin_n {
+                                m.stop(StopReason::MarginBelowMinimum);
+                                return DriveStep::Finished;
+                            }
+                        }
+                        Err(_) => {
+                            m.margin_n = 0.0;
+                            m.stop(StopReason::MarginBelowMinimum);
+                            return DriveStep::Finished;
+                        }
+                    }
+                    match path.get(k + 1) {
+                        Some((next, _)) if !next.off_map => space.check(&cur, &m.tracked, next).is_ok(),
+                        _ => true,
+                    }
+                }
+                Err(_) => false,
+            }
+        } else {
+            match (path.get(k), path.get(k + 1)) {
+                (Some((a, ha)), Some((c, _))) if !c.off_map => space.check(a, ha, c).is_ok(),
+                _ => true,
+            }
+        };
+        m.recheck_at = k + 1;
+        m.recheck_left = m.recheck_left.saturating_sub(1);
+        if m.recheck_at + 1 >= path.len() {
+            m.recheck_left = 0;
+        }
+        if !ok {
+            m.counters.recheck_failures = m.counters.recheck_failures.saturating_add(1);
+            log::info!("mission: re-check of segment {k} failed on the current map: replan");
+            m.recheck_left = 0;
+            m.state = MissionState::Driving;
+            return self.replan(now);
+        }
+        if m.recheck_left == 0 {
+            m.state = MissionState::Driving;
+        }
+        DriveStep::Wait
+    }
+
+    /// Plan again from the tracked pose and anchor history.
+    fn replan(&mut self, now: Instant) -> DriveStep {
+        let m = &mut self.mission;
+        if m.replans >= mcfg::MAX_REPLANS {
+            m.stop(StopReason::ReplanLimit);
+            return DriveStep::Finished;
+        }
+        m.replans = m.replans.saturating_add(1);
+        let (Some(goal), Some(setup)) = (m.goal, self.setup) else {
+            m.stop(StopReason::GoalRefused);
+            return DriveStep::Finished;
+        };
+        let Some(pose) = self.start_pose() else {
+            self.mission.stop(StopReason::GoalRefused);
+            return DriveStep::Finished;
+        };
+        planning::clear_plan(&mut self.storage);
+        let budget = goal.max_iterations.min(MAX_PLAN_ITERATIONS);
+        let set_up = match Map::reattach(self.cfg, self.blocks.borrow_mut(), self.index.borrow_mut(), self.used) {
+            Ok(map) => planning::set_up(&map, &setup, &pose, &goal, budget, now).ok(),
+            Err(_) => None,
+        };
+        let Some(mut problem) = set_up else {
+            log::warn!("mission: replan could not be set up from the current pose");
+            self.problem = None;
+            self.mission.stop(StopReason::GoalRefused);
+            return DriveStep::Finished;
+        };
+        // another sample sequence than the plan that failed
+        problem.seed ^= u64::from(self.mission.replans).wrapping_mul(0xD1B5_4A32_D192_ED03);
+        self.problem = Some(problem);
+        self.storage.borrow_mut().start_history.clone_from(&self.mission.tracked);
+        self.mission.state = MissionState::Planning;
+        self.mission.seg = 0;
+        self.mission.next_open = 0;
+        self.mission.cross_track_m = 0.0;
+        log::info!("mission: replan {} from ({}, {})", self.mission.replans, pose.position.x, pose.position.y);
+        DriveStep::Replan
+    }
+}

@@ -1,0 +1,460 @@
+//! Unit tests of the closed-loop mission: the navigator driven through its `Autonomy` hooks against a tiny
+//! kinematic world written here (flat ground mapped by synthetic downward scans; turns exact, straight drives moved
+//! along the heading plus an optional lateral drift toward the tether's side computed by the test's own model: a
+//! straight tether to the root, not the navigator's anchor history).
+
+use super::*;
+use crate::protocol::{
+    LogLevel, MissionConfig, MissionState, MotionOutcome, PlannerConfig, Point3, Quat, RoverConfig, StopReason,
+    TelemetryConfig, TetherConfig, Tracking,
+};
+use std::boxed::Box;
+use std::vec;
+use std::vec::Vec;
+
+type TestNav = Navigator<Vec<Block>, Vec<u32>, Box<NavPlanStorage>>;
+
+const VOXEL: f32 = 0.1;
+const SENSOR_H: f32 = 4.0;
+const Z0: f32 = 0.03;
+/// Axle height above the flat ground reported in the test world's poses (the wheel radius).
+const AXLE_H: f32 = 0.35;
+
+fn configure(root: Point3, mission: MissionConfig) -> Configure {
+    Configure {
+        rover: RoverConfig {
+            mass_kg: 50.0,
+            wheel_radius_m: 0.35,
+            axle_length_m: 1.0,
+            boom_length_m: 1.0,
+            friction_coefficient: 0.6,
+        },
+        tether: TetherConfig { root_anchor: root, max_payout_m: 50.0, max_tension_n: 2000.0 },
+        planner: PlannerConfig { rng_seed: 11, max_iterations: 750, batch_size: 100, goal_bias: 0.0 },
+        telemetry: TelemetryConfig { period_ms: 0, forward_log_level: LogLevel::Off },
+        mission,
+    }
+}
+
+fn goal(id: u32, x: f32, y: f32) -> GoalRequest {
+    GoalRequest {
+        goal_id: id,
+        position: Point3 { x, y, z: Z0 },
+        tolerance_m: 0.4,
+        planner: PlannerChoice::Abit,
+        max_iterations: 120,
+        time_budget_ms: 0,
+        allow_approximate: false,
+    }
+}
+
+fn scan_down(nav: &mut TestNav, id: u32, cx: f32) {
+    scan_ground(nav, id, cx, &|_| true);
+}
+
+/// A downward scan from above `(cx, 0)` of the flat ground where `seen(x)` (elsewhere no return: unknown).
+fn scan_ground(nav: &mut TestNav, id: u32, cx: f32, seen: &dyn Fn(f32) -> bool) {
+    let step = 0.5 * VOXEL;
+    let mut pts = Vec::new();
+    for i in -20..=20 {
+        for j in -44..=44 {
+            let (x, y) = (i as f32 * step, j as f32 * step);
+            if seen(cx + x) {
+                pts.push(Point3 { x, y, z: Z0 - SENSOR_H });
+            }
+        }
+    }
+    let pose = Pose { position: Point3 { x: cx, y: 0.0, z: SENSOR_H }, orientation: Quat { x: 0.0, y: 0.0, z: 0.0, w: 1.0 } };
+    nav.scan(&Scan { scan_id: id, sensor_pose: pose, points: &pts }, Instant::from_micros(0));
+}
+
+/// A navigator configured with `root` and `mission`, the flat world mapped over x in [-1, 5], y in [-2.2, 2.2]; the
+/// last scan from above the origin (the rover's first pose).
+fn mapped(root: Point3, mission: MissionConfig) -> TestNav {
+    mapped_where(root, mission, &|_| true)
+}
+
+fn mapped_where(root: Point3, mission: MissionConfig, seen: &dyn Fn(f32) -> bool) -> TestNav {
+    let mut nav =
+        Navigator::new(MapConfig::with_voxel_size(VOXEL), vec![Block::EMPTY; 4096], vec![0u32; 8192], Box::default())
+            .unwrap();
+    nav.configure(&configure(root, mission)).unwrap();
+    let mut id = 0;
+    let mut x = -1.0;
+    while x <= 5.0 + 1e-3 {
+        id += 1;
+        scan_ground(&mut nav, id, x, seen);
+        x += 0.5;
+    }
+    scan_ground(&mut nav, id + 1, 0.0, seen);
+    assert_eq!(nav.map_status().pool_errors, 0);
+    nav
+}
+
+const ROOT: Point3 = Point3 { x: -1.0, y: 0.0, z: 1.5 };
+
+/// The test's kinematic world: the true pose, and a lateral drift gain (metres per metre driven per unit of the
+/// sine between the drive direction and the straight line to the root).
+struct World {
+    x: f32,
+    y: f32,
+    yaw: f32,
+    drift: f32,
+    root: Point3,
+}
+
+impl World {
+    fn new(root: Point3, drift: f32) -> Self {
+        World { x: 0.0, y: 0.0, yaw: 0.0, drift, root }
+    }
+    fn execute(&mut self, m: Motion) -> (f32, f32) {
+        match m {
+            Motion::Turn { yaw_rad } => {
+                self.yaw += yaw_rad;
+                (yaw_rad, 0.0)
+            }
+            Motion::Straight { distance_m } => {
+                // 5 cm increments, the drift re-evaluated at each
+                let n = (libm::fabsf(distance_m) / 0.05).ceil().max(1.0) as i32;
+                let d = distance_m / n as f32;
+                for _ in 0..n {
+                    let s = d.signum();
+                    let (dx, dy) = (s * self.yaw.cos(), s * self.yaw.sin());
+                    let (tx, ty) = (self.root.x - self.x, self.root.y - self.y);
+                    let tn = (tx * tx + ty * ty).sqrt().max(1e-6);
+                    let pull = (dx * ty - dy * tx) / tn;
+                    let lat = self.drift * pull * d.abs();
+                    self.x += d * self.yaw.cos() - lat * dy;
+                    self.y += d * self.yaw.sin() + lat * dx;
+                }
+                (0.0, distance_m)
+            }
+            Motion::Stop => (0.0, 0.0),
+        }
+    }
+    fn pose(&self) -> Pose {
+        Pose {
+            position: Point3 { x: self.x, y: self.y, z: Z0 + AXLE_H },
+            orientation: Quat { x: 0.0, y: 0.0, z: (0.5 * self.yaw).sin(), w: (0.5 * self.yaw).cos() },
+        }
+    }
+    fn report(&mut self, command_id: u32, m: Motion) -> MotionReport {
+        let (yaw, dist) = self.execute(m);
+        MotionReport { command_id, outcome: MotionOutcome::Completed, achieved_yaw_rad: yaw, achieved_distance_m: dist, pose: self.pose() }
+    }
+}
+
+fn plan(nav: &mut TestNav) -> PlanProgress {
+    let mut buf = PlanBuffer::new();
+    for k in 0..2000u64 {
+        let p = nav.plan_step(Instant::from_micros(k * 1000), 8, &mut buf);
+        if matches!(p, PlanProgress::Finished { .. }) {
+            return p;
+        }
+    }
+    panic!("planning did not finish");
+}
+
+/// What a run of the loop saw.
+#[derive(Default, Debug)]
+struct Run {
+    motions: u32,
+    max_cross_track: f32,
+    replans: u32,
+}
+
+/// Runs the loop like the executive: plan, then drive steps; each motion executed in `world` and reported (after
+/// `hook(k, nav, world)`, which may inject input). At most `max_steps` drive steps.
+fn drive(nav: &mut TestNav, world: &mut World, max_steps: u32, hook: &mut dyn FnMut(u32, &mut TestNav, &mut World)) -> Run {
+    let mut run = Run::default();
+    let mut planning = true;
+    let mut id = 0;
+    for _ in 0..max_steps {
+        if planning {
+            plan(nav);
+            planning = false;
+        }
+        match nav.drive_step(Instant::from_micros(0)) {
+            DriveStep::Motion(m) => {
+                let r = world.report(id, m);
+                id += 1;
+                run.motions += 1;
+                nav.motion_report(&r, m, Instant::from_micros(0));
+                hook(run.motions, nav, world);
+                let (dist, _, _, _) = off_path(world, 0.0, 4.0);
+                run.max_cross_track = run.max_cross_track.max(dist);
+            }
+            DriveStep::Wait => {}
+            DriveStep::Replan => {
+                run.replans += 1;
+                planning = true;
+            }
+            DriveStep::Finished => break,
+        }
+    }
+    run
+}
+
+/// The true distance of the world's rover from the straight line y = y0 between x = 0 and x = x1 (the test's
+/// own judge of tracking, independent of the navigator's cross-track).
+fn off_path(w: &World, y0: f32, x1: f32) -> (f32, f32, f32, f32) {
+    let cx = w.x.clamp(0.0, x1);
+    let d = ((w.x - cx).powi(2) + (w.y - y0).powi(2)).sqrt();
+    (d, w.x, w.y, w.yaw)
+}
+
+fn horizontal(a: &Pose, x: f32, y: f32) -> f32 {
+    ((a.position.x - x).powi(2) + (a.position.y - y).powi(2)).sqrt()
+}
+
+#[test]
+fn a_mission_plans_drives_and_arrives() {
+    let mut nav = mapped(ROOT, MissionConfig::DEFAULT);
+    assert_eq!(nav.goal(&goal(1, 3.0, 0.0), Instant::from_micros(0)), PlanState::Accepted);
+    assert_eq!(nav.mission().state().0, MissionState::Planning);
+    let mut world = World::new(ROOT, 0.0);
+    let run = drive(&mut nav, &mut world, 400, &mut |_, _, _| {});
+    let st = nav.mission_status().unwrap();
+    assert_eq!((st.state, st.reason), (MissionState::Arrived, StopReason::None), "{run:?} {st:?}");
+    // the world's rover (not the navigator's belief) is in the goal region
+    assert!(horizontal(&world.pose(), 3.0, 0.0) <= 0.4, "rover at ({}, {})", world.x, world.y);
+    assert_eq!(st.motions_done, run.motions);
+    assert!(st.distance_driven_m >= 2.5, "{st:?}");
+    // the tracked tether: its length to the true axle equals the straight line to the root (no obstacle)
+    let p = world.pose().position;
+    let straight = ((p.x - ROOT.x).powi(2) + (p.y - ROOT.y).powi(2) + (p.z - ROOT.z).powi(2)).sqrt();
+    assert!((st.predicted_payout_m - straight).abs() < 0.05, "{} vs {straight}", st.predicted_payout_m);
+    assert_eq!(st.anchors, 1);
+    assert!(st.margin_n > 0.0, "{st:?}");
+    assert!(nav.mission().counters.rechecks > 0);
+}
+
+#[test]
+fn a_cancel_while_driving_stops_safe() {
+    let mut nav = mapped(ROOT, MissionConfig::DEFAULT);
+    nav.goal(&goal(1, 3.0, 0.0), Instant::from_micros(0));
+    let mut world = World::new(ROOT, 0.0);
+    let run = drive(&mut nav, &mut world, 400, &mut |k, nav, _| {
+        if k == 2 {
+            nav.cancel(1, Instant::from_micros(0)).unwrap();
+        }
+    });
+    assert_eq!(run.motions, 2, "no motion after the cancel");
+    let st = nav.mission_status().unwrap();
+    assert_eq!((st.state, st.reason), (MissionState::Safe, StopReason::Cancelled));
+    assert_eq!(nav.drive_step(Instant::from_micros(0)), DriveStep::Finished);
+}
+
+#[test]
+fn a_new_goal_while_driving_replaces_the_old_one() {
+    let mut nav = mapped(ROOT, MissionConfig::DEFAULT);
+    nav.goal(&goal(1, 3.0, 0.0), Instant::from_micros(0));
+    let mut world = World::new(ROOT, 0.0);
+    let mut changed = false;
+    let run = drive(&mut nav, &mut world, 600, &mut |k, nav, _| {
+        if k == 3 && !changed {
+            changed = true;
+            assert_eq!(nav.goal(&goal(2, 2.0, 1.0), Instant::from_micros(0)), PlanState::Accepted);
+        }
+    });
+    // the drive loop planned anew after the goal (the hook's goal put the mission in Planning: drive_step says
+    // Finished until planned, so drive again)
+    let mut run2 = Run::default();
+    if nav.mission().state().0 == MissionState::Planning {
+        run2 = drive(&mut nav, &mut world, 600, &mut |_, _, _| {});
+    }
+    let st = nav.mission_status().unwrap();
+    assert_eq!(st.goal_id, 2);
+    assert_eq!((st.state, st.reason), (MissionState::Arrived, StopReason::None), "{run:?} {run2:?} {st:?}");
+    assert!(horizontal(&world.pose(), 2.0, 1.0) <= 0.4, "rover at ({}, {})", world.x, world.y);
+    // the new plan started where the rover was, not at the origin
+    let start = nav.plan_start().unwrap().axle();
+    assert!(start.x > 0.3 || start.y.abs() > 0.05, "replanned start {start:?}");
+}
+
+#[test]
+fn a_disagreeing_tether_reading_is_re_estimated_then_stops_safe() {
+    let mut nav = mapped(ROOT, MissionConfig::DEFAULT);
+    nav.goal(&goal(1, 3.0, 0.0), Instant::from_micros(0));
+    let mut world = World::new(ROOT, 0.0);
+    let mut t = 1_000_000u64;
+    let run = drive(&mut nav, &mut world, 400, &mut |k, nav, w| {
+        let p = w.pose().position;
+        let truth = ((p.x - ROOT.x).powi(2) + (p.y - ROOT.y).powi(2) + (p.z - ROOT.z).powi(2)).sqrt();
+        t += 10_000_000;
+        // agreeing readings first; after the third motion the tether snags: the encoder pays out 2 m more
+        // (slowly: not a jump)
+        let snag = if k >= 3 { 2.0 } else { 0.0 };
+        let r = TetherReading { time_us: t, payout_m: truth + snag, tension_n: 100.0, boom_angle_rad: 0.0 };
+        nav.tether_reading(&r, Instant::from_micros(0));
+    });
+    let st = nav.mission_status().unwrap();
+    assert_eq!((st.state, st.reason), (MissionState::Safe, StopReason::TetherInconsistent), "{run:?} {st:?}");
+    assert_eq!(st.tether_reestimates, 1, "re-estimated once before stopping");
+    assert_eq!(run.motions, 3);
+    assert_eq!(nav.drive_step(Instant::from_micros(0)), DriveStep::Finished);
+}
+
+#[test]
+fn a_payout_jump_is_rejected_and_counted_and_tension_over_the_limit_stops() {
+    let mut nav = mapped(ROOT, MissionConfig::DEFAULT);
+    nav.goal(&goal(1, 3.0, 0.0), Instant::from_micros(0));
+    let r = |t: u64, p: f32, n: f32| TetherReading { time_us: t, payout_m: p, tension_n: n, boom_angle_rad: 0.0 };
+    nav.tether_reading(&r(1_000_000, 2.0, 50.0), Instant::from_micros(0));
+    // 5 m in 0.1 s: not physically possible
+    nav.tether_reading(&r(1_100_000, 7.0, 50.0), Instant::from_micros(0));
+    let st = nav.mission_status().unwrap();
+    assert_eq!(st.tether_rejected, 1);
+    assert_eq!(st.measured_payout_m, 2.0, "the jump was not taken");
+    nav.tether_reading(&r(1_200_000, 2.05, 2500.0), Instant::from_micros(0));
+    let st = nav.mission_status().unwrap();
+    assert_eq!((st.state, st.reason), (MissionState::Safe, StopReason::TensionLimit));
+}
+
+#[test]
+fn a_pose_that_jumps_against_odometry_is_rejected_and_counted() {
+    let mut nav = mapped(ROOT, MissionConfig::DEFAULT);
+    nav.goal(&goal(1, 3.0, 0.0), Instant::from_micros(0));
+    let mut world = World::new(ROOT, 0.0);
+    plan(&mut nav);
+    let mut id = 0;
+    let mut jumped = None;
+    for _ in 0..100 {
+        match nav.drive_step(Instant::from_micros(0)) {
+            DriveStep::Motion(m) => {
+                let mut rep = world.report(id, m);
+                id += 1;
+                if jumped.is_none() && matches!(m, Motion::Straight { .. }) {
+                    // the localisation says 3 m to the side
+                    rep.pose.position.y += 3.0;
+                    jumped = Some(world.pose());
+                }
+                nav.motion_report(&rep, m, Instant::from_micros(0));
+                if jumped.is_some() {
+                    break;
+                }
+            }
+            DriveStep::Wait => {}
+            other => panic!("{other:?}"),
+        }
+    }
+    let truth = jumped.expect("a straight drive was commanded");
+    let st = nav.mission_status().unwrap();
+    assert_eq!(st.pose_jumps, 1);
+    assert_ne!(st.state, MissionState::Safe, "one jump is rejected, not fatal");
+    let b = nav.mission().body().unwrap();
+    assert!((b.position.y - truth.position.y).abs() < 0.05, "odometry kept: {b:?} vs {truth:?}");
+}
+
+#[test]
+fn closed_loop_tracking_corrects_a_lateral_tether_drift_that_open_loop_does_not() {
+    // the root off to the side: the tether pulls left of the drive to the goal
+    let root = Point3 { x: -1.0, y: 1.2, z: 1.5 };
+    let run_with = |tracking: Tracking| {
+        // no replans on cross-track: compare the trackers alone
+        let mission = MissionConfig { tracking, replan_cross_track_m: 10.0, ..MissionConfig::DEFAULT };
+        let mut nav = mapped(root, mission);
+        let mut g = goal(1, 4.0, 0.0);
+        g.tolerance_m = 0.3;
+        assert_eq!(nav.goal(&g, Instant::from_micros(0)), PlanState::Accepted);
+        assert!(matches!(plan(&mut nav), PlanProgress::Finished { state: PlanState::ExactSolution, .. }));
+        let planned: Vec<Vec3> = nav.plan_path().iter().map(|(s, _)| s.axle()).collect();
+        let mut world = World::new(root, 0.3);
+        let run = drive(&mut nav, &mut world, 600, &mut |_, _, _| {});
+        std::println!("{tracking:?}: {:?}", nav.mission_status());
+        (run, world, nav.mission().drift_gain(), planned)
+    };
+    let (open, w_open, _, p_open) = run_with(Tracking::OpenLoop);
+    let (closed, w_closed, gain, p_closed) = run_with(Tracking::ClosedLoop);
+    // both first plans run (nearly) straight along y = 0 (the test judges against that line)
+    for p in p_open.iter().chain(&p_closed) {
+        assert!(p.y.abs() < 0.35, "plan leaves the line: {p:?}");
+    }
+    std::println!("open {open:?} end ({}, {}); closed {closed:?} end ({}, {}); learned gain {gain}", w_open.x, w_open.y, w_closed.x, w_closed.y);
+    assert!(open.max_cross_track > 0.3, "open loop drifted only {open:?}");
+    assert!(closed.max_cross_track < 0.2, "closed loop left the path: {closed:?}");
+    assert!(open.max_cross_track > 2.0 * closed.max_cross_track, "open {open:?} closed {closed:?}");
+    assert!(gain > 0.0, "the drift toward the tether was learned: {gain}");
+    assert!(horizontal(&w_closed.pose(), 4.0, 0.0) <= 0.3);
+}
+
+#[test]
+fn a_scan_whose_pose_disagrees_with_odometry_is_not_integrated() {
+    let mut nav = mapped(ROOT, MissionConfig::DEFAULT);
+    nav.goal(&goal(1, 3.0, 0.0), Instant::from_micros(0));
+    let mut world = World::new(ROOT, 0.0);
+    plan(&mut nav);
+    // one motion, so the navigator has a body pose from a report
+    let DriveStep::Motion(m) = nav.drive_step(Instant::from_micros(0)) else { panic!("no motion") };
+    let r = world.report(0, m);
+    nav.motion_report(&r, m, Instant::from_micros(0));
+    let before = nav.map_status().scans_integrated;
+    // a scan said to be taken 10 m away from where odometry puts the rover
+    scan_down(&mut nav, 99, 10.0);
+    assert_eq!(nav.map_status().scans_integrated, before, "the disagreeing scan was integrated");
+    assert_eq!(nav.mission_status().unwrap().scans_rejected, 1);
+    // a scan from above the rover is integrated
+    scan_down(&mut nav, 100, world.x);
+    assert_eq!(nav.map_status().scans_integrated, before + 1);
+    assert_ne!(nav.mission_status().unwrap().state, MissionState::Safe);
+}
+
+#[test]
+fn no_waypoint_below_the_minimum_margin_is_sent_or_driven() {
+    // a minimum margin no state on this map can have (the rover's whole weight)
+    let mission = MissionConfig { min_margin_n: 1.0e6, ..MissionConfig::DEFAULT };
+    let mut nav = mapped(ROOT, mission);
+    assert_eq!(nav.goal(&goal(1, 3.0, 0.0), Instant::from_micros(0)), PlanState::Accepted);
+    let mut buf = PlanBuffer::new();
+    let mut last = None;
+    for k in 0..2000u64 {
+        let p = nav.plan_step(Instant::from_micros(k * 1000), 8, &mut buf);
+        if let PlanProgress::Finished { state, .. } = p {
+            last = Some(state);
+            break;
+        }
+    }
+    assert_eq!(last, Some(PlanState::NoSolutionWithinBudget));
+    assert!(buf.is_empty(), "{} waypoints sent", buf.len());
+    let st = nav.mission_status().unwrap();
+    assert_eq!((st.state, st.reason), (MissionState::Safe, StopReason::NoSolution));
+    assert_eq!(nav.drive_step(Instant::from_micros(0)), DriveStep::Finished);
+    // the same world with the default minimum plans and every sent waypoint has a margin at or above it
+    let mut nav = mapped(ROOT, MissionConfig::DEFAULT);
+    nav.goal(&goal(1, 3.0, 0.0), Instant::from_micros(0));
+    let mut buf = PlanBuffer::new();
+    for k in 0..2000u64 {
+        if let PlanProgress::Finished { state, .. } = nav.plan_step(Instant::from_micros(k * 1000), 8, &mut buf) {
+            assert_eq!(state, PlanState::ExactSolution);
+            break;
+        }
+    }
+    assert!(buf.len() >= 2);
+    assert!(buf.iter().all(|w| w.stability_margin >= 0.0), "{buf:?}");
+}
+
+#[test]
+fn an_approximate_solution_is_driven_only_when_allowed_and_only_to_its_last_state() {
+    // ground unobserved for x in [1.2, 2.4]: the goal at x = 3.5 cannot be reached
+    let seen = |x: f32| !(1.2..=2.4).contains(&x);
+    for allow in [false, true] {
+        let mut nav = mapped_where(ROOT, MissionConfig::DEFAULT, &seen);
+        let mut g = goal(1, 3.5, 0.0);
+        g.allow_approximate = allow;
+        g.max_iterations = 24;
+        assert_eq!(nav.goal(&g, Instant::from_micros(0)), PlanState::Accepted);
+        let p = plan(&mut nav);
+        let PlanProgress::Finished { state, .. } = p else { unreachable!() };
+        let mut world = World::new(ROOT, 0.0);
+        let run = drive(&mut nav, &mut world, 400, &mut |_, _, _| {});
+        let st = nav.mission_status().unwrap();
+        std::println!("allow {allow}: {state:?} {run:?} {st:?}");
+        assert_eq!((st.state, st.reason), (MissionState::Safe, StopReason::NoSolution));
+        if state == PlanState::ApproximateSolution && allow {
+            assert!(run.motions > 0, "an allowed approximate plan is driven");
+            assert!(world.x < 1.2, "driven past the last safe state: x = {}", world.x);
+        } else {
+            assert_eq!(run.motions, 0, "{state:?} driven without allow_approximate");
+        }
+    }
+}
