@@ -3,17 +3,20 @@
 //! (Fig. 7). It follows OMPL 1.5.2's `BITstar`/`ABITstar`. Heap-free, every loop bounded.
 //!
 //! ## Files (OMPL's split of `informedtrees/bitstar/`)
+//! The data structures are types of their own over the arena, generic only over what they store; the planner's
+//! methods in each file name only the bounds they use (the space, the objective, the generator, ...).
+//!
 //! | file | what | OMPL |
 //! |---|---|---|
-//! | `mod.rs` | [`AbitStar`]: set-up, the iteration (batch / final search / one edge), public API | `BITstar.cpp` |
+//! | `mod.rs` | [`AbitStar`]: set-up, the iteration ([`Planner::step`]), processing one edge, the public API | `BITstar.cpp` |
 //! | `params.rs` | [`AbitParams`] and their defaults | the planner's parameters |
 //! | `node.rs` | [`Node`] and its flags | `Vertex` |
-//! | `arena.rs` | [`AbitArena`]: the node arena, the edge slab and heap, the memo; [`ArenaUse`] | (the planner's storage) |
-//! | `graph.rs` | allocation, neighbours, tree bookkeeping, cost propagation, goals | `ImplicitGraph` |
-//! | `queue.rs` | the edge queue over [`crate::plan::heap::IndexedHeap`], vertex expansion | `SearchQueue` |
-//! | `memo.rs` | the edge memo | the vertices' black / white lists |
+//! | `arena.rs` | [`AbitArena`]: the graph, the queue and the memo, lent by the caller; cost propagation (tree and queue); [`ArenaUse`] | (the planner's storage) |
+//! | `graph.rs` | `ImplicitGraph`: nodes and free list, goal vertices, nearest neighbours, tree links, pruning; the planner's heuristics, `add_edge`, best goal | `ImplicitGraph` |
+//! | `queue.rs` | `SearchQueue`: the edge slab over [`crate::plan::heap::IndexedHeap`]; the planner's vertex expansion | `SearchQueue` |
+//! | `memo.rs` | `EdgeMemo`: memoised motion checks keyed by node generations | the vertices' black / white lists |
 //! | `attachments.rs` | history twins, revealing edges, copied attachments, catch-boundary samples | (Paton et al. V-A) |
-//! | `batch.rs` | batches: RGG terms, sampling, informed sampling, pruning | `ImplicitGraph::addNewSamples`, `prune` |
+//! | `batch.rs` | batches: RGG terms, sampling, informed sampling; starting a batch or its final search | `ImplicitGraph::addNewSamples`, `BITstar::iterate` |
 //! | `suspend.rs` | [`AbitSuspended`]: suspend and resume a search | — |
 //!
 //! ## The algorithm
