@@ -6,6 +6,8 @@
 //! Knowing the positions is what makes the heap *indexed*: an item whose key changed is moved in O(log n)
 //! ([`Heap::update`], decrease-key and increase-key alike) and an item can leave from anywhere
 //! ([`Heap::remove`]), as with OMPL's `BinaryHeap` element handles.
+//! Items that each record their own position (ABIT*'s queued edges, the homotopy A*'s nodes) implement
+//! [`HeapSlot`] instead: a slice of them, addressed by index, is then the [`HeapItems`].
 //!
 //! One algorithm, two kinds of id storage ([`HeapIds`]):
 //! - [`IndexedHeap<N>`]: a fixed capacity `N`, a const generic (a `heapless::Vec` of ids); the heap can be a
@@ -41,6 +43,35 @@ pub trait HeapItems {
     fn set_position(&mut self, id: u32, pos: u32);
     /// The position last recorded for `id` (`None` or [`NOT_IN_HEAP`] if none).
     fn position(&self, id: u32) -> Option<u32>;
+}
+
+/// An item that records its own heap position, ordered against its peers: a slice of them, addressed by index,
+/// is the [`HeapItems`] (ABIT*'s edge slab, the homotopy A*'s node arena).
+pub trait HeapSlot {
+    /// Does this item, id `id`, come out before `other`, id `other_id`? A strict order.
+    fn before(&self, id: u32, other: &Self, other_id: u32) -> bool;
+    /// The position last recorded for it.
+    fn heap_position(&self) -> u32;
+    /// Record that it now sits at heap position `pos` ([`NOT_IN_HEAP`] when it left the heap).
+    fn set_heap_position(&mut self, pos: u32);
+}
+
+/// A slice of [`HeapSlot`]s: the id is the index.
+impl<T: HeapSlot> HeapItems for [T] {
+    fn before(&self, a: u32, b: u32) -> bool {
+        match (self.get(a as usize), self.get(b as usize)) {
+            (Some(x), Some(y)) => x.before(a, y, b),
+            _ => false,
+        }
+    }
+    fn set_position(&mut self, id: u32, pos: u32) {
+        if let Some(x) = self.get_mut(id as usize) {
+            x.set_heap_position(pos);
+        }
+    }
+    fn position(&self, id: u32) -> Option<u32> {
+        self.get(id as usize).map(T::heap_position)
+    }
 }
 
 /// Where a heap keeps its ids: position 0 is the front. The heap algorithm ([`Heap`]) is written once over this.
@@ -742,6 +773,47 @@ mod tests {
                 assert_consistent_ties(&heap, &items);
             }
         }
+    }
+
+    /// An item that keeps its own position, largest key first: a slice of them is the heap's items.
+    struct Slot {
+        key: i32,
+        pos: u32,
+    }
+
+    impl HeapSlot for Slot {
+        fn before(&self, id: u32, other: &Self, other_id: u32) -> bool {
+            self.key > other.key || (self.key == other.key && id < other_id)
+        }
+        fn heap_position(&self) -> u32 {
+            self.pos
+        }
+        fn set_heap_position(&mut self, pos: u32) {
+            self.pos = pos;
+        }
+    }
+
+    #[test]
+    fn a_slice_of_heap_slots_is_ordered_by_the_slots_and_records_their_positions() {
+        let keys = [4, 1, 3, 1, 0, 2];
+        let mut slots: StdVec<Slot> = keys.iter().map(|&key| Slot { key, pos: NOT_IN_HEAP }).collect();
+        let mut heap: IndexedHeap<8> = IndexedHeap::new();
+        for id in 0..6 {
+            heap.push(id, &mut slots[..]).unwrap();
+        }
+        for p in 0..heap.len() {
+            let id = heap.get(p).unwrap();
+            assert_eq!(slots[id as usize].pos as usize, p, "position recorded in the slot");
+        }
+        slots[0].key = 0;
+        heap.update(0, &mut slots[..]);
+        let mut order = StdVec::new();
+        while let Some(id) = heap.pop(&mut slots[..]) {
+            assert_eq!(slots[id as usize].pos, NOT_IN_HEAP);
+            order.push(id);
+        }
+        assert_eq!(order, [2, 5, 1, 3, 0, 4], "largest key first, ties by id");
+        assert!(!slots[..].before(0, 99), "an unknown id is never before");
     }
 
     fn assert_consistent_ties<S: HeapIds>(heap: &Heap<S>, items: &TieKeys) {

@@ -7,7 +7,7 @@
 
 use heapless::Vec;
 
-use crate::plan::heap::{Full, HeapItems, IndexedHeap, NOT_IN_HEAP};
+use crate::plan::heap::{Full, HeapSlot, IndexedHeap, NOT_IN_HEAP};
 use crate::plan::space::{Arena, Cost, OptimizationObjective, StateSpace};
 use super::node::{Node, F_FREE, F_INCONSISTENT, F_START, F_TWIN};
 use super::{AbitStar, NONE};
@@ -33,9 +33,10 @@ pub(super) struct QueueEdge {
     pub(super) reveals: bool,
 }
 
-impl QueueEdge {
-    /// The queue order: the key lexicographically, ties by node indices (deterministic).
-    fn before(&self, other: &Self) -> bool {
+/// The edge slab is what the heap orders (ids are slab slots), in the queue order: the key lexicographically, ties
+/// by node indices (deterministic).
+impl HeapSlot for QueueEdge {
+    fn before(&self, _: u32, other: &Self, _: u32) -> bool {
         for (a, b) in self.key.iter().zip(other.key.iter()) {
             if a < b {
                 return true;
@@ -46,23 +47,11 @@ impl QueueEdge {
         }
         (self.parent, self.child) < (other.parent, other.child)
     }
-}
-
-/// The edge slab is what the heap orders: ids are slab slots.
-impl<const NQ: usize> HeapItems for Vec<QueueEdge, NQ> {
-    fn before(&self, a: u32, b: u32) -> bool {
-        match (self.get(a as usize), self.get(b as usize)) {
-            (Some(x), Some(y)) => x.before(y),
-            _ => false,
-        }
+    fn heap_position(&self) -> u32 {
+        self.heap_pos
     }
-    fn set_position(&mut self, id: u32, pos: u32) {
-        if let Some(e) = self.get_mut(id as usize) {
-            e.heap_pos = pos;
-        }
-    }
-    fn position(&self, id: u32) -> Option<u32> {
-        self.get(id as usize).map(|e| e.heap_pos)
+    fn set_heap_position(&mut self, pos: u32) {
+        self.heap_pos = pos;
     }
 }
 
@@ -133,7 +122,7 @@ impl<const NQ: usize> SearchQueue<NQ> {
             self.edges.push(e).map_err(|_| Full)?;
             slot
         };
-        if self.heap.push(slot, &mut self.edges).is_err() {
+        if self.heap.push(slot, &mut self.edges[..]).is_err() {
             // Cannot happen (heap and slab have the same capacity); keep the slab consistent anyway.
             self.release(nodes, slot);
             return Err(Full);
@@ -173,7 +162,7 @@ impl<const NQ: usize> SearchQueue<NQ> {
 
     /// Take the front edge out of the queue.
     pub(super) fn pop<St, A>(&mut self, nodes: &mut [Node<St, A>]) -> Option<QueueEdge> {
-        let slot = self.heap.pop(&mut self.edges)?;
+        let slot = self.heap.pop(&mut self.edges[..])?;
         let e = self.edge(slot).copied();
         self.release(nodes, slot);
         e
@@ -188,7 +177,7 @@ impl<const NQ: usize> SearchQueue<NQ> {
                 e.key = sort_key(nodes, e.parent, e.child, e.c_hat, inflation);
             }
         }
-        self.heap.heapify(&mut self.edges);
+        self.heap.heapify(&mut self.edges[..]);
     }
 
     /// Re-key the queued outgoing edges of `v` after its cost-to-come changed. Bounded by the slab size.
@@ -201,7 +190,7 @@ impl<const NQ: usize> SearchQueue<NQ> {
             let Some(e) = self.edges.get_mut(slot as usize) else { break };
             e.key = sort_key(nodes, e.parent, e.child, e.c_hat, inflation);
             let next = e.next_out;
-            self.heap.update(slot, &mut self.edges);
+            self.heap.update(slot, &mut self.edges[..]);
             slot = next;
         }
     }
@@ -242,7 +231,7 @@ impl<const NQ: usize> SearchQueue<NQ> {
                 e.key = key;
                 e.reveals = reveals;
             }
-            self.heap.update(slot, &mut self.edges);
+            self.heap.update(slot, &mut self.edges[..]);
             return Ok(self.heap.len());
         }
         let edge = QueueEdge {
