@@ -18,6 +18,7 @@
 //! | `attachments.rs` | history twins, revealing edges, copied attachments, catch-boundary samples | (Paton et al. V-A) |
 //! | `batch.rs` | batches: RGG terms, sampling, informed sampling; starting a batch or its final search | `ImplicitGraph::addNewSamples`, `BITstar::iterate` |
 //! | `suspend.rs` | [`AbitSuspended`]: suspend and resume a search | — |
+//! | `tests.rs` | the graph, the queue and the memo driven on their own (the real line) | — |
 //!
 //! ## The algorithm
 //! - **Implicit RGG.** Samples arrive in batches of `samples_per_batch` and form, with the start and goals, an
@@ -140,6 +141,8 @@ mod node;
 mod params;
 mod queue;
 mod suspend;
+#[cfg(test)]
+mod tests;
 
 use heapless::Vec;
 use rand_core::Rng;
