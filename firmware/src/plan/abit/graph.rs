@@ -334,7 +334,13 @@ impl<St, A, const NV: usize> ImplicitGraph<St, A, NV> {
     /// help). `new_generations`: a vertex that leaves the tree becomes a new node for the memo (non-Markovian
     /// spaces: a motion's result depends on the attachment the next connection gives it). Returns the number of
     /// vertices kept as samples ("recycled"), `None` when the graph was not pruned.
-    pub(super) fn prune(&mut self, best: Cost, best_goal: u32, prune_fraction: f64, new_generations: bool) -> Option<usize> {
+    pub(super) fn prune(
+        &mut self,
+        best: Cost,
+        best_goal: u32,
+        prune_fraction: f64,
+        new_generations: bool,
+    ) -> Option<usize> {
         let total = self.ompl_graph_size();
         let prunable =
             self.nodes.iter().filter(|n| !n.has(F_FREE) && !n.has(F_START) && n.h_come + n.h_go >= best).count();
