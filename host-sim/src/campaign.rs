@@ -412,7 +412,6 @@ pub fn run_trial<D: DistanceField>(
     let found = report.status.is_exact() && planner.write_path(&mut out).is_ok();
     let final_cost = found.then(|| planner.best_cost());
     let arena_use = planner.arena_use();
-    drop(planner);
     let stats: MotionStats = space.stats();
     let states: Vec<RoverState> = out.iter().map(|(s, _)| *s).collect();
     let path: Vec<PathState> = out

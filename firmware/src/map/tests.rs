@@ -177,6 +177,14 @@ fn brute_force(sites: &[([i32; 3], i8)], g: [i32; 3], dmax: Real) -> Option<Real
     if best <= dmax { Some(best) } else { None }
 }
 
+/// The configuration of the brute-force comparisons: 0.1 m voxels, distances up to 1.2 m, every site exact.
+fn brute_force_config() -> MapConfig {
+    let mut cfg = MapConfig::with_voxel_size(0.1);
+    cfg.esdf_max_distance = 1.2;
+    cfg.esdf_site_tolerance = 0.0;
+    cfg
+}
+
 /// Builds a map over a `n`^3 voxel cube with random sites; every other voxel free (TSDF = truncation).
 fn random_site_map<'a>(
     map: &mut Map<'a>,
@@ -209,6 +217,15 @@ fn random_site_map<'a>(
         sites.push((g, hundredths));
     }
     sites
+}
+
+/// Vector propagation is exact except in rare configurations: the map's distances are within a tenth of a voxel
+/// of the brute force's, and at most 1 % of the voxels are inexact.
+fn assert_close_to_brute_force(map: &Map<'_>, sites: &[([i32; 3], i8)], n: i32, what: &str) {
+    let (max_err, inexact, total) = compare_with_brute_force(map, sites, n);
+    std::eprintln!("{what}: max error {max_err} voxels, {inexact} of {total} voxels inexact");
+    assert!(max_err < 0.1, "{what}: max error {max_err} voxels");
+    assert!(inexact * 100 <= total, "{what}: {inexact} of {total} voxels inexact");
 }
 
 fn compare_with_brute_force(map: &Map<'_>, sites: &[([i32; 3], i8)], n: i32) -> (Real, usize, usize) {
@@ -245,20 +262,12 @@ fn esdf_matches_brute_force_on_random_small_grids() {
     let mut rng = rand_pcg::Pcg32::new(7, 11);
     for trial in 0..6 {
         let (mut b, mut i) = slices(256, 512);
-        let mut cfg = MapConfig::with_voxel_size(0.1);
-        cfg.esdf_max_distance = 1.2;
-        cfg.esdf_site_tolerance = 0.0;
-        let mut map = Map::from_slices(cfg, &mut b, &mut i).unwrap();
+        let mut map = Map::from_slices(brute_force_config(), &mut b, &mut i).unwrap();
         let n = 24;
         let sites = random_site_map(&mut map, &mut rng, n, 3 + trial * 4);
         let e = map.update_esdf();
         assert!(e.converged);
-        let (max_err, inexact, total) = compare_with_brute_force(&map, &sites, n);
-        std::eprintln!("trial {trial}: max error {max_err} voxels, {inexact} of {total} voxels inexact");
-        // Vector propagation is exact except in rare configurations; bound the error at a tenth of a voxel and
-        // the inexact voxels at 1 %.
-        assert!(max_err < 0.1, "trial {trial}: max error {max_err} voxels");
-        assert!(inexact * 100 <= total, "trial {trial}: {inexact} of {total} voxels inexact");
+        assert_close_to_brute_force(&map, &sites, n, &std::format!("trial {trial}"));
     }
 }
 
@@ -266,10 +275,7 @@ fn esdf_matches_brute_force_on_random_small_grids() {
 fn incremental_update_matches_brute_force_after_sites_vanish_and_appear() {
     let mut rng = rand_pcg::Pcg32::new(3, 5);
     let (mut b, mut i) = slices(256, 512);
-    let mut cfg = MapConfig::with_voxel_size(0.1);
-    cfg.esdf_max_distance = 1.2;
-    cfg.esdf_site_tolerance = 0.0;
-    let mut map = Map::from_slices(cfg, &mut b, &mut i).unwrap();
+    let mut map = Map::from_slices(brute_force_config(), &mut b, &mut i).unwrap();
     let n = 24;
     let mut sites = random_site_map(&mut map, &mut rng, n, 10);
     assert!(map.update_esdf().converged);
@@ -296,19 +302,15 @@ fn incremental_update_matches_brute_force_after_sites_vanish_and_appear() {
     }
     let e = map.update_esdf();
     assert!(e.converged);
-    let (max_err, inexact, total) = compare_with_brute_force(&map, &sites, n);
-    assert!(max_err < 0.1, "max error {max_err} voxels");
-    assert!(inexact * 100 <= total, "{inexact} of {total} voxels inexact");
+    assert_close_to_brute_force(&map, &sites, n, "after the changes");
 }
 
 #[test]
 fn esdf_budget_exhaustion_is_resumable() {
     let mut rng = rand_pcg::Pcg32::new(1, 2);
     let (mut b, mut i) = slices(256, 512);
-    let mut cfg = MapConfig::with_voxel_size(0.1);
-    cfg.esdf_max_distance = 1.2;
+    let mut cfg = brute_force_config();
     cfg.esdf_max_sweeps = 1;
-    cfg.esdf_site_tolerance = 0.0;
     let mut map = Map::from_slices(cfg, &mut b, &mut i).unwrap();
     let n = 24;
     let sites = random_site_map(&mut map, &mut rng, n, 2);
