@@ -23,6 +23,7 @@ use super::geometry::{closest_point_on_triangle, P3};
 use firmware::geom::p3::{cross, dot, norm, sub};
 use super::{Aabb, World};
 use crate::terrain::Heightmap;
+use crate::truth::solid::{ExactGeometry, Solid};
 use firmware::geom::{Real, Vec3};
 use firmware::map::{DistanceField, DistanceQuery};
 
@@ -259,6 +260,19 @@ impl World for HeightmapWorld {
 
     fn height_at(&self, x: Real, y: Real) -> Option<Real> {
         self.height(x as f64, y as f64).map(|h| h as Real)
+    }
+
+    fn exact_geometry(&self) -> ExactGeometry {
+        ExactGeometry {
+            solids: vec![Solid::HeightGrid {
+                nx: self.nx,
+                ny: self.ny,
+                x0: self.x0,
+                y0: self.y0,
+                spacing: self.spacing,
+                heights: self.heights.clone(),
+            }],
+        }
     }
 
     /// The ring search stopped at `limit`: a voxel far from the surface costs a few rings instead of
