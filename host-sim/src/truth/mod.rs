@@ -4,4 +4,5 @@
 //! worlds (lip, pole), kept as the oracle of [`taut`], the general true tether on every world.
 
 pub mod solid;
+pub mod taut;
 pub mod tether;
