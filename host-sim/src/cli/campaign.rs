@@ -79,6 +79,10 @@ pub struct CampaignArgs {
     /// Exit with status 1 unless at least this many trials are found stable.
     #[arg(long)]
     pub require_stable: Option<usize>,
+    /// Skip the physics judge (rigid bodies on the exact terrain with the true tether); found paths are then
+    /// judged by the model-on-truth re-check alone.
+    #[arg(long)]
+    pub no_physics: bool,
 }
 
 impl CampaignArgs {
@@ -105,6 +109,7 @@ impl CampaignArgs {
             wheel_mu: None,
             yaw_spread_deg: None,
             require_stable: None,
+            no_physics: false,
         }
     }
 }
@@ -203,6 +208,7 @@ pub fn spec_from(a: &CampaignArgs) -> Result<CampaignSpec, String> {
         params,
         rover,
         abit,
+        physics_judge: !a.no_physics,
     })
 }
 

@@ -56,6 +56,7 @@
 //! Every test builds a fresh rapier world from the same shapes in the same order; `enhanced-determinism` makes
 //! rapier's arithmetic identical run to run and machine to machine, so a verdict is a pure function of its inputs.
 
+pub mod path;
 pub mod terrain;
 
 use rapier3d_f64::prelude::*;
@@ -321,6 +322,11 @@ impl PhysicsJudge {
         };
         let tip = axle + rot * Vector::new(l * beta.cos(), 0.0, l * beta.sin());
         Some(Placement { axle: p3(axle), axle_dir: p3(ay), boom_angle: beta, tip: p3(tip), boom_raised: raised, boom })
+    }
+
+    /// The axle centre of the rover set down at `pose` (its wheels on the terrain), `None` as in [`Self::place`].
+    pub fn axle_at(&self, pose: GroundPose) -> Option<P3> {
+        self.place_wheels(pose).map(|(_, a)| p3(a))
     }
 
     /// The wheels set down at `pose` (see the module docs): the rover's rotation and axle centre.

@@ -123,9 +123,14 @@ impl PhysicsTerrain {
             .min_by(f64::total_cmp)
     }
 
-    /// True when `shape` at `pose` overlaps the terrain (an unsupported pair counts as overlapping: unsafe).
+    /// True when `shape` at `pose` overlaps the terrain: parry's intersection test, or its contact query for the
+    /// pairs the intersection test does not support (height fields); a pair neither supports counts as
+    /// overlapping (unsafe).
     pub fn intersects(&self, pose: &Pose, shape: &dyn Shape) -> bool {
-        self.parts.iter().any(|(tp, ts)| query::intersection_test(pose, shape, tp, ts.as_ref()).map_or(true, |r| r.intersecting))
+        self.parts.iter().any(|(tp, ts)| match query::intersection_test(pose, shape, tp, ts.as_ref()) {
+            Ok(r) => r.intersecting,
+            Err(_) => query::contact(pose, shape, tp, ts.as_ref(), 0.0).map_or(true, |c| c.is_some_and(|c| c.dist <= 0.0)),
+        })
     }
 
     /// True when the open segment `a -> b` misses the terrain (rays both ways, so a segment that starts on a

@@ -83,3 +83,18 @@ fn drive_straight_on_flat_ground_arrives_and_off_the_lip_falls() {
     assert!(d.placed && d.fell, "{d:?}");
 }
 
+
+#[test]
+fn a_dem_pose_is_placed_like_the_analytic_one() {
+    use crate::terrain::Heightmap;
+    use crate::world::heightmap::HeightmapWorld;
+    // The ledge as a 0.25 m DEM whose posts include the lip: on the slope the heights are the same planes.
+    let ledge = LedgeWorld::new();
+    let s = 0.25;
+    let (nx, ny) = (89usize, 81usize);
+    let hs = (0..nx * ny).map(|k| Some(ledge.height_f64(-11.0 + (k % nx) as f64 * s, -10.0 + (k / nx) as f64 * s))).collect();
+    let dem = HeightmapWorld::new("ledge-dem", &Heightmap { width: nx, height: ny, spacing_m: s, heights_m: hs }, 1.0, 1.0).expect("dem");
+    let pose = GroundPose { x: 1.4, y: 0.0, yaw: 0.0 };
+    let (a, b) = (judge(&dem).axle_at(pose).expect("dem"), judge(&ledge).axle_at(pose).expect("analytic"));
+    assert!((a[2] - b[2]).abs() < 1e-6, "{a:?} vs {b:?}");
+}
