@@ -615,17 +615,15 @@ impl CampaignResult {
 
     /// One CSV row per trial.
     pub fn csv(&self) -> String {
-        let mut s = String::from("trial,seed,found,stable_on_truth,model_stable,physics_stable,first_iteration,first_time_s,final_cost,iterations,batches,edges_evaluated,states_checked,settles,stability_checks,anchor_predictions,total_time_s,path_states,final_anchors,termination\n");
+        let mut s = String::from("trial,seed,found,stable_on_truth,first_iteration,first_time_s,final_cost,iterations,batches,edges_evaluated,states_checked,settles,stability_checks,anchor_predictions,total_time_s,path_states,final_anchors,termination,model_stable,physics_stable\n");
         let o = |v: Option<String>| v.unwrap_or_default();
         for t in &self.trials {
             s += &format!(
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.6},{},{},{}\n",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.6},{},{},{},{},{}\n",
                 t.trial,
                 t.seed,
                 t.found,
                 t.found_stable(),
-                t.model_stable(),
-                o(t.physics.as_ref().map(|p| p.stable.to_string())),
                 o(t.first_iteration.map(|v| v.to_string())),
                 o(t.first_time_s.map(|v| format!("{v:.6}"))),
                 o(t.final_cost.map(|v| format!("{v:.6}"))),
@@ -639,7 +637,9 @@ impl CampaignResult {
                 t.total_time_s,
                 t.path.len(),
                 t.path.last().map_or(0, |p| p.anchors.len()),
-                t.termination
+                t.termination,
+                t.model_stable(),
+                o(t.physics.as_ref().map(|p| p.stable.to_string())),
             );
         }
         s

@@ -57,3 +57,38 @@ fn the_physics_judge_gives_the_same_verdicts_on_a_dem_rendering_of_the_ledge() {
     }
     assert_eq!(agree, 4);
 }
+
+#[test]
+fn the_same_campaign_twice_gives_identical_json_minus_timings() {
+    use host_sim::cli::campaign::{spec_from, CampaignArgs};
+    fn strip(v: &mut serde_json::Value) {
+        match v {
+            serde_json::Value::Object(m) => {
+                for k in ["first_time_s", "total_time_s", "wall_s", "map_build_s"] {
+                    m.remove(k);
+                }
+                m.values_mut().for_each(strip);
+            }
+            serde_json::Value::Array(a) => a.iter_mut().for_each(strip),
+            _ => {}
+        }
+    }
+    let run = || {
+        let spec = spec_from(&CampaignArgs {
+            trials: Some(2),
+            iterations: Some(1),
+            threads: Some(2),
+            field: "truth".into(),
+            ..CampaignArgs::new("ledge_test1")
+        })
+        .expect("spec");
+        let r = host_sim::campaign::run(&spec, &|_, _| {}).expect("campaign");
+        assert_eq!(r.physics_judged(), 2, "{}", r.table());
+        let mut v = serde_json::to_value(&r).expect("json");
+        strip(&mut v);
+        v
+    };
+    let (a, b) = (run(), run());
+    assert!(a["trials"][0]["physics"]["poses"].as_u64().is_some_and(|n| n > 20), "{}", a["trials"][0]["physics"]);
+    assert_eq!(a, b);
+}
