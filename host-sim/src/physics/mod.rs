@@ -23,15 +23,19 @@
 //! that anchor, the winch locked. `None` for the free length: taut at the placed pose.
 //!
 //! # Placing a pose
-//! [`place`]: the axle is horizontal across the heading `yaw` and rolled so both wheels rest at their own ground
+//! [`PhysicsJudge::place`]: the axle is horizontal across the heading `yaw` and rolled so both wheels rest at their own ground
 //! height (ray casts under each wheel, then each wheel's cylinder cast straight down onto the terrain, three
-//! rounds), [`PLACE_GAP_M`] (2 mm) above the first touch. The boom points at the anchor (inline, Paton IV-A); if
-//! that boom overlaps the terrain it is raised in 2-degree steps until it is clear (at most 180 steps) — the boom
-//! then rests on or just above the ground, the in-contact configuration. A pose whose wheels or body overlap the
-//! terrain after placement is [`HoldOutcome::Blocked`].
+//! rounds), [`PLACE_GAP_M`] (2 mm) above the first touch. The boom points at the anchor (inline, Paton IV-A) or
+//! is swept from there in 1-degree steps (refined to 0.01 degrees) until it touches the terrain (resting); an
+//! inline boom that overlaps the terrain is raised in 1-degree steps until clear (at most 180). A pose whose
+//! wheels or body overlap the terrain after placement, or whose boom finds no clear angle, is
+//! [`HoldOutcome::Blocked`].
 //!
-//! # Hold test ([`hold`])
-//! Brakes on (each wheel's joint locked at its angle), the rover is released at the placed pose and simulated for
+//! # Hold test ([`PhysicsJudge::hold`])
+//! The rover chooses its boom angle (as the planner tries inline and in contact): the boom settings of
+//! [`BOOM_SETTINGS`] are tried in turn — inline, then swept from the inline angle onto the terrain the way that
+//! lowers the tip, then the other way — and the pose holds if one of them holds. For each: brakes on (each wheel's
+//! joint locked at its angle), the rover is released at the placed pose and simulated for
 //! [`HOLD_SECONDS`] = 3 s at [`STEP_HZ`] = 240 steps per second. It **holds** iff over the whole run
 //! - the axle centre moves less than [`HOLD_SLIDE_M`] = 5 cm: one step of the campaign's 5 cm interpolation, and a
 //!   seventh of the wheel radius; a rover that moves more has left the pose the plan claims (the settling
@@ -43,10 +47,11 @@
 //! - and at the end the axle moves slower than [`HOLD_END_SPEED_MPS`] = 1 cm/s (not a slow slide that the 3 s
 //!   window cut short).
 //!
-//! # Drive test ([`drive`])
+//! # Drive test ([`PhysicsJudge::drive`])
 //! A straight drive or a turn in place executed dynamically: wheel joints driven by velocity motors (straight:
 //! both wheels at `speed / r`; turn: opposite at `rate * track / 2 / r`) until the wheels' odometry reaches the
-//! command, then the brakes for [`DRIVE_SETTLE_SECONDS`] = 1 s. The winch keeps the tether taut: the rope
+//! command, then the brakes for [`DRIVE_SETTLE_SECONDS`] = 1 s. The boom setting is the first of
+//! [`BOOM_SETTINGS`] that holds at the start (inline if none does). The winch keeps the tether taut: the rope
 //! shortens to the anchor-tip distance when the rover comes closer and pays out no faster than the wheels roll.
 //! It reports the end pose and whether the rover **fell**: the axle turned more than [`FALL_TILT_DEG`] = 30
 //! degrees out of its starting plane at any time, or the rover had not come to rest (speed above 1 cm/s) after
@@ -150,7 +155,7 @@ pub enum BoomSetting {
 /// The boom settings [`PhysicsJudge::hold`] tries, in order.
 pub const BOOM_SETTINGS: [BoomSetting; 3] = [BoomSetting::Inline, BoomSetting::Rest(Sense::Down), BoomSetting::Rest(Sense::Over)];
 
-/// The answer of [`hold`].
+/// The answer of [`PhysicsJudge::hold`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum HoldOutcome {
     /// The pose holds.
@@ -183,7 +188,7 @@ impl HoldVerdict {
     }
 }
 
-/// A motion for [`drive`].
+/// A motion for [`PhysicsJudge::drive`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum DriveCommand {
     /// Drive straight along the heading by this distance (negative: backwards), metres, at `speed_mps`.
@@ -202,7 +207,7 @@ pub enum DriveCommand {
     },
 }
 
-/// The answer of [`drive`].
+/// The answer of [`PhysicsJudge::drive`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DriveReport {
     /// The rover could be placed at the start (otherwise nothing else is meaningful).
