@@ -8,7 +8,12 @@
 //! (Paton et al. VI-A); `--map truth` plans on the exact world instead. The returned path is then **re-validated
 //! on the ground-truth world**: every state re-settled from its ground point and yaw, and every motion re-checked
 //! (settling, body collision, anchor prediction from the root, static stability with a margin of at least 0).
-//! A path that fails is "found unstable".
+//! That re-check uses the planner's own model (settling, Alg. 1, the stability LP) on the exact geometry: it
+//! checks the map, not the model. So a returned path is also judged by the **physics judge**
+//! ([`crate::physics::path`]): every pose along it, 5 cm / 0.1 rad apart, placed as rigid bodies on the exact
+//! terrain with the true tether ([`crate::truth::taut`]) and simulated; it must hold
+//! (`CampaignSpec::physics_judge`, default on in the CLI). A path is **found stable** when both the model-on-truth
+//! re-check and the physics judge accept it; the table also reports each judge's own count.
 //!
 //! Outputs: Table I's columns (found stable / found unstable, time and iterations to the first solution, mean and
 //! sd) plus batches, edges evaluated and states checked; `results.json` and `results.csv` (one row per trial);
@@ -34,6 +39,9 @@ use heapless::Vec as HVec;
 use rand_core::SeedableRng;
 use serde::Serialize;
 
+use crate::physics::path::{judge_path, PathJudgement, PathPose};
+use crate::physics::PhysicsJudge;
+use crate::truth::taut::WrapEdges;
 use crate::world::World;
 
 /// Node capacity of a campaign trial's arena (host).
@@ -101,6 +109,8 @@ pub struct CampaignSpec {
     pub rover: RoverParams,
     /// Planner parameters.
     pub abit: AbitParams,
+    /// Judge every found path with the physics judge too (see the module docs).
+    pub physics_judge: bool,
 }
 
 /// The ground-truth world as a sized distance field.
@@ -221,6 +231,8 @@ pub struct PathState {
     pub theta: f64,
     /// Anchor history after reaching the state (root first).
     pub anchors: Vec<[f64; 3]>,
+    /// World heading of the settled rover's x axis, radians.
+    pub heading: f64,
 }
 
 /// Ground-truth re-validation of a path.
@@ -279,14 +291,25 @@ pub struct TrialResult {
     pub arena_queue: usize,
     /// The best path (start first).
     pub path: Vec<PathState>,
-    /// Re-validation on the ground truth (when found).
+    /// Re-validation on the ground truth with the planner's own model (when found).
     pub revalidation: Option<Revalidation>,
+    /// The physics judge's verdict (when found and judged).
+    pub physics: Option<PathJudgement>,
 }
 
 impl TrialResult {
-    /// Found and stable on the true terrain.
+    /// Found and stable on the true terrain: the model-on-truth re-check and (when it ran) the physics judge
+    /// both accept it.
     pub fn found_stable(&self) -> bool {
+        self.model_stable() && self.physics.as_ref().is_none_or(|p| p.stable)
+    }
+    /// Found and accepted by the model-on-truth re-check (the planner's own model on the exact world).
+    pub fn model_stable(&self) -> bool {
         self.found && self.revalidation.as_ref().is_some_and(|r| r.stable)
+    }
+    /// Found and judged unstable by the physics judge.
+    pub fn physics_unstable(&self) -> bool {
+        self.found && self.physics.as_ref().is_some_and(|p| !p.stable)
     }
     /// Found but not stable on the true terrain.
     pub fn found_unstable(&self) -> bool {
@@ -416,7 +439,13 @@ pub fn run_trial<D: DistanceField>(
     let states: Vec<RoverState> = out.iter().map(|(s, _)| *s).collect();
     let path: Vec<PathState> = out
         .iter()
-        .map(|(s, h)| PathState { axle: from_vec3(&s.axle()), ground: from_vec3(&s.ground), theta: f64::from(s.theta), anchors: anchors_of(h) })
+        .map(|(s, h)| PathState {
+            axle: from_vec3(&s.axle()),
+            ground: from_vec3(&s.ground),
+            theta: f64::from(s.theta),
+            anchors: anchors_of(h),
+            heading: f64::from(s.heading()),
+        })
         .collect();
     let revalidation = found.then(|| {
         let mut r = revalidate(spec.world.as_ref(), spec, &states);
@@ -454,6 +483,7 @@ pub fn run_trial<D: DistanceField>(
         arena_queue: arena_use.queue,
         path,
         revalidation,
+        physics: None,
     })
 }
 
@@ -473,6 +503,36 @@ fn tether_too_short(spec: &CampaignSpec, path: &[PathState]) -> Option<String> {
     (need > spec.tether_length_m).then(|| {
         format!("state {k} needs {need:.2} m of tether along its anchors; the tether is {:.2} m (tether.length_m)", spec.tether_length_m)
     })
+}
+
+/// The physics judge of a campaign: the judge and the world's wrap edges (built once, shared by the workers).
+pub struct CampaignJudge {
+    /// The rigid-body judge.
+    pub judge: PhysicsJudge,
+    /// The true tether's wrap edges.
+    pub edges: WrapEdges,
+}
+
+impl CampaignJudge {
+    /// The judge of `spec`'s world; the wrap edges of height grids and meshes within the planning bounds and the
+    /// root (2 m margin).
+    pub fn new(spec: &CampaignSpec) -> Result<CampaignJudge, String> {
+        let judge = PhysicsJudge::new(spec.world.as_ref(), spec.rover).map_err(|e| format!("physics judge: {e}"))?;
+        let b = spec.bounds;
+        let lo = core::array::from_fn(|k| f64::from(b.min[k]).min(spec.root[k]) - 2.0);
+        let hi = core::array::from_fn(|k| f64::from(b.max[k]).max(spec.root[k]) + 2.0);
+        let edges = WrapEdges::new(&spec.world.exact_geometry(), (lo, hi)).map_err(|e| format!("true tether: {e}"))?;
+        Ok(CampaignJudge { judge, edges })
+    }
+
+    /// Judge a trial's path (when found).
+    pub fn judge_trial(&self, spec: &CampaignSpec, t: &mut TrialResult) {
+        if !t.found {
+            return;
+        }
+        let path: Vec<PathPose> = t.path.iter().map(|p| PathPose { axle: p.axle, heading: p.heading }).collect();
+        t.physics = Some(judge_path(&self.judge, &self.edges, spec.root, &path));
+    }
 }
 
 /// The outcome of a campaign.
@@ -522,6 +582,18 @@ impl CampaignResult {
     pub fn found_unstable(&self) -> usize {
         self.trials.iter().filter(|t| t.found_unstable()).count()
     }
+    /// Found trials the model-on-truth re-check rejects.
+    pub fn model_unstable(&self) -> usize {
+        self.trials.iter().filter(|t| t.found && !t.model_stable()).count()
+    }
+    /// Found trials the physics judge rejects.
+    pub fn physics_unstable(&self) -> usize {
+        self.trials.iter().filter(|t| t.physics_unstable()).count()
+    }
+    /// Found trials the physics judge ran on.
+    pub fn physics_judged(&self) -> usize {
+        self.trials.iter().filter(|t| t.physics.is_some()).count()
+    }
     /// Table I and the work columns, as text.
     pub fn table(&self) -> String {
         let f = |xs: Vec<f64>, prec: usize| match mean_sd(&xs) {
@@ -569,12 +641,23 @@ impl CampaignResult {
             f(all.iter().map(|t| t.total_time_s).collect(), 3),
             f(found.iter().filter_map(|t| t.final_cost).collect(), 3),
         );
+        s += &format!(
+            "\nunstable by judge: model-on-truth (the planner's own model on the exact world) {}; physics judge (rigid bodies, true tether) {} of {} judged\n",
+            self.model_unstable(),
+            self.physics_unstable(),
+            self.physics_judged()
+        );
+        for t in all.iter().filter(|t| t.physics_unstable()) {
+            if let Some(p) = &t.physics {
+                s += &format!("physics judge: trial {} seed {}: {}\n", t.trial, t.seed, p.failure.clone().unwrap_or_default());
+            }
+        }
         let nodes = all.iter().map(|t| t.arena_nodes).max().unwrap_or(0);
         let queue = all.iter().map(|t| t.arena_queue).max().unwrap_or(0);
         s += &format!("\narena high-water over all trials: {nodes} nodes of {TRIAL_NODES}, {queue} queued edges of {TRIAL_QUEUE}\n");
         let with_anchor = found.iter().filter(|t| t.path.last().is_some_and(|p| p.anchors.len() > 1)).count();
         s += &format!("found paths whose final anchor history holds an intermediate anchor: {with_anchor} of {}\n", found.len());
-        for t in all.iter().filter(|t| t.found_unstable()) {
+        for t in all.iter().filter(|t| t.found && !t.model_stable()) {
             if let Some(r) = &t.revalidation {
                 s += &format!("unstable on the true terrain: trial {} seed {}: {}\n", t.trial, t.seed, r.failure.clone().unwrap_or_default());
             }
@@ -584,11 +667,11 @@ impl CampaignResult {
 
     /// One CSV row per trial.
     pub fn csv(&self) -> String {
-        let mut s = String::from("trial,seed,found,stable_on_truth,first_iteration,first_time_s,final_cost,iterations,batches,edges_evaluated,states_checked,settles,stability_checks,anchor_predictions,total_time_s,path_states,final_anchors,termination\n");
+        let mut s = String::from("trial,seed,found,stable_on_truth,first_iteration,first_time_s,final_cost,iterations,batches,edges_evaluated,states_checked,settles,stability_checks,anchor_predictions,total_time_s,path_states,final_anchors,termination,model_stable,physics_stable\n");
         let o = |v: Option<String>| v.unwrap_or_default();
         for t in &self.trials {
             s += &format!(
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.6},{},{},{}\n",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.6},{},{},{},{},{}\n",
                 t.trial,
                 t.seed,
                 t.found,
@@ -606,7 +689,9 @@ impl CampaignResult {
                 t.total_time_s,
                 t.path.len(),
                 t.path.last().map_or(0, |p| p.anchors.len()),
-                t.termination
+                t.termination,
+                t.model_stable(),
+                o(t.physics.as_ref().map(|p| p.stable.to_string())),
             );
         }
         s
@@ -663,6 +748,8 @@ fn run_trials<D: DistanceField + Sync>(
     spec: &CampaignSpec,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Vec<TrialResult>, String> {
+    let judge = if spec.physics_judge { Some(CampaignJudge::new(spec)?) } else { None };
+    let judge = judge.as_ref();
     let total = spec.trials as usize;
     let next = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);
@@ -676,7 +763,10 @@ fn run_trials<D: DistanceField + Sync>(
                     if i >= total {
                         break;
                     }
-                    let r = run_trial(field, spec, i as u32, &mut arena);
+                    let mut r = run_trial(field, spec, i as u32, &mut arena);
+                    if let (Ok(t), Some(j)) = (r.as_mut(), judge) {
+                        j.judge_trial(spec, t);
+                    }
                     if let Ok(mut v) = results.lock() {
                         v.push(r);
                     }

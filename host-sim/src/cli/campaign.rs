@@ -80,6 +80,10 @@ pub struct CampaignArgs {
     /// Exit with status 1 unless at least this many trials are found stable.
     #[arg(long)]
     pub require_stable: Option<usize>,
+    /// Skip the physics judge (rigid bodies on the exact terrain with the true tether); found paths are then
+    /// judged by the model-on-truth re-check alone.
+    #[arg(long)]
+    pub no_physics: bool,
 }
 
 impl CampaignArgs {
@@ -106,6 +110,7 @@ impl CampaignArgs {
             wheel_mu: None,
             yaw_spread_deg: None,
             require_stable: None,
+            no_physics: false,
         }
     }
 }
@@ -265,6 +270,7 @@ pub fn spec_from_scenario(sc: &crate::scenario::Scenario, a: &CampaignArgs) -> R
         params,
         rover,
         abit,
+        physics_judge: !a.no_physics,
     })
 }
 

@@ -7,6 +7,7 @@ pub mod board;
 pub mod export;
 pub mod homotopy;
 pub mod inspect;
+pub mod judge_agreement;
 pub mod map;
 pub mod replay;
 pub mod run;

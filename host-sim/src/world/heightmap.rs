@@ -32,6 +32,7 @@ use super::geometry::{closest_point_on_triangle, P3};
 use firmware::geom::p3::{cross, dot, norm, sub};
 use super::{Aabb, World};
 use crate::terrain::Heightmap;
+use crate::truth::solid::{ExactGeometry, Solid};
 use firmware::geom::{Real, Vec3};
 use firmware::map::{DistanceField, DistanceQuery};
 
@@ -197,6 +198,11 @@ impl HeightmapWorld {
     /// distance is at most `radius`; otherwise an upper bound of it that exceeds `radius`, or `None` when no
     /// triangle lies within the rings searched.
     pub fn sdf_closest_within(&self, p: P3, radius: f64) -> Option<(f64, P3)> {
+        self.closest_within(p, radius).map(|(d, q, _)| (d, q))
+    }
+
+    /// [`Self::sdf_closest_within`] with the closest triangle's unit normal (pointing up, out of the terrain).
+    fn closest_within(&self, p: P3, radius: f64) -> Option<(f64, P3, P3)> {
         let ci = (((p[0] - self.x0) / self.spacing).floor() as i64).clamp(0, self.nx as i64 - 2);
         let cj = (((p[1] - self.y0) / self.spacing).floor() as i64).clamp(0, self.ny as i64 - 2);
         // Horizontal distance from p to the clamped cell (p may be outside the grid).
@@ -239,20 +245,27 @@ impl HeightmapWorld {
                 dot(sub(p, q), n) >= 0.0
             }
         };
-        Some((if above { d } else { -d }, q))
+        let n = cross(sub(t[1], t[0]), sub(t[2], t[0]));
+        let l = norm(n);
+        let up = if l > 0.0 { [n[0] / l, n[1] / l, n[2] / l] } else { [0.0, 0.0, 1.0] };
+        let up = if up[2] < 0.0 { [-up[0], -up[1], -up[2]] } else { up };
+        Some((if above { d } else { -d }, q, up))
     }
 }
 
 impl HeightmapWorld {
-    fn distance_query(q: P3, closest: Option<(f64, P3)>) -> DistanceQuery {
-        let Some((d, c)) = closest else { return DistanceQuery::Unknown };
+    /// The query's answer from the closest point. On the surface itself (`q` = the closest point) the gradient is
+    /// the closest triangle's normal, as on the analytic worlds: a zero gradient there made every consumer that
+    /// needs a surface normal (the settler's footprint normal) treat the point as unknown space (issue 19).
+    fn distance_query(q: P3, closest: Option<(f64, P3, P3)>) -> DistanceQuery {
+        let Some((d, c, up)) = closest else { return DistanceQuery::Unknown };
         let v = sub(q, c);
         let n = norm(v);
         let s = if d >= 0.0 { 1.0 } else { -1.0 };
         let gradient = if n > 1e-12 {
             Vec3::new((s * v[0] / n) as Real, (s * v[1] / n) as Real, (s * v[2] / n) as Real)
         } else {
-            Vec3::zeros()
+            Vec3::new(up[0] as Real, up[1] as Real, up[2] as Real)
         };
         DistanceQuery::Known { distance: d as Real, gradient }
     }
@@ -261,7 +274,7 @@ impl HeightmapWorld {
 impl DistanceField for HeightmapWorld {
     fn query(&self, p: &Vec3) -> DistanceQuery {
         let q = [p.x as f64, p.y as f64, p.z as f64];
-        Self::distance_query(q, self.sdf_closest(q))
+        Self::distance_query(q, self.closest_within(q, self.exact_radius_m))
     }
 }
 
@@ -339,11 +352,24 @@ impl World for HeightmapWorld {
         self.height(x as f64, y as f64).map(|h| h as Real)
     }
 
+    fn exact_geometry(&self) -> ExactGeometry {
+        ExactGeometry {
+            solids: vec![Solid::HeightGrid {
+                nx: self.nx,
+                ny: self.ny,
+                x0: self.x0,
+                y0: self.y0,
+                spacing: self.spacing,
+                heights: self.heights.clone(),
+            }],
+        }
+    }
+
     /// The ring search stopped at `limit`: a voxel far from the surface costs a few rings instead of
     /// `(distance / spacing)^2` cells. No triangle within `limit` (a hole): the full search.
     fn query_up_to(&self, p: &Vec3, limit: Real) -> DistanceQuery {
         let q = [p.x as f64, p.y as f64, p.z as f64];
-        match self.sdf_closest_within(q, f64::from(limit).min(self.exact_radius_m)) {
+        match self.closest_within(q, f64::from(limit).min(self.exact_radius_m)) {
             Some(found) => Self::distance_query(q, Some(found)),
             None => self.query(p),
         }
