@@ -8,7 +8,12 @@
 //! (Paton et al. VI-A); `--map truth` plans on the exact world instead. The returned path is then **re-validated
 //! on the ground-truth world**: every state re-settled from its ground point and yaw, and every motion re-checked
 //! (settling, body collision, anchor prediction from the root, static stability with a margin of at least 0).
-//! A path that fails is "found unstable".
+//! That re-check uses the planner's own model (settling, Alg. 1, the stability LP) on the exact geometry: it
+//! checks the map, not the model. So a returned path is also judged by the **physics judge**
+//! ([`crate::physics::path`]): every pose along it, 5 cm / 0.1 rad apart, placed as rigid bodies on the exact
+//! terrain with the true tether ([`crate::truth::taut`]) and simulated; it must hold
+//! (`CampaignSpec::physics_judge`, default on in the CLI). A path is **found stable** when both the model-on-truth
+//! re-check and the physics judge accept it; the table also reports each judge's own count.
 //!
 //! Outputs: Table I's columns (found stable / found unstable, time and iterations to the first solution, mean and
 //! sd) plus batches, edges evaluated and states checked; `results.json` and `results.csv` (one row per trial);
@@ -34,6 +39,9 @@ use heapless::Vec as HVec;
 use rand_core::SeedableRng;
 use serde::Serialize;
 
+use crate::physics::path::{judge_path, PathJudgement, PathPose};
+use crate::physics::PhysicsJudge;
+use crate::truth::taut::WrapEdges;
 use crate::world::World;
 
 /// Node capacity of a campaign trial's arena (host).
@@ -79,6 +87,12 @@ pub struct CampaignSpec {
     pub bounds: PlanBounds,
     /// Voxel edge of the planning map, metres.
     pub voxel_m: f64,
+    /// Block capacity of the planning map (the scenario's `map.pool_blocks` when it gives one); `None`: as many
+    /// blocks as the planning box needs.
+    pub pool_blocks: Option<usize>,
+    /// Tether available, metres (the scenario's `tether.length_m`): a found path whose tether, along the anchor
+    /// history of any of its states, is longer does not count as found stable.
+    pub tether_length_m: f64,
     /// Planner iterations per trial.
     pub iterations: u32,
     /// Trials.
@@ -95,6 +109,8 @@ pub struct CampaignSpec {
     pub rover: RoverParams,
     /// Planner parameters.
     pub abit: AbitParams,
+    /// Judge every found path with the physics judge too (see the module docs).
+    pub physics_judge: bool,
 }
 
 /// The ground-truth world as a sized distance field.
@@ -124,6 +140,18 @@ impl PlanningMap {
     /// Fill a map of voxel `voxel_m` from `world`'s signed distance over the box `[lo, hi]` (exact up to the TSDF
     /// truncation, [`World::query_up_to`]), then converge the ESDF.
     pub fn from_world(world: &dyn World, lo: [f64; 3], hi: [f64; 3], voxel_m: f64) -> Result<PlanningMap, String> {
+        Self::from_world_in_pool(world, lo, hi, voxel_m, None)
+    }
+
+    /// [`Self::from_world`] in a pool of at most `pool_blocks` blocks: a box that needs more is an error naming
+    /// the pool, not a map with holes.
+    pub fn from_world_in_pool(
+        world: &dyn World,
+        lo: [f64; 3],
+        hi: [f64; 3],
+        voxel_m: f64,
+        pool_blocks: Option<usize>,
+    ) -> Result<PlanningMap, String> {
         let t0 = Instant::now();
         let cfg = MapConfig::with_voxel_size(voxel_m as Real);
         cfg.validate().map_err(|e| format!("planning map: {}: {}", e.field, e.reason))?;
@@ -133,6 +161,7 @@ impl PlanningMap {
         if blocks_needed > 1 << 20 {
             return Err(format!("planning map: {blocks_needed} blocks needed; use a larger --voxel"));
         }
+        let blocks_needed = pool_blocks.map_or(blocks_needed, |p| p.min(blocks_needed));
         let mut blocks = vec![Block::EMPTY; blocks_needed];
         let mut index = vec![0u32; (2 * blocks_needed).next_power_of_two()];
         let (used, voxels, esdf_calls) = {
@@ -148,7 +177,14 @@ impl PlanningMap {
                         let DistanceQuery::Known { distance, .. } = world.query_up_to(&c, cfg.truncation) else {
                             continue;
                         };
-                        map.set_voxel(g, distance, 1.0).map_err(|e| format!("planning map: {e:?}"))?;
+                        map.set_voxel(g, distance, 1.0).map_err(|e| match pool_blocks {
+                            Some(p) => format!(
+                                "planning map: {e:?}: the pool of {p} blocks (map.pool_blocks) cannot hold the \
+                                 planning box at {voxel_m} m voxels; raise map.pool_blocks, use a larger voxel or \
+                                 a smaller [plan] box"
+                            ),
+                            None => format!("planning map: {e:?}"),
+                        })?;
                         voxels += 1;
                     }
                 }
@@ -195,6 +231,8 @@ pub struct PathState {
     pub theta: f64,
     /// Anchor history after reaching the state (root first).
     pub anchors: Vec<[f64; 3]>,
+    /// World heading of the settled rover's x axis, radians.
+    pub heading: f64,
 }
 
 /// Ground-truth re-validation of a path.
@@ -253,14 +291,25 @@ pub struct TrialResult {
     pub arena_queue: usize,
     /// The best path (start first).
     pub path: Vec<PathState>,
-    /// Re-validation on the ground truth (when found).
+    /// Re-validation on the ground truth with the planner's own model (when found).
     pub revalidation: Option<Revalidation>,
+    /// The physics judge's verdict (when found and judged).
+    pub physics: Option<PathJudgement>,
 }
 
 impl TrialResult {
-    /// Found and stable on the true terrain.
+    /// Found and stable on the true terrain: the model-on-truth re-check and (when it ran) the physics judge
+    /// both accept it.
     pub fn found_stable(&self) -> bool {
+        self.model_stable() && self.physics.as_ref().is_none_or(|p| p.stable)
+    }
+    /// Found and accepted by the model-on-truth re-check (the planner's own model on the exact world).
+    pub fn model_stable(&self) -> bool {
         self.found && self.revalidation.as_ref().is_some_and(|r| r.stable)
+    }
+    /// Found and judged unstable by the physics judge.
+    pub fn physics_unstable(&self) -> bool {
+        self.found && self.physics.as_ref().is_some_and(|p| !p.stable)
     }
     /// Found but not stable on the true terrain.
     pub fn found_unstable(&self) -> bool {
@@ -386,14 +435,28 @@ pub fn run_trial<D: DistanceField>(
     let found = report.status.is_exact() && planner.write_path(&mut out).is_ok();
     let final_cost = found.then(|| planner.best_cost());
     let arena_use = planner.arena_use();
-    drop(planner);
     let stats: MotionStats = space.stats();
     let states: Vec<RoverState> = out.iter().map(|(s, _)| *s).collect();
-    let path = out
+    let path: Vec<PathState> = out
         .iter()
-        .map(|(s, h)| PathState { axle: from_vec3(&s.axle()), ground: from_vec3(&s.ground), theta: f64::from(s.theta), anchors: anchors_of(h) })
+        .map(|(s, h)| PathState {
+            axle: from_vec3(&s.axle()),
+            ground: from_vec3(&s.ground),
+            theta: f64::from(s.theta),
+            anchors: anchors_of(h),
+            heading: f64::from(s.heading()),
+        })
         .collect();
-    let revalidation = found.then(|| revalidate(spec.world.as_ref(), spec, &states));
+    let revalidation = found.then(|| {
+        let mut r = revalidate(spec.world.as_ref(), spec, &states);
+        if let Some(why) = tether_too_short(spec, &path) {
+            if r.stable {
+                r.stable = false;
+                r.failure = Some(why);
+            }
+        }
+        r
+    });
     Ok(TrialResult {
         trial,
         seed,
@@ -420,7 +483,56 @@ pub fn run_trial<D: DistanceField>(
         arena_queue: arena_use.queue,
         path,
         revalidation,
+        physics: None,
     })
+}
+
+/// The longest tether a path needs (root, then the anchors of each state's history, then its axle centre),
+/// against `spec.tether_length_m`: the reason, when some state needs more tether than there is.
+fn tether_too_short(spec: &CampaignSpec, path: &[PathState]) -> Option<String> {
+    let dist = |a: &[f64; 3], b: &[f64; 3]| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
+    let (k, need) = path
+        .iter()
+        .map(|p| {
+            let mut pts: Vec<&[f64; 3]> = p.anchors.iter().collect();
+            pts.push(&p.axle);
+            pts.windows(2).map(|w| dist(w[0], w[1])).sum::<f64>()
+        })
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(&b.1))?;
+    (need > spec.tether_length_m).then(|| {
+        format!("state {k} needs {need:.2} m of tether along its anchors; the tether is {:.2} m (tether.length_m)", spec.tether_length_m)
+    })
+}
+
+/// The physics judge of a campaign: the judge and the world's wrap edges (built once, shared by the workers).
+pub struct CampaignJudge {
+    /// The rigid-body judge.
+    pub judge: PhysicsJudge,
+    /// The true tether's wrap edges.
+    pub edges: WrapEdges,
+}
+
+impl CampaignJudge {
+    /// The judge of `spec`'s world; the wrap edges of height grids and meshes within the planning bounds and the
+    /// root (2 m margin).
+    pub fn new(spec: &CampaignSpec) -> Result<CampaignJudge, String> {
+        let judge = PhysicsJudge::new(spec.world.as_ref(), spec.rover).map_err(|e| format!("physics judge: {e}"))?;
+        let b = spec.bounds;
+        let lo = core::array::from_fn(|k| f64::from(b.min[k]).min(spec.root[k]) - 2.0);
+        let hi = core::array::from_fn(|k| f64::from(b.max[k]).max(spec.root[k]) + 2.0);
+        let edges = WrapEdges::new(&spec.world.exact_geometry(), (lo, hi)).map_err(|e| format!("true tether: {e}"))?;
+        Ok(CampaignJudge { judge, edges })
+    }
+
+    /// Judge a trial's path (when found).
+    pub fn judge_trial(&self, spec: &CampaignSpec, t: &mut TrialResult) {
+        if !t.found {
+            return;
+        }
+        let path: Vec<PathPose> = t.path.iter().map(|p| PathPose { axle: p.axle, heading: p.heading }).collect();
+        t.physics = Some(judge_path(&self.judge, &self.edges, spec.root, &path));
+    }
 }
 
 /// The outcome of a campaign.
@@ -470,6 +582,18 @@ impl CampaignResult {
     pub fn found_unstable(&self) -> usize {
         self.trials.iter().filter(|t| t.found_unstable()).count()
     }
+    /// Found trials the model-on-truth re-check rejects.
+    pub fn model_unstable(&self) -> usize {
+        self.trials.iter().filter(|t| t.found && !t.model_stable()).count()
+    }
+    /// Found trials the physics judge rejects.
+    pub fn physics_unstable(&self) -> usize {
+        self.trials.iter().filter(|t| t.physics_unstable()).count()
+    }
+    /// Found trials the physics judge ran on.
+    pub fn physics_judged(&self) -> usize {
+        self.trials.iter().filter(|t| t.physics.is_some()).count()
+    }
     /// Table I and the work columns, as text.
     pub fn table(&self) -> String {
         let f = |xs: Vec<f64>, prec: usize| match mean_sd(&xs) {
@@ -517,12 +641,23 @@ impl CampaignResult {
             f(all.iter().map(|t| t.total_time_s).collect(), 3),
             f(found.iter().filter_map(|t| t.final_cost).collect(), 3),
         );
+        s += &format!(
+            "\nunstable by judge: model-on-truth (the planner's own model on the exact world) {}; physics judge (rigid bodies, true tether) {} of {} judged\n",
+            self.model_unstable(),
+            self.physics_unstable(),
+            self.physics_judged()
+        );
+        for t in all.iter().filter(|t| t.physics_unstable()) {
+            if let Some(p) = &t.physics {
+                s += &format!("physics judge: trial {} seed {}: {}\n", t.trial, t.seed, p.failure.clone().unwrap_or_default());
+            }
+        }
         let nodes = all.iter().map(|t| t.arena_nodes).max().unwrap_or(0);
         let queue = all.iter().map(|t| t.arena_queue).max().unwrap_or(0);
         s += &format!("\narena high-water over all trials: {nodes} nodes of {TRIAL_NODES}, {queue} queued edges of {TRIAL_QUEUE}\n");
         let with_anchor = found.iter().filter(|t| t.path.last().is_some_and(|p| p.anchors.len() > 1)).count();
         s += &format!("found paths whose final anchor history holds an intermediate anchor: {with_anchor} of {}\n", found.len());
-        for t in all.iter().filter(|t| t.found_unstable()) {
+        for t in all.iter().filter(|t| t.found && !t.model_stable()) {
             if let Some(r) = &t.revalidation {
                 s += &format!("unstable on the true terrain: trial {} seed {}: {}\n", t.trial, t.seed, r.failure.clone().unwrap_or_default());
             }
@@ -532,11 +667,11 @@ impl CampaignResult {
 
     /// One CSV row per trial.
     pub fn csv(&self) -> String {
-        let mut s = String::from("trial,seed,found,stable_on_truth,first_iteration,first_time_s,final_cost,iterations,batches,edges_evaluated,states_checked,settles,stability_checks,anchor_predictions,total_time_s,path_states,final_anchors,termination\n");
+        let mut s = String::from("trial,seed,found,stable_on_truth,first_iteration,first_time_s,final_cost,iterations,batches,edges_evaluated,states_checked,settles,stability_checks,anchor_predictions,total_time_s,path_states,final_anchors,termination,model_stable,physics_stable\n");
         let o = |v: Option<String>| v.unwrap_or_default();
         for t in &self.trials {
             s += &format!(
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.6},{},{},{}\n",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.6},{},{},{},{},{}\n",
                 t.trial,
                 t.seed,
                 t.found,
@@ -554,7 +689,9 @@ impl CampaignResult {
                 t.total_time_s,
                 t.path.len(),
                 t.path.last().map_or(0, |p| p.anchors.len()),
-                t.termination
+                t.termination,
+                t.model_stable(),
+                o(t.physics.as_ref().map(|p| p.stable.to_string())),
             );
         }
         s
@@ -565,6 +702,9 @@ impl CampaignResult {
 /// called after every finished trial with (done, total).
 pub fn run(spec: &CampaignSpec, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<CampaignResult, String> {
     let t0 = Instant::now();
+    if spec.first_seed.checked_add(u64::from(spec.trials.saturating_sub(1))).is_none() {
+        return Err(format!("seed {} with {} trials: the trial seeds would pass u64::MAX", spec.first_seed, spec.trials));
+    }
     let b = spec.bounds;
     let lo = [
         f64::from(b.min[0]).min(spec.root[0] - 1.0),
@@ -577,7 +717,7 @@ pub fn run(spec: &CampaignSpec, progress: &(dyn Fn(usize, usize) + Sync)) -> Res
         f64::from(b.max[2]).max(spec.root[2] + 1.0),
     ];
     let mut storage = match spec.field {
-        PlanningField::Map => Some(PlanningMap::from_world(spec.world.as_ref(), lo, hi, spec.voxel_m)?),
+        PlanningField::Map => Some(PlanningMap::from_world_in_pool(spec.world.as_ref(), lo, hi, spec.voxel_m, spec.pool_blocks)?),
         PlanningField::Truth => None,
     };
     let (map_blocks, map_build_s) = storage.as_ref().map_or((0, 0.0), |m| (m.blocks_used(), m.build_s));
@@ -608,6 +748,8 @@ fn run_trials<D: DistanceField + Sync>(
     spec: &CampaignSpec,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Vec<TrialResult>, String> {
+    let judge = if spec.physics_judge { Some(CampaignJudge::new(spec)?) } else { None };
+    let judge = judge.as_ref();
     let total = spec.trials as usize;
     let next = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);
@@ -621,7 +763,10 @@ fn run_trials<D: DistanceField + Sync>(
                     if i >= total {
                         break;
                     }
-                    let r = run_trial(field, spec, i as u32, &mut arena);
+                    let mut r = run_trial(field, spec, i as u32, &mut arena);
+                    if let (Ok(t), Some(j)) = (r.as_mut(), judge) {
+                        j.judge_trial(spec, t);
+                    }
                     if let Ok(mut v) = results.lock() {
                         v.push(r);
                     }

@@ -2,22 +2,33 @@
 //!
 //! Format (all integers little-endian; `host-sim/doc/fieldlog.md` has the same table):
 //!
-//! Header: `magic "TBOTFLOG"` (8) | `format_version u16` (= 1) | `protocol_version u8` | `reserved u8` (0) |
-//! `created_at_unix_ms u64` (passed in by the caller) | `seed u64` | `config_len u32` | `config` (UTF-8 JSON,
-//! at most 1 MiB) | `header_crc u32` (CRC-32/ISO-HDLC of all header bytes before it).
+//! Header: `magic "TBOTFLOG"` (8) | `format_version u16` (= 2; 1 is still read) | `protocol_version u8` |
+//! `reserved u8` (0) | `created_at_unix_ms u64` (passed in by the caller) | `seed u64` | `config_len u32` |
+//! `config` (UTF-8 JSON, at most 1 MiB) | `header_crc u32` (CRC-32/ISO-HDLC of all header bytes before it).
 //!
-//! Record: `direction u8` (1 host -> flight, 2 flight -> host) | `t_us u64` (link time) | `len u32` (at most
-//! 16 MiB) | `bytes` | `crc u32` (CRC-32 of direction, t_us, len and bytes).
+//! Record: `direction u8` (1 host -> flight, 2 flight -> host, 3 end) | `t_us u64` (link time) | `len u32` (at
+//! most 16 MiB) | `bytes` | `crc u32` (CRC-32 of direction, t_us, len and bytes).
 //!
-//! The reader returns every valid record up to the first damage and reports where (byte offset) and why the
-//! damage starts, and how many bytes follow it; nothing before the damage is lost.
+//! End record (format 2): direction 3, the last record's time, 8 bytes: the number of data records before it
+//! (`u64`). [`Writer::finish`] writes it; a log without one was cut short (possibly exactly at a record boundary,
+//! where nothing else would show it) or is a format-1 log, and [`FieldLog::end`] is `None`.
+//!
+//! The reader keeps every valid record. At damage (a bad checksum, direction or length, or a truncated record)
+//! it reports where (byte offset) and why, then resynchronises: it looks for the next byte offset where a whole
+//! valid record starts (direction 1-3, a length that fits, a time not before the last good record's, a matching
+//! checksum) and goes on from there, so one flipped bit costs one record, not the rest of the log. Each damaged
+//! span is one [`Damage`] with the bytes skipped; the end record's count says how many records were lost.
 
 use std::io::Write;
 
 /// Magic bytes at the start of a field log.
 pub const MAGIC: &[u8; 8] = b"TBOTFLOG";
-/// Format version this build writes and reads.
-pub const FORMAT_VERSION: u16 = 1;
+/// Format version this build writes (it also reads [`FORMAT_VERSION_1`]).
+pub const FORMAT_VERSION: u16 = 2;
+/// The first format: the same records, no end record.
+pub const FORMAT_VERSION_1: u16 = 1;
+/// Direction byte of the end record (format 2).
+const END_DIRECTION: u8 = 3;
 /// Largest configuration text.
 pub const MAX_CONFIG_LEN: usize = 1 << 20;
 /// Largest record payload.
@@ -78,11 +89,15 @@ pub struct Record {
     pub offset: u64,
 }
 
-/// Why reading stopped before the end of the file.
+/// Why bytes of the log could not be read as records.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DamageReason {
     /// The file ends inside a record.
     Truncated,
+    /// Bytes follow the end record.
+    AfterEnd,
+    /// An end record's payload is not one 8-byte count.
+    BadEndRecord,
     /// A record's checksum does not match.
     BadChecksum,
     /// A record's direction byte is not 1 or 2.
@@ -91,15 +106,24 @@ pub enum DamageReason {
     LengthTooLarge,
 }
 
-/// Where and why a log is damaged.
+/// Where and why a log is damaged: one damaged span, from `offset` to the next valid record (or the end).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Damage {
     /// Byte offset of the first damaged record.
     pub offset: u64,
     /// Why it is damaged.
     pub reason: DamageReason,
-    /// Bytes from the damage to the end of the file (not read).
+    /// Bytes skipped from the damage to the next valid record (or to the end of the file).
     pub unread_bytes: u64,
+}
+
+/// The end record of a complete log.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct EndRecord {
+    /// Byte offset of the end record.
+    pub offset: u64,
+    /// Data records the writer wrote before it.
+    pub records: u64,
 }
 
 /// Why the header could not be read (then nothing in the log can be trusted).
@@ -136,15 +160,75 @@ impl core::fmt::Display for HeaderError {
 
 impl core::error::Error for HeaderError {}
 
-/// A parsed log: the header, every valid record, and the damage if reading stopped early.
+/// A parsed log: the header, every valid record, the damage and the end record.
 #[derive(Debug, Clone)]
 pub struct FieldLog {
     /// The header.
     pub header: Header,
-    /// Records up to the damage (or the end).
+    /// Format version of the file (1 or 2).
+    pub format_version: u16,
+    /// Every valid data record, in file order (damaged spans skipped).
     pub records: Vec<Record>,
-    /// The first damage, if any.
+    /// The first damage, if any (the same as `damaged[0]`).
     pub damage: Option<Damage>,
+    /// Every damaged span, in file order.
+    pub damaged: Vec<Damage>,
+    /// The end record (format 2), if the file has one.
+    pub end: Option<EndRecord>,
+}
+
+/// What a reader can say about a log's completeness.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Completeness {
+    /// An end record, no damage, and its count equals the records read.
+    Complete,
+    /// No end record and no damage: the log may have been cut at a record boundary (or is format 1).
+    NoEndRecord,
+    /// Damaged spans were skipped; `lost` records are missing by the end record's count (`None` without one).
+    Damaged {
+        /// Damaged spans.
+        spans: usize,
+        /// Records missing (the end record's count minus the records read), if there is an end record.
+        lost: Option<u64>,
+    },
+    /// No damage, but the end record counts other than the records read (a writer bug or a forged log).
+    CountMismatch {
+        /// The end record's count.
+        expected: u64,
+        /// Records read.
+        read: u64,
+    },
+}
+
+impl FieldLog {
+    /// Whether the log is complete, and if not, why.
+    pub fn completeness(&self) -> Completeness {
+        let read = self.records.len() as u64;
+        match (self.damaged.len(), self.end) {
+            (0, Some(e)) if e.records == read => Completeness::Complete,
+            (0, Some(e)) => Completeness::CountMismatch { expected: e.records, read },
+            (0, None) => Completeness::NoEndRecord,
+            (spans, end) => Completeness::Damaged { spans, lost: end.map(|e| e.records.saturating_sub(read)) },
+        }
+    }
+}
+
+impl core::fmt::Display for Completeness {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Completeness::Complete => write!(f, "complete (end record present, every record read)"),
+            Completeness::NoEndRecord => write!(f, "no end record: truncated? (or a format-1 log, which has none)"),
+            Completeness::Damaged { spans, lost: Some(n) } => {
+                write!(f, "{spans} damaged span(s) skipped; {n} record(s) lost by the end record's count")
+            }
+            Completeness::Damaged { spans, lost: None } => {
+                write!(f, "{spans} damaged span(s) skipped; no end record, so the number of lost records is unknown")
+            }
+            Completeness::CountMismatch { expected, read } => {
+                write!(f, "the end record counts {expected} records but {read} were read")
+            }
+        }
+    }
 }
 
 fn header_bytes(h: &Header) -> Vec<u8> {
@@ -164,8 +248,17 @@ fn header_bytes(h: &Header) -> Vec<u8> {
 
 /// Encodes one record.
 pub fn record_bytes(direction: Direction, t_us: u64, bytes: &[u8]) -> Vec<u8> {
+    raw_record(direction.to_u8(), t_us, bytes)
+}
+
+/// Encodes the end record: `records` data records were written before it, the last at `t_us`.
+pub fn end_record_bytes(t_us: u64, records: u64) -> Vec<u8> {
+    raw_record(END_DIRECTION, t_us, &records.to_le_bytes())
+}
+
+fn raw_record(direction: u8, t_us: u64, bytes: &[u8]) -> Vec<u8> {
     let mut b = Vec::with_capacity(RECORD_OVERHEAD + bytes.len());
-    b.push(direction.to_u8());
+    b.push(direction);
     b.extend_from_slice(&t_us.to_le_bytes());
     b.extend_from_slice(&(bytes.len() as u32).to_le_bytes());
     b.extend_from_slice(bytes);
@@ -174,9 +267,11 @@ pub fn record_bytes(direction: Direction, t_us: u64, bytes: &[u8]) -> Vec<u8> {
     b
 }
 
-/// Appends records to a field log.
+/// Appends records to a field log; [`Writer::finish`] closes it with the end record.
 pub struct Writer<W: Write> {
     out: W,
+    records: u64,
+    last_t_us: u64,
 }
 
 impl<W: Write> Writer<W> {
@@ -189,7 +284,7 @@ impl<W: Write> Writer<W> {
             ));
         }
         out.write_all(&header_bytes(header))?;
-        Ok(Self { out })
+        Ok(Self { out, records: 0, last_t_us: 0 })
     }
 
     /// Appends one record (empty byte strings are skipped).
@@ -203,7 +298,18 @@ impl<W: Write> Writer<W> {
                 "record too long",
             ));
         }
-        self.out.write_all(&record_bytes(direction, t_us, bytes))
+        self.out.write_all(&record_bytes(direction, t_us, bytes))?;
+        self.records += 1;
+        self.last_t_us = self.last_t_us.max(t_us);
+        Ok(())
+    }
+
+    /// Writes the end record (the count of records appended), flushes and gives the writer back. A log closed
+    /// without it reads as "no end record: truncated?".
+    pub fn finish(mut self) -> std::io::Result<W> {
+        self.out.write_all(&end_record_bytes(self.last_t_us, self.records))?;
+        self.out.flush()?;
+        Ok(self.out)
     }
 
     /// Flushes the underlying writer.
@@ -211,7 +317,8 @@ impl<W: Write> Writer<W> {
         self.out.flush()
     }
 
-    /// Gives the writer back.
+    /// Gives the writer back without an end record (the log then reads as possibly truncated; see
+    /// [`Writer::finish`]).
     pub fn into_inner(self) -> W {
         self.out
     }
@@ -240,7 +347,7 @@ pub fn parse(b: &[u8]) -> Result<FieldLog, HeaderError> {
         return Err(HeaderError::BadMagic);
     }
     let version = u16_at(b, 8).ok_or(HeaderError::Truncated)?;
-    if version != FORMAT_VERSION {
+    if version != FORMAT_VERSION && version != FORMAT_VERSION_1 {
         return Err(HeaderError::UnsupportedVersion(version));
     }
     let protocol_version = *b.get(10).ok_or(HeaderError::Truncated)?;
@@ -263,51 +370,86 @@ pub fn parse(b: &[u8]) -> Result<FieldLog, HeaderError> {
         seed,
         config,
     };
-    let mut at = end + 4;
-    let mut records = Vec::new();
-    let mut damage = None;
-    while at < b.len() {
-        let fail = |reason| Damage {
-            offset: at as u64,
-            reason,
-            unread_bytes: (b.len() - at) as u64,
-        };
-        let Some(&dir) = b.get(at) else { break };
-        let (Some(t_us), Some(len)) = (u64_at(b, at + 1), u32_at(b, at + 9)) else {
-            damage = Some(fail(DamageReason::Truncated));
-            break;
-        };
-        let len = len as usize;
-        if len > MAX_RECORD_LEN {
-            damage = Some(fail(DamageReason::LengthTooLarge));
-            break;
-        }
-        let body_end = at + 13 + len;
-        let Some(stored) = u32_at(b, body_end) else {
-            damage = Some(fail(DamageReason::Truncated));
-            break;
-        };
-        if CRC.checksum(&b[at..body_end]) != stored {
-            damage = Some(fail(DamageReason::BadChecksum));
-            break;
-        }
-        let Some(direction) = Direction::from_u8(dir) else {
-            damage = Some(fail(DamageReason::BadDirection));
-            break;
-        };
-        records.push(Record {
-            direction,
-            t_us,
-            bytes: b[at + 13..body_end].to_vec(),
-            offset: at as u64,
-        });
-        at = body_end + 4;
-    }
-    Ok(FieldLog {
+    let mut log = FieldLog {
         header,
-        records,
-        damage,
-    })
+        format_version: version,
+        records: Vec::new(),
+        damage: None,
+        damaged: Vec::new(),
+        end: None,
+    };
+    let ends = version >= 2;
+    let mut at = end + 4;
+    let mut last_t = 0u64;
+    // Each pass reads one record or one damaged span; every pass advances `at`, so at most `b.len()` passes.
+    while at < b.len() {
+        match record_at(b, at, ends) {
+            Ok(r) => {
+                let next = at + RECORD_OVERHEAD + r.bytes.len();
+                if r.dir == END_DIRECTION {
+                    match <[u8; 8]>::try_from(r.bytes) {
+                        Ok(n) => {
+                            log.end = Some(EndRecord { offset: at as u64, records: u64::from_le_bytes(n) });
+                            if next < b.len() {
+                                push_damage(&mut log, next, DamageReason::AfterEnd, b.len() - next);
+                            }
+                            break;
+                        }
+                        Err(_) => {
+                            push_damage(&mut log, at, DamageReason::BadEndRecord, next - at);
+                            at = next;
+                            continue;
+                        }
+                    }
+                }
+                let Some(direction) = Direction::from_u8(r.dir) else { break };
+                last_t = last_t.max(r.t_us);
+                log.records.push(Record { direction, t_us: r.t_us, bytes: r.bytes.to_vec(), offset: at as u64 });
+                at = next;
+            }
+            Err(reason) => {
+                let resume = (at + 1..b.len()).find(|&p| record_at(b, p, ends).is_ok_and(|r| r.t_us >= last_t));
+                let stop = resume.unwrap_or(b.len());
+                push_damage(&mut log, at, reason, stop - at);
+                at = stop;
+            }
+        }
+    }
+    Ok(log)
+}
+
+fn push_damage(log: &mut FieldLog, at: usize, reason: DamageReason, skipped: usize) {
+    let d = Damage { offset: at as u64, reason, unread_bytes: skipped as u64 };
+    log.damage.get_or_insert(d);
+    log.damaged.push(d);
+}
+
+/// A whole record's fields, checked (the checksum matches; the direction is 1, 2, or 3 when `ends`).
+struct RawRecord<'a> {
+    dir: u8,
+    t_us: u64,
+    bytes: &'a [u8],
+}
+
+fn record_at(b: &[u8], at: usize, ends: bool) -> Result<RawRecord<'_>, DamageReason> {
+    let (Some(&dir), Some(t_us), Some(len)) = (b.get(at), u64_at(b, at + 1), u32_at(b, at + 9)) else {
+        return Err(DamageReason::Truncated);
+    };
+    let len = len as usize;
+    if len > MAX_RECORD_LEN {
+        return Err(DamageReason::LengthTooLarge);
+    }
+    let body_end = at + 13 + len;
+    let (Some(body), Some(stored)) = (b.get(at..body_end), u32_at(b, body_end)) else {
+        return Err(DamageReason::Truncated);
+    };
+    if CRC.checksum(body) != stored {
+        return Err(DamageReason::BadChecksum);
+    }
+    if Direction::from_u8(dir).is_none() && !(ends && dir == END_DIRECTION) {
+        return Err(DamageReason::BadDirection);
+    }
+    Ok(RawRecord { dir, t_us, bytes: body.get(13..).unwrap_or_default() })
 }
 
 /// Reads and parses a log file.
@@ -372,5 +514,86 @@ mod tests {
                 assert_eq!(complete, whole);
             }
         }
+    }
+
+    fn finished() -> (Vec<u8>, Vec<u64>) {
+        let h = Header { protocol_version: 1, created_at_unix_ms: 5, seed: 42, config: "{}".into() };
+        let mut w = Writer::new(Vec::new(), &h).unwrap();
+        for k in 0..6u8 {
+            let dir = if k % 2 == 0 { Direction::HostToFlight } else { Direction::FlightToHost };
+            w.append(dir, 10 * u64::from(k), &[k; 5]).unwrap();
+        }
+        let b = w.finish().unwrap();
+        let offsets = parse(&b).unwrap().records.iter().map(|r| r.offset).collect();
+        (b, offsets)
+    }
+
+    /// Regression (issue 24): a log cut exactly at a record boundary read as complete ("no damage"). A finished
+    /// log has an end record with the record count; every cut, at a boundary or not, is reported.
+    #[test]
+    fn a_finished_log_is_complete_and_every_cut_is_reported() {
+        let (b, offsets) = finished();
+        let log = parse(&b).unwrap();
+        assert_eq!(log.format_version, FORMAT_VERSION);
+        assert_eq!(log.completeness(), Completeness::Complete);
+        assert_eq!(log.end.map(|e| e.records), Some(6));
+        for cut in offsets[0] as usize..b.len() {
+            let log = parse(&b[..cut]).unwrap();
+            assert_ne!(log.completeness(), Completeness::Complete, "cut {cut}");
+            if offsets.contains(&(cut as u64)) || cut == b.len() - RECORD_OVERHEAD - 8 {
+                assert_eq!(log.completeness(), Completeness::NoEndRecord, "cut {cut}");
+            }
+        }
+        // bytes after the end record are damage
+        let mut longer = b.clone();
+        longer.extend_from_slice(&[0u8; 3]);
+        let log = parse(&longer).unwrap();
+        assert_eq!(log.damage.map(|d| (d.reason, d.unread_bytes)), Some((DamageReason::AfterEnd, 3)));
+        assert_eq!(log.records.len(), 6);
+    }
+
+    /// Regression (issue 24): one flipped bit in a payload lost every record after it. The reader skips the
+    /// damaged record, resynchronises at the next one and counts the loss by the end record.
+    #[test]
+    fn one_bit_flip_costs_one_record() {
+        let (b, offsets) = finished();
+        let good = parse(&b).unwrap();
+        for k in 0..offsets.len() {
+            let mut flipped = b.clone();
+            flipped[offsets[k] as usize + 13 + 2] ^= 0x08;
+            let log = parse(&flipped).unwrap();
+            let mut expect = good.records.clone();
+            expect.remove(k);
+            assert_eq!(log.records, expect, "flip in record {k}");
+            let d = log.damage.unwrap();
+            assert_eq!((d.offset, d.reason, d.unread_bytes), (offsets[k], DamageReason::BadChecksum, (RECORD_OVERHEAD + 5) as u64));
+            assert_eq!(log.completeness(), Completeness::Damaged { spans: 1, lost: Some(1) });
+        }
+        // two damaged spans, garbage in between, a flipped time field: still every other record
+        let mut two = b.clone();
+        two[offsets[1] as usize + 3] ^= 0x01;
+        two[offsets[4] as usize] = 9;
+        let log = parse(&two).unwrap();
+        assert_eq!(log.records.len(), 4);
+        assert_eq!(log.damaged.len(), 2);
+        assert_eq!(log.completeness(), Completeness::Damaged { spans: 2, lost: Some(2) });
+    }
+
+    /// A format-1 log (no end record) still reads, with the verdict "no end record".
+    #[test]
+    fn format_1_logs_still_read() {
+        let mut v1 = sample();
+        v1[8..10].copy_from_slice(&FORMAT_VERSION_1.to_le_bytes());
+        let hdr_end = 32 + 7;
+        let crc = CRC.checksum(&v1[..hdr_end]);
+        v1[hdr_end..hdr_end + 4].copy_from_slice(&crc.to_le_bytes());
+        let log = parse(&v1).unwrap();
+        assert_eq!((log.format_version, log.records.len()), (1, 3));
+        assert_eq!(log.completeness(), Completeness::NoEndRecord);
+        assert!(log.completeness().to_string().contains("no end record: truncated?"));
+        // an end record is not a format-1 record
+        let mut with_end = v1.clone();
+        with_end.extend_from_slice(&end_record_bytes(30, 3));
+        assert_eq!(parse(&with_end).unwrap().damage.map(|d| d.reason), Some(DamageReason::BadDirection));
     }
 }

@@ -17,6 +17,7 @@
 //! loop), [`team`] and [`movingai`] (tethered climbing teams, grid benchmarks).
 
 pub mod campaign;
+pub mod physics;
 pub mod cli;
 pub mod fieldlog;
 pub mod harness;

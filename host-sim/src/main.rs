@@ -49,6 +49,8 @@ enum Command {
     Board(cli::board::BoardArgs),
     /// Render the stability region of the 55-degree ledge for a root anchor (SVG).
     StabilityMap(cli::stability_map::StabilityMapArgs),
+    /// The planner's stability verdict (map and exact field) against the physics judge: confusion matrices.
+    JudgeAgreement(cli::judge_agreement::JudgeAgreementArgs),
 }
 
 fn main() -> ExitCode {
@@ -75,6 +77,7 @@ fn main() -> ExitCode {
         Command::Homotopy(a) => cli::homotopy::main(&a),
         Command::Board(a) => cli::board::main(&a),
         Command::StabilityMap(a) => cli::stability_map::main(&a),
+        Command::JudgeAgreement(a) => cli::judge_agreement::main(&a),
     }
 }
 

@@ -118,6 +118,10 @@ pub struct CheckReport {
     pub scans: usize,
     /// Points integrated.
     pub points: usize,
+    /// Non-finite points dropped on the host before sending (the flight side would Nack their chunks).
+    pub non_finite_points: usize,
+    /// Scans that could not be chunked (too many points, or a non-finite sensor pose).
+    pub scans_refused: usize,
     /// Total TSDF integration time, seconds (thread CPU time).
     pub integrate_s: f64,
     /// Total TSDF integration wall time, seconds.
@@ -195,7 +199,11 @@ pub fn build_map(world: &dyn World, poses: &[Pose3], cfg: &CheckConfig, map: &mu
     let mut esdf_wall = Vec::new();
     for (k, pose) in poses.iter().enumerate() {
         let s = scan(world, &cfg.sensor, pose, &mut rng);
-        let Ok(chunks) = s.to_chunks(k as u32, cfg.chunk_points) else { continue };
+        rep.non_finite_points += s.non_finite_points();
+        let Ok(chunks) = s.to_chunks(k as u32, cfg.chunk_points) else {
+            rep.scans_refused += 1;
+            continue;
+        };
         let chunks: Vec<(Pose3, Vec<Vec3>)> = chunks
             .iter()
             .map(|c| (c.sensor_pose.to_isometry(), c.points.iter().map(|p| Vec3::new(p.x, p.y, p.z)).collect()))

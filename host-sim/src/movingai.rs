@@ -170,9 +170,19 @@ pub fn parse_map(text: &str) -> Result<GridMap, MovingAiError> {
     Ok(GridMap { width, height, passable })
 }
 
-/// Parse `.scen` text.
+/// Parse `.scen` text. A cut file is an error, not fewer scenarios: the text must end with a newline (Moving AI's
+/// files do; a file cut inside its last line does not), every optimal length must have as many decimals as the
+/// first (a cut inside the last number shortens it), and there must be at least one scenario. A cut exactly at a
+/// line boundary cannot be told from a shorter file (the format has no count).
 pub fn parse_scen(text: &str) -> Result<Vec<Scenario>, MovingAiError> {
-    let mut out = Vec::new();
+    let mut out: Vec<Scenario> = Vec::new();
+    let last_line = text.lines().count().max(1);
+    if !text.is_empty() && !text.ends_with('\n') {
+        return Err(MovingAiError::BadScenario {
+            line: last_line,
+            reason: "the file does not end with a newline: truncated inside this line?".into(),
+        });
+    }
     let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
     let (n, first) = lines.next().ok_or(MovingAiError::BadHeader { line: 1, expected: "`version 1`" })?;
     let v: Vec<&str> = first.split_whitespace().collect();
@@ -194,6 +204,14 @@ pub fn parse_scen(text: &str) -> Result<Vec<Scenario>, MovingAiError> {
             return Err(bad("optimal length must be finite and >= 0"));
         }
         let decimals = f[8].split_once('.').map(|(_, d)| d.len()).unwrap_or(0);
+        if let Some(first) = out.first() {
+            if first.decimals != decimals {
+                return Err(bad(&format!(
+                    "optimal length {:?} has {decimals} decimals, line {}'s has {}: truncated?",
+                    f[8], first.line, first.decimals
+                )));
+            }
+        }
         out.push(Scenario {
             line: n,
             bucket: num(0, "bucket")? as u32,
@@ -206,6 +224,9 @@ pub fn parse_scen(text: &str) -> Result<Vec<Scenario>, MovingAiError> {
             decimals,
         });
         let _ = (num(2, "map width")?, num(3, "map height")?);
+    }
+    if out.is_empty() {
+        return Err(MovingAiError::BadScenario { line: last_line, reason: "no scenarios after the version line".into() });
     }
     Ok(out)
 }
@@ -362,6 +383,14 @@ mod tests {
         assert!(matches!(parse_scen("version 1\n0 m 3 2 0 0 2\n"), Err(MovingAiError::BadScenario { line: 2, .. })));
         assert!(matches!(parse_scen("version 1\n0 m 3 2 0 -1 2 1 2.0\n"), Err(MovingAiError::BadScenario { .. })));
         assert!(matches!(parse_scen("version 1\n0 m 3 2 0 0 2 1 nan\n"), Err(MovingAiError::BadScenario { .. })));
+        // regression (issue 24): a truncated .scen ran its whole scenarios and exited 0
+        let two = "version 1\n0 m 3 2 0 0 2 1 2.00000000\n0 m 3 2 0 1 2 1 2.41421356\n";
+        assert_eq!(parse_scen(two).map(|v| v.len()).ok(), Some(2));
+        for cut in two.find("2.4").unwrap()..two.len() - 1 {
+            let e = parse_scen(&two[..cut]).unwrap_err().to_string();
+            assert!(e.contains("line 3") && e.contains("truncated"), "cut {cut}: {e}");
+        }
+        assert!(parse_scen("version 1\n").unwrap_err().to_string().contains("no scenarios"));
     }
 
     #[test]

@@ -120,7 +120,79 @@ impl core::fmt::Display for ReplayOutcome {
     }
 }
 
-/// Replays `log` through `link` (a fresh flight software) and compares the output.
+/// Why a log is not replayed at all.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ReplayRefusal {
+    /// The configuration's executive period is 0 (link time would never advance).
+    ZeroStep,
+    /// A record's time is before the previous record's (a recording's link time only grows).
+    TimeGoesBack {
+        /// Index of the record in the log.
+        record: usize,
+        /// Its time, microseconds.
+        t_us: u64,
+        /// The previous record's time, microseconds.
+        previous_us: u64,
+    },
+    /// A record's time is past the replay's link-time budget.
+    TooLong {
+        /// Index of the record in the log.
+        record: usize,
+        /// Its time, microseconds.
+        t_us: u64,
+        /// The budget, microseconds.
+        max_us: u64,
+        /// Executive period, microseconds.
+        step_us: u64,
+    },
+}
+
+impl core::fmt::Display for ReplayRefusal {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ReplayRefusal::ZeroStep => write!(f, "the log's configuration has step_us = 0: link time cannot advance"),
+            ReplayRefusal::TimeGoesBack { record, t_us, previous_us } => write!(
+                f,
+                "record #{record} is stamped {t_us} us, before the previous record's {previous_us} us: the time \
+                 stamps are damaged (link time only grows)"
+            ),
+            ReplayRefusal::TooLong { record, t_us, max_us, step_us } => write!(
+                f,
+                "record #{record} is stamped {:.3} s of link time: replaying to it takes {} executive steps of {step_us} \
+                 us, past the limit of {:.0} s; a damaged time stamp? (raise --max-link-time-s if the run really \
+                 lasted that long)",
+                *t_us as f64 / 1e6,
+                t_us / (*step_us).max(1),
+                *max_us as f64 / 1e6
+            ),
+        }
+    }
+}
+
+impl core::error::Error for ReplayRefusal {}
+
+/// Checks that replaying `log` ends: a non-zero executive period, record times that never go back and stay within
+/// `max_link_time_us` (the replay steps the executive every `step_us` up to the last record's time, so one time
+/// stamp of `u64::MAX` would otherwise run for ever).
+pub fn check_replayable(log: &FieldLog, step_us: u64, max_link_time_us: u64) -> Result<(), ReplayRefusal> {
+    if step_us == 0 {
+        return Err(ReplayRefusal::ZeroStep);
+    }
+    let mut previous_us = 0;
+    for (record, r) in log.records.iter().enumerate() {
+        if r.t_us < previous_us {
+            return Err(ReplayRefusal::TimeGoesBack { record, t_us: r.t_us, previous_us });
+        }
+        if r.t_us > max_link_time_us {
+            return Err(ReplayRefusal::TooLong { record, t_us: r.t_us, max_us: max_link_time_us, step_us });
+        }
+        previous_us = r.t_us;
+    }
+    Ok(())
+}
+
+/// Replays `log` through `link` (a fresh flight software) and compares the output. Run [`check_replayable`]
+/// first on a log from outside: the replay steps the link up to every record's time.
 pub fn replay(log: &FieldLog, link: &mut impl FlightLink) -> Result<ReplayOutcome, LinkError> {
     let mut got = Vec::new();
     let mut expected = Vec::new();

@@ -264,6 +264,10 @@ pub struct Scenario {
     /// The file it came from (set by [`load`]).
     #[serde(skip)]
     pub file: PathBuf,
+    /// Dotted paths of the `[tether]`, `[goal]`, `[sensor]` and `[map]` fields the file gives (set by [`parse`]):
+    /// a command that cannot apply one says so instead of ignoring it ([`Scenario::gives`]).
+    #[serde(skip)]
+    given: Vec<String>,
 }
 
 /// A world description, resolved (paths absolute).
@@ -432,6 +436,19 @@ impl Scenario {
         self.world.kind.clone()
     }
 
+    /// Whether the file gives `dotted` (e.g. `"map.voxel_size_m"`, or `"sensor"` for any field of `[sensor]`)
+    /// rather than leaving it at its default. Tracked for the `[tether]`, `[goal]`, `[sensor]` and `[map]` tables.
+    pub fn gives(&self, dotted: &str) -> bool {
+        self.given.iter().any(|g| g == dotted || g.strip_prefix(dotted).is_some_and(|rest| rest.starts_with('.')))
+    }
+
+    /// The scenario's name made safe as one path component of an output directory: characters other than ASCII
+    /// letters, digits, `-`, `_` and `.` become `_`, and a name that is empty or only dots becomes `_` followed by
+    /// it, so neither an absolute name (`/etc`) nor `..` can leave the output directory.
+    pub fn file_safe_name(&self) -> String {
+        file_safe(&self.name)
+    }
+
     fn err(&self, field: &str, reason: impl Into<String>) -> ScenarioError {
         ScenarioError { file: self.file.clone(), field: field.into(), reason: reason.into() }
     }
@@ -567,14 +584,34 @@ impl Scenario {
     }
 }
 
+/// `name` as one safe path component (see [`Scenario::file_safe_name`]).
+pub fn file_safe(name: &str) -> String {
+    let s: String = name
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.') { c } else { '_' })
+        .collect();
+    if s.chars().all(|c| c == '.') {
+        format!("_{s}")
+    } else {
+        s
+    }
+}
+
 /// Parses a scenario from text (`file` is used in errors and to resolve terrain paths); does not build the world.
 pub fn parse(text: &str, file: &Path) -> Result<Scenario, ScenarioError> {
-    let mut sc: Scenario = toml::from_str(text).map_err(|e| ScenarioError {
+    let syntax = |e: toml::de::Error| ScenarioError {
         file: file.to_path_buf(),
         field: "(syntax)".into(),
         reason: e.to_string().trim().replace('\n', " "),
-    })?;
+    };
+    let mut sc: Scenario = toml::from_str(text).map_err(syntax)?;
     sc.file = file.to_path_buf();
+    let table: toml::Table = toml::from_str(text).map_err(syntax)?;
+    for section in ["tether", "goal", "sensor", "map"] {
+        if let Some(toml::Value::Table(t)) = table.get(section) {
+            sc.given.extend(t.keys().map(|k| format!("{section}.{k}")));
+        }
+    }
     Ok(sc)
 }
 
@@ -733,6 +770,18 @@ position = [10.0, 10.0, 21.67]
             let e = check_text(&text).unwrap_err();
             assert_eq!(e.field, field, "{e}");
             assert!(e.reason.contains(reason), "{e}");
+        }
+    }
+
+    #[test]
+    fn given_fields_are_tracked_and_names_are_made_path_safe() {
+        let sc = check_text(&format!("{CRATER}[map]\nvoxel_size_m = 0.2\n[sensor]\nmax_range_m = 5.0\n")).unwrap();
+        assert!(sc.gives("map.voxel_size_m") && sc.gives("map") && sc.gives("sensor"));
+        assert!(!sc.gives("map.pool_blocks") && !sc.gives("tether.length_m") && !sc.gives("ma"));
+        let plain = check_text(CRATER).unwrap();
+        assert!(!plain.gives("map") && !plain.gives("sensor"));
+        for (name, safe) in [("/etc/passwd", "_etc_passwd"), ("..", "_.."), ("", "_"), ("a/../b", "a_.._b"), ("ledge_test3", "ledge_test3")] {
+            assert_eq!(file_safe(name), safe, "{name:?}");
         }
     }
 

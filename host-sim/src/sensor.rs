@@ -6,6 +6,11 @@
 //! at `mount` (rover frame). A scan becomes protocol [`SensorChunk`]s of at most
 //! [`MAX_POINTS_PER_CHUNK`] points each ([`Scan::to_chunks`]).
 //!
+//! The host never sends a non-finite point (the flight side Nacks a whole chunk holding one, `NonFinite`):
+//! [`scan`] drops a return whose range is not finite (a world's ray cast gone wrong), and [`Scan::to_chunks`]
+//! drops any non-finite point a caller put in a [`Scan`], says so (`log::warn!`) and counts it
+//! ([`Scan::non_finite_points`]); a non-finite sensor pose is an error, not a chunk.
+//!
 //! Parameters (defaults): `h_fov_deg` 90, `v_fov_deg` 60, `resolution_deg` 1.0 (91 x 61 = 5551 rays, within the
 //! protocol's `SCAN_POINTS_CAPACITY` of 8192), `min_range_m` 0.3, `max_range_m` 8.0, `noise_sigma_m` 0.005,
 //! `dropout_probability` 0.02, mount 0.5 m above the rover origin pitched 30 degrees down.
@@ -119,13 +124,29 @@ pub struct Scan {
     pub points: Vec<Vec3>,
 }
 
-/// A scan that does not fit the protocol's chunking limits.
+/// A scan that cannot become protocol chunks.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct TooManyPoints {
-    /// Points in the scan.
-    pub points: usize,
-    /// Largest number that fits.
-    pub capacity: usize,
+pub enum ChunkError {
+    /// More (finite) points than the protocol's chunking limits hold.
+    TooManyPoints {
+        /// Points in the scan.
+        points: usize,
+        /// Largest number that fits.
+        capacity: usize,
+    },
+    /// The sensor pose is not finite: every point would be garbage on the flight side.
+    NonFinitePose,
+}
+
+impl core::fmt::Display for ChunkError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ChunkError::TooManyPoints { points, capacity } => {
+                write!(f, "{points} points do not fit the protocol's {capacity} points per scan")
+            }
+            ChunkError::NonFinitePose => write!(f, "the sensor pose is not finite"),
+        }
+    }
 }
 
 /// Uniform in [0, 1).
@@ -157,7 +178,8 @@ pub fn scan(world: &dyn World, params: &RangeSensorParams, rover_pose: &Pose3, r
             let drop = unit(rng) < params.dropout_probability;
             let Some(t) = world.raycast(&origin, &d_w, params.max_range_m as Real) else { continue };
             let r = t as f64 + noise;
-            if drop || r < params.min_range_m || r > params.max_range_m {
+            // A NaN range fails the range test too: it is dropped, never sent.
+            if drop || !(r >= params.min_range_m && r <= params.max_range_m) {
                 continue;
             }
             points.push(d_s * r as Real);
@@ -174,19 +196,37 @@ pub fn to_wire_pose(p: &Pose3) -> Pose {
 }
 
 impl Scan {
-    /// Splits the scan into protocol chunks of at most `max_points` points (clamped to
-    /// `1..=MAX_POINTS_PER_CHUNK`). A scan with more than `MAX_CHUNKS_PER_SCAN` chunks is refused.
-    pub fn to_chunks(&self, scan_id: u32, max_points: usize) -> Result<Vec<SensorChunk>, TooManyPoints> {
-        let n = max_points.clamp(1, MAX_POINTS_PER_CHUNK);
-        let count = self.points.len().div_ceil(n).max(1);
-        if count > MAX_CHUNKS_PER_SCAN as usize {
-            return Err(TooManyPoints { points: self.points.len(), capacity: n * MAX_CHUNKS_PER_SCAN as usize });
-        }
+    /// Points of the scan that are not finite (dropped by [`Scan::to_chunks`]).
+    pub fn non_finite_points(&self) -> usize {
+        self.points.iter().filter(|p| !p.iter().all(|c| c.is_finite())).count()
+    }
+
+    /// Splits the scan's finite points into protocol chunks of at most `max_points` points (clamped to
+    /// `1..=MAX_POINTS_PER_CHUNK`); non-finite points are dropped with a warning (see the module docs). A scan
+    /// with more than `MAX_CHUNKS_PER_SCAN` chunks, or with a non-finite sensor pose, is refused.
+    pub fn to_chunks(&self, scan_id: u32, max_points: usize) -> Result<Vec<SensorChunk>, ChunkError> {
         let pose = to_wire_pose(&self.sensor_pose);
+        let finite_pose = [pose.position.x, pose.position.y, pose.position.z]
+            .iter()
+            .chain([pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w].iter())
+            .all(|c| c.is_finite());
+        if !finite_pose {
+            return Err(ChunkError::NonFinitePose);
+        }
+        let dropped = self.non_finite_points();
+        if dropped > 0 {
+            log::warn!("scan {scan_id}: dropped {dropped} non-finite point(s) of {} before sending", self.points.len());
+        }
+        let finite: Vec<&Vec3> = self.points.iter().filter(|p| p.iter().all(|c| c.is_finite())).collect();
+        let n = max_points.clamp(1, MAX_POINTS_PER_CHUNK);
+        let count = finite.len().div_ceil(n).max(1);
+        if count > MAX_CHUNKS_PER_SCAN as usize {
+            return Err(ChunkError::TooManyPoints { points: finite.len(), capacity: n * MAX_CHUNKS_PER_SCAN as usize });
+        }
         let mut out = Vec::with_capacity(count);
         for k in 0..count {
             let mut points = heapless::Vec::new();
-            for p in self.points.iter().skip(k * n).take(n) {
+            for p in finite.iter().skip(k * n).take(n) {
                 // Cannot fail: at most n <= MAX_POINTS_PER_CHUNK points per chunk.
                 let _ = points.push(Point3::new(p.x, p.y, p.z));
             }
@@ -252,8 +292,27 @@ mod tests {
         }
         assert_eq!(all, s.points);
         let big = Scan { sensor_pose: Pose3::identity(), points: vec![Vec3::zeros(); 64 * 128 + 1] };
-        assert!(big.to_chunks(1, 128).is_err());
+        assert!(matches!(big.to_chunks(1, 128), Err(ChunkError::TooManyPoints { .. })));
         let e = RangeSensorParams { resolution_deg: 0.2, ..Default::default() }.validate().unwrap_err();
         assert_eq!(e.0, "resolution_deg");
+    }
+
+    /// Regression (issue 24): one NaN point made the flight side Nack every chunk of its scan (`NonFinite`). The
+    /// host drops the point, counts it and sends the rest; a non-finite pose is refused.
+    #[test]
+    fn non_finite_points_are_dropped_and_counted_never_sent() {
+        let mut points: Vec<Vec3> = (0..300).map(|i| Vec3::new(1.0 + i as Real * 0.01, 0.0, 0.5)).collect();
+        points[17].x = Real::NAN;
+        points[250].z = Real::INFINITY;
+        let s = Scan { sensor_pose: Pose3::identity(), points: points.clone() };
+        assert_eq!(s.non_finite_points(), 2);
+        let chunks = s.to_chunks(3, 100).unwrap();
+        let sent: Vec<Vec3> = chunks.iter().flat_map(|c| c.points.iter().map(|p| Vec3::new(p.x, p.y, p.z))).collect();
+        let finite: Vec<Vec3> = points.into_iter().filter(|p| p.iter().all(|c| c.is_finite())).collect();
+        assert_eq!(sent, finite);
+        assert_eq!(sent.len(), 298);
+        let mut bad = s.clone();
+        bad.sensor_pose.translation.vector.x = Real::NAN;
+        assert_eq!(bad.to_chunks(3, 100).unwrap_err(), ChunkError::NonFinitePose);
     }
 }

@@ -15,26 +15,23 @@ fn board(test: &str) -> Option<std::path::PathBuf> {
     }
 }
 
-/// Boots the board with a fault probe; `None` when QEMU is absent outside CI (the skip was printed).
-fn probe(words: &str) -> Option<qemu::QemuExit> {
+/// Boots the board with a fault probe and checks that the run failed (QEMU exit status 1); returns its output.
+/// `None` when QEMU is absent outside CI (the skip was printed).
+fn failed_probe(words: &str) -> Option<String> {
     let elf = board(words)?;
     let mut cfg = QemuConfig::new(elf);
     cfg.boot_words = Some(words.into());
-    Some(qemu::run_to_exit(&cfg, Duration::from_secs(20)).unwrap_or_else(|e| panic!("{e}")))
+    let exit = qemu::run_to_exit(&cfg, Duration::from_secs(20)).unwrap_or_else(|e| panic!("{e}"));
+    let text = exit.output.both();
+    assert_eq!(exit.status.code(), Some(1), "output: {text}");
+    Some(text)
 }
 
 #[test]
 fn panic_on_target_is_reported_with_location_and_fails_the_run() {
-    let Some(exit) = probe("tetherbot.probe=panic") else {
+    let Some(text) = failed_probe("tetherbot.probe=panic") else {
         return;
     };
-    assert_eq!(
-        exit.status.code(),
-        Some(1),
-        "output: {}",
-        exit.output.both()
-    );
-    let text = exit.output.both();
     assert!(
         text.contains("board: PANIC fault probe"),
         "no panic report in: {text}"
@@ -47,16 +44,9 @@ fn panic_on_target_is_reported_with_location_and_fails_the_run() {
 
 #[test]
 fn hard_fault_on_target_is_reported_with_registers_and_fails_the_run() {
-    let Some(exit) = probe("tetherbot.probe=hardfault") else {
+    let Some(text) = failed_probe("tetherbot.probe=hardfault") else {
         return;
     };
-    assert_eq!(
-        exit.status.code(),
-        Some(1),
-        "output: {}",
-        exit.output.both()
-    );
-    let text = exit.output.both();
     assert!(
         text.contains("board: HARDFAULT pc=0x"),
         "no hard-fault report in: {text}"
@@ -70,20 +60,10 @@ fn hard_fault_on_target_is_reported_with_registers_and_fails_the_run() {
 
 #[test]
 fn stalled_loop_is_caught_by_the_watchdog_and_fails_the_run() {
-    let Some(exit) = probe("tetherbot.probe=watchdog") else {
+    let Some(text) = failed_probe("tetherbot.probe=watchdog") else {
         return;
     };
-    assert_eq!(
-        exit.status.code(),
-        Some(1),
-        "output: {}",
-        exit.output.both()
-    );
-    assert!(
-        exit.output.both().contains("board: WATCHDOG expired"),
-        "output: {}",
-        exit.output.both()
-    );
+    assert!(text.contains("board: WATCHDOG expired"), "output: {text}");
 }
 
 #[test]

@@ -128,7 +128,7 @@ fn replay_reports_the_first_differing_record_and_byte() {
 }
 
 #[test]
-fn corrupted_log_is_read_up_to_the_damage_and_the_position_reported() {
+fn corrupted_log_skips_only_the_damaged_record_and_reports_its_position() {
     let bytes = record(5);
     let log = fieldlog::parse(&bytes).unwrap();
     let k = log.records.len() / 2;
@@ -140,11 +140,15 @@ fn corrupted_log_is_read_up_to_the_damage_and_the_position_reported() {
     let d = damaged.damage.expect("damage found");
     assert_eq!(d.offset, target.offset);
     assert_eq!(d.reason, DamageReason::BadChecksum);
-    assert_eq!(d.unread_bytes, (bytes.len() as u64) - target.offset);
+    // Issue 24: the reader resynchronises at the next record, so the damage is exactly record k's bytes...
+    assert_eq!(d.unread_bytes, (fieldlog::RECORD_OVERHEAD + target.bytes.len()) as u64);
+    // ...every record before and after it is kept intact, and the end record counts the one lost.
+    let mut kept = log.records.clone();
+    kept.remove(k);
+    assert_eq!(damaged.records, kept, "every record but the damaged one is kept intact");
     assert_eq!(
-        damaged.records,
-        log.records[..k],
-        "every record before the damage is kept intact"
+        damaged.completeness(),
+        fieldlog::Completeness::Damaged { spans: 1, lost: Some(1) }
     );
 
     // cut the file in the middle of record k

@@ -25,6 +25,14 @@ pub const FLIGHT_INDEX: usize = 8192;
 /// probes on average; 32 is a generous bound that keeps every lookup O(1) and bounded.
 pub const MAX_PROBE: usize = 32;
 
+/// Map bounds: the largest |voxel coordinate| on any axis that [`crate::map::Map::integrate_points`] accepts for a
+/// sensor origin or a point. Default 2^22 voxels (210 km at 5 cm). A point or sensor pose beyond it (a pose of
+/// 1e30 m, a corrupted transform) is rejected and counted in
+/// [`crate::map::IntegrationOutcome::points_out_of_bounds`]: voxel indices are `i32`, and below 2^24 they and their
+/// centres are exact in `f32`, so every index a ray then visits (at most `max_ray_voxels` steps on) stays far from
+/// overflow.
+pub const MAX_VOXEL_COORD: Real = 4_194_304.0;
+
 /// Per-mission map parameters (runtime). Every field is validated by [`MapConfig::validate`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MapConfig {

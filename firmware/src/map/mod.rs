@@ -23,6 +23,9 @@
 //! Voxblox). Voxels with weight 0 are **unknown**; observed voxels with TSDF >= 0 are free, < 0 occupied.
 //! Deviation from Voxblox's "fast" integrator: no per-scan ray merging; the carving length budget bounds the cost
 //! per point instead, which is what a flight budget needs.
+//! Points that are not finite, outside `min_range..=max_range`, or (with their sensor origin) beyond the map bounds
+//! [`MAX_VOXEL_COORD`](crate::config::map::MAX_VOXEL_COORD) are rejected and counted
+//! ([`IntegrationOutcome::points_rejected`], of them [`IntegrationOutcome::points_out_of_bounds`]).
 //!
 //! ## ESDF ([`Map::update_esdf`])
 //! Sites are the observed voxels inside the fixed band `|TSDF| < esdf_band` voxels; a site's distance is its own

@@ -48,6 +48,42 @@ fn full_pool_is_an_outcome_and_keeps_work() {
     assert_eq!(map.blocks_used(), 2);
 }
 
+/// Regression (issue 24): a sensor pose of 1e30 m overflowed the voxel index (`i32` saturating, then `+ 1`). Points
+/// and origins beyond the map bounds are rejected and counted; nothing is written; a valid point alongside still
+/// lands; a sensor exactly inside the bound integrates.
+#[test]
+fn sensor_pose_beyond_the_map_bounds_is_rejected_and_counted() {
+    use crate::config::map::MAX_VOXEL_COORD;
+    let (mut b, mut i) = slices(16, 32);
+    let mut map = Map::from_slices(MapConfig::DEFAULT, &mut b, &mut i).unwrap();
+    let vs = map.config().voxel_size;
+    // 2e8 m: the voxel index (4e9) saturates i32 while the point, 16 m ahead, has a valid depth; this is the
+    // path that overflowed (`(ga + 1)` on i32::MAX).
+    let out = map.integrate_points(&Pose3::translation(2e8, 0.0, 0.0), &[Vec3::new(16.0, 0.0, 0.0)]);
+    assert_eq!((out.points_rejected, out.points_out_of_bounds, out.voxels_updated), (1, 1, 0));
+    let far = Pose3::translation(1e30, -1e30, 1e30);
+    let out = map.integrate_points(&far, &[Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0)]);
+    assert_eq!((out.points_rejected, out.points_out_of_bounds, out.points_integrated), (2, 2, 0));
+    assert_eq!((out.voxels_updated, map.blocks_used()), (0, 0));
+    // The point beyond the bound is rejected, the near one integrated (the sensor is at the origin).
+    let beyond = Vec3::new(0.0, 0.0, 1.01 * MAX_VOXEL_COORD * vs);
+    let out = map.integrate_points(&Pose3::identity(), &[beyond, Vec3::new(1.0, 0.0, 0.0)]);
+    assert_eq!((out.points_rejected, out.points_out_of_bounds, out.points_integrated), (1, 1, 1));
+    assert!(out.voxels_updated > 0);
+    // A sensor near the bound (inside it) with a point 1 m ahead integrates; the indices do not wrap.
+    let edge = 0.999 * MAX_VOXEL_COORD * vs;
+    let (mut b, mut i) = slices(16, 32);
+    let mut map = Map::from_slices(MapConfig::DEFAULT, &mut b, &mut i).unwrap();
+    let out = map.integrate_points(&Pose3::translation(edge, edge, -edge), &[Vec3::new(1.0, 0.0, 0.0)]);
+    assert_eq!((out.points_rejected, out.points_integrated), (0, 1));
+    let slot = map.blocks_used().checked_sub(1).unwrap();
+    let c = map.block_coord(slot).unwrap();
+    assert!(c[0] > 0 && c[1] > 0 && c[2] < 0, "{c:?}");
+    // NaN is rejected as not finite, not as out of bounds.
+    let out = map.integrate_points(&Pose3::identity(), &[Vec3::new(Real::NAN, 0.0, 1.0)]);
+    assert_eq!((out.points_rejected, out.points_out_of_bounds), (1, 0));
+}
+
 /// Points on the plane z = 0 seen from a sensor at `origin`, on a grid of directions (a synthetic scan).
 fn plane_scan(origin: Vec3, n: usize) -> Vec<Vec3> {
     let mut pts = Vec::new();
@@ -141,6 +177,14 @@ fn brute_force(sites: &[([i32; 3], i8)], g: [i32; 3], dmax: Real) -> Option<Real
     if best <= dmax { Some(best) } else { None }
 }
 
+/// The configuration of the brute-force comparisons: 0.1 m voxels, distances up to 1.2 m, every site exact.
+fn brute_force_config() -> MapConfig {
+    let mut cfg = MapConfig::with_voxel_size(0.1);
+    cfg.esdf_max_distance = 1.2;
+    cfg.esdf_site_tolerance = 0.0;
+    cfg
+}
+
 /// Builds a map over a `n`^3 voxel cube with random sites; every other voxel free (TSDF = truncation).
 fn random_site_map<'a>(
     map: &mut Map<'a>,
@@ -173,6 +217,15 @@ fn random_site_map<'a>(
         sites.push((g, hundredths));
     }
     sites
+}
+
+/// Vector propagation is exact except in rare configurations: the map's distances are within a tenth of a voxel
+/// of the brute force's, and at most 1 % of the voxels are inexact.
+fn assert_close_to_brute_force(map: &Map<'_>, sites: &[([i32; 3], i8)], n: i32, what: &str) {
+    let (max_err, inexact, total) = compare_with_brute_force(map, sites, n);
+    std::eprintln!("{what}: max error {max_err} voxels, {inexact} of {total} voxels inexact");
+    assert!(max_err < 0.1, "{what}: max error {max_err} voxels");
+    assert!(inexact * 100 <= total, "{what}: {inexact} of {total} voxels inexact");
 }
 
 fn compare_with_brute_force(map: &Map<'_>, sites: &[([i32; 3], i8)], n: i32) -> (Real, usize, usize) {
@@ -209,20 +262,12 @@ fn esdf_matches_brute_force_on_random_small_grids() {
     let mut rng = rand_pcg::Pcg32::new(7, 11);
     for trial in 0..6 {
         let (mut b, mut i) = slices(256, 512);
-        let mut cfg = MapConfig::with_voxel_size(0.1);
-        cfg.esdf_max_distance = 1.2;
-        cfg.esdf_site_tolerance = 0.0;
-        let mut map = Map::from_slices(cfg, &mut b, &mut i).unwrap();
+        let mut map = Map::from_slices(brute_force_config(), &mut b, &mut i).unwrap();
         let n = 24;
         let sites = random_site_map(&mut map, &mut rng, n, 3 + trial * 4);
         let e = map.update_esdf();
         assert!(e.converged);
-        let (max_err, inexact, total) = compare_with_brute_force(&map, &sites, n);
-        std::eprintln!("trial {trial}: max error {max_err} voxels, {inexact} of {total} voxels inexact");
-        // Vector propagation is exact except in rare configurations; bound the error at a tenth of a voxel and
-        // the inexact voxels at 1 %.
-        assert!(max_err < 0.1, "trial {trial}: max error {max_err} voxels");
-        assert!(inexact * 100 <= total, "trial {trial}: {inexact} of {total} voxels inexact");
+        assert_close_to_brute_force(&map, &sites, n, &std::format!("trial {trial}"));
     }
 }
 
@@ -230,10 +275,7 @@ fn esdf_matches_brute_force_on_random_small_grids() {
 fn incremental_update_matches_brute_force_after_sites_vanish_and_appear() {
     let mut rng = rand_pcg::Pcg32::new(3, 5);
     let (mut b, mut i) = slices(256, 512);
-    let mut cfg = MapConfig::with_voxel_size(0.1);
-    cfg.esdf_max_distance = 1.2;
-    cfg.esdf_site_tolerance = 0.0;
-    let mut map = Map::from_slices(cfg, &mut b, &mut i).unwrap();
+    let mut map = Map::from_slices(brute_force_config(), &mut b, &mut i).unwrap();
     let n = 24;
     let mut sites = random_site_map(&mut map, &mut rng, n, 10);
     assert!(map.update_esdf().converged);
@@ -260,19 +302,15 @@ fn incremental_update_matches_brute_force_after_sites_vanish_and_appear() {
     }
     let e = map.update_esdf();
     assert!(e.converged);
-    let (max_err, inexact, total) = compare_with_brute_force(&map, &sites, n);
-    assert!(max_err < 0.1, "max error {max_err} voxels");
-    assert!(inexact * 100 <= total, "{inexact} of {total} voxels inexact");
+    assert_close_to_brute_force(&map, &sites, n, "after the changes");
 }
 
 #[test]
 fn esdf_budget_exhaustion_is_resumable() {
     let mut rng = rand_pcg::Pcg32::new(1, 2);
     let (mut b, mut i) = slices(256, 512);
-    let mut cfg = MapConfig::with_voxel_size(0.1);
-    cfg.esdf_max_distance = 1.2;
+    let mut cfg = brute_force_config();
     cfg.esdf_max_sweeps = 1;
-    cfg.esdf_site_tolerance = 0.0;
     let mut map = Map::from_slices(cfg, &mut b, &mut i).unwrap();
     let n = 24;
     let sites = random_site_map(&mut map, &mut rng, n, 2);

@@ -1,7 +1,13 @@
 //! TSDF integration by ray casting (Voxblox's "simple" integrator with a carving-length budget per ray).
+//!
+//! Bad input is counted, never integrated: a point that is not finite or outside `min_range..=max_range` of the
+//! sensor is rejected; so is a point or sensor origin beyond the map bounds
+//! ([`crate::config::map::MAX_VOXEL_COORD`] voxels from the map origin), which would overflow the `i32` voxel
+//! index. The ray walk steps voxel indices with checked arithmetic and stops rather than wrap.
 
 use super::esdf::band_site;
 use super::{quantize_weight, NO_SITE, split, local_index, Map, MapError, FLAG_TSDF_DIRTY, WEIGHT_SCALE};
+use crate::config::map::MAX_VOXEL_COORD;
 use crate::geom::{norm3, Pose3, Real, Vec3};
 
 /// What one call of [`Map::integrate_points`] did.
@@ -9,8 +15,12 @@ use crate::geom::{norm3, Pose3, Real, Vec3};
 pub struct IntegrationOutcome {
     /// Points whose ray was integrated.
     pub points_integrated: u32,
-    /// Points ignored: not finite, closer than `min_range` or beyond `max_range`.
+    /// Points ignored: not finite, closer than `min_range`, beyond `max_range`, or out of the map bounds (every
+    /// rejected point, whatever the reason).
     pub points_rejected: u32,
+    /// Of `points_rejected`: the point or the sensor origin lies beyond the map bounds
+    /// ([`crate::config::map::MAX_VOXEL_COORD`] voxels from the map origin on some axis).
+    pub points_out_of_bounds: u32,
     /// Voxel updates applied.
     pub voxels_updated: u32,
     /// Voxel updates lost because their block could not be allocated.
@@ -27,8 +37,17 @@ impl Map<'_> {
     pub fn integrate_points(&mut self, sensor_pose: &Pose3, points: &[Vec3]) -> IntegrationOutcome {
         let mut out = IntegrationOutcome::default();
         let origin = sensor_pose.translation.vector;
+        let inv = 1.0 / self.cfg.voxel_size;
+        // NaN is not "beyond" (it fails the comparison) and is rejected below as not finite; infinity is beyond.
+        let beyond = |q: &Vec3| q.iter().any(|c| (c * inv).abs() > MAX_VOXEL_COORD);
+        let origin_beyond = beyond(&origin);
         for p in points {
             let pw = sensor_pose.transform_point(&(*p).into()).coords;
+            if origin_beyond || beyond(&pw) {
+                out.points_rejected += 1;
+                out.points_out_of_bounds += 1;
+                continue;
+            }
             let v = pw - origin;
             let depth = norm3(&v);
             if !depth.is_finite() || depth < self.cfg.min_range || depth > self.cfg.max_range {
@@ -64,7 +83,7 @@ impl Map<'_> {
         ];
         let axis = |da: Real, pa: Real, ga: i32| -> (i32, Real, Real) {
             if da > 0.0 {
-                (1, t_start + (((ga + 1) as Real) * vs - pa) / da, vs / da)
+                (1, t_start + ((ga as Real + 1.0) * vs - pa) / da, vs / da)
             } else if da < 0.0 {
                 (-1, t_start + ((ga as Real) * vs - pa) / da, -vs / da)
             } else {
@@ -129,7 +148,9 @@ impl Map<'_> {
             if *tm > t_end {
                 break;
             }
-            *ga += *st;
+            // Cannot overflow within the map bounds (MAX_VOXEL_COORD << i32::MAX); stop rather than wrap.
+            let Some(next) = ga.checked_add(*st) else { break };
+            *ga = next;
             *tm += *td;
         }
     }

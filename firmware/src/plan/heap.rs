@@ -6,6 +6,8 @@
 //! Knowing the positions is what makes the heap *indexed*: an item whose key changed is moved in O(log n)
 //! ([`Heap::update`], decrease-key and increase-key alike) and an item can leave from anywhere
 //! ([`Heap::remove`]), as with OMPL's `BinaryHeap` element handles.
+//! Items that each record their own position (ABIT*'s queued edges, the homotopy A*'s nodes) implement
+//! [`HeapSlot`] instead: a slice of them, addressed by index, is then the [`HeapItems`].
 //!
 //! One algorithm, two kinds of id storage ([`HeapIds`]):
 //! - [`IndexedHeap<N>`]: a fixed capacity `N`, a const generic (a `heapless::Vec` of ids); the heap can be a
@@ -41,6 +43,35 @@ pub trait HeapItems {
     fn set_position(&mut self, id: u32, pos: u32);
     /// The position last recorded for `id` (`None` or [`NOT_IN_HEAP`] if none).
     fn position(&self, id: u32) -> Option<u32>;
+}
+
+/// An item that records its own heap position, ordered against its peers: a slice of them, addressed by index,
+/// is the [`HeapItems`] (ABIT*'s edge slab, the homotopy A*'s node arena).
+pub trait HeapSlot {
+    /// Does this item, id `id`, come out before `other`, id `other_id`? A strict order.
+    fn before(&self, id: u32, other: &Self, other_id: u32) -> bool;
+    /// The position last recorded for it.
+    fn heap_position(&self) -> u32;
+    /// Record that it now sits at heap position `pos` ([`NOT_IN_HEAP`] when it left the heap).
+    fn set_heap_position(&mut self, pos: u32);
+}
+
+/// A slice of [`HeapSlot`]s: the id is the index.
+impl<T: HeapSlot> HeapItems for [T] {
+    fn before(&self, a: u32, b: u32) -> bool {
+        match (self.get(a as usize), self.get(b as usize)) {
+            (Some(x), Some(y)) => x.before(a, y, b),
+            _ => false,
+        }
+    }
+    fn set_position(&mut self, id: u32, pos: u32) {
+        if let Some(x) = self.get_mut(id as usize) {
+            x.set_heap_position(pos);
+        }
+    }
+    fn position(&self, id: u32) -> Option<u32> {
+        self.get(id as usize).map(T::heap_position)
+    }
 }
 
 /// Where a heap keeps its ids: position 0 is the front. The heap algorithm ([`Heap`]) is written once over this.
@@ -389,14 +420,28 @@ mod tests {
         }
     }
 
-    #[test]
-    fn pops_in_key_order_with_ties_by_the_items_order() {
+    // Every check runs on both kinds of id storage: the fixed one (`IndexedHeap`, one test each) and the lent one
+    // (`LentHeap`, D* Lite's open list: `a_lent_heap_passes_every_check`), of capacity 16 unless said.
+
+    /// Items with `keys`, ids `0..n` pushed in order.
+    fn queued<S: HeapIds>(heap: &mut Heap<S>, keys: [i32; 16], n: u32) -> Keys {
+        let mut items = Keys::new(keys);
+        for id in 0..n {
+            heap.push(id, &mut items).unwrap();
+        }
+        items
+    }
+
+    /// 16 ids pushed in a scrambled order pop by key, ties by id.
+    fn check_pops_in_key_order<S: HeapIds>(mut heap: Heap<S>) {
         let mut items = Keys::new([5, 3, 9, 3, 0, 7, 1, 8, 3, 2, 6, 4, 9, 0, 5, 1]);
-        let mut heap: IndexedHeap<16> = IndexedHeap::new();
+        assert_eq!(heap.ids.capacity(), 16);
+        assert!(heap.is_empty());
         for id in [7, 2, 11, 0, 15, 4, 9, 13, 1, 6, 12, 3, 10, 5, 8, 14] {
             heap.push(id, &mut items).unwrap();
             assert_consistent(&heap, &items);
         }
+        assert!(heap.is_full());
         assert_eq!(heap.peek(), Some(4));
         let order = drain(&mut heap, &mut items);
         let mut expect: StdVec<u32> = (0..16).collect();
@@ -407,12 +452,12 @@ mod tests {
     }
 
     #[test]
-    fn decrease_and_increase_key_move_the_item() {
-        let mut items = Keys::new([10, 20, 30, 40, 50, 60, 70, 80, 0, 0, 0, 0, 0, 0, 0, 0]);
-        let mut heap: IndexedHeap<16> = IndexedHeap::new();
-        for id in 0..8 {
-            heap.push(id, &mut items).unwrap();
-        }
+    fn pops_in_key_order_with_ties_by_the_items_order() {
+        check_pops_in_key_order(IndexedHeap::<16>::new());
+    }
+
+    fn check_update<S: HeapIds>(mut heap: Heap<S>) {
+        let mut items = queued(&mut heap, [10, 20, 30, 40, 50, 60, 70, 80, 0, 0, 0, 0, 0, 0, 0, 0], 8);
         items.key[6] = 5; // decrease: to the front
         heap.update(6, &mut items);
         assert_consistent(&heap, &items);
@@ -430,12 +475,12 @@ mod tests {
     }
 
     #[test]
-    fn rekeying_everything_then_heapify_restores_the_order() {
-        let mut items = Keys::new([0; 16]);
-        let mut heap: IndexedHeap<16> = IndexedHeap::new();
-        for id in 0..16 {
-            heap.push(id, &mut items).unwrap();
-        }
+    fn decrease_and_increase_key_move_the_item() {
+        check_update(IndexedHeap::<16>::new());
+    }
+
+    fn check_heapify<S: HeapIds>(mut heap: Heap<S>) {
+        let mut items = queued(&mut heap, [0; 16], 16);
         for (id, k) in items.key.iter_mut().enumerate() {
             *k = (id as i32 * 7) % 16;
         }
@@ -447,12 +492,12 @@ mod tests {
     }
 
     #[test]
-    fn contains_checks_the_recorded_position() {
-        let mut items = Keys::new([4, 8, 1, 6, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
-        let mut heap: IndexedHeap<16> = IndexedHeap::new();
-        for id in 0..4 {
-            heap.push(id, &mut items).unwrap();
-        }
+    fn rekeying_everything_then_heapify_restores_the_order() {
+        check_heapify(IndexedHeap::<16>::new());
+    }
+
+    fn check_contains<S: HeapIds>(mut heap: Heap<S>) {
+        let mut items = queued(&mut heap, [4, 8, 1, 6, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0], 4);
         assert!((0..4).all(|id| heap.contains(id, &items)));
         assert!(!heap.contains(4, &items), "never queued");
         assert_eq!(heap.pop(&mut items), Some(2));
@@ -465,12 +510,12 @@ mod tests {
     }
 
     #[test]
-    fn remove_takes_an_item_from_anywhere() {
-        let mut items = Keys::new([4, 8, 1, 6, 3, 9, 2, 7, 5, 0, 0, 0, 0, 0, 0, 0]);
-        let mut heap: IndexedHeap<16> = IndexedHeap::new();
-        for id in 0..9 {
-            heap.push(id, &mut items).unwrap();
-        }
+    fn contains_checks_the_recorded_position() {
+        check_contains(IndexedHeap::<16>::new());
+    }
+
+    fn check_remove<S: HeapIds>(mut heap: Heap<S>) {
+        let mut items = queued(&mut heap, [4, 8, 1, 6, 3, 9, 2, 7, 5, 0, 0, 0, 0, 0, 0, 0], 9);
         assert!(heap.remove(2, &mut items)); // the front
         assert!(heap.remove(5, &mut items)); // a leaf or inner node
         assert!(heap.remove(7, &mut items));
@@ -482,10 +527,14 @@ mod tests {
     }
 
     #[test]
-    fn a_full_heap_is_a_typed_outcome_that_changes_nothing() {
+    fn remove_takes_an_item_from_anywhere() {
+        check_remove(IndexedHeap::<16>::new());
+    }
+
+    /// A heap of capacity 3.
+    fn check_full<S: HeapIds>(mut heap: Heap<S>) {
         let mut items = Keys::new([3, 1, 2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
-        let mut heap: IndexedHeap<3> = IndexedHeap::new();
-        assert_eq!(heap.capacity(), 3);
+        assert_eq!(heap.ids.capacity(), 3);
         for id in 0..3 {
             heap.push(id, &mut items).unwrap();
         }
@@ -501,87 +550,27 @@ mod tests {
         assert_eq!(heap.pop(&mut items), None);
     }
 
-    // ---- the lent-storage variant (D* Lite's open list) ----
+    #[test]
+    fn a_full_heap_is_a_typed_outcome_that_changes_nothing() {
+        let fixed = IndexedHeap::<3>::new();
+        assert_eq!(fixed.capacity(), 3);
+        check_full(fixed);
+    }
 
     #[test]
-    fn lent_heap_pops_in_key_order_with_ties_by_the_items_order() {
-        let mut items = Keys::new([5, 3, 9, 3, 0, 7, 1, 8, 3, 2, 6, 4, 9, 0, 5, 1]);
+    fn a_lent_heap_passes_every_check() {
         let mut slots = [7u32; 16]; // contents ignored
-        let mut heap = LentHeap::lent(&mut slots);
-        assert_eq!(heap.capacity(), 16);
-        assert!(heap.is_empty());
-        for id in [7, 2, 11, 0, 15, 4, 9, 13, 1, 6, 12, 3, 10, 5, 8, 14] {
-            heap.push(id, &mut items).unwrap();
-            assert_consistent(&heap, &items);
-        }
-        assert!(heap.is_full());
-        assert_eq!(heap.peek(), Some(4));
-        let order = drain(&mut heap, &mut items);
-        let mut expect: StdVec<u32> = (0..16).collect();
-        expect.sort_by_key(|&i| (items.key[i as usize], i));
-        assert_eq!(order, expect);
-        assert_eq!(heap.pop(&mut items), None);
-    }
-
-    #[test]
-    fn lent_heap_update_moves_the_item_both_ways() {
-        let mut items = Keys::new([10, 20, 30, 40, 50, 60, 70, 80, 0, 0, 0, 0, 0, 0, 0, 0]);
-        let mut slots = [0u32; 8];
-        let mut heap = LentHeap::lent(&mut slots);
-        for id in 0..8 {
-            heap.push(id, &mut items).unwrap();
-        }
-        items.key[6] = 5;
-        heap.update(6, &mut items);
-        assert_consistent(&heap, &items);
-        assert_eq!(heap.peek(), Some(6));
-        items.key[0] = 65;
-        heap.update(0, &mut items);
-        assert_consistent(&heap, &items);
-        assert_eq!(drain(&mut heap, &mut items), [6, 1, 2, 3, 4, 5, 0, 7]);
-        heap.push(3, &mut items).unwrap();
-        items.pos[1] = 0; // stale: 3 sits there
-        heap.update(1, &mut items);
-        assert_eq!((heap.len(), heap.peek()), (1, Some(3)));
-    }
-
-    #[test]
-    fn lent_heap_remove_takes_an_item_from_anywhere() {
-        let mut items = Keys::new([4, 8, 1, 6, 3, 9, 2, 7, 5, 0, 0, 0, 0, 0, 0, 0]);
-        let mut slots = [0u32; 9];
-        let mut heap = LentHeap::lent(&mut slots);
-        for id in 0..9 {
-            heap.push(id, &mut items).unwrap();
-        }
-        assert!(heap.remove(2, &mut items));
-        assert!(heap.remove(5, &mut items));
-        assert!(heap.remove(7, &mut items));
-        assert_consistent(&heap, &items);
-        assert!(!heap.remove(5, &mut items), "removed twice");
-        assert_eq!(items.pos[5], NOT_IN_HEAP);
-        assert_eq!(drain(&mut heap, &mut items), [6, 4, 0, 8, 3, 1]);
-        assert!(!heap.remove(0, &mut items), "empty heap");
-    }
-
-    #[test]
-    fn a_full_lent_heap_is_a_typed_outcome_that_changes_nothing() {
-        let mut items = Keys::new([3, 1, 2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
-        let mut slots = [0u32; 3];
-        let mut heap = LentHeap::lent(&mut slots);
-        for id in 0..3 {
-            heap.push(id, &mut items).unwrap();
-        }
-        assert!(heap.is_full());
-        assert_eq!(heap.push(3, &mut items), Err(Full));
-        assert_eq!(items.pos[3], NOT_IN_HEAP);
-        assert_eq!(heap.len(), 3);
-        assert_eq!(drain(&mut heap, &mut items), [1, 2, 0]);
-        heap.push(3, &mut items).unwrap();
-        heap.clear();
-        assert!(heap.is_empty());
+        check_pops_in_key_order(LentHeap::lent(&mut slots));
+        check_update(LentHeap::lent(&mut slots));
+        check_heapify(LentHeap::lent(&mut slots));
+        check_contains(LentHeap::lent(&mut slots));
+        check_remove(LentHeap::lent(&mut slots[..9]));
+        let lent = LentHeap::lent(&mut slots[..3]);
+        assert_eq!(lent.capacity(), 3);
+        check_full(lent);
         // An empty lent slice: a heap of capacity 0, every push full.
-        let mut none: [u32; 0] = [];
-        let mut empty = LentHeap::lent(&mut none);
+        let mut items = Keys::new([0; 16]);
+        let mut empty = LentHeap::lent(&mut slots[..0]);
         assert_eq!(empty.push(0, &mut items), Err(Full));
         assert_eq!(empty.pop(&mut items), None);
     }
@@ -742,6 +731,47 @@ mod tests {
                 assert_consistent_ties(&heap, &items);
             }
         }
+    }
+
+    /// An item that keeps its own position, largest key first: a slice of them is the heap's items.
+    struct Slot {
+        key: i32,
+        pos: u32,
+    }
+
+    impl HeapSlot for Slot {
+        fn before(&self, id: u32, other: &Self, other_id: u32) -> bool {
+            self.key > other.key || (self.key == other.key && id < other_id)
+        }
+        fn heap_position(&self) -> u32 {
+            self.pos
+        }
+        fn set_heap_position(&mut self, pos: u32) {
+            self.pos = pos;
+        }
+    }
+
+    #[test]
+    fn a_slice_of_heap_slots_is_ordered_by_the_slots_and_records_their_positions() {
+        let keys = [4, 1, 3, 1, 0, 2];
+        let mut slots: StdVec<Slot> = keys.iter().map(|&key| Slot { key, pos: NOT_IN_HEAP }).collect();
+        let mut heap: IndexedHeap<8> = IndexedHeap::new();
+        for id in 0..6 {
+            heap.push(id, &mut slots[..]).unwrap();
+        }
+        for p in 0..heap.len() {
+            let id = heap.get(p).unwrap();
+            assert_eq!(slots[id as usize].pos as usize, p, "position recorded in the slot");
+        }
+        slots[0].key = 0;
+        heap.update(0, &mut slots[..]);
+        let mut order = StdVec::new();
+        while let Some(id) = heap.pop(&mut slots[..]) {
+            assert_eq!(slots[id as usize].pos, NOT_IN_HEAP);
+            order.push(id);
+        }
+        assert_eq!(order, [2, 5, 1, 3, 0, 4], "largest key first, ties by id");
+        assert!(!slots[..].before(0, 99), "an unknown id is never before");
     }
 
     fn assert_consistent_ties<S: HeapIds>(heap: &Heap<S>, items: &TieKeys) {

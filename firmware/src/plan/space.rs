@@ -43,7 +43,7 @@
 
 use rand_core::Rng;
 
-pub use crate::plan::status::{Detail, Ended, Status};
+pub use crate::plan::status::{Ended, Status};
 
 /// Path cost (OMPL `base::Cost`). Lower is better; `f64::INFINITY` means "no path".
 pub type Cost = f64;
@@ -358,21 +358,10 @@ pub enum InvalidInput {
     HeuristicNotAdmissible,
 }
 
-/// The sampling planners' detail of a [`Status`] (OMPL `PlannerStatus`): `Exact(cost)` of the best path,
-/// `Approximate(cost_to_go)` (heuristic cost-to-go of the best path's end), `NoSolution(Ended::BudgetExhausted)`
-/// (no path within the budget), `InvalidInput(InvalidInput)`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Sampling;
-
-impl Detail for Sampling {
-    type Exact = Cost;
-    type Approximate = Cost;
-    type NoSolution = Ended;
-    type Invalid = InvalidInput;
-}
-
-/// What a sampling planner found: the shared [`Status`] with the [`Sampling`] detail.
-pub type PlannerStatus = Status<Sampling>;
+/// What a sampling planner found (OMPL `PlannerStatus`), the shared [`Status`] with the sampling planners'
+/// detail: `Exact(cost)` of the best path, `Approximate(cost_to_go)` (heuristic cost-to-go of the best path's end),
+/// `NoSolution(Ended::BudgetExhausted)` (no path within the budget), `InvalidInput(InvalidInput)`.
+pub type PlannerStatus = Status<Cost, Cost, Ended, InvalidInput>;
 
 /// Why `solve` returned.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

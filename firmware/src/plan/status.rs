@@ -1,7 +1,8 @@
 //! One status vocabulary for every planner, after OMPL's `PlannerStatus`: an **exact** solution, an
 //! **approximate** one, **no solution**, or **invalid input**. Why a search stopped short of an exact answer (it
 //! searched everything, its budget ran out, an arena filled up) is an [`Ended`]; what else a planner reports (a
-//! cost, expansions, how the enumeration ended) is its own detail, chosen by a [`Detail`] marker type.
+//! cost, expansions, how the enumeration ended) is its own detail: the four type parameters of [`Status`], one per
+//! case, which each planner fixes once in a type alias (`Never` for a case it does not have).
 //!
 //! | planner | `Exact` | `Approximate` | `NoSolution` | `InvalidInput` |
 //! |---|---|---|---|---|
@@ -15,32 +16,22 @@
 
 use core::convert::Infallible;
 
-/// The planner-specific detail of each case of a [`Status`].
-pub trait Detail {
-    /// With an exact solution.
-    type Exact;
-    /// With an approximate solution.
-    type Approximate;
-    /// With no solution.
-    type NoSolution;
-    /// Why the input was rejected.
-    type Invalid;
-}
-
-/// What a planner found (OMPL `PlannerStatus`); see the module docs for each planner's detail.
+/// What a planner found (OMPL `PlannerStatus`), with the planner's detail of each case: `E` with an exact
+/// solution, `A` with an approximate one, `N` with none, `I` why the input was rejected. See the module docs for
+/// each planner's detail.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Status<P: Detail> {
+pub enum Status<E, A, N, I> {
     /// A solution that answers the query: a path into the goal region, or every requested class.
-    Exact(P::Exact),
+    Exact(E),
     /// The best answer short of an exact one (a path ending closest to the goal, the classes found so far).
-    Approximate(P::Approximate),
+    Approximate(A),
     /// No solution: proved ([`Ended::SearchComplete`]) or not found within the budget.
-    NoSolution(P::NoSolution),
+    NoSolution(N),
     /// The input was rejected before searching.
-    InvalidInput(P::Invalid),
+    InvalidInput(I),
 }
 
-impl<P: Detail> Status<P> {
+impl<E, A, N, I> Status<E, A, N, I> {
     /// Is this an exact solution?
     pub fn is_exact(&self) -> bool {
         matches!(self, Self::Exact(_))
@@ -74,21 +65,14 @@ pub type Never = Infallible;
 mod tests {
     use super::*;
 
-    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-    struct Demo;
-    impl Detail for Demo {
-        type Exact = u32;
-        type Approximate = Ended;
-        type NoSolution = Ended;
-        type Invalid = Never;
-    }
+    type Demo = Status<u32, Ended, Ended, Never>;
 
     #[test]
     fn cases_carry_their_detail() {
-        let s: Status<Demo> = Status::Exact(3);
+        let s: Demo = Status::Exact(3);
         assert!(s.is_exact());
         assert_eq!(s, Status::Exact(3));
-        let a: Status<Demo> = Status::Approximate(Ended::BudgetExhausted);
+        let a: Demo = Status::Approximate(Ended::BudgetExhausted);
         assert!(!a.is_exact());
         assert_ne!(a, Status::NoSolution(Ended::BudgetExhausted));
     }

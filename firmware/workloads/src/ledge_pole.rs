@@ -230,7 +230,6 @@ pub fn plan_ledge_pole<D: DistanceField, const NV: usize, const NQ: usize, const
     let found = report.status.is_exact() && written.is_ok();
     let cost = found.then(|| planner.best_cost());
     let arena_use = planner.arena_use();
-    drop(planner);
     Ok(LedgePoleOutcome {
         found,
         cost,

@@ -359,7 +359,6 @@ pub fn run_all(arenas: &mut Arenas<'_>, h: &mut impl Harness) {
         }
         None => line(format_args!("not run")),
     };
-    drop(planner);
     h.result("abit_wall_gap_r2", &s);
 
     // Team: one local plan, one D* Lite replan.

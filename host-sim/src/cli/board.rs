@@ -78,10 +78,17 @@ pub fn board_elf(explicit: Option<&PathBuf>, build: bool) -> Result<PathBuf, qem
         if std::env::var_os("TETHERBOT_BOARD_ELF").is_some() {
             return Ok(path);
         }
-        eprintln!(
-            "building the board binary (cargo build --release in {}) ...",
-            qemu::BOARD_DIR
-        );
+        if build {
+            eprintln!("building the board binary (cargo build --release in {}) ...", qemu::BOARD_DIR);
+        } else {
+            // Say so before a build nobody asked for starts (it takes minutes on a loaded machine).
+            eprintln!(
+                "the board binary {} is missing: building it now (cargo build --release in {}; set TETHERBOT_BOARD_ELF \
+                 to use another binary) ...",
+                path.display(),
+                qemu::BOARD_DIR
+            );
+        }
         return qemu::build_board_elf();
     }
     Ok(path)

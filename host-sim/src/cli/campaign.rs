@@ -29,9 +29,10 @@ pub struct CampaignArgs {
     /// Worker threads (default: the machine's cores).
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Voxel edge of the planning map, metres.
-    #[arg(long, default_value_t = 0.1)]
-    pub voxel: f64,
+    /// Voxel edge of the planning map, metres (default: the scenario's `map.voxel_size_m` when it gives one,
+    /// else 0.1).
+    #[arg(long)]
+    pub voxel: Option<f64>,
     /// Plan on the onboard `map` (filled from the world's signed distance) or the exact world (`truth`).
     #[arg(long, default_value = "map")]
     pub field: String,
@@ -79,6 +80,10 @@ pub struct CampaignArgs {
     /// Exit with status 1 unless at least this many trials are found stable.
     #[arg(long)]
     pub require_stable: Option<usize>,
+    /// Skip the physics judge (rigid bodies on the exact terrain with the true tether); found paths are then
+    /// judged by the model-on-truth re-check alone.
+    #[arg(long)]
+    pub no_physics: bool,
 }
 
 impl CampaignArgs {
@@ -90,7 +95,7 @@ impl CampaignArgs {
             iterations: None,
             seed: None,
             threads: None,
-            voxel: 0.1,
+            voxel: None,
             field: "map".into(),
             out: None,
             samples_per_batch: None,
@@ -105,6 +110,7 @@ impl CampaignArgs {
             wheel_mu: None,
             yaw_spread_deg: None,
             require_stable: None,
+            no_physics: false,
         }
     }
 }
@@ -128,10 +134,42 @@ pub fn paper_row(name: &str) -> Option<&'static str> {
     }
 }
 
-/// Build the campaign spec from a scenario and the arguments.
+/// Planning-map voxel of a campaign when neither `--voxel` nor the scenario's `map.voxel_size_m` gives one, metres.
+pub const DEFAULT_CAMPAIGN_VOXEL_M: f64 = 0.1;
+
+/// The scenario fields a campaign cannot apply, each with the reason (printed on stderr by the command, so a
+/// field is never silently ignored): the planning map is filled from the world's true signed distance
+/// (Paton et al. VI-A), so no `[sensor]` is simulated and the TSDF's own parameters do not enter; ABIT* (as
+/// OMPL's BIT*) plans to the goal state itself, so a goal radius does not change the search.
+pub fn unused_scenario_fields(sc: &crate::scenario::Scenario) -> Vec<String> {
+    let mut out = Vec::new();
+    if sc.gives("sensor") {
+        out.push("[sensor] does not apply to campaign: the planning map is filled from the world's true signed distance, not from scans (map-check uses it)".to_string());
+    }
+    for f in ["map.truncation_m", "map.esdf_max_distance_m"] {
+        if sc.gives(f) {
+            out.push(format!("{f} does not apply to campaign: the planning map holds exact distances (truncation 3 voxels, ESDF cap 1.5 m) (map-check uses it)"));
+        }
+    }
+    if sc.gives("goal.tolerance_m") {
+        out.push(format!(
+            "goal.tolerance_m ({}) does not apply to campaign: ABIT* plans to the goal state itself (OMPL's GoalState sample), so the radius does not change the search",
+            sc.goal.tolerance_m
+        ));
+    }
+    out
+}
+
+/// Build the campaign spec from a scenario and the arguments. Every option is checked here, before any work,
+/// with the reason in the error.
 pub fn spec_from(a: &CampaignArgs) -> Result<CampaignSpec, String> {
     let file = scenario_file(&a.scenario);
     let sc = crate::scenario::load(&file).map_err(|e| e.to_string())?;
+    spec_from_scenario(&sc, a)
+}
+
+/// [`spec_from`] on a loaded scenario.
+pub fn spec_from_scenario(sc: &crate::scenario::Scenario, a: &CampaignArgs) -> Result<CampaignSpec, String> {
     let world = sc.build_world().map_err(|e| e.to_string())?;
     let wb = world.bounds();
     let lo = sc.plan.bounds_min.unwrap_or([f64::from(wb.min.x), f64::from(wb.min.y), f64::from(wb.min.z) - 1.0]);
@@ -145,12 +183,29 @@ pub fn spec_from(a: &CampaignArgs) -> Result<CampaignSpec, String> {
         "truth" => PlanningField::Truth,
         f => return Err(format!("--field {f:?}: use map or truth")),
     };
-    if !(a.voxel > 0.0 && a.voxel.is_finite()) {
-        return Err(format!("--voxel {}: must be > 0", a.voxel));
+    let voxel = match a.voxel {
+        Some(v) => v,
+        None if sc.gives("map.voxel_size_m") => sc.map.voxel_size_m,
+        None => DEFAULT_CAMPAIGN_VOXEL_M,
+    };
+    if !(voxel > 0.0 && voxel.is_finite()) {
+        return Err(format!("--voxel {voxel}: must be > 0"));
     }
     let trials = a.trials.unwrap_or(sc.seeds.trials);
     if trials == 0 {
         return Err("--trials must be at least 1".into());
+    }
+    let iterations = a.iterations.unwrap_or(sc.budgets.planner_iterations);
+    if iterations == 0 {
+        return Err("--iterations must be at least 1".into());
+    }
+    let first_seed = a.seed.unwrap_or(sc.seeds.planner);
+    if first_seed.checked_add(u64::from(trials - 1)).is_none() {
+        return Err(format!(
+            "--seed {first_seed} with --trials {trials}: trial i uses seed {first_seed} + i, which passes u64::MAX; \
+             use a seed of at most {}",
+            u64::MAX - u64::from(trials - 1)
+        ));
     }
     let mut abit = AbitParams::ompl_defaults();
     if let Some(n) = a.samples_per_batch {
@@ -169,6 +224,16 @@ pub fn spec_from(a: &CampaignArgs) -> Result<CampaignSpec, String> {
     if let Some(f) = a.catch_fraction {
         abit.catch_sample_fraction = f;
     }
+    abit.validate().map_err(|e| {
+        let why = match e {
+            firmware::plan::space::InvalidInput::Parameter(p) => p.to_string(),
+            other => format!("{other:?}"),
+        };
+        format!(
+            "planner parameters: {why} (--samples-per-batch {:?}, --rewire-factor {:?}, --copy-fraction {:?}, --catch-fraction {:?})",
+            a.samples_per_batch, a.rewire_factor, a.copy_fraction, a.catch_fraction
+        )
+    })?;
     let mut params = TetherSpaceParams::DEFAULT;
     if let Some(m) = a.min_margin {
         params.min_stability_margin = m;
@@ -194,15 +259,18 @@ pub fn spec_from(a: &CampaignArgs) -> Result<CampaignSpec, String> {
         goal: sc.goal.position,
         goal_tolerance_m: sc.goal.tolerance_m,
         bounds,
-        voxel_m: a.voxel,
-        iterations: a.iterations.unwrap_or(sc.budgets.planner_iterations),
+        voxel_m: voxel,
+        pool_blocks: sc.gives("map.pool_blocks").then_some(sc.map.pool_blocks),
+        tether_length_m: sc.tether.length_m,
+        iterations,
         trials,
-        first_seed: a.seed.unwrap_or(sc.seeds.planner),
+        first_seed,
         threads,
         field,
         params,
         rover,
         abit,
+        physics_judge: !a.no_physics,
     })
 }
 
@@ -216,7 +284,11 @@ pub fn main(a: &CampaignArgs) -> ExitCode {
 }
 
 fn run(a: &CampaignArgs) -> Result<bool, String> {
-    let spec = spec_from(a)?;
+    let sc = crate::scenario::load(&scenario_file(&a.scenario)).map_err(|e| e.to_string())?;
+    let spec = spec_from_scenario(&sc, a)?;
+    for note in unused_scenario_fields(&sc) {
+        eprintln!("note: {note}");
+    }
     let bar = ProgressBar::new(u64::from(spec.trials));
     if let Ok(style) = ProgressStyle::with_template("{prefix} [{bar:40}] {pos}/{len} trials, {elapsed} elapsed, eta {eta}") {
         bar.set_style(style.progress_chars("=> "));
@@ -229,7 +301,8 @@ fn run(a: &CampaignArgs) -> Result<bool, String> {
         println!("{p}");
     }
     let out = a.out.clone().unwrap_or_else(|| {
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/campaign").join(&result.name)
+        // The name comes from the scenario file: made one safe path component, so it cannot leave target/campaign.
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/campaign").join(crate::scenario::file_safe(&result.name))
     });
     std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
     let json = serde_json::to_string_pretty(&result).map_err(|e| e.to_string())?;

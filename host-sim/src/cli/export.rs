@@ -11,9 +11,12 @@ use crate::mcap_export;
 pub struct ExportArgs {
     /// The field log.
     pub log: PathBuf,
-    /// Write an MCAP file here.
+    /// Write an MCAP file here (refused if it exists, unless `--force`; never the log itself).
     #[arg(long, value_name = "OUT")]
     pub mcap: PathBuf,
+    /// Overwrite an existing output file.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// `export` entry point.
@@ -22,6 +25,9 @@ pub fn main(args: &ExportArgs) -> ExitCode {
         Ok(l) => l,
         Err(e) => return super::fail(e),
     };
+    if let Err(e) = super::check_output(&args.mcap, args.force, &[&args.log]) {
+        return super::fail(e);
+    }
     let file = match std::fs::File::create(&args.mcap) {
         Ok(f) => f,
         Err(e) => return super::fail(format!("cannot create {}: {e}", args.mcap.display())),
@@ -35,11 +41,14 @@ pub fn main(args: &ExportArgs) -> ExitCode {
                 s.frames,
                 s.bad_frames
             );
-            if let Some(d) = log.damage {
+            for d in &log.damaged {
                 println!(
-                    "note: log damaged at byte {} ({:?}); exported the records before it",
-                    d.offset, d.reason
+                    "note: log damaged at byte {} ({:?}); {} bytes skipped, the valid records around it exported",
+                    d.offset, d.reason, d.unread_bytes
                 );
+            }
+            if log.completeness() != fieldlog::Completeness::Complete {
+                println!("note: log incomplete: {}", log.completeness());
             }
             ExitCode::SUCCESS
         }

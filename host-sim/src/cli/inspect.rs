@@ -6,7 +6,7 @@ use std::process::ExitCode;
 
 use firmware::protocol::{self, Deframer};
 
-use crate::fieldlog::{self, Direction};
+use crate::fieldlog::{self, Completeness, Direction};
 
 /// Arguments of `inspect`.
 #[derive(Debug, Clone, clap::Args)]
@@ -18,7 +18,7 @@ pub struct InspectArgs {
     pub frames: bool,
 }
 
-/// `inspect` entry point: exit 1 if the log is damaged.
+/// `inspect` entry point: exit 1 if the log is damaged or has no end record (it may be truncated).
 pub fn main(args: &InspectArgs) -> ExitCode {
     let log = match fieldlog::read_file(&args.log) {
         Ok(l) => l,
@@ -28,7 +28,7 @@ pub fn main(args: &InspectArgs) -> ExitCode {
     println!("field log {}", args.log.display());
     println!(
         "  format {}, protocol {}, seed {}, created at {} ms (Unix)",
-        fieldlog::FORMAT_VERSION,
+        log.format_version,
         h.protocol_version,
         h.seed,
         h.created_at_unix_ms
@@ -75,19 +75,19 @@ pub fn main(args: &InspectArgs) -> ExitCode {
     for ((dir, kind), n) in &kinds {
         println!("  {dir} {kind}: {n}");
     }
-    match log.damage {
-        None => {
-            println!("  no damage");
+    for d in &log.damaged {
+        println!(
+            "  DAMAGED at byte {} ({:?}); {} bytes skipped to the next valid record",
+            d.offset, d.reason, d.unread_bytes
+        );
+    }
+    match log.completeness() {
+        Completeness::Complete => {
+            println!("  no damage; end record: {} records, all read", log.records.len());
             ExitCode::SUCCESS
         }
-        Some(d) => {
-            println!(
-                "  DAMAGED at byte {} ({:?}); {} records before it are valid; {} bytes after it unread",
-                d.offset,
-                d.reason,
-                log.records.len(),
-                d.unread_bytes
-            );
+        other => {
+            println!("  {} valid records read; INCOMPLETE: {other}", log.records.len());
             ExitCode::from(super::EXIT_FAILED)
         }
     }

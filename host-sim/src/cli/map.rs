@@ -21,12 +21,13 @@ pub struct MapCheckArgs {
     /// World: crater_wall, ledge, ledge_pole, marsyard, hirise_cliff, itokawa, or a scenario file (.toml).
     #[arg(long, default_value = "crater_wall")]
     pub world: String,
-    /// Voxel size, metres.
-    #[arg(long, default_value_t = 0.05)]
-    pub voxel: Real,
-    /// Sensor noise seed.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
+    /// Voxel size, metres (default: a scenario's `[map]` configuration, else 0.05). With a scenario, the flag
+    /// overrides `map.voxel_size_m` only.
+    #[arg(long)]
+    pub voxel: Option<Real>,
+    /// Sensor noise seed (default: a scenario's `seeds.sensor`, else 1).
+    #[arg(long)]
+    pub seed: Option<u64>,
     /// Evaluate every n-th voxel.
     #[arg(long, default_value_t = 7)]
     pub stride: usize,
@@ -91,32 +92,90 @@ pub fn world_by_name(name: &str) -> Result<(Box<dyn World>, String), String> {
     Ok((w, name.to_string()))
 }
 
-/// `map-check`: prints ESDF error, timing and memory figures.
-pub fn map_check(a: &MapCheckArgs) -> Result<(), String> {
-    let (world, kind) = world_by_name(&a.world)?;
-    let mut cfg = CheckConfig::at_voxel_size(a.voxel);
-    cfg.seed = a.seed;
+/// Voxel edge of `map-check` without a scenario or `--voxel`, metres.
+pub const DEFAULT_CHECK_VOXEL_M: Real = 0.05;
+
+/// The check configuration of `map-check`: a scenario's `[map]`, `[budgets]`, `[sensor]`, `seeds.sensor` and
+/// `map.pool_blocks` when the world is a scenario file (`--voxel`, `--seed` override), else the defaults.
+pub fn check_config(a: &MapCheckArgs) -> Result<CheckConfig, String> {
+    let mut cfg = if a.world.ends_with(".toml") {
+        let sc = crate::scenario::load(std::path::Path::new(&a.world)).map_err(|e| e.to_string())?;
+        let mut m = sc.map_config().map_err(|e| e.to_string())?;
+        if let Some(v) = a.voxel {
+            // The flag replaces the voxel; the truncation and ray budget keep their proportions unless given.
+            let scaled = firmware::config::map::MapConfig::with_voxel_size(v);
+            m.voxel_size = v;
+            if sc.map.truncation_m.is_none() {
+                m.truncation = scaled.truncation;
+            }
+            if !sc.gives("budgets.max_ray_voxels") {
+                m.max_ray_voxels = scaled.max_ray_voxels;
+            }
+        }
+        let mut cfg = CheckConfig::at_voxel_size(m.voxel_size);
+        cfg.map = m;
+        cfg.sensor = sc.sensor.clone();
+        cfg.seed = sc.seeds.sensor;
+        cfg.pool_blocks = sc.map.pool_blocks;
+        cfg
+    } else {
+        CheckConfig::at_voxel_size(a.voxel.unwrap_or(DEFAULT_CHECK_VOXEL_M))
+    };
+    if let Some(s) = a.seed {
+        cfg.seed = s;
+    }
     cfg.sample_stride = a.stride.max(1);
     if let Some(c) = a.carve {
         cfg.map.max_carve_length = c;
     }
-    cfg.map.validate().map_err(|e| format!("voxel: {} {}", e.field, e.reason))?;
+    cfg.map.validate().map_err(|e| format!("map configuration: {}: {}", e.field, e.reason))?;
+    Ok(cfg)
+}
+
+/// `map-check`: prints ESDF error, timing and memory figures. No integrated point, or an error figure that is
+/// not a number, is an error (a map-check that measured nothing has not passed).
+pub fn map_check(a: &MapCheckArgs) -> Result<(), String> {
+    let (world, kind) = world_by_name(&a.world)?;
+    let cfg = check_config(a)?;
     let poses = standard_poses(world.as_ref(), &kind);
     let (mut blocks, mut index) = host_storage(cfg.pool_blocks);
     let mut map = Map::from_slices(cfg.map, &mut blocks, &mut index).map_err(|e| format!("{e:?}"))?;
     let mut rep = build_map(world.as_ref(), &poses, &cfg, &mut map);
     esdf_errors(world.as_ref(), &map, &cfg, &mut rep);
     rep.surface_m2 = observed_surface_m2(&map);
+    if rep.points == 0 {
+        return Err(format!(
+            "no point was integrated in {} scans of {} ({} sensor rays each): the sensor saw no surface from the \
+             standard poses (a degenerate mesh, or a scale that makes the world too small or too far?)",
+            rep.scans,
+            world.name(),
+            cfg.sensor.ray_count()
+        ));
+    }
+    for (what, e) in [("all observed voxels", &rep.all), ("near the surface", &rep.near)] {
+        if !(e.rms.is_finite() && e.mean.is_finite() && e.max.is_finite()) {
+            return Err(format!(
+                "the ESDF error over {what} is not a number ({e}): the world's distances overflow (a height or \
+                 mesh scale too large?)"
+            ));
+        }
+    }
     let bb = Map::block_bytes();
     println!(
         "world {} ({kind}), voxel {} m, truncation {} m, ESDF cap {} m, carving {} m",
         world.name(),
-        a.voxel,
+        cfg.map.voxel_size,
         cfg.map.truncation,
         cfg.map.esdf_max_distance,
         cfg.map.max_carve_length
     );
     println!("scans {}  points {}  sensor {} rays/scan  seed {}", rep.scans, rep.points, cfg.sensor.ray_count(), cfg.seed);
+    if rep.non_finite_points > 0 || rep.scans_refused > 0 {
+        println!(
+            "dropped on the host: {} non-finite points, {} scans that could not be chunked",
+            rep.non_finite_points, rep.scans_refused
+        );
+    }
     println!(
         "integration (thread CPU time): {:.3} s total, {:.0} points/s, {:.2} ms/scan (wall {:.3} s)",
         rep.integrate_s,

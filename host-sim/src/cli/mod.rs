@@ -7,6 +7,7 @@ pub mod board;
 pub mod export;
 pub mod homotopy;
 pub mod inspect;
+pub mod judge_agreement;
 pub mod map;
 pub mod mission;
 pub mod replay;
@@ -20,6 +21,22 @@ use std::process::ExitCode;
 pub const EXIT_ERROR: u8 = 2;
 /// Exit code when a check failed (scenario expectation, replay mismatch, damaged log).
 pub const EXIT_FAILED: u8 = 1;
+
+/// Refuses an output path that exists (unless `force`) or that is one of `inputs` (never, even with `force`: the
+/// output is created before the input is read to the end). The error says what to do.
+pub fn check_output(out: &std::path::Path, force: bool, inputs: &[&std::path::Path]) -> Result<(), String> {
+    let same = |a: &std::path::Path, b: &std::path::Path| match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => a == b,
+    };
+    if let Some(input) = inputs.iter().find(|i| same(out, i)) {
+        return Err(format!("output {} is the input {}: choose another output file", out.display(), input.display()));
+    }
+    if !force && out.exists() {
+        return Err(format!("{} exists: refusing to overwrite it (give --force to replace it)", out.display()));
+    }
+    Ok(())
+}
 
 /// Prints an error and returns [`EXIT_ERROR`].
 pub fn fail(msg: impl core::fmt::Display) -> ExitCode {

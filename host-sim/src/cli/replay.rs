@@ -5,7 +5,8 @@ use std::process::ExitCode;
 
 use crate::fieldlog;
 use crate::link::LinkKind;
-use crate::replay::{replay, ReplayOutcome, RunConfig};
+use crate::fieldlog::Completeness;
+use crate::replay::{check_replayable, replay, ReplayOutcome, RunConfig};
 
 /// Arguments of `replay`.
 #[derive(Debug, Clone, clap::Args)]
@@ -16,9 +17,14 @@ pub struct ReplayArgs {
     /// because the board runs in lockstep on the same simulated clock).
     #[arg(long, value_enum, default_value_t = LinkKind::Inproc)]
     pub link: LinkKind,
+    /// Longest link time to replay, seconds: the replay steps the executive every `step_us` up to the last
+    /// record's time, so a log whose time stamps run past this is refused instead of running for ever.
+    #[arg(long, default_value_t = 3600)]
+    pub max_link_time_s: u64,
 }
 
-/// `replay` entry point: exit 0 when identical, 1 on a mismatch or a damaged log, 2 if it cannot run.
+/// `replay` entry point: exit 0 when identical and the log complete, 1 on a mismatch, a damaged log or one
+/// without an end record (it may be truncated), 2 if it cannot run.
 pub fn main(args: &ReplayArgs) -> ExitCode {
     let log = match fieldlog::read_file(&args.log) {
         Ok(l) => l,
@@ -33,6 +39,9 @@ pub fn main(args: &ReplayArgs) -> ExitCode {
             "replay of '{}' links is not supported; only inproc and qemu",
             config.link
         ));
+    }
+    if let Err(e) = check_replayable(&log, config.step_us, args.max_link_time_s.saturating_mul(1_000_000)) {
+        return super::fail(format!("{}: {e}", args.log.display()));
     }
     let run = |mut link: &mut dyn crate::link::FlightLink| -> Result<ReplayOutcome, Box<dyn core::error::Error>> {
         Ok(replay(&log, &mut link)?)
@@ -51,14 +60,24 @@ pub fn main(args: &ReplayArgs) -> ExitCode {
         Ok(o) => o,
         Err(e) => return super::fail(e),
     };
-    println!("{}: {outcome}", args.log.display());
-    let mut ok = matches!(outcome, ReplayOutcome::Identical { .. });
-    if let Some(d) = log.damage {
+    let completeness = log.completeness();
+    let ok = matches!(outcome, ReplayOutcome::Identical { .. }) && completeness == Completeness::Complete;
+    match (&outcome, completeness) {
+        (ReplayOutcome::Identical { records_fed, bytes_compared }, c) if c != Completeness::Complete => println!(
+            "{}: NOT VERIFIED: the {records_fed} host->flight records read replay to the {bytes_compared} \
+             flight->host bytes recorded, but the log is incomplete",
+            args.log.display()
+        ),
+        _ => println!("{}: {outcome}", args.log.display()),
+    }
+    for d in &log.damaged {
         println!(
-            "log damaged at byte {} ({:?}); {} bytes after it not replayed",
+            "log damaged at byte {} ({:?}); {} bytes skipped to the next valid record",
             d.offset, d.reason, d.unread_bytes
         );
-        ok = false;
+    }
+    if completeness != Completeness::Complete {
+        println!("log incomplete: {completeness}");
     }
     if ok {
         ExitCode::SUCCESS

@@ -31,10 +31,17 @@ pub struct RunArgs {
     /// Flight software to run against: the in-process executive, or the board binary in QEMU (lockstep).
     #[arg(long, value_enum, default_value_t = LinkKind::Inproc)]
     pub link: LinkKind,
+    /// Overwrite an existing field log (without it, `-o EXISTING` is refused).
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Runs a scenario on the in-process link, optionally recording it.
 pub fn run_scenario(args: &RunArgs) -> Result<ScenarioReport, Box<dyn core::error::Error>> {
+    if let Some(path) = &args.log {
+        // Checked before the link starts (a QEMU boot or a board build would be wasted).
+        super::check_output(path, args.force, &[])?;
+    }
     if !scripted::SCENARIOS.contains(&args.scenario.as_str()) {
         return Err(format!(
             "unknown scenario '{}'; built in: {}",

@@ -27,10 +27,10 @@ impl<L: FlightLink, W: Write> RecordingLink<L, W> {
         &mut self.inner
     }
 
-    /// Flushes the log and gives both parts back.
-    pub fn finish(mut self) -> Result<(L, W), LinkError> {
-        self.log.flush().map_err(LinkError::Record)?;
-        Ok((self.inner, self.log.into_inner()))
+    /// Closes the log with its end record ([`Writer::finish`]), flushes it and gives both parts back.
+    pub fn finish(self) -> Result<(L, W), LinkError> {
+        let out = self.log.finish().map_err(LinkError::Record)?;
+        Ok((self.inner, out))
     }
 
     fn record_rx(&mut self, bytes: &[u8]) -> Result<(), LinkError> {

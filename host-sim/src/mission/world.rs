@@ -11,6 +11,7 @@ use firmware::map::{DistanceField, DistanceQuery};
 
 use super::params::ObstacleSpec;
 use crate::world::ledge::LedgeWorld;
+use crate::truth::solid::{ExactGeometry, Solid};
 use crate::world::{Aabb, World};
 
 /// The scenario's terrain with the mission's rocks.
@@ -134,6 +135,51 @@ impl MissionWorld {
     }
 }
 
+/// Sectors and rings of the closed mesh that stands for a spherical rock in [`MissionWorld::exact_geometry_with`].
+const ROCK_MESH_SECTORS: u32 = 16;
+const ROCK_MESH_RINGS: u32 = 8;
+
+/// A closed UV-sphere mesh (counter-clockwise seen from outside) inscribed in the sphere: its vertices lie on the
+/// sphere, so its faces are at most `r (1 - cos(pi / 16))`, 2 % of the radius, inside it.
+fn sphere_mesh(c: [f64; 3], r: f64) -> Solid {
+    let (ns, nr) = (ROCK_MESH_SECTORS, ROCK_MESH_RINGS);
+    let mut vertices = vec![[c[0], c[1], c[2] + r]];
+    for i in 1..nr {
+        let th = core::f64::consts::PI * f64::from(i) / f64::from(nr);
+        for j in 0..ns {
+            let ph = 2.0 * core::f64::consts::PI * f64::from(j) / f64::from(ns);
+            vertices.push([c[0] + r * th.sin() * ph.cos(), c[1] + r * th.sin() * ph.sin(), c[2] + r * th.cos()]);
+        }
+    }
+    let bottom = u32::try_from(vertices.len()).unwrap_or(u32::MAX);
+    vertices.push([c[0], c[1], c[2] - r]);
+    let at = |ring: u32, j: u32| 1 + (ring - 1) * ns + j % ns;
+    let mut triangles = Vec::new();
+    for j in 0..ns {
+        triangles.push([0, at(1, j), at(1, j + 1)]);
+        triangles.push([bottom, at(nr - 1, j + 1), at(nr - 1, j)]);
+        for ring in 1..nr - 1 {
+            triangles.push([at(ring, j), at(ring + 1, j), at(ring + 1, j + 1)]);
+            triangles.push([at(ring, j), at(ring + 1, j + 1), at(ring, j + 1)]);
+        }
+    }
+    Solid::Mesh { vertices, triangles }
+}
+
+impl MissionWorld {
+    /// The terrain's exact geometry plus every present rock as a closed mesh inscribed in its sphere ([`sphere_mesh`]);
+    /// with `sensor`, only the rocks the sensor sees.
+    fn exact_geometry_with(&self, sensor: bool) -> ExactGeometry {
+        let mut g = self.base.exact_geometry();
+        for (r, present) in self.rocks() {
+            if present && !(sensor && !r.visible) {
+                g.solids.push(sphere_mesh(r.centre, r.radius_m));
+            }
+        }
+        g
+    }
+}
+
 /// Everything that exists now (see the module docs).
 pub struct TrueView<'a>(&'a MissionWorld);
 /// What the range sensor sees (see the module docs).
@@ -159,6 +205,9 @@ macro_rules! view {
             fn height_at(&self, x: Real, y: Real) -> Option<Real> {
                 self.0.height_with(x, y, $sensor)
             }
+            fn exact_geometry(&self) -> ExactGeometry {
+                self.0.exact_geometry_with($sensor)
+            }
         }
     };
 }
@@ -168,6 +217,39 @@ view!(SensorView, true);
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_rock_mesh_is_closed_and_on_its_sphere() {
+        let Solid::Mesh { vertices, triangles } = sphere_mesh([1.0, 2.0, 3.0], 0.5) else { panic!("not a mesh") };
+        for v in &vertices {
+            let d = ((v[0] - 1.0).powi(2) + (v[1] - 2.0).powi(2) + (v[2] - 3.0).powi(2)).sqrt();
+            assert!((d - 0.5).abs() < 1e-12, "vertex {v:?} off the sphere");
+        }
+        // closed and consistently oriented: every directed edge appears once, and its reverse once
+        let mut edges = std::collections::BTreeMap::new();
+        for t in &triangles {
+            for k in 0..3 {
+                *edges.entry((t[k], t[(k + 1) % 3])).or_insert(0) += 1;
+            }
+        }
+        for (&(a, b), &n) in &edges {
+            assert_eq!(n, 1, "edge {a}-{b} used {n} times in one direction");
+            assert_eq!(edges.get(&(b, a)), Some(&1), "edge {a}-{b} has no opposite");
+        }
+        // outward: the signed volume is positive and near the sphere's
+        let vol: f64 = triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| vertices[i as usize]);
+                let a = [a[0] - 1.0, a[1] - 2.0, a[2] - 3.0];
+                let b = [b[0] - 1.0, b[1] - 2.0, b[2] - 3.0];
+                let c = [c[0] - 1.0, c[1] - 2.0, c[2] - 3.0];
+                (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0])) / 6.0
+            })
+            .sum();
+        let sphere = 4.0 / 3.0 * core::f64::consts::PI * 0.125;
+        assert!(vol > 0.9 * sphere && vol < sphere, "volume {vol} vs sphere {sphere}");
+    }
 
     fn world() -> MissionWorld {
         let rocks = vec![

@@ -104,8 +104,15 @@ pub fn parse_asc(text: &str, height_scale: f64) -> Result<Heightmap, AscError> {
     }
     let mut heights_m = Vec::with_capacity(total);
     for row in (0..nrows).rev() {
-        for s in samples.iter().skip(row * ncols).take(ncols) {
+        for (col, s) in samples.iter().skip(row * ncols).take(ncols).enumerate() {
             let missing = s.is_nan() || nodata.is_some_and(|n| *s == n);
+            if !missing && !(s * height_scale).is_finite() {
+                // An infinite height is not "no data" (that is NODATA_value): the file is damaged.
+                return Err(err(
+                    0,
+                    format!("sample (file row {row}, column {col}) is {s} (x height scale {height_scale}): heights must be finite; mark missing posts with NODATA_value"),
+                ));
+            }
             heights_m.push(if missing { None } else { Some(s * height_scale) });
         }
     }
@@ -129,6 +136,12 @@ mod tests {
     }
 
     #[test]
+    fn a_height_scale_that_overflows_is_rejected() {
+        let e = parse_asc("ncols 2\nnrows 1\ncellsize 1\n1e300 1\n", 1e10).unwrap_err().to_string();
+        assert!(e.contains("must be finite"), "{e}");
+    }
+
+    #[test]
     fn file_round_trip() {
         let dir = std::env::temp_dir().join(format!("asc-test-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
@@ -149,6 +162,9 @@ mod tests {
             ("ncols 3\nnrows 1\ncellsize 0\n1 2 3\n", "cellsize must be > 0"),
             ("ncols 1\nnrows 1\ncellsize 1\nfoo 3\n1\n", "unknown header key"),
             ("ncols 1\nnrows 1\ncellsize 1\n1 2\n", "more than"),
+            // regression (issue 24): +inf heights were accepted
+            ("ncols 2\nnrows 1\ncellsize 1\n1 inf\n", "(file row 0, column 1) is inf"),
+            ("ncols 2\nnrows 1\ncellsize 1\n-infinity 1\n", "heights must be finite"),
         ];
         for (text, want) in cases {
             let e = parse_asc(text, 1.0).unwrap_err().to_string();

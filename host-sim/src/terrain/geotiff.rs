@@ -118,8 +118,16 @@ pub fn read_geotiff<R: std::io::Read + std::io::Seek>(
     }
     let mut heights_m = Vec::with_capacity(samples.len());
     for row in (0..height).rev() {
-        for s in samples.iter().skip(row * width).take(width) {
+        for (col, s) in samples.iter().skip(row * width).take(width).enumerate() {
             let missing = s.is_nan() || nodata.is_some_and(|n| *s == n);
+            if !missing && !(s * opts.height_scale).is_finite() {
+                // An infinite height is not "no data" (that is the GDAL_NODATA tag or `nodata`): the file is damaged.
+                return Err(GeoTiffError::Unsupported(format!(
+                    "pixel (file row {row}, column {col}) is {s} (x height_scale {}): heights must be finite; mark missing \
+                     posts with the GDAL_NODATA tag or the scenario's nodata",
+                    opts.height_scale
+                )));
+            }
             heights_m.push(if missing { None } else { Some(s * opts.height_scale) });
         }
     }
@@ -168,6 +176,29 @@ mod tests {
             .unwrap();
         // without a nodata tag, -32768 is a height
         assert_eq!(hm.get(1, 0), Some(-32768.0));
+    }
+
+    /// Regression (issue 24): +inf heights in a float GeoTIFF were accepted (NaN stays "no data").
+    #[test]
+    fn infinite_heights_are_rejected() {
+        let tiff = |data: &[f32]| {
+            let mut buf = Cursor::new(Vec::new());
+            {
+                let mut enc = TiffEncoder::new(&mut buf).unwrap();
+                let mut img = enc.new_image::<colortype::Gray32Float>(3, 2).unwrap();
+                img.encoder().write_tag(Tag::ModelPixelScaleTag, &[1.0f64, 1.0, 0.0][..]).unwrap();
+                img.write_data(data).unwrap();
+            }
+            buf.into_inner()
+        };
+        let opts = GeoTiffOptions::default();
+        let hm = read_geotiff(Cursor::new(tiff(&[1.0, 2.0, 3.0, 4.0, f32::NAN, 6.0])), &opts).unwrap();
+        assert_eq!(hm.get(1, 0), None);
+        let e = read_geotiff(Cursor::new(tiff(&[1.0, 2.0, 3.0, 4.0, f32::INFINITY, 6.0])), &opts).unwrap_err();
+        assert!(e.to_string().contains("(file row 1, column 1) is inf"), "{e}");
+        let big = GeoTiffOptions { height_scale: 1e300, ..Default::default() };
+        let e = read_geotiff(Cursor::new(tiff(&[1.0, 2.0, 3.0, 4.0, 5e30, 6.0])), &big).unwrap_err();
+        assert!(e.to_string().contains("must be finite"), "{e}");
     }
 
     #[test]

@@ -96,6 +96,9 @@ pub enum ObjError {
     Empty,
     /// The scale option is not a finite positive number.
     BadScale,
+    /// Every triangle has zero area (all vertices coincide or lie on one line): the mesh has no surface a sensor
+    /// could see.
+    NoSurface,
 }
 
 impl fmt::Display for ObjError {
@@ -114,6 +117,10 @@ impl fmt::Display for ObjError {
             }
             ObjError::Empty => write!(f, "OBJ file has no faces"),
             ObjError::BadScale => write!(f, "OBJ scale must be finite and > 0"),
+            ObjError::NoSurface => write!(
+                f,
+                "OBJ mesh is degenerate: every triangle has zero area (coincident or collinear vertices, or a scale that rounds them together)"
+            ),
         }
     }
 }
@@ -187,6 +194,15 @@ pub fn parse_obj(text: &str, opts: &ObjOptions) -> Result<TriMesh, ObjError> {
     if mesh.triangles.is_empty() {
         return Err(ObjError::Empty);
     }
+    let area = |t: &[u32; 3]| -> Option<f64> {
+        let [a, b, c] = [mesh.vertices.get(t[0] as usize)?, mesh.vertices.get(t[1] as usize)?, mesh.vertices.get(t[2] as usize)?];
+        let (u, v) = ([b[0] - a[0], b[1] - a[1], b[2] - a[2]], [c[0] - a[0], c[1] - a[1], c[2] - a[2]]);
+        let n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+        Some(0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt())
+    };
+    if !mesh.triangles.iter().any(|t| area(t).is_some_and(|a| a > 0.0)) {
+        return Err(ObjError::NoSurface);
+    }
     Ok(mesh)
 }
 
@@ -211,6 +227,9 @@ mod tests {
     fn bad_inputs_are_typed_errors_with_line_numbers() {
         let o = ObjOptions::METRES;
         assert!(matches!(parse_obj("v 0 0\nf 1 2 3\n", &o), Err(ObjError::BadVertex { line: 1 })));
+        // regression (issue 24): a degenerate mesh loaded and map-check then saw 0 points with exit 0
+        assert!(matches!(parse_obj("v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n", &o), Err(ObjError::NoSurface)));
+        assert!(matches!(parse_obj("v 0 0 0\nv 0 0 0\nv 0 0 0\nf 1 2 3\n", &o), Err(ObjError::NoSurface)));
         assert!(matches!(parse_obj("v 0 0 nan\n", &o), Err(ObjError::BadVertex { line: 1 })));
         let three = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
         assert!(matches!(parse_obj(&format!("{three}f 1 2 x\n"), &o), Err(ObjError::BadFaceIndex { line: 4 })));

@@ -14,6 +14,8 @@ use firmware::geom::{Real, Vec3};
 use firmware::map::{DistanceField, DistanceQuery};
 use rand_core::Rng;
 
+use crate::truth::solid::{ExactGeometry, Solid};
+
 /// Parameters of [`CraterWall`]; defaults in [`CraterWallParams::default`].
 #[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
 #[serde(default, deny_unknown_fields)]
@@ -232,6 +234,19 @@ impl World for CraterWall {
             .filter(|r| convex_polygon_sdf([x, y], &r.polygon) <= 0.0)
             .fold(self.profile_height(x), |h, r| h.max(r.z1));
         Some(top as Real)
+    }
+
+    fn exact_geometry(&self) -> ExactGeometry {
+        // The profile is unbounded in x < 0 and along y; 100 m beyond the world's bounds stands for that.
+        let p = &self.params;
+        let (far_x, far_y) = (-p.rim_length_m - 100.0, p.width_m / 2.0 + 100.0);
+        let h = p.rim_height_m;
+        let mut solids = vec![
+            Solid::Ground { z: 0.0 },
+            Solid::xz_prism(&[[far_x, 0.0], [self.foot_x, 0.0], [0.0, h], [far_x, h]], -far_y, far_y),
+        ];
+        solids.extend(self.rocks.iter().map(|r| Solid::vertical_prism(&r.polygon, r.z0, r.z1)));
+        ExactGeometry { solids }
     }
 }
 

@@ -17,14 +17,35 @@
 //!
 //! Ray casts march along the ray in steps of a quarter of the post spacing on the sign of `z - h(x, y)` and
 //! refine a sign change by 50 bisections: a feature thinner than a quarter post spacing along the ray can be
-//! missed (a height field has none thinner than one post except at grazing incidence).
+//! missed (a height field has none thinner than one post except at grazing incidence). The march covers only the
+//! part of the ray over the grid and not above its highest post (elsewhere there is no surface to hit), on the
+//! same grid of steps as a march from the origin, so the result is the same. A march stops after
+//! [`RAYCAST_MAX_STEPS`] steps: [`HeightmapWorld::new`] rejects a grid whose box diagonal is longer, so a ray over
+//! posts hits or leaves the box within the budget (below the lowest post every sample over a post is a hit); only a
+//! ray that stays over a hole (no data) for the whole budget ends as a miss.
+//!
+//! Limits checked at load (absurd scales are errors, not hangs or NaN): post spacing at least
+//! [`MIN_POST_SPACING_M`] (1 mm), every height finite, extent and height span at most [`MAX_EXTENT_M`] (10 000 km),
+//! and the ray-cast budget above.
 
 use super::geometry::{closest_point_on_triangle, P3};
 use firmware::geom::p3::{cross, dot, norm, sub};
 use super::{Aabb, World};
 use crate::terrain::Heightmap;
+use crate::truth::solid::{ExactGeometry, Solid};
 use firmware::geom::{Real, Vec3};
 use firmware::map::{DistanceField, DistanceQuery};
+
+/// Smallest post spacing after `horizontal_scale`, metres. Default 1 mm: finer than any DEM (the HiRISE DTMs are
+/// 1 m, the Mars Yard 5 cm); a smaller one is a scale mistake.
+pub const MIN_POST_SPACING_M: f64 = 1e-3;
+/// Largest horizontal extent and height span of a grid, metres. Default 10 000 km (more than Mars' diameter; the
+/// LOLA south-polar DEM spans 1218 km); keeps every distance and its square finite.
+pub const MAX_EXTENT_M: f64 = 1e7;
+/// Budget of one ray cast, in march steps (a quarter post spacing each). Default 2^20: a grid whose box diagonal
+/// is longer than this many steps is rejected at load (about 185 000 posts on a side, or a height span of
+/// 260 000 post spacings).
+pub const RAYCAST_MAX_STEPS: usize = 1 << 20;
 
 /// A height field world.
 #[derive(Debug, Clone)]
@@ -73,14 +94,46 @@ impl HeightmapWorld {
             }
         }
         let spacing = hm.spacing_m * horizontal_scale;
-        if !(spacing.is_finite() && spacing > 0.0) {
-            return bad(format!("post spacing {spacing} is not positive"));
+        if !(spacing.is_finite() && spacing >= MIN_POST_SPACING_M) {
+            return bad(format!(
+                "post spacing {spacing} m ({} m x horizontal_scale {horizontal_scale}) is below {MIN_POST_SPACING_M} m: \
+                 check horizontal_scale / spacing_m",
+                hm.spacing_m
+            ));
+        }
+        let extent = spacing * (hm.width.max(hm.height) - 1) as f64;
+        if extent > MAX_EXTENT_M {
+            return bad(format!("the grid spans {extent:.3e} m, above {MAX_EXTENT_M:.0e} m: check horizontal_scale / spacing_m"));
         }
         let raw: Vec<f64> = hm.heights_m.iter().map(|h| h.map_or(f64::NAN, |h| h * vertical_scale)).collect();
+        if let Some(k) = hm.heights_m.iter().zip(&raw).position(|(h, r)| h.is_some() && !r.is_finite()) {
+            return bad(format!(
+                "post (column {}, row {}) has height {:?} x vertical_scale {vertical_scale:e} = {}: every height must be \
+                 finite (mark missing posts as no data)",
+                k % hm.width,
+                k / hm.width,
+                hm.heights_m.get(k).copied().flatten(),
+                raw.get(k).copied().unwrap_or(f64::NAN)
+            ));
+        }
         let lo = raw.iter().copied().filter(|h| h.is_finite()).fold(f64::INFINITY, f64::min);
         let hi = raw.iter().copied().filter(|h| h.is_finite()).fold(f64::NEG_INFINITY, f64::max);
         if !lo.is_finite() {
             return bad("every post is 'no data'".into());
+        }
+        if hi - lo > MAX_EXTENT_M {
+            return bad(format!(
+                "heights span {:.3e} m, above {MAX_EXTENT_M:.0e} m: check height_scale / vertical_scale",
+                hi - lo
+            ));
+        }
+        let diagonal = (extent * extent * 2.0 + (hi - lo) * (hi - lo)).sqrt();
+        let steps = diagonal / (spacing / 4.0);
+        if steps > (RAYCAST_MAX_STEPS - 4) as f64 {
+            return bad(format!(
+                "a ray across this grid ({diagonal:.3e} m diagonal at {spacing:.3e} m post spacing) would take {steps:.3e} \
+                 march steps, above the ray-cast budget of {RAYCAST_MAX_STEPS}: check horizontal_scale / vertical_scale"
+            ));
         }
         let heights = raw.iter().map(|h| h - lo).collect();
         Ok(HeightmapWorld {
@@ -145,6 +198,11 @@ impl HeightmapWorld {
     /// distance is at most `radius`; otherwise an upper bound of it that exceeds `radius`, or `None` when no
     /// triangle lies within the rings searched.
     pub fn sdf_closest_within(&self, p: P3, radius: f64) -> Option<(f64, P3)> {
+        self.closest_within(p, radius).map(|(d, q, _)| (d, q))
+    }
+
+    /// [`Self::sdf_closest_within`] with the closest triangle's unit normal (pointing up, out of the terrain).
+    fn closest_within(&self, p: P3, radius: f64) -> Option<(f64, P3, P3)> {
         let ci = (((p[0] - self.x0) / self.spacing).floor() as i64).clamp(0, self.nx as i64 - 2);
         let cj = (((p[1] - self.y0) / self.spacing).floor() as i64).clamp(0, self.ny as i64 - 2);
         // Horizontal distance from p to the clamped cell (p may be outside the grid).
@@ -187,20 +245,27 @@ impl HeightmapWorld {
                 dot(sub(p, q), n) >= 0.0
             }
         };
-        Some((if above { d } else { -d }, q))
+        let n = cross(sub(t[1], t[0]), sub(t[2], t[0]));
+        let l = norm(n);
+        let up = if l > 0.0 { [n[0] / l, n[1] / l, n[2] / l] } else { [0.0, 0.0, 1.0] };
+        let up = if up[2] < 0.0 { [-up[0], -up[1], -up[2]] } else { up };
+        Some((if above { d } else { -d }, q, up))
     }
 }
 
 impl HeightmapWorld {
-    fn distance_query(q: P3, closest: Option<(f64, P3)>) -> DistanceQuery {
-        let Some((d, c)) = closest else { return DistanceQuery::Unknown };
+    /// The query's answer from the closest point. On the surface itself (`q` = the closest point) the gradient is
+    /// the closest triangle's normal, as on the analytic worlds: a zero gradient there made every consumer that
+    /// needs a surface normal (the settler's footprint normal) treat the point as unknown space (issue 19).
+    fn distance_query(q: P3, closest: Option<(f64, P3, P3)>) -> DistanceQuery {
+        let Some((d, c, up)) = closest else { return DistanceQuery::Unknown };
         let v = sub(q, c);
         let n = norm(v);
         let s = if d >= 0.0 { 1.0 } else { -1.0 };
         let gradient = if n > 1e-12 {
             Vec3::new((s * v[0] / n) as Real, (s * v[1] / n) as Real, (s * v[2] / n) as Real)
         } else {
-            Vec3::zeros()
+            Vec3::new(up[0] as Real, up[1] as Real, up[2] as Real)
         };
         DistanceQuery::Known { distance: d as Real, gradient }
     }
@@ -209,7 +274,7 @@ impl HeightmapWorld {
 impl DistanceField for HeightmapWorld {
     fn query(&self, p: &Vec3) -> DistanceQuery {
         let q = [p.x as f64, p.y as f64, p.z as f64];
-        Self::distance_query(q, self.sdf_closest(q))
+        Self::distance_query(q, self.closest_within(q, self.exact_radius_m))
     }
 }
 
@@ -233,10 +298,36 @@ impl World for HeightmapWorld {
             self.height(p[0], p[1]).map(|h| p[2] - h)
         };
         let step = self.spacing / 4.0;
-        let n = ((max_range as f64) / step).ceil() as usize + 1;
+        let max_t = max_range as f64;
+        let n = (max_t / step).ceil() + 1.0;
+        // Only the part of the ray over the grid and not above its highest post can hit (see the module docs).
+        let (x1, y1) = (-self.x0, -self.y0);
+        let mut t_lo: f64 = 0.0;
+        let mut t_hi: f64 = max_t;
+        for (oa, da, lo, hi) in [(o[0], d[0], self.x0, x1), (o[1], d[1], self.y0, y1), (o[2], d[2], f64::NEG_INFINITY, self.z_max)] {
+            if da == 0.0 {
+                if !(oa >= lo && oa <= hi) {
+                    return None;
+                }
+            } else {
+                let (ta, tb) = ((lo - oa) / da, (hi - oa) / da);
+                t_lo = t_lo.max(ta.min(tb));
+                t_hi = t_hi.min(ta.max(tb));
+            }
+        }
+        if t_lo.is_nan() || t_hi.is_nan() || t_lo > t_hi {
+            return None;
+        }
+        // The same steps k * step as a march from the origin, from one before the entry to one after the exit.
+        let k0 = ((t_lo / step).floor() - 1.0).max(0.0);
+        let k1 = ((t_hi / step).ceil() + 1.0).min(n);
+        // The budget: within the box a ray hits or leaves it in fewer steps (checked in `new`); below the lowest
+        // post every sample over a post is a hit, so only a ray still over a hole can reach it (a miss).
+        let k1 = k1.min(k0 + RAYCAST_MAX_STEPS as f64);
+        let (k0, k1) = (k0 as usize, k1 as usize);
         let mut prev: Option<(f64, f64)> = None;
-        for k in 0..n {
-            let t = (k as f64 * step).min(max_range as f64);
+        for k in k0..k1 {
+            let t = (k as f64 * step).min(max_t);
             match f(t) {
                 Some(v) if v < 0.0 => {
                     let Some((mut a, _)) = prev else { return Some(0.0) };
@@ -261,11 +352,24 @@ impl World for HeightmapWorld {
         self.height(x as f64, y as f64).map(|h| h as Real)
     }
 
+    fn exact_geometry(&self) -> ExactGeometry {
+        ExactGeometry {
+            solids: vec![Solid::HeightGrid {
+                nx: self.nx,
+                ny: self.ny,
+                x0: self.x0,
+                y0: self.y0,
+                spacing: self.spacing,
+                heights: self.heights.clone(),
+            }],
+        }
+    }
+
     /// The ring search stopped at `limit`: a voxel far from the surface costs a few rings instead of
     /// `(distance / spacing)^2` cells. No triangle within `limit` (a hole): the full search.
     fn query_up_to(&self, p: &Vec3, limit: Real) -> DistanceQuery {
         let q = [p.x as f64, p.y as f64, p.z as f64];
-        match self.sdf_closest_within(q, f64::from(limit).min(self.exact_radius_m)) {
+        match self.closest_within(q, f64::from(limit).min(self.exact_radius_m)) {
             Some(found) => Self::distance_query(q, Some(found)),
             None => self.query(p),
         }
@@ -315,5 +419,77 @@ mod tests {
         assert!(HeightmapWorld::new("x", &hm, 1.0, 1.0).is_err());
         let hm = Heightmap { width: 2, height: 2, spacing_m: 1.0, heights_m: vec![Some(0.0); 4] };
         assert!(HeightmapWorld::new("x", &hm, f64::NAN, 1.0).is_err());
+    }
+
+    /// The march over the grid's box only gives exactly the hits of a march from the origin over the whole range
+    /// (the reference below is the old, unclipped march), for rays from outside, above, over holes and missing.
+    #[test]
+    fn clipped_raycast_equals_the_full_march() {
+        let mut w = plane();
+        let full = |w: &HeightmapWorld, o: Vec3, d: Vec3, r: f64| {
+            let step = w.spacing / 4.0;
+            let n = (r / step).ceil() as usize + 1;
+            let f = |t: f64| w.height(o.x as f64 + d.x as f64 * t, o.y as f64 + d.y as f64 * t).map(|h| o.z as f64 + d.z as f64 * t - h);
+            let mut prev: Option<f64> = None;
+            for k in 0..n {
+                let t = (k as f64 * step).min(r);
+                match f(t) {
+                    Some(v) if v < 0.0 => {
+                        let Some(mut a) = prev else { return Some(0.0) };
+                        let mut b = t;
+                        for _ in 0..50 {
+                            let m = 0.5 * (a + b);
+                            match f(m) {
+                                Some(v) if v >= 0.0 => a = m,
+                                _ => b = m,
+                            }
+                        }
+                        return Some(b as Real);
+                    }
+                    Some(_) => prev = Some(t),
+                    None => prev = None,
+                }
+            }
+            None
+        };
+        w.heights[200] = f64::NAN; // a hole
+        let mut rng = rand_pcg::Pcg64::new(7, 11);
+        let mut u = || (rand_core::Rng::next_u64(&mut rng) >> 11) as f64 / (1u64 << 53) as f64;
+        let mut hits = 0;
+        for _ in 0..400 {
+            let o = Vec3::new((8.0 * u() - 4.0) as Real, (8.0 * u() - 4.0) as Real, (6.0 * u() - 1.0) as Real);
+            let d = Vec3::new((2.0 * u() - 1.0) as Real, (2.0 * u() - 1.0) as Real, (2.0 * u() - 1.5) as Real).normalize();
+            let r = 12.0 * u();
+            let got = w.raycast(&o, &d, r as Real);
+            assert_eq!(got, full(&w, o, d, r), "o {o:?} d {d:?} r {r}");
+            hits += usize::from(got.is_some());
+        }
+        assert!(hits > 50, "{hits} hits");
+        // A long vertical ray (range 1e6 m: 4e7 steps if it did not hit) hits like the full march.
+        let (o, down) = (Vec3::new(0.13, -0.21, (w.z_max + 5.0) as Real), Vec3::new(0.0, 0.0, -1.0));
+        let got = w.raycast(&o, &down, 1e6);
+        assert!(got.is_some());
+        assert_eq!(got, full(&w, o, down, 1e6));
+    }
+
+    /// Regression (issue 24): a horizontal scale of 1e-9 made every ray cast take 3e10 steps (map-check never
+    /// ended); infinite heights and a height scale that overflows were accepted and gave NaN errors later.
+    #[test]
+    fn absurd_scales_and_infinite_heights_are_rejected_at_load() {
+        let hm = |heights_m: Vec<Option<f64>>| Heightmap { width: 3, height: 2, spacing_m: 1.0, heights_m };
+        let ok = hm(vec![Some(0.0), Some(1.0), Some(2.0), Some(0.5), Some(1.5), Some(2.5)]);
+        assert!(HeightmapWorld::new("x", &ok, 1.0, 1.0).is_ok());
+        let e = HeightmapWorld::new("x", &ok, 1e-9, 1.0).unwrap_err();
+        assert!(e.0.contains("below 0.001 m"), "{e}");
+        let e = HeightmapWorld::new("x", &ok, 1.0, 1e308).unwrap_err();
+        assert!(e.0.contains("must be finite") && e.0.contains("column 2, row 0"), "{e}");
+        let e = HeightmapWorld::new("x", &ok, 1.0, 1e12).unwrap_err();
+        assert!(e.0.contains("heights span"), "{e}");
+        let e = HeightmapWorld::new("x", &ok, 1.0, 3e5).unwrap_err();
+        assert!(e.0.contains("ray-cast budget"), "{e}");
+        let e = HeightmapWorld::new("x", &ok, 1e7, 1.0).unwrap_err();
+        assert!(e.0.contains("spans"), "{e}");
+        let inf = hm(vec![Some(0.0), Some(f64::INFINITY), Some(2.0), Some(0.5), Some(1.5), Some(2.5)]);
+        assert!(HeightmapWorld::new("x", &inf, 1.0, 1.0).unwrap_err().0.contains("finite"));
     }
 }

@@ -22,6 +22,8 @@ use firmware::geom::p3::from_vec3;
 use firmware::map::{DistanceField, DistanceQuery};
 use workloads::ledge::Ledge;
 
+use crate::truth::solid::{ExactGeometry, Solid};
+
 pub use workloads::ledge::{
     toe_x, LEDGE_DEPTH_M, LEDGE_HALF_WIDTH_M, LEDGE_HEIGHT_M, POLE_CENTRE_XY, POLE_HEIGHT_M, POLE_RADIUS_M, SLOPE_DEG,
 };
@@ -116,6 +118,19 @@ impl World for LedgeWorld {
 
     fn height_at(&self, x: Real, y: Real) -> Option<Real> {
         Some(self.height_f64(f64::from(x), f64::from(y)) as Real)
+    }
+
+    fn exact_geometry(&self) -> ExactGeometry {
+        // The ground, the ledge body (its x-z section: back wall, top, lip, slope, toe) and the pole.
+        let (h, xb, w) = (LEDGE_HEIGHT_M, -LEDGE_DEPTH_M, LEDGE_HALF_WIDTH_M);
+        let mut solids = vec![
+            Solid::Ground { z: 0.0 },
+            Solid::xz_prism(&[[xb, 0.0], [toe_x(), 0.0], [0.0, h], [xb, h]], -w, w),
+        ];
+        if self.has_pole() {
+            solids.push(Solid::Cylinder { centre: POLE_CENTRE_XY, radius: POLE_RADIUS_M, z0: h, z1: h + POLE_HEIGHT_M });
+        }
+        ExactGeometry { solids }
     }
 }
 

@@ -37,6 +37,7 @@ use super::geometry::P3;
 use firmware::geom::p3::{self, add_scaled, cross, dot, norm, sub, unit_or};
 use super::{Aabb, World};
 use crate::terrain::obj::TriMesh;
+use crate::truth::solid::{ExactGeometry, Solid};
 use firmware::geom::{Real, Vec3};
 use firmware::map::{DistanceField, DistanceQuery};
 
@@ -562,6 +563,10 @@ impl World for MeshWorld {
         let top = self.hi[2] + 1.0;
         let t = self.first_hit([x as f64, y as f64, top], [0.0, 0.0, -1.0], top - self.lo[2] + 1.0)?;
         Some((top - t) as Real)
+    }
+
+    fn exact_geometry(&self) -> ExactGeometry {
+        ExactGeometry { solids: vec![Solid::Mesh { vertices: self.verts.clone(), triangles: self.tris.clone() }] }
     }
 }
 

@@ -14,6 +14,8 @@ pub mod mesh;
 use firmware::geom::{Real, Vec3};
 use firmware::map::{DistanceField, DistanceQuery};
 
+use crate::truth::solid::ExactGeometry;
+
 /// Axis-aligned bounds of a world, metres.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Aabb {
@@ -40,4 +42,7 @@ pub trait World: DistanceField + Send + Sync {
         let _ = limit;
         self.query(p)
     }
+    /// The world's exact geometry as primitive solids ([`crate::truth::solid`]), for the judges that must not
+    /// use a distance field (the physics judge, the general true tether).
+    fn exact_geometry(&self) -> ExactGeometry;
 }

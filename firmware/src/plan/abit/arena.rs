@@ -1,38 +1,64 @@
-//! The planner's storage ([`AbitArena`]): the node arena, the edge queue (a slab and its indexed heap) and the
-//! edge memo, with their capacities and high-water marks.
-
-use heapless::Vec;
+//! The planner's storage ([`AbitArena`]): the implicit graph (the nodes, `graph.rs`), the edge queue (`queue.rs`)
+//! and the edge memo (`memo.rs`), with their capacities, and the one operation that needs both the tree and the
+//! queue: propagating a cost change down the tree.
 
 use crate::config::abit as cfg;
-use crate::plan::heap::IndexedHeap;
 
-use super::memo::MemoEntry;
-use super::node::Node;
-use super::queue::QueueEdge;
+use super::graph::ImplicitGraph;
+use super::memo::EdgeMemo;
+use super::queue::SearchQueue;
+use super::NONE;
 
 /// The planner's storage, owned by the caller (a `static` on the board, a `Box` on the host) and lent to
-/// [`AbitStar::new`]. Capacities: `NV` nodes, `NQ` queued edges, `NM` memo entries (see `config::abit`).
+/// [`AbitStar::new`](super::AbitStar::new). Capacities: `NV` nodes, `NQ` queued edges, `NM` memo entries (see
+/// `config::abit`).
 pub struct AbitArena<St, A, const NV: usize, const NQ: usize, const NM: usize> {
-    pub(super) nodes: Vec<Node<St, A>, NV>,
-    /// Queued edges (a slab with a free list; slots are stable while queued).
-    pub(super) edges: Vec<QueueEdge, NQ>,
-    /// The indexed binary heap of slab indices, ordered by the edges' keys.
-    pub(super) heap: IndexedHeap<NQ>,
-    pub(super) memo: Vec<Option<MemoEntry<A>>, NM>,
+    pub(super) graph: ImplicitGraph<St, A, NV>,
+    pub(super) queue: SearchQueue<NQ>,
+    pub(super) memo: EdgeMemo<A, NM>,
 }
 
 impl<St, A, const NV: usize, const NQ: usize, const NM: usize> AbitArena<St, A, NV, NQ, NM> {
     /// An empty arena (const, so it can be a `static`).
     pub const fn new() -> Self {
-        Self { nodes: Vec::new(), edges: Vec::new(), heap: IndexedHeap::new(), memo: Vec::new() }
+        Self { graph: ImplicitGraph::new(), queue: SearchQueue::new(), memo: EdgeMemo::new() }
     }
+
     /// Nodes currently used (including freed slots awaiting reuse).
     pub fn nodes_used(&self) -> usize {
-        self.nodes.len()
+        self.graph.nodes().len()
     }
+
     /// Edges currently queued.
     pub fn queue_len(&self) -> usize {
-        self.heap.len()
+        self.queue.len()
+    }
+
+    /// Empty graph, queue and memo, for a new problem.
+    pub(super) fn reset(&mut self) {
+        self.graph.clear();
+        self.queue.reset();
+        self.memo.reset();
+    }
+
+    /// Re-key the queued outgoing edges of `v` (its cost-to-come changed) under inflation factor `inflation`.
+    pub(super) fn rekey_out_edges(&mut self, v: u32, inflation: f64) {
+        self.queue.rekey_out_edges(self.graph.nodes(), v, inflation);
+    }
+
+    /// Propagate a cost change of `root` to its descendants, re-keying each one's queued edges (a pre-order walk
+    /// via parent links, bounded by NV). Only `root` itself joins the inconsistent set (the caller's `add_edge`),
+    /// as in OMPL (`BITstar::addEdge`): descendants get their queued edges re-keyed, not re-expanded.
+    pub(super) fn propagate_costs(&mut self, root: u32, inflation: f64) {
+        let mut cur = self.graph.node(root).map_or(NONE, |n| n.first_child);
+        for _ in 0..(2 * NV + 2) {
+            if cur == NONE || cur == root {
+                return;
+            }
+            self.graph.update_cost_from_parent(cur);
+            self.rekey_out_edges(cur, inflation);
+            cur = self.graph.next_in_subtree(cur, root);
+        }
     }
 }
 
@@ -56,4 +82,3 @@ pub struct ArenaUse {
     /// Memo slots filled.
     pub memo: usize,
 }
-

@@ -1,36 +1,94 @@
 //! Non-Markovian attachments (Paton et al. V-A and this project's extensions): history twins, revealing edges,
-//! the attachment a new sample copies, and catch-boundary samples.
+//! the attachment a new sample copies, and catch-boundary samples. The graph's side ([`ImplicitGraph`]'s methods
+//! here) compares the attachments its nodes hold; the planner's side creates twins, predicts attachments and
+//! draws what a new sample needs.
 
 use heapless::Vec;
 use rand_core::Rng;
 
 use crate::config::abit as cfg;
 
-use crate::plan::space::{
-    uniform01, Arena, CatchSample, GoalRegion, MotionValidator, OptimizationObjective, StateSpace,
-    StateValidityChecker,
-};
-use super::node::{F_FREE, F_GOAL, F_TWIN};
+use crate::plan::space::{uniform01, Arena, CatchSample, OptimizationObjective, StateSpace};
+use super::graph::ImplicitGraph;
+use super::node::{Node, F_FREE, F_GOAL, F_TWIN};
 use super::AbitStar;
+
+/// The tree vertices whose histories a batch's catch-boundary samples follow (one per compatibility class).
+pub(super) type CatchHistories = Vec<u32, { cfg::CATCH_ATTACHMENT_CAPACITY }>;
+
+impl<St, A, const NV: usize> ImplicitGraph<St, A, NV> {
+    /// Does one of the nodes `of` hold an attachment compatible with `att`?
+    fn any_compatible<S>(&self, space: &S, of: &[u32], att: &A) -> bool
+    where
+        S: StateSpace<State = St, Attachment = A>,
+    {
+        of.iter().any(|&j| {
+            let other = self.node(j).and_then(|n| n.attachment.as_ref());
+            other.is_some_and(|b| space.attachments_compatible(att, b))
+        })
+    }
+
+    /// Do `u` (the parent) and `w` — a tree vertex, or a sample that copied an attachment — hold incompatible
+    /// attachments? (The parent's own attachment stands in for the motion's result, which is only known after the
+    /// motion check.) A sample that copied one history must not lock out every other history: the edge goes to a
+    /// twin of undetermined history instead.
+    pub(super) fn histories_conflict<S>(&self, space: &S, u: u32, w: u32) -> bool
+    where
+        S: StateSpace<State = St, Attachment = A>,
+    {
+        let (Some(un), Some(wn)) = (self.node(u), self.node(w)) else { return false };
+        match (un.attachment.as_ref(), wn.attachment.as_ref()) {
+            (Some(a), Some(b)) => !space.attachments_compatible(a, b),
+            _ => false,
+        }
+    }
+
+    /// The distinct (mutually incompatible) attachments among the `k` tree vertices nearest to `state`, one
+    /// vertex each, in order of distance (deterministic). Bounded by the arena size and `NEIGHBOUR_CAPACITY`.
+    fn distinct_nearby_attachments<S>(&self, space: &S, state: &St, k: usize) -> Vec<u32, { cfg::NEIGHBOUR_CAPACITY }>
+    where
+        S: StateSpace<State = St, Attachment = A>,
+    {
+        let admit = |n: &Node<St, A>| n.in_tree() && n.attachment.is_some();
+        let (near, _) = self.nearest(space, state, k.clamp(1, cfg::NEIGHBOUR_CAPACITY), f64::INFINITY, admit);
+        let mut distinct: Vec<u32, { cfg::NEIGHBOUR_CAPACITY }> = Vec::new();
+        for &(_, i) in near.iter() {
+            let Some(att) = self.node(i).and_then(|n| n.attachment.as_ref()) else { continue };
+            if !self.any_compatible(space, &distinct, att) {
+                let _ = distinct.push(i);
+            }
+        }
+        distinct
+    }
+
+    /// One tree vertex per distinct attachment (compatibility class), in arena order, up to
+    /// `CATCH_ATTACHMENT_CAPACITY`: the histories whose catch boundaries a batch samples. Bounded by the arena
+    /// size times that capacity.
+    pub(super) fn distinct_attachment_vertices<S>(&self, space: &S) -> CatchHistories
+    where
+        S: StateSpace<State = St, Attachment = A>,
+    {
+        let mut distinct = CatchHistories::new();
+        for (i, n) in self.nodes().iter().enumerate() {
+            let Some(att) = n.attachment.as_ref().filter(|_| n.in_tree()) else { continue };
+            if !self.any_compatible(space, &distinct, att) && distinct.push(i as u32).is_err() {
+                break;
+            }
+        }
+        distinct
+    }
+}
 
 impl<'a, S, V, M, O, G, R, const NV: usize, const NQ: usize, const NM: usize> AbitStar<'a, S, V, M, O, G, R, NV, NQ, NM>
 where
     S: StateSpace,
-    V: StateValidityChecker<S>,
-    M: MotionValidator<S>,
     O: OptimizationObjective<S>,
-    G: GoalRegion<S>,
-    R: Rng,
 {
-    pub(super) fn twins_enabled(&self) -> bool {
-        S::NON_MARKOVIAN && self.st.params.history_twins
-    }
-
     /// Would the motion from tree vertex `u` into tree vertex `w` give `w` an attachment incompatible with the one
     /// it holds? From the memo when the motion was checked, else from the space's prediction
     /// ([`StateSpace::predict_attachment`]); `false` when neither knows.
     pub(super) fn reveals_attachment(&mut self, u: u32, w: u32) -> bool {
-        let predicted = match self.arena.memo_get(u, w) {
+        let predicted = match self.arena.memo.get(self.arena.graph.nodes(), u, w) {
             Some(known) => known,
             None => {
                 let (Some(un), Some(wn)) = (self.node(u), self.node(w)) else { return false };
@@ -83,27 +141,15 @@ where
             i
         }?;
         self.st.counters.history_twins += 1;
-        if let Some(n) = self.node_mut(created) {
+        if let Some(n) = self.arena.graph.node_mut(created) {
             n.flags |= F_TWIN;
         }
         let generation = self.node(created).map_or(0, |n| n.generation);
-        if let Some(n) = self.node_mut(cur) {
+        if let Some(n) = self.arena.graph.node_mut(cur) {
             n.twin = created;
             n.twin_generation = generation;
         }
         Some(created)
-    }
-
-    /// Do `u` (the parent) and `w` — a tree vertex, or a sample that copied an attachment — hold incompatible
-    /// attachments? (The parent's own attachment stands in for the motion's result, which is only known after the
-    /// motion check.) A sample that copied one history must not lock out every other history: the edge goes to a
-    /// twin of undetermined history instead.
-    pub(super) fn histories_conflict(&self, u: u32, w: u32) -> bool {
-        let (Some(un), Some(wn)) = (self.node(u), self.node(w)) else { return false };
-        match (un.attachment.as_ref(), wn.attachment.as_ref()) {
-            (Some(a), Some(b)) => !self.space.attachments_compatible(a, b),
-            _ => false,
-        }
     }
 
     /// The node an edge from `u` into the state of `v` should target: `v` itself, or the first twin of `v` that
@@ -115,37 +161,20 @@ where
             None => Some(v),
         }
     }
+}
 
+/// What a new sample draws: its copied attachment and catch-boundary states.
+impl<'a, S, V, M, O, G, R, const NV: usize, const NQ: usize, const NM: usize> AbitStar<'a, S, V, M, O, G, R, NV, NQ, NM>
+where
+    S: StateSpace,
+    O: OptimizationObjective<S>,
+    R: Rng,
+{
     /// The attachment a new sample copies (Paton et al. V-A): one of the distinct (mutually incompatible)
     /// attachments among the k nearest tree vertices, chosen uniformly, so rare histories (the one anchored on the
     /// column, Fig. 7d) are copied as often as the common one. Bounded by the arena size and `NEIGHBOUR_CAPACITY`.
     pub(super) fn copied_attachment(&mut self, state: &S::State) -> Option<S::Attachment> {
-        let cap = self.st.k.clamp(1, cfg::NEIGHBOUR_CAPACITY);
-        let mut near: Vec<(f64, u32), { cfg::NEIGHBOUR_CAPACITY }> = Vec::new();
-        for (i, n) in self.arena.nodes.iter().enumerate() {
-            if !n.in_tree() || n.attachment.is_none() {
-                continue;
-            }
-            let entry = (self.space.distance(state, &n.state), i as u32);
-            if near.len() == cap {
-                match near.last() {
-                    Some(last) if entry < *last => {
-                        let _ = near.pop();
-                    }
-                    _ => continue,
-                }
-            }
-            let pos = near.iter().position(|e| entry < *e).unwrap_or(near.len());
-            let _ = near.insert(pos, entry);
-        }
-        // Distinct attachments, in order of distance (deterministic).
-        let mut distinct: Vec<u32, { cfg::NEIGHBOUR_CAPACITY }> = Vec::new();
-        for &(_, i) in near.iter() {
-            let Some(att) = self.node(i).and_then(|n| n.attachment.as_ref()) else { continue };
-            if !self.any_compatible(&distinct, att) {
-                let _ = distinct.push(i);
-            }
-        }
+        let distinct = self.arena.graph.distinct_nearby_attachments(self.space, state, self.st.k);
         if distinct.is_empty() {
             return None;
         }
@@ -153,33 +182,11 @@ where
         distinct.get(pick).and_then(|&i| self.node(i)).and_then(|n| n.attachment.clone())
     }
 
-    /// Does one of the nodes `of` hold an attachment compatible with `att`?
-    pub(super) fn any_compatible(&self, of: &[u32], att: &S::Attachment) -> bool {
-        of.iter().any(|&j| {
-            let other = self.node(j).and_then(|n| n.attachment.as_ref());
-            other.is_some_and(|b| self.space.attachments_compatible(att, b))
-        })
-    }
-
-    /// One tree vertex per distinct attachment (compatibility class), in arena order, up to
-    /// `CATCH_ATTACHMENT_CAPACITY`: the histories whose catch boundaries a batch samples. Bounded by the arena
-    /// size times that capacity.
-    pub(super) fn distinct_attachment_vertices(&self) -> Vec<u32, { cfg::CATCH_ATTACHMENT_CAPACITY }> {
-        let mut distinct: Vec<u32, { cfg::CATCH_ATTACHMENT_CAPACITY }> = Vec::new();
-        for (i, n) in self.arena.nodes.iter().enumerate() {
-            let Some(att) = n.attachment.as_ref().filter(|_| n.in_tree()) else { continue };
-            if !self.any_compatible(&distinct, att) && distinct.push(i as u32).is_err() {
-                break;
-            }
-        }
-        distinct
-    }
-
     /// A sample near the catch boundary of one of `histories` (chosen uniformly), kept only if it can improve
     /// the solution (informed set by rejection, as for uniform draws). A history whose boundary the space did
     /// not find leaves `histories` for the rest of the batch, so a root anchor that sees the whole planning area
     /// costs one search per batch, not one per draw.
-    pub(super) fn catch_sample(&mut self, histories: &mut Vec<u32, { cfg::CATCH_ATTACHMENT_CAPACITY }>) -> Option<S::State> {
+    pub(super) fn catch_sample(&mut self, histories: &mut CatchHistories) -> Option<S::State> {
         let pick = ((uniform01(self.rng) * histories.len() as f64) as usize).min(histories.len().saturating_sub(1));
         let att = histories.get(pick).and_then(|&i| self.node(i)).and_then(|n| n.attachment.clone())?;
         let x = match self.space.sample_catch_boundary(self.rng, &att) {

@@ -1,125 +1,76 @@
-//! Batches (OMPL's `ImplicitGraph::addNewSamples` and `prune`): the RGG terms, drawing the samples (uniform,
-//! informed, catch-boundary), copying attachments into them, and pruning before a batch.
+//! Batches (OMPL's `ImplicitGraph::addNewSamples` and `prune`, and where `BITstar::iterate` starts a batch or its
+//! final search): the RGG terms, drawing the samples (uniform, informed, catch-boundary), copying attachments into
+//! them, and pruning before a batch (the pruning itself is the graph's, `graph.rs`).
 
-use heapless::Vec;
 use rand_core::Rng;
 
-use crate::config::abit as cfg;
-
 use crate::geom::unit_ball_measure;
-use crate::plan::space::{
-    uniform01, Arena, GoalRegion, InformedSample, MotionValidator, OptimizationObjective, StateSpace,
-    StateValidityChecker,
-};
-use super::node::{F_FREE, F_GOAL, F_INCONSISTENT, F_IN_TREE, F_START};
-use super::{AbitStar, NONE};
+use crate::plan::space::{uniform01, Arena, InformedSample, OptimizationObjective, StateSpace, StateValidityChecker};
+use super::attachments::CatchHistories;
+use super::node::F_INCONSISTENT;
+use super::{AbitStar, NONE, START};
 
 impl<'a, S, V, M, O, G, R, const NV: usize, const NQ: usize, const NM: usize> AbitStar<'a, S, V, M, O, G, R, NV, NQ, NM>
 where
     S: StateSpace,
     V: StateValidityChecker<S>,
-    M: MotionValidator<S>,
     O: OptimizationObjective<S>,
-    G: GoalRegion<S>,
     R: Rng,
 {
-    pub(super) fn prune(&mut self) {
+    /// Prune before a batch (OMPL's `ImplicitGraph::prune`, see `ImplicitGraph::prune`): only with a solution,
+    /// and only when at least `prune_fraction` of the states can go.
+    fn prune(&mut self) {
         if !self.has_solution() {
             return;
         }
-        let best = self.st.best_cost;
-        // OMPL: prunable states (vertices included) over `numSamples() + numVertices()`.
-        let total = self.ompl_graph_size();
-        let prunable = self
-            .arena
-            .nodes
-            .iter()
-            .filter(|n| !n.has(F_FREE) && !n.has(F_START) && n.h_come + n.h_go >= best)
-            .count();
-        if (prunable as f64) / total < self.st.params.prune_fraction {
+        let (best, best_goal, fraction) = (self.st.best_cost, self.st.best_goal, self.st.params.prune_fraction);
+        let Some(recycled) = self.arena.graph.prune(best, best_goal, fraction, S::NON_MARKOVIAN) else {
             return;
-        }
+        };
         self.st.counters.prunings += 1;
-        let len = self.arena.nodes.len();
-        // Pass 1: disconnect vertices that cannot be on a better path; drop samples that cannot help.
-        for i in 0..len as u32 {
-            let Some(n) = self.node(i) else { continue };
-            if n.has(F_FREE) || n.has(F_START) {
-                continue;
-            }
-            if n.in_tree() {
-                if i != self.st.best_goal && n.cost + n.h_go > best {
-                    self.disconnect(i);
-                    // Kept as a sample: OMPL "recycles" it, i.e. it rejoins the samples only after the next
-                    // batch's RGG terms are computed.
-                    if self.node(i).is_some_and(|n| !n.has(F_FREE)) {
-                        self.st.recycled += 1;
-                    }
-                }
-            } else if !n.has(F_GOAL) && n.h_come + n.h_go >= best {
-                self.free(i);
-            }
-        }
-        // Pass 2 (robust to rounding): vertices whose parent left the tree leave it too. Bounded sweeps.
-        for _ in 0..len {
-            let mut changed = false;
-            for i in 0..len as u32 {
-                let Some(n) = self.node(i) else { continue };
-                if n.in_tree() && !n.has(F_START) {
-                    let parent_ok = self.node(n.parent).is_some_and(|p| p.in_tree());
-                    if !parent_ok {
-                        self.disconnect(i);
-                        changed = true;
-                    }
-                }
-            }
-            if !changed {
-                break;
-            }
-        }
-    }
-
-    /// Take a vertex out of the tree; keep it as a sample if it can still help, otherwise free it.
-    pub(super) fn disconnect(&mut self, i: u32) {
-        self.unlink_from_parent(i);
-        // Orphan the children (they are disconnected by the caller's sweep).
-        let mut c = self.node(i).map_or(NONE, |n| n.first_child);
-        for _ in 0..NV {
-            if c == NONE {
-                break;
-            }
-            let next = self.node(c).map_or(NONE, |n| n.next_sibling);
-            if let Some(cn) = self.node_mut(c) {
-                cn.parent = NONE;
-                cn.next_sibling = NONE;
-            }
-            c = next;
-        }
-        let best = self.st.best_cost;
-        let Some(n) = self.node_mut(i) else { return };
-        n.first_child = NONE;
-        n.flags &= !(F_IN_TREE | F_INCONSISTENT);
-        n.cost = f64::INFINITY;
-        n.attachment = None;
-        // The generation keys the memo (OMPL's per-vertex black/white lists, which survive pruning): a motion's
-        // result depends on the parent's attachment, which changes with a reconnection only in non-Markovian
-        // spaces; in Markovian ones the memo of a recycled state stays valid, as in OMPL.
-        if S::NON_MARKOVIAN {
-            n.generation = n.generation.wrapping_add(1);
-        }
-        let keep = n.has(F_GOAL) || n.h_come + n.h_go < best;
-        if !keep {
-            self.free(i);
-        }
-        if self.st.approx_vertex == i {
+        self.st.recycled += recycled;
+        // The vertex closest to the goal may have left the tree.
+        if self.st.approx_vertex != NONE && !self.node(self.st.approx_vertex).is_some_and(|n| n.in_tree()) {
             self.st.approx_vertex = NONE;
             self.st.approx_h = f64::INFINITY;
         }
     }
 
+    /// End the current search and start a batch: prune, draw the batch, and begin a search with the initial
+    /// inflation factor from the start's edges.
+    pub(super) fn start_batch(&mut self) {
+        if self.st.params.pruning {
+            self.prune();
+        }
+        self.new_batch();
+        self.st.inflation = self.st.params.initial_inflation_factor;
+        let arena = &mut *self.arena;
+        arena.queue.clear(arena.graph.nodes_mut());
+        self.st.search_id = self.st.search_id.wrapping_add(1);
+        self.insert_outgoing_edges(START, false);
+        self.st.final_search = false;
+        self.st.truncation = 1.0 + self.st.params.truncation_scaling_parameter / self.arena.graph.ompl_graph_size();
+        self.st.search_done = false;
+    }
+
+    /// The final search of a batch: less inflation, re-key the queue, re-expand the inconsistent vertices.
+    pub(super) fn start_final_search(&mut self) {
+        self.st.inflation = 1.0 + self.st.params.inflation_scaling_parameter / self.arena.graph.ompl_graph_size();
+        let arena = &mut *self.arena;
+        arena.queue.rekey_all(arena.graph.nodes(), self.st.inflation);
+        for i in 0..self.arena.graph.nodes().len() as u32 {
+            let inconsistent = self.node(i).is_some_and(|n| n.has(F_INCONSISTENT) && n.in_tree());
+            if inconsistent {
+                self.insert_outgoing_edges(i, true);
+            }
+        }
+        self.st.final_search = true;
+        self.st.search_done = false;
+    }
+
     /// A new sample: near a catch boundary (a fraction `catch_sample_fraction` of the draws, non-Markovian
     /// spaces), else uniform before the first solution and informed after it.
-    pub(super) fn draw_sample(&mut self, catch_histories: &mut Vec<u32, { cfg::CATCH_ATTACHMENT_CAPACITY }>) -> Option<S::State> {
+    fn draw_sample(&mut self, catch_histories: &mut CatchHistories) -> Option<S::State> {
         if !catch_histories.is_empty() && uniform01(self.rng) < self.st.params.catch_sample_fraction {
             if let Some(x) = self.catch_sample(catch_histories) {
                 return Some(x);
@@ -149,15 +100,17 @@ where
         None
     }
 
-    pub(super) fn new_batch(&mut self) {
+    /// Draw a batch (OMPL's `ImplicitGraph::addNewSamples`): the RGG terms for the states so far, then up to
+    /// `samples_per_batch` valid samples, some with a copied attachment.
+    fn new_batch(&mut self) {
         self.st.counters.batches += 1;
         let batch = self.st.params.samples_per_batch as usize;
         // RGG terms for the number of states we have (OMPL: plus the batch on the very first batch).
         // OMPL counts the states before the recycled ones (vertices disconnected by the last pruning and kept
         // as samples) are added back.
-        let mut q = self.st.live_nodes.saturating_sub(self.st.recycled);
+        let mut q = self.arena.graph.live().saturating_sub(self.st.recycled);
         self.st.recycled = 0;
-        if q == 1 + self.st.goals.len() {
+        if q == 1 + self.arena.graph.goals().len() {
             q += batch;
         }
         let qf = (q.max(2)) as f64;
@@ -171,9 +124,9 @@ where
         self.st.r = self.st.params.rewire_factor * r_rgg * libm::pow(libm::log(qf) / qf, 1.0 / d);
 
         let mut catch_histories = if S::NON_MARKOVIAN && self.st.params.catch_sample_fraction > 0.0 {
-            self.distinct_attachment_vertices()
+            self.arena.graph.distinct_attachment_vertices(&*self.space)
         } else {
-            Vec::new()
+            CatchHistories::new()
         };
         let attempts = self.st.params.sample_attempts_per_sample as usize * batch;
         let mut added = 0usize;
@@ -208,12 +161,5 @@ where
             added += 1;
             self.st.counters.samples_added += 1;
         }
-    }
-
-    /// OMPL's `numSamples() + numVertices()`: live states (samples and vertices) plus tree vertices, the `q` of
-    /// the truncation and final-search inflation factors. Bounded by the arena size.
-    pub(super) fn ompl_graph_size(&self) -> f64 {
-        let vertices = self.arena.nodes.iter().filter(|n| n.in_tree() && !n.has(F_FREE)).count();
-        ((self.st.live_nodes + vertices).max(1)) as f64
     }
 }

@@ -3,18 +3,22 @@
 //! (Fig. 7). It follows OMPL 1.5.2's `BITstar`/`ABITstar`. Heap-free, every loop bounded.
 //!
 //! ## Files (OMPL's split of `informedtrees/bitstar/`)
+//! The data structures are types of their own over the arena, generic only over what they store; the planner's
+//! methods in each file name only the bounds they use (the space, the objective, the generator, ...).
+//!
 //! | file | what | OMPL |
 //! |---|---|---|
-//! | `mod.rs` | [`AbitStar`]: set-up, the iteration (batch / final search / one edge), public API | `BITstar.cpp` |
+//! | `mod.rs` | [`AbitStar`]: set-up, the iteration ([`Planner::step`]), processing one edge, the public API | `BITstar.cpp` |
 //! | `params.rs` | [`AbitParams`] and their defaults | the planner's parameters |
 //! | `node.rs` | [`Node`] and its flags | `Vertex` |
-//! | `arena.rs` | [`AbitArena`]: the node arena, the edge slab and heap, the memo; [`ArenaUse`] | (the planner's storage) |
-//! | `graph.rs` | allocation, neighbours, tree bookkeeping, cost propagation, goals | `ImplicitGraph` |
-//! | `queue.rs` | the edge queue over [`crate::plan::heap::IndexedHeap`], vertex expansion | `SearchQueue` |
-//! | `memo.rs` | the edge memo | the vertices' black / white lists |
+//! | `arena.rs` | [`AbitArena`]: the graph, the queue and the memo, lent by the caller; cost propagation (tree and queue); [`ArenaUse`] | (the planner's storage) |
+//! | `graph.rs` | `ImplicitGraph`: nodes and free list, goal vertices, nearest neighbours, tree links, pruning; the planner's heuristics, `add_edge`, best goal | `ImplicitGraph` |
+//! | `queue.rs` | `SearchQueue`: the edge slab over [`crate::plan::heap::IndexedHeap`]; the planner's vertex expansion | `SearchQueue` |
+//! | `memo.rs` | `EdgeMemo`: memoised motion checks keyed by node generations | the vertices' black / white lists |
 //! | `attachments.rs` | history twins, revealing edges, copied attachments, catch-boundary samples | (Paton et al. V-A) |
-//! | `batch.rs` | batches: RGG terms, sampling, informed sampling, pruning | `ImplicitGraph::addNewSamples`, `prune` |
+//! | `batch.rs` | batches: RGG terms, sampling, informed sampling; starting a batch or its final search | `ImplicitGraph::addNewSamples`, `BITstar::iterate` |
 //! | `suspend.rs` | [`AbitSuspended`]: suspend and resume a search | — |
+//! | `tests.rs` | the graph, the queue and the memo driven on their own (the real line) | — |
 //!
 //! ## The algorithm
 //! - **Implicit RGG.** Samples arrive in batches of `samples_per_batch` and form, with the start and goals, an
@@ -137,6 +141,8 @@ mod node;
 mod params;
 mod queue;
 mod suspend;
+#[cfg(test)]
+mod tests;
 
 use heapless::Vec;
 use rand_core::Rng;
@@ -151,11 +157,15 @@ pub use node::Node;
 pub use params::{AbitParams, Connection};
 pub use suspend::AbitSuspended;
 
-use node::{F_FREE, F_INCONSISTENT, F_IN_TREE, F_START};
+use memo::MemoCheck;
+use node::{F_FREE, F_IN_TREE, F_START};
 use queue::QueueEdge;
 
 /// "No node".
 const NONE: u32 = u32::MAX;
+
+/// The start's node: the first allocated, the root of the tree.
+const START: u32 = 0;
 
 /// Why a path could not be written.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -177,10 +187,12 @@ where
     motion: &'a mut M,
     pdef: &'a ProblemDefinition<S, G, O>,
     rng: &'a mut R,
-    /// The search state (everything but the borrows): what [`Self::suspend`] hands out.
+    /// The search state (everything but the borrows and the arena): what [`Self::suspend`] hands out.
     st: AbitSuspended<S::State>,
 }
 
+/// Setting up a problem asks for every bound the planner needs to run (a planner that cannot step cannot be
+/// built), the goal region's included: it is sampled here.
 impl<'a, S, V, M, O, G, R, const NV: usize, const NQ: usize, const NM: usize> AbitStar<'a, S, V, M, O, G, R, NV, NQ, NM>
 where
     S: StateSpace,
@@ -202,49 +214,8 @@ where
         rng: &'a mut R,
         params: AbitParams,
     ) -> Self {
-        arena.nodes.clear();
-        arena.edges.clear();
-        arena.heap.clear();
-        arena.memo.clear();
-        // Bounded by NM.
-        for _ in 0..NM {
-            if arena.memo.push(None).is_err() {
-                break;
-            }
-        }
-        let mut planner = Self {
-            arena,
-            space,
-            validity,
-            motion,
-            pdef,
-            rng,
-            st: AbitSuspended {
-                params,
-                goal_state: None,
-                goals: Vec::new(),
-                free_head: NONE,
-                free_edge: NONE,
-                live_nodes: 0,
-                best_goal: NONE,
-                best_cost: f64::INFINITY,
-                min_cost: f64::INFINITY,
-                inflation: params.initial_inflation_factor,
-                truncation: 1.0,
-                search_id: 1,
-                search_done: false,
-                final_search: false,
-                k: 0,
-                r: f64::INFINITY,
-                recycled: 0,
-                approx_vertex: NONE,
-                approx_h: f64::INFINITY,
-                pending_full: None,
-                counters: Counters::default(),
-                invalid: None,
-                high_water: ArenaUse::default(),
-            },
-        };
+        arena.reset();
+        let mut planner = Self::resume(arena, space, validity, motion, pdef, rng, AbitSuspended::fresh(params));
         if let Err(e) = planner.set_up() {
             planner.st.invalid = Some(e);
         }
@@ -276,22 +247,23 @@ where
         let start = self
             .alloc(pdef.start.clone(), Some(pdef.start_attachment.clone()), F_START | F_IN_TREE)
             .ok_or(InvalidInput::ArenaTooSmall)?;
-        if let Some(n) = self.arena.nodes.get_mut(start as usize) {
+        if let Some(n) = self.arena.graph.node_mut(start) {
             n.cost = 0.0;
         }
         self.add_goal_vertex(goal).ok_or(InvalidInput::ArenaTooSmall)?;
         // OMPL: before the first batch, k = |starts| + |goals| and r = infinity, so the first queue holds the
         // start-goal edge only.
-        self.st.k = 1 + self.st.goals.len();
+        self.st.k = 1 + self.arena.graph.goals().len();
         self.st.r = f64::INFINITY;
         self.insert_outgoing_edges(start, false);
         Ok(())
     }
+}
 
-    fn start_index(&self) -> u32 {
-        0
-    }
-
+impl<'a, S, V, M, O, G, R, const NV: usize, const NQ: usize, const NM: usize> AbitStar<'a, S, V, M, O, G, R, NV, NQ, NM>
+where
+    S: StateSpace,
+{
     /// High-water marks of the arenas so far.
     pub fn arena_use(&self) -> ArenaUse {
         self.st.high_water
@@ -324,12 +296,21 @@ where
 
     /// Live nodes (start, goals, samples and vertices).
     pub fn num_states(&self) -> usize {
-        self.st.live_nodes
+        self.arena.graph.live()
     }
 
     /// All live nodes (for pictures and tests).
     pub fn nodes(&self) -> impl Iterator<Item = &Node<S::State, S::Attachment>> {
-        self.arena.nodes.iter().filter(|n| !n.has(F_FREE))
+        self.arena.graph.nodes().iter().filter(|n| !n.has(F_FREE))
+    }
+
+    /// The node in arena slot `i` (the index [`Node::parent`] returns), free slots included; `None` past the end.
+    pub fn node(&self, i: u32) -> Option<&Node<S::State, S::Attachment>> {
+        self.arena.graph.node(i)
+    }
+
+    fn has_solution(&self) -> bool {
+        self.st.best_goal != NONE
     }
 
     fn path_end(&self) -> Option<u32> {
@@ -362,8 +343,7 @@ where
         if len > P {
             return Err(PathError::TooLong(len));
         }
-        // Fill from the goal backwards: write in reverse order by walking len times per slot would be O(n^2);
-        // instead push goal->start and reverse in place.
+        // Push goal -> start, then reverse in place.
         let mut cur = end;
         for _ in 0..len {
             let Some(n) = self.node(cur) else { break };
@@ -377,67 +357,29 @@ where
         Ok(out.len())
     }
 
-    // ---------------------------------------------------------------- the iteration
+    /// Are history twins on (a non-Markovian space and `history_twins`)?
+    fn twins_enabled(&self) -> bool {
+        S::NON_MARKOVIAN && self.st.params.history_twins
+    }
 
-    fn iterate(&mut self) -> StepOutcome {
-        self.st.counters.iterations += 1;
-        self.clean_front();
-        if self.st.search_done || self.arena.heap.is_empty() {
-            if self.st.final_search || !self.has_solution() {
-                if self.st.params.pruning {
-                    self.prune();
-                }
-                self.new_batch();
-                self.st.inflation = self.st.params.initial_inflation_factor;
-                self.queue_clear();
-                self.st.search_id = self.st.search_id.wrapping_add(1);
-                self.insert_outgoing_edges(self.start_index(), false);
-                self.st.final_search = false;
-                self.st.truncation = 1.0 + self.st.params.truncation_scaling_parameter / self.ompl_graph_size();
-                self.st.search_done = false;
-                return match self.st.pending_full.take() {
-                    Some(a) => StepOutcome::ArenaFull(a),
-                    None => StepOutcome::NewBatch,
-                };
-            }
-            // Final search of this batch: less inflation, re-key, re-expand the inconsistent vertices.
-            self.st.inflation = 1.0 + self.st.params.inflation_scaling_parameter / self.ompl_graph_size();
-            self.queue_rebuild();
-            for i in 0..self.arena.nodes.len() as u32 {
-                let inconsistent = self.node(i).is_some_and(|n| n.has(F_INCONSISTENT) && n.in_tree());
-                if inconsistent {
-                    self.insert_outgoing_edges(i, true);
-                }
-            }
-            self.st.final_search = true;
-            self.st.search_done = false;
-            return match self.st.pending_full.take() {
-                Some(a) => StepOutcome::ArenaFull(a),
-                None => StepOutcome::FinalSearch,
-            };
-        }
-        // `drop_dead_edges`: edges that can no longer improve their child leave without an iteration (bounded by the
-        // queue's capacity).
-        let mut popped = None;
+    /// `ImplicitGraph::histories_conflict` in this planner's space.
+    fn histories_conflict(&self, u: u32, w: u32) -> bool {
+        self.arena.graph.histories_conflict(&*self.space, u, w)
+    }
+
+    /// Take the front edge out of the queue. With `drop_dead_edges`, edges that can no longer improve their child
+    /// leave without an iteration (bounded by the queue's capacity).
+    fn pop_edge(&mut self) -> Option<QueueEdge> {
         for _ in 0..NQ {
-            let Some(edge) = self.queue_pop() else { break };
+            let arena = &mut *self.arena;
+            let edge = arena.queue.pop(arena.graph.nodes_mut())?;
             if self.st.params.drop_dead_edges && self.edge_cannot_improve_child(&edge) {
                 self.st.counters.edges_dropped += 1;
                 continue;
             }
-            popped = Some(edge);
-            break;
+            return Some(edge);
         }
-        let Some(edge) = popped else {
-            return StepOutcome::ProcessedEdge;
-        };
-        self.st.counters.edges_popped += 1;
-        let (u, v) = (edge.parent, edge.child);
-        let outcome = self.process_edge(u, v, edge.c_hat, edge.reveals);
-        match self.st.pending_full.take() {
-            Some(a) => StepOutcome::ArenaFull(a),
-            None => outcome,
-        }
+        None
     }
 
     /// A queued edge `(u, v)` whose child `v` already has a cost-to-come no worse than `g(u) + c_hat(u, v)`: the
@@ -449,6 +391,32 @@ where
             return false;
         }
         un.cost + e.c_hat >= vn.cost
+    }
+}
+
+/// Processing one edge of the queue: the motion checks (memoised) and the tree's growth.
+impl<'a, S, V, M, O, G, R, const NV: usize, const NQ: usize, const NM: usize> AbitStar<'a, S, V, M, O, G, R, NV, NQ, NM>
+where
+    S: StateSpace,
+    M: MotionValidator<S>,
+    O: OptimizationObjective<S>,
+{
+    /// Check the motion parent -> child (memoised, `memo.rs`). Returns the child's attachment after the motion.
+    fn check_edge(&mut self, parent: u32, child: u32) -> Option<S::Attachment> {
+        let arena = &mut *self.arena;
+        match arena.memo.check(arena.graph.nodes(), &*self.space, &mut *self.motion, parent, child) {
+            MemoCheck::Known(result) => {
+                self.st.counters.memo_hits += 1;
+                result
+            }
+            MemoCheck::Checked { result, filled } => {
+                self.st.counters.edges_evaluated += 1;
+                if filled {
+                    self.st.high_water.memo += 1;
+                }
+                result
+            }
+        }
     }
 
     fn process_edge(&mut self, u: u32, v: u32, c_hat: Cost, reveals: bool) -> StepOutcome {
@@ -467,7 +435,7 @@ where
         // Already in the tree: a freebie, expand the child.
         if vn.parent == u && vn.in_tree() {
             if un.expanded_search != self.st.search_id {
-                self.register_expansion(u);
+                self.arena.graph.register_expansion(u, self.st.search_id);
             }
             self.insert_outgoing_edges(v, false);
             return StepOutcome::ProcessedEdge;
@@ -511,11 +479,11 @@ where
             let Some(t) = self.twin_for_attachment(v, &att) else {
                 return StepOutcome::ProcessedEdge;
             };
-            (t, self.g(t))
+            (t, self.arena.graph.g(t))
         };
         if g_u + c < g_v {
             self.add_edge(u, v, c, att);
-            self.register_expansion(u);
+            self.arena.graph.register_expansion(u, self.st.search_id);
             if self.update_goal() {
                 return StepOutcome::ImprovedSolution;
             }
@@ -524,6 +492,7 @@ where
     }
 }
 
+/// One iteration (OMPL's `BITstar::iterate`): start a batch or the final search of one, or process one edge.
 impl<'a, S, V, M, O, G, R, const NV: usize, const NQ: usize, const NM: usize> Planner
     for AbitStar<'a, S, V, M, O, G, R, NV, NQ, NM>
 where
@@ -531,7 +500,6 @@ where
     V: StateValidityChecker<S>,
     M: MotionValidator<S>,
     O: OptimizationObjective<S>,
-    G: GoalRegion<S>,
     R: Rng,
 {
     fn step(&mut self) -> StepOutcome {
@@ -542,7 +510,28 @@ where
         if self.has_solution() && self.st.best_cost <= self.st.min_cost {
             return StepOutcome::Converged;
         }
-        self.iterate()
+        self.st.counters.iterations += 1;
+        let arena = &mut *self.arena;
+        arena.queue.clean_front(arena.graph.nodes_mut());
+        let outcome = if self.st.search_done || self.arena.queue.is_empty() {
+            if self.st.final_search || !self.has_solution() {
+                self.start_batch();
+                StepOutcome::NewBatch
+            } else {
+                self.start_final_search();
+                StepOutcome::FinalSearch
+            }
+        } else {
+            let Some(edge) = self.pop_edge() else {
+                return StepOutcome::ProcessedEdge;
+            };
+            self.st.counters.edges_popped += 1;
+            self.process_edge(edge.parent, edge.child, edge.c_hat, edge.reveals)
+        };
+        match self.st.pending_full.take() {
+            Some(a) => StepOutcome::ArenaFull(a),
+            None => outcome,
+        }
     }
 
     fn counters(&self) -> Counters {

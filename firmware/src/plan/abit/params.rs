@@ -89,6 +89,12 @@ impl AbitParams {
         }
     }
 
+    /// Checks every parameter (the planner's set-up runs the same check and reports `InvalidInput`): callers
+    /// that take parameters from a user reject bad ones up front with the reason.
+    pub fn validate(&self) -> Result<(), InvalidInput> {
+        self.check()
+    }
+
     pub(super) fn check(&self) -> Result<(), InvalidInput> {
         let p = InvalidInput::Parameter;
         if self.samples_per_batch == 0 {

@@ -1,25 +1,17 @@
 //! Suspending and resuming a search: [`AbitSuspended`] holds everything the planner keeps outside its arena.
 
-use heapless::Vec;
-
-use crate::config::abit as cfg;
-
 use crate::plan::space::{Arena, Cost, Counters, InvalidInput, ProblemDefinition, StateSpace};
-use super::{AbitArena, AbitParams, AbitStar, ArenaUse};
+use super::{AbitArena, AbitParams, AbitStar, ArenaUse, NONE};
 
 /// The search state of a suspended [`AbitStar`]: everything the planner keeps outside its arena (inflation and
-/// truncation, the goals, the best solution, the free lists, the counters), as plain data, so a caller that cannot
-/// keep the planner's borrows alive between calls (the on-board navigator, between executive steps) can hold it
-/// and continue the search later with [`AbitStar::resume`]. The graph, the edge queue and the memo stay in the
-/// arena.
+/// truncation, the best solution, the RGG terms, the counters), as plain data, so a caller that cannot keep the
+/// planner's borrows alive between calls (the on-board navigator, between executive steps) can hold it and
+/// continue the search later with [`AbitStar::resume`]. The graph (with its free list and goal vertices), the edge
+/// queue and the memo stay in the arena.
 #[derive(Debug, Clone)]
 pub struct AbitSuspended<St> {
     pub(super) params: AbitParams,
     pub(super) goal_state: Option<St>,
-    pub(super) goals: Vec<u32, { cfg::GOAL_CAPACITY }>,
-    pub(super) free_head: u32,
-    pub(super) free_edge: u32,
-    pub(super) live_nodes: usize,
     pub(super) best_goal: u32,
     pub(super) best_cost: Cost,
     pub(super) min_cost: Cost,
@@ -40,6 +32,31 @@ pub struct AbitSuspended<St> {
 }
 
 impl<St> AbitSuspended<St> {
+    /// The state of a search not begun: no goal yet, no solution, the first batch's inflation.
+    pub(super) fn fresh(params: AbitParams) -> Self {
+        Self {
+            params,
+            goal_state: None,
+            best_goal: NONE,
+            best_cost: f64::INFINITY,
+            min_cost: f64::INFINITY,
+            inflation: params.initial_inflation_factor,
+            truncation: 1.0,
+            search_id: 1,
+            search_done: false,
+            final_search: false,
+            k: 0,
+            r: f64::INFINITY,
+            recycled: 0,
+            approx_vertex: NONE,
+            approx_h: f64::INFINITY,
+            pending_full: None,
+            counters: Counters::default(),
+            invalid: None,
+            high_water: ArenaUse::default(),
+        }
+    }
+
     /// The work counters when the search was suspended.
     pub fn counters(&self) -> Counters {
         self.counters

@@ -22,8 +22,8 @@ use super::geo::Pt;
 use super::lvalue::{segment_log, segment_lvalue, LValue};
 use super::sleeve::{push_reduced, Sleeve};
 use crate::config::homotopy::{ASTAR_EXPANSION_BUDGET, MAX_CLASSES, MAX_OBSTACLES, MAX_SEARCH_NODES, MAX_SLEEVE, MAX_TRIANGLES};
-use crate::plan::heap::{HeapItems, IndexedHeap, NOT_IN_HEAP};
-use crate::plan::status::{Detail, Ended, Enumeration, Never, Status};
+use crate::plan::heap::{HeapSlot, IndexedHeap, NOT_IN_HEAP};
+use crate::plan::status::{Ended, Enumeration, Never, Status};
 use heapless::Vec as HVec;
 
 /// One homotopy class from a0 to g.
@@ -39,24 +39,13 @@ pub struct HomotopyClass {
     pub cost: f64,
 }
 
-/// The class enumeration's detail of a [`Status`]: `Exact(Enumeration::Enough)` — `max_classes` found;
-/// `Exact(Enumeration::AllClasses)` — every reachable state expanded, the list is all the classes A* can produce
-/// (possibly none); `Approximate(Ended::BudgetExhausted)` — the expansion budget ran out, and
-/// `Approximate(Ended::ArenaFull)` — the node arena filled up (the classes found so far are kept either way);
-/// `InvalidInput(SearchError)` — start or goal outside the BTM. There is no `NoSolution` case: an exhausted search
-/// that found no class is `Exact(AllClasses)` with an empty list.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ClassSearch;
-
-impl Detail for ClassSearch {
-    type Exact = Enumeration;
-    type Approximate = Ended;
-    type NoSolution = Never;
-    type Invalid = SearchError;
-}
-
-/// How the enumeration ended: the shared [`Status`] with the [`ClassSearch`] detail.
-pub type SearchOutcome = Status<ClassSearch>;
+/// How the enumeration ended, the shared [`Status`] with the class enumeration's detail:
+/// `Exact(Enumeration::Enough)` — `max_classes` found; `Exact(Enumeration::AllClasses)` — every reachable state
+/// expanded, the list is all the classes A* can produce (possibly none); `Approximate(Ended::BudgetExhausted)` —
+/// the expansion budget ran out, and `Approximate(Ended::ArenaFull)` — the node arena filled up (the classes found
+/// so far are kept either way); `InvalidInput(SearchError)` — start or goal outside the BTM. There is no
+/// `NoSolution` case: an exhausted search that found no class is `Exact(AllClasses)` with an empty list.
+pub type SearchOutcome = Status<Enumeration, Ended, Never, SearchError>;
 
 /// The word a report prints for `outcome`: `Enough`, `Exhausted`, `BudgetExhausted`, `ArenaFull`, or the
 /// input error's name.
@@ -113,20 +102,15 @@ pub struct SearchArena {
 
 /// The open list's order: by `(key, node index)`, the order of the `(u64, u16)` pairs the search queued before
 /// it used [`IndexedHeap`] (a strict total order: node indices are unique, so there are no ties).
-impl HeapItems for [Node] {
-    fn before(&self, a: u32, b: u32) -> bool {
-        match (self.get(a as usize), self.get(b as usize)) {
-            (Some(x), Some(y)) => (x.key, a) < (y.key, b),
-            _ => false,
-        }
+impl HeapSlot for Node {
+    fn before(&self, id: u32, other: &Self, other_id: u32) -> bool {
+        (self.key, id) < (other.key, other_id)
     }
-    fn set_position(&mut self, id: u32, pos: u32) {
-        if let Some(n) = self.get_mut(id as usize) {
-            n.heap_pos = pos;
-        }
+    fn heap_position(&self) -> u32 {
+        self.heap_pos
     }
-    fn position(&self, id: u32) -> Option<u32> {
-        self.get(id as usize).map(|n| n.heap_pos)
+    fn set_heap_position(&mut self, pos: u32) {
+        self.heap_pos = pos;
     }
 }
 

@@ -28,7 +28,7 @@ use core::cmp::Ordering;
 use core::f64::consts::SQRT_2;
 
 use crate::plan::heap::{HeapItems, LentHeap, NOT_IN_HEAP};
-use crate::plan::status::{Detail, Ended, Never, Status};
+use crate::plan::status::{Ended, Never, Status};
 
 /// Octile direction offsets (dx, dy); index = direction id. Straight first, then diagonals.
 pub const DIRS: [(i32, i32); 8] = [(1, 0), (0, 1), (-1, 0), (0, -1), (1, 1), (-1, 1), (-1, -1), (1, -1)];
@@ -230,22 +230,12 @@ pub enum DStarError {
     NotPlanned,
 }
 
-/// D* Lite's detail of a [`Status`]: `Exact(Found)` — the shortest path's cost; `NoSolution(NoPath)` — with
-/// [`Ended::SearchComplete`] the goal is not reachable from the start (search completed, or the start or goal cell
-/// is blocked), with [`Ended::BudgetExhausted`] the expansion budget ran out: the search state is kept, call
-/// `replan` to continue. D* Lite never returns an approximate path, and a bad call is a [`DStarError`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct GridSearch;
-
-impl Detail for GridSearch {
-    type Exact = Found;
-    type Approximate = Never;
-    type NoSolution = NoPath;
-    type Invalid = Never;
-}
-
-/// Result of a (re)planning call: the shared [`Status`] with the [`GridSearch`] detail.
-pub type DStarOutcome = Status<GridSearch>;
+/// Result of a (re)planning call, the shared [`Status`] with D* Lite's detail: `Exact(Found)` — the shortest
+/// path's cost; `NoSolution(NoPath)` — with [`Ended::SearchComplete`] the goal is not reachable from the start
+/// (search completed, or the start or goal cell is blocked), with [`Ended::BudgetExhausted`] the expansion budget
+/// ran out: the search state is kept, call `replan` to continue. D* Lite never returns an approximate path, and a
+/// bad call is a [`DStarError`].
+pub type DStarOutcome = Status<Found, Never, NoPath, Never>;
 
 /// A shortest path was found.
 #[derive(Debug, Clone, Copy, PartialEq)]

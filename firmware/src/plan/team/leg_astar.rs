@@ -20,27 +20,16 @@
 use super::graph::HopGraph;
 use crate::config::team::TeamParams;
 use crate::geom::{norm3, Real, Vec3};
-use crate::plan::status::{Detail, Ended, Status};
+use crate::plan::status::{Ended, Status};
 use crate::plan::heap::{HeapItems, IndexedHeap, NOT_IN_HEAP};
 use heapless::Vec as HVec;
 
-/// The bounded-leg A*'s detail of a [`Status`]: `Exact(())` reaches the goal region;
-/// `Approximate(Ended::SearchComplete)`: the goal region is not reachable, the path ends at the reachable vertex
-/// closest to the goal; `Approximate(Ended::BudgetExhausted)`: the expansion budget ran out, the path is the best
-/// so far (closest to the goal; possibly the start alone); `NoSolution(Ended::SearchComplete)`: no hop from the
-/// start brings the robot closer to the goal; `InvalidInput(())`: the start vertex does not exist.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct HopSearch;
-
-impl Detail for HopSearch {
-    type Exact = ();
-    type Approximate = Ended;
-    type NoSolution = Ended;
-    type Invalid = ();
-}
-
-/// Status of a local plan: the shared [`Status`] with the [`HopSearch`] detail.
-pub type AStarStatus = Status<HopSearch>;
+/// Status of a local plan, the shared [`Status`] with the bounded-leg A*'s detail: `Exact(())` reaches the goal
+/// region; `Approximate(Ended::SearchComplete)`: the goal region is not reachable, the path ends at the reachable
+/// vertex closest to the goal; `Approximate(Ended::BudgetExhausted)`: the expansion budget ran out, the path is the
+/// best so far (closest to the goal; possibly the start alone); `NoSolution(Ended::SearchComplete)`: no hop from
+/// the start brings the robot closer to the goal; `InvalidInput(())`: the start vertex does not exist.
+pub type AStarStatus = Status<(), Ended, Ended, ()>;
 
 /// The word a report prints for `status`: `Exact`, `Approximate`, `BudgetExhausted`, `NoSolution` or
 /// `InvalidInput`.

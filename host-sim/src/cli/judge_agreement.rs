@@ -1,0 +1,256 @@
+//! `tetherbot judge-agreement SCENARIO --poses N`: the flight software's stability verdict against the physics
+//! judge (issue 19's agreement study; figures in `host-sim/doc/physics_judge.md`).
+//!
+//! Poses: `N` points drawn uniformly (seeded PCG) over the scenario's planning bounds in x, y, each with a yaw
+//! uniform in [-pi, pi) (the settler's yaw about the surface normal). For each pose:
+//! - the **planner**, on the onboard map (voxel `--voxel`, 0.1 m, as `campaign` builds it) and on the exact field:
+//!   `TetherSpace::settle_state` then `stable_with` (the LP with the planner's minimum margin) with the anchor
+//!   history root + the true tether's contacts; verdicts *stable*, *unstable*, *no settle*;
+//! - the **physics judge** at the planner's settled pose (axle x, y and heading; the yaw itself where the planner
+//!   does not settle), with the true tether ([`crate::truth::taut`]) to the boom tip: *holds*, *falls*,
+//!   *blocked* (cannot be placed), or *no tether*.
+//!
+//! Output: a confusion matrix per field, the count of planner-stable poses that fall (must be 0 for poses whose
+//! margin is at least the planner's minimum margin: `stable` means exactly that), how conservative the planner is
+//! (physics holds, planner refuses), the judge's throughput, and `--out` JSON with every pose.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use firmware::config::rover::RoverParams;
+use firmware::geom::p3::to_vec3;
+use firmware::geom::Real;
+use firmware::map::DistanceField;
+use firmware::plan::tethered::{PlanBounds, RoverState, TetherSpace, TetherSpaceParams};
+use firmware::tether::{Anchor, AnchorHistory};
+use rand_core::{Rng, SeedableRng};
+use serde::Serialize;
+
+use crate::campaign::{PlanningMap, Truth};
+use crate::physics::{BoomSetting, GroundPose, HoldOutcome, PhysicsJudge, TetherSpec};
+use crate::truth::taut::{TautTether, WrapEdges, SHORTEST_SAMPLE_M};
+
+/// Arguments of `judge-agreement`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct JudgeAgreementArgs {
+    /// A scenario name from `host-sim/scenarios/` or a path to a `.toml` scenario.
+    pub scenario: String,
+    /// Poses to judge.
+    #[arg(long, default_value_t = 200)]
+    pub poses: usize,
+    /// Seed of the pose sampler.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Voxel edge of the planning map, metres.
+    #[arg(long, default_value_t = 0.1)]
+    pub voxel: f64,
+    /// Write every pose's verdicts here (JSON).
+    #[arg(long, short)]
+    pub out: Option<PathBuf>,
+}
+
+/// The planner's verdict on a pose.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum PlannerVerdict {
+    /// Settles and is stable with at least the minimum margin.
+    Stable,
+    /// Settles, not stable.
+    Unstable,
+    /// Does not settle (no surface, collision, steep contact, unknown space, ...).
+    NoSettle,
+}
+
+/// The physics judge's verdict on a pose.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum PhysicsVerdict {
+    /// Holds.
+    Holds,
+    /// Slides or tips.
+    Falls,
+    /// Cannot be placed.
+    Blocked,
+    /// No true tether to the pose.
+    NoTether,
+}
+
+/// One pose of the study.
+#[derive(Debug, Clone, Serialize)]
+pub struct PoseRecord {
+    /// Sampled ground x, y and settler yaw.
+    pub sample: [f64; 3],
+    /// Planner on the onboard map.
+    pub map: PlannerVerdict,
+    /// Planner on the exact field.
+    pub exact: PlannerVerdict,
+    /// The planner's margin on the exact field (when it settles and the LP answers).
+    pub exact_margin: Option<f64>,
+    /// Physics judge.
+    pub physics: PhysicsVerdict,
+    /// Physics: largest slide, metres.
+    pub slide_m: f64,
+}
+
+/// A 3 x 4 confusion matrix: planner (stable, unstable, no settle) x physics (holds, falls, blocked, no tether).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct Confusion(pub [[usize; 4]; 3]);
+
+impl Confusion {
+    fn add(&mut self, p: PlannerVerdict, q: PhysicsVerdict) {
+        let i = match p {
+            PlannerVerdict::Stable => 0,
+            PlannerVerdict::Unstable => 1,
+            PlannerVerdict::NoSettle => 2,
+        };
+        let j = match q {
+            PhysicsVerdict::Holds => 0,
+            PhysicsVerdict::Falls => 1,
+            PhysicsVerdict::Blocked => 2,
+            PhysicsVerdict::NoTether => 3,
+        };
+        self.0[i][j] += 1;
+    }
+
+    /// As a markdown table.
+    pub fn table(&self, title: &str) -> String {
+        let mut s = format!("{title}\n| planner \\ physics | holds | falls | blocked | no tether |\n|---|---|---|---|---|\n");
+        for (name, row) in ["stable", "unstable", "no settle"].iter().zip(self.0.iter()) {
+            s += &format!("| {name} | {} | {} | {} | {} |\n", row[0], row[1], row[2], row[3]);
+        }
+        s
+    }
+}
+
+/// The study's result.
+#[derive(Debug, Clone, Serialize)]
+pub struct Agreement {
+    /// Scenario name.
+    pub name: String,
+    /// Poses.
+    pub poses: Vec<PoseRecord>,
+    /// Planner on the map against physics.
+    pub map: Confusion,
+    /// Planner on the exact field against physics.
+    pub exact: Confusion,
+    /// Seconds spent in the physics judge (tether included).
+    pub physics_s: f64,
+}
+
+fn planner_verdict<D: DistanceField>(space: &TetherSpace<'_, D>, x: f64, y: f64, yaw: f64, hist: &AnchorHistory) -> (PlannerVerdict, Option<RoverState>, Option<f64>) {
+    match space.settle_state(x as Real, y as Real, yaw as Real) {
+        Err(_) => (PlannerVerdict::NoSettle, None, None),
+        Ok(s) => match space.stable_with(&s.settled, hist) {
+            Ok(m) => (PlannerVerdict::Stable, Some(s), Some(m)),
+            Err(_) => (PlannerVerdict::Unstable, Some(s), None),
+        },
+    }
+}
+
+/// Run the study.
+pub fn run(a: &JudgeAgreementArgs) -> Result<Agreement, String> {
+    let file = crate::cli::campaign::scenario_file(&a.scenario);
+    let sc = crate::scenario::load(&file).map_err(|e| e.to_string())?;
+    let world = sc.build_world().map_err(|e| e.to_string())?;
+    let wb = world.bounds();
+    let lo = sc.plan.bounds_min.unwrap_or([f64::from(wb.min.x), f64::from(wb.min.y), f64::from(wb.min.z) - 1.0]);
+    let hi = sc.plan.bounds_max.unwrap_or([f64::from(wb.max.x), f64::from(wb.max.y), f64::from(wb.max.z) + 1.0]);
+    let root = sc.tether.root_anchor;
+    let bounds = PlanBounds { min: lo.map(|v| v as Real), max: hi.map(|v| v as Real) };
+    let rover = RoverParams::AXEL;
+    let params = TetherSpaceParams::DEFAULT;
+    let box_lo = core::array::from_fn(|k| lo[k].min(root[k] - 1.0));
+    let box_hi = core::array::from_fn(|k| hi[k].max(root[k] + 1.0));
+    let mut map = PlanningMap::from_world(world.as_ref(), box_lo, box_hi, a.voxel)?;
+    let view = map.view()?;
+    let mut map_rover = rover;
+    map_rover.body_clearance_m += a.voxel as Real;
+    let mut map_params = params;
+    map_params.surface_uncertainty_m = map_params.surface_uncertainty_m.max(0.5 * a.voxel as Real);
+    let on_map = TetherSpace::new(&view, bounds, map_rover, map_params).map_err(|(f, r)| format!("{f}: {r}"))?;
+    let truth = Truth(world.as_ref());
+    let on_truth = TetherSpace::new(&truth, bounds, rover, params).map_err(|(f, r)| format!("{f}: {r}"))?;
+    let judge = PhysicsJudge::new(world.as_ref(), rover).map_err(|e| e.to_string())?;
+    let edges = WrapEdges::new(&world.exact_geometry(), (box_lo.map(|v: f64| v - 1.0), box_hi.map(|v: f64| v + 1.0)))?;
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(a.seed);
+    let mut unit = || (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+    let mut out = Agreement { name: sc.name.clone(), poses: Vec::with_capacity(a.poses), map: Confusion::default(), exact: Confusion::default(), physics_s: 0.0 };
+    for _ in 0..a.poses {
+        let (x, y) = (lo[0] + (hi[0] - lo[0]) * unit(), lo[1] + (hi[1] - lo[1]) * unit());
+        let yaw = core::f64::consts::TAU * unit() - core::f64::consts::PI;
+        // Physics first: the true tether (to the boom tip) gives the planner its anchor history too.
+        let t0 = Instant::now();
+        let s = on_truth.settle_state(x as Real, y as Real, yaw as Real).ok();
+        let pose = match s {
+            Some(s) => {
+                let a = s.axle();
+                GroundPose { x: f64::from(a.x), y: f64::from(a.y), yaw: f64::from(s.heading()) }
+            }
+            None => GroundPose { x, y, yaw },
+        };
+        let mut anchor = root;
+        let mut tether: Option<TautTether> = None;
+        for _ in 0..2 {
+            let Some(pl) = judge.place(pose, anchor, BoomSetting::Inline) else { break };
+            tether = TautTether::shortest(&edges, root, pl.tip, SHORTEST_SAMPLE_M).ok();
+            let Some(t) = &tether else { break };
+            anchor = t.last_anchor(&edges);
+        }
+        let (physics, slide) = match &tether {
+            _ if judge.axle_at(pose).is_none() => (PhysicsVerdict::Blocked, 0.0),
+            None => (PhysicsVerdict::NoTether, 0.0),
+            Some(t) => {
+                let v = judge.hold(pose, &TetherSpec { anchor: t.last_anchor(&edges), free_length_m: None });
+                let p = match v.outcome {
+                    HoldOutcome::Holds => PhysicsVerdict::Holds,
+                    HoldOutcome::Falls => PhysicsVerdict::Falls,
+                    HoldOutcome::Blocked => PhysicsVerdict::Blocked,
+                };
+                (p, v.slide_m)
+            }
+        };
+        out.physics_s += t0.elapsed().as_secs_f64();
+        let mut hist = AnchorHistory::new(Anchor::root(to_vec3(root)));
+        if let Some(t) = &tether {
+            for c in &t.contacts {
+                if let Some(e) = edges.edges.get(c.edge) {
+                    let _ = hist.push(Anchor { point: to_vec3(e.point(c.t)), gradient: to_vec3(e.out) });
+                }
+            }
+        }
+        let (m, _, _) = planner_verdict(&on_map, x, y, yaw, &hist);
+        let (e, _, margin) = planner_verdict(&on_truth, x, y, yaw, &hist);
+        out.map.add(m, physics);
+        out.exact.add(e, physics);
+        out.poses.push(PoseRecord { sample: [x, y, yaw], map: m, exact: e, exact_margin: margin, physics, slide_m: slide });
+    }
+    if let Some(p) = &a.out {
+        let json = serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?;
+        std::fs::write(p, json).map_err(|e| format!("{}: {e}", p.display()))?;
+    }
+    Ok(out)
+}
+
+impl Agreement {
+    /// The report.
+    pub fn report(&self) -> String {
+        let n = self.poses.len();
+        let mut s = format!("judge agreement on {}: {n} poses\n\n", self.name);
+        s += &self.map.table("planner on the onboard map vs physics");
+        s += "\n";
+        s += &self.exact.table("planner on the exact field vs physics");
+        for (name, c) in [("map", &self.map), ("exact", &self.exact)] {
+            let holds_refused = c.0[1][0] + c.0[2][0];
+            let holds = c.0[0][0] + holds_refused;
+            s += &format!(
+                "\n{name}: planner-stable but physics falls: {}; physics holds but the planner refuses: {holds_refused} of {holds} holding poses\n",
+                c.0[0][1]
+            );
+        }
+        s += &format!("\nphysics judge: {:.1} poses per second ({:.2} s for {n} poses, tether included, one thread)\n", n as f64 / self.physics_s.max(1e-9), self.physics_s);
+        s
+    }
+}
+
+/// Run the command.
+pub fn main(a: &JudgeAgreementArgs) -> std::process::ExitCode {
+    super::printed(run(a).map(|r| r.report()))
+}

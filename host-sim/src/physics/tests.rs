@@ -1,0 +1,100 @@
+//! The physics judge on poses whose answer follows from statics alone (no planner code involved).
+
+use super::*;
+use crate::world::crater::{CraterWall, CraterWallParams};
+use crate::world::ledge::LedgeWorld;
+
+fn judge(world: &dyn World) -> PhysicsJudge {
+    PhysicsJudge::new(world, RoverParams::AXEL).expect("judge")
+}
+
+#[test]
+fn flat_ground_holds_without_a_tether_pull() {
+    let w = LedgeWorld::new();
+    let j = judge(&w);
+    // On the flat ground in front of the ledge, the tether slack from an anchor far above.
+    let anchor = [6.0, 0.0, 3.0];
+    let v = j.hold(GroundPose { x: 6.0, y: 2.0, yaw: 0.3 }, &TetherSpec { anchor, free_length_m: Some(10.0) });
+    assert!(v.holds(), "{v:?}");
+    let pl = v.placement.expect("placed");
+    assert!((pl.axle[2] - 0.35).abs() < 0.01, "axle at {:?}", pl.axle);
+}
+
+#[test]
+fn steep_slope_without_tether_falls_and_with_a_pull_from_above_holds() {
+    // The 55-degree slope: tan 55 = 1.43 > mu 0.6, so a braked rover slides without help...
+    let w = LedgeWorld::new();
+    let j = judge(&w);
+    let pose = GroundPose { x: 1.4, y: 0.0, yaw: 0.0 };
+    let slack = TetherSpec { anchor: [-6.4, 0.0, 6.35], free_length_m: Some(50.0) };
+    let v = j.hold(pose, &slack);
+    assert_eq!(v.outcome, HoldOutcome::Falls, "{v:?}");
+    assert!(v.slide_m > HOLD_SLIDE_M);
+    // ...and a taut tether over the lip (the true anchor is on the lip, straight up-slope) holds it.
+    let taut = TetherSpec { anchor: [0.0, 0.0, 4.0], free_length_m: None };
+    let v = j.hold(pose, &taut);
+    assert!(v.holds(), "{v:?}");
+    let pl = v.placement.expect("placed");
+    assert!(pl.tip[0] < pl.axle[0], "the boom trails up-slope towards the lip: {pl:?}");
+}
+
+#[test]
+fn friction_decides_a_moderate_slope() {
+    // A 25-degree crater wall without rocks: tan 25 = 0.47, below the wheels' 0.6 and the boom's 0.4 combined
+    // as long as the wheels carry most of the load; with 0.3 everywhere it slides.
+    let params = CraterWallParams { wall_angle_deg: 25.0, rocks: 0, ..CraterWallParams::default() };
+    let w = CraterWall::new(params).expect("world");
+    let x = 0.5 * w.foot_x();
+    let pose = GroundPose { x, y: 0.0, yaw: 0.0 };
+    let slack = TetherSpec { anchor: [-20.0, 0.0, 30.0], free_length_m: Some(100.0) };
+    let v = judge(&w).hold(pose, &slack);
+    // Facing down the fall line the braked wheels hold by friction alone (the boom rests on the ground too).
+    assert!(v.holds(), "mu 0.6 on 25 degrees: {v:?}");
+    let mut slippery = RoverParams::AXEL;
+    slippery.wheel_mu = 0.3;
+    slippery.boom_mu = 0.3;
+    let v = PhysicsJudge::new(&w, slippery).expect("judge").hold(pose, &slack);
+    assert_eq!(v.outcome, HoldOutcome::Falls, "mu 0.3 on 25 degrees: {v:?}");
+}
+
+#[test]
+fn hold_is_deterministic() {
+    let w = LedgeWorld::with_pole();
+    let j = judge(&w);
+    let pose = GroundPose { x: 0.9, y: 0.4, yaw: 0.2 };
+    let t = TetherSpec { anchor: [0.0, 0.3, 4.0], free_length_m: None };
+    assert_eq!(j.hold(pose, &t), j.hold(pose, &t));
+}
+
+#[test]
+fn drive_straight_on_flat_ground_arrives_and_off_the_lip_falls() {
+    let w = LedgeWorld::new();
+    let j = judge(&w);
+    let slack = TetherSpec { anchor: [6.0, 0.0, 3.0], free_length_m: Some(30.0) };
+    let d = j.drive(GroundPose { x: 5.0, y: 0.0, yaw: 0.0 }, &slack, DriveCommand::Straight { distance_m: 1.0, speed_mps: 0.3 });
+    assert!(d.placed && d.completed && !d.fell, "{d:?}");
+    assert!((d.end_axle[0] - 6.0).abs() < 0.1 && d.end_axle[1].abs() < 0.05, "{d:?}");
+    // Turning in place on flat ground.
+    let d = j.drive(GroundPose { x: 5.0, y: 0.0, yaw: 0.0 }, &slack, DriveCommand::Turn { angle_rad: 1.0, rate_radps: 0.5 });
+    assert!(d.completed && !d.fell && (d.end_yaw - 1.0).abs() < 0.15, "{d:?}");
+    // Driving from the ledge top over the lip with a slack tether: the rover slides down the slope.
+    let loose = TetherSpec { anchor: [-6.4, 0.0, 6.35], free_length_m: Some(40.0) };
+    let d = j.drive(GroundPose { x: -0.5, y: 0.0, yaw: 0.0 }, &loose, DriveCommand::Straight { distance_m: 1.2, speed_mps: 0.3 });
+    assert!(d.placed && d.fell, "{d:?}");
+}
+
+
+#[test]
+fn a_dem_pose_is_placed_like_the_analytic_one() {
+    use crate::terrain::Heightmap;
+    use crate::world::heightmap::HeightmapWorld;
+    // The ledge as a 0.25 m DEM whose posts include the lip: on the slope the heights are the same planes.
+    let ledge = LedgeWorld::new();
+    let s = 0.25;
+    let (nx, ny) = (89usize, 81usize);
+    let hs = (0..nx * ny).map(|k| Some(ledge.height_f64(-11.0 + (k % nx) as f64 * s, -10.0 + (k / nx) as f64 * s))).collect();
+    let dem = HeightmapWorld::new("ledge-dem", &Heightmap { width: nx, height: ny, spacing_m: s, heights_m: hs }, 1.0, 1.0).expect("dem");
+    let pose = GroundPose { x: 1.4, y: 0.0, yaw: 0.0 };
+    let (a, b) = (judge(&dem).axle_at(pose).expect("dem"), judge(&ledge).axle_at(pose).expect("analytic"));
+    assert!((a[2] - b[2]).abs() < 1e-6, "{a:?} vs {b:?}");
+}
