@@ -25,6 +25,7 @@ pub mod homotopy;
 pub mod link;
 pub mod mapcheck;
 pub mod mcap_export;
+pub mod mission;
 pub mod movingai;
 pub mod qemu;
 pub mod replay;

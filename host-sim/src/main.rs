@@ -17,6 +17,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// A closed-loop mission with the flight software in the loop (the main job; default: a crater-wall descent).
+    Mission(cli::mission::MissionArgs),
     /// Run a scenario against the flight software on the in-process link (the main job).
     Run(cli::run::RunArgs),
     /// Run a scenario and record every byte into a field log (same as `run --log LOG`).
@@ -54,6 +56,7 @@ enum Command {
 fn main() -> ExitCode {
     env_logger_lite();
     match Cli::parse().command {
+        Command::Mission(a) => cli::mission::main(&a),
         Command::Run(a) => cli::run::main(&a),
         Command::Record(a) => {
             if a.log.is_none() {

@@ -19,6 +19,63 @@ pub struct RunConfig {
     pub link: String,
     /// Executive period of the in-process link, microseconds.
     pub step_us: u64,
+    /// The navigator's map configuration when it is not `MapConfig::DEFAULT` (missions on a scenario's `[map]`);
+    /// replay builds the same navigator.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub map: Option<MapParams>,
+}
+
+/// `firmware::config::map::MapConfig`, field for field, as stored in a field log.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[allow(missing_docs)]
+pub struct MapParams {
+    pub voxel_size: f32,
+    pub truncation: f32,
+    pub max_weight: f32,
+    pub max_carve_length: f32,
+    pub max_ray_voxels: usize,
+    pub max_range: f32,
+    pub min_range: f32,
+    pub esdf_band: f32,
+    pub esdf_site_tolerance: f32,
+    pub esdf_max_distance: f32,
+    pub esdf_max_sweeps: usize,
+}
+
+impl From<firmware::config::map::MapConfig> for MapParams {
+    fn from(c: firmware::config::map::MapConfig) -> Self {
+        MapParams {
+            voxel_size: c.voxel_size,
+            truncation: c.truncation,
+            max_weight: c.max_weight,
+            max_carve_length: c.max_carve_length,
+            max_ray_voxels: c.max_ray_voxels,
+            max_range: c.max_range,
+            min_range: c.min_range,
+            esdf_band: c.esdf_band,
+            esdf_site_tolerance: c.esdf_site_tolerance,
+            esdf_max_distance: c.esdf_max_distance,
+            esdf_max_sweeps: c.esdf_max_sweeps,
+        }
+    }
+}
+
+impl From<MapParams> for firmware::config::map::MapConfig {
+    fn from(c: MapParams) -> Self {
+        firmware::config::map::MapConfig {
+            voxel_size: c.voxel_size,
+            truncation: c.truncation,
+            max_weight: c.max_weight,
+            max_carve_length: c.max_carve_length,
+            max_ray_voxels: c.max_ray_voxels,
+            max_range: c.max_range,
+            min_range: c.min_range,
+            esdf_band: c.esdf_band,
+            esdf_site_tolerance: c.esdf_site_tolerance,
+            esdf_max_distance: c.esdf_max_distance,
+            esdf_max_sweeps: c.esdf_max_sweeps,
+        }
+    }
 }
 
 /// The outcome of a replay.

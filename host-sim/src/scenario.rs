@@ -208,6 +208,9 @@ pub struct MapSection {
     pub esdf_max_distance_m: f64,
     /// Pool size in blocks. Default `FLIGHT_BLOCKS` (the flight board's pool, 3072).
     pub pool_blocks: usize,
+    /// Free space carved along each ray in front of its return, metres (`MapConfig::max_carve_length`). Default
+    /// 4.0; bounded by `budgets.max_ray_voxels` voxels per ray.
+    pub max_carve_length_m: Option<f64>,
 }
 
 impl Default for MapSection {
@@ -217,6 +220,7 @@ impl Default for MapSection {
             truncation_m: None,
             esdf_max_distance_m: 1.5,
             pool_blocks: firmware::config::map::FLIGHT_BLOCKS,
+            max_carve_length_m: None,
         }
     }
 }
@@ -253,6 +257,10 @@ pub struct Scenario {
     /// Planning region (the `campaign` command and the onboard planner's bounds).
     #[serde(default)]
     pub plan: PlanSection,
+    /// The closed-loop mission's models (`tetherbot mission`; all optional, defaults in
+    /// [`crate::mission::params::MissionSection`]).
+    #[serde(default)]
+    pub mission: crate::mission::params::MissionSection,
     /// The file it came from (set by [`load`]).
     #[serde(skip)]
     pub file: PathBuf,
@@ -482,6 +490,9 @@ impl Scenario {
             c.truncation = t as Real;
         }
         c.esdf_max_distance = self.map.esdf_max_distance_m as Real;
+        if let Some(l) = self.map.max_carve_length_m {
+            c.max_carve_length = l as Real;
+        }
         c.esdf_max_sweeps = self.budgets.esdf_max_sweeps;
         c.max_ray_voxels = self.budgets.max_ray_voxels;
         c.validate().map_err(|e| {
@@ -491,6 +502,7 @@ impl Scenario {
                 "esdf_max_distance" => "map.esdf_max_distance_m".to_string(),
                 "esdf_max_sweeps" => "budgets.esdf_max_sweeps".to_string(),
                 "max_ray_voxels" => "budgets.max_ray_voxels".to_string(),
+                "max_carve_length" => "map.max_carve_length_m".to_string(),
                 f => format!("map.{f}"),
             };
             self.err(&field, e.reason)
@@ -529,6 +541,7 @@ impl Scenario {
             return Err(self.err("map.pool_blocks", format!("must be in 1..=1048576, got {}", self.map.pool_blocks)));
         }
         self.sensor.validate().map_err(|(f, r)| self.err(&format!("sensor.{f}"), r))?;
+        self.mission.validate().map_err(|(f, r)| self.err(&format!("mission.{f}"), r))?;
         self.map_config()?;
         match (&self.plan.bounds_min, &self.plan.bounds_max) {
             (None, None) => {}

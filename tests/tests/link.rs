@@ -33,6 +33,7 @@ fn record(seed: u64) -> Vec<u8> {
         scenario: "protocol".into(),
         link: "inproc".into(),
         step_us: DEFAULT_STEP_US,
+        map: None,
     };
     let header = fieldlog::Header {
         protocol_version: 1,

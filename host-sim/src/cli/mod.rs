@@ -9,6 +9,7 @@ pub mod homotopy;
 pub mod inspect;
 pub mod judge_agreement;
 pub mod map;
+pub mod mission;
 pub mod replay;
 pub mod run;
 pub mod team;

@@ -1,0 +1,22 @@
+//! The closed-loop mission simulator (issue 18): the host side of a tethered descent with the flight software in
+//! the loop.
+//!
+//! - [`params`]: the `[mission]` section of a scenario (execution, sensing, disturbance models, hidden rocks);
+//! - [`world`]: the true world (terrain plus rocks; what the rover meets and what the sensor sees);
+//! - [`truth`]: the true tether, the statics (tension, margin, the fall judge) and the tether drift;
+//! - [`executor`]: each commanded motion executed on the true world in small increments;
+//! - [`sensing`]: scans with the localisation error, tether readings, the overview scan from the mast;
+//! - [`run`]: one mission over a link; [`link`]: the in-process flight software on the scenario's map;
+//! - [`campaign`]: N seeds in parallel and the table; [`svg`]: the picture.
+//!
+//! `host-sim/doc/mission.md` describes the models and their gaps.
+
+pub mod campaign;
+pub mod executor;
+pub mod link;
+pub mod params;
+pub mod run;
+pub mod sensing;
+pub mod svg;
+pub mod truth;
+pub mod world;

@@ -1,0 +1,722 @@
+//! One closed-loop mission (issue 18, items 1, 2 and 5): the simulator configures the flight software, scans,
+//! sends the goal, then executes every drive command on the true world and reports it, streaming scans and tether
+//! readings, until the flight software reports `Arrived` or `Safe` (with its reason), the rover falls, or the
+//! mission's link-time limit passes.
+//!
+//! The conversation (protocol v2, `firmware/PROTOCOL.md`):
+//! 1. boot telemetry; `Configure` (the scenario's root anchor, tether length as `max_payout_m`, the planner seed,
+//!    `MissionConfig` with the tracking mode and the `[mission]` overrides);
+//! 2. a tether reading, the overview scan from the root anchor's mast (`[mission] overview_scan`), a scan from the
+//!    rover at its start pose (with the localisation error);
+//! 3. the `GoalRequest` (with `allow_approximate`);
+//! 4. link time runs; tether readings every `1 / tether_rate_hz` seconds; each `DriveCommand` is executed on the
+//!    true world ([`super::executor`]) increment by increment, each increment taking its link time (speed, turn
+//!    rate), with a scan at most every `scan_every_m` metres; at its end a `MotionReport` (outcome, achieved
+//!    turn and distance, the pose estimate) and a scan. A `Stop` while a motion runs ends it `Stalled`.
+//! 5. the verdict is the simulator's own ([`Verdict`]): the flight software's word plus the truth's (the rover
+//!    really within the goal tolerance plus `arrival_slack_m`, no fall).
+//!
+//! Everything is seeded by the mission seed (planner, sensor noise, localisation, actuation, tether noise), so a
+//! mission is a pure function of (scenario, seed, tracking) and the link's bytes replay bit for bit.
+
+use std::time::Instant;
+
+use firmware::config::rover::RoverParams;
+use firmware::geom::p3::{dist, from_vec3, P3};
+use firmware::geom::Real;
+use firmware::protocol::{
+    Configure, GoalRequest, Message, MissionConfig, MissionState, MissionStatus, Motion, MotionOutcome,
+    MotionReport, PlanState, PlannerChoice, Point3, StopReason, Tracking,
+};
+use rand_core::Rng;
+use serde::Serialize;
+
+use super::executor::{Blocked, Execution, MissionTruth, Progress, TrueOutcome, TrueRover};
+use super::params::MissionSection;
+use super::sensing::{gaussian, overview_scan, overview_sensor, rover_scan, tether_reading, Localiser};
+use super::truth::Body;
+use super::world::MissionWorld;
+use crate::link::FlightLink;
+use crate::scenario::{Scenario, WorldSpec};
+use crate::sensor::{to_wire_pose, RangeSensorParams, Scan};
+use crate::session::{HostSession, SessionError};
+
+/// Points per scan chunk sent.
+const CHUNK_POINTS: usize = 256;
+/// Link time between two looks at the link while the rover stands still, microseconds.
+const IDLE_STEP_US: u64 = 100_000;
+/// Link time without a drive command or a mission-state change after which the mission ends `FlightQuiet`, s.
+pub const QUIET_LIMIT_S: f64 = 300.0;
+/// Trace points kept at most (the picture and the JSON), one per increment.
+const MAX_TRACE: usize = 20_000;
+
+/// How a mission ended, by the simulator's verdict.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Verdict {
+    /// The flight software reported `Arrived` and the true rover is within the goal tolerance (plus slack).
+    Arrived,
+    /// The flight software reported `Arrived` but the true rover is not within tolerance (localisation error).
+    FalseArrival,
+    /// The flight software stopped safe, with this reason.
+    SafeStop(StopReason),
+    /// The truth could not hold the rover: a fall.
+    Fell,
+    /// The mission's link-time limit passed.
+    TimeLimit,
+    /// The flight software sent nothing that moves the mission on (no drive command, no mission-state change)
+    /// for [`QUIET_LIMIT_S`] of link time while not `Arrived` or `Safe`.
+    FlightQuiet,
+}
+
+impl Verdict {
+    /// A short name for tables.
+    pub fn name(&self) -> String {
+        match self {
+            Verdict::SafeStop(r) => format!("safe:{r:?}"),
+            v => format!("{v:?}"),
+        }
+    }
+}
+
+/// One increment of the executed path.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct TracePoint {
+    /// Link time, seconds.
+    pub t_s: f64,
+    /// True axle centre.
+    pub axle: P3,
+    /// Estimated axle centre (last estimate sent).
+    pub estimate: P3,
+    /// True static margin, N.
+    pub margin_n: f64,
+    /// True tension, N.
+    pub tension_n: f64,
+    /// True payout, m.
+    pub payout_m: f64,
+    /// Distance driven, m.
+    pub driven_m: f64,
+}
+
+/// A plan the flight software sent.
+#[derive(Debug, Clone, Serialize)]
+pub struct PlanSeen {
+    /// Link time, seconds.
+    pub t_s: f64,
+    /// Final planner state.
+    pub state: String,
+    /// Iterations.
+    pub iterations: u32,
+    /// Host wall time from the goal (or the previous plan's end) to this plan's end, seconds.
+    pub host_s: f64,
+    /// Waypoint axle positions.
+    pub waypoints: Vec<P3>,
+    /// Waypoint stability margins on the onboard map.
+    pub margins: Vec<f32>,
+}
+
+/// What a mission did.
+#[derive(Debug, Clone, Serialize)]
+pub struct MissionReport {
+    /// Scenario name.
+    pub scenario: String,
+    /// Mission seed.
+    pub seed: u64,
+    /// Tracking mode sent.
+    pub tracking: String,
+    /// The verdict.
+    pub verdict: Verdict,
+    /// The flight software's last mission status.
+    pub last_status: Option<MissionStatus>,
+    /// True distance driven, m.
+    pub distance_m: f64,
+    /// Straight-line distance from the final true pose to the goal, m.
+    pub goal_error_m: f64,
+    /// Distance from the start to the goal, m.
+    pub start_goal_m: f64,
+    /// Replans the flight software reported.
+    pub replans: u32,
+    /// Motions executed.
+    pub motions: u32,
+    /// Motions that stalled / slipped.
+    pub stalls: u32,
+    /// Motions that slipped.
+    pub slips: u32,
+    /// Smallest true static margin along the executed path, N.
+    pub min_true_margin_n: f64,
+    /// Largest true tension, N.
+    pub max_tension_n: f64,
+    /// Largest true payout, m.
+    pub max_payout_m: f64,
+    /// Largest distance of the true axle from the plan being driven (horizontal), m.
+    pub max_cross_track_m: f64,
+    /// Mean of that distance over the increments, m.
+    pub mean_cross_track_m: f64,
+    /// Plans received.
+    pub plans: Vec<PlanSeen>,
+    /// Map blocks in use at the last telemetry (high water: blocks are never freed).
+    pub map_blocks: u32,
+    /// Map block capacity.
+    pub map_blocks_capacity: u32,
+    /// Nacks received.
+    pub nacks: u32,
+    /// Link time at the end, s.
+    pub link_s: f64,
+    /// Host wall time, s.
+    pub host_s: f64,
+    /// The executed path.
+    pub trace: Vec<TracePoint>,
+    /// The true tether at the start, at each motion's end (every few) and at the end: (time s, points root..rover).
+    pub tethers: Vec<(f64, Vec<P3>)>,
+    /// Rocks: centre, radius, visible.
+    pub rocks: Vec<(P3, f64, bool)>,
+    /// Root anchor, start and goal.
+    pub root: P3,
+    /// Start axle.
+    pub start: P3,
+    /// Goal.
+    pub goal: P3,
+    /// Goal tolerance (flight) and the truth's slack.
+    pub tolerance_m: f64,
+}
+
+impl MissionReport {
+    /// Distance the flight software drove autonomously and the distance an operator would still have to drive
+    /// (the straight line from the stop to the goal when the mission did not arrive).
+    pub fn autonomy_m(&self) -> (f64, f64) {
+        match self.verdict {
+            Verdict::Arrived => (self.distance_m, 0.0),
+            _ => (self.distance_m, self.goal_error_m),
+        }
+    }
+}
+
+/// What to run.
+#[derive(Debug, Clone)]
+pub struct MissionOptions {
+    /// Seed of everything (planner, noise).
+    pub seed: u64,
+    /// Tracking mode sent in `MissionConfig`.
+    pub tracking: Tracking,
+    /// All noise and error sources zero (the deterministic unit tests).
+    pub noiseless: bool,
+    /// Print a live progress line on stderr.
+    pub live: bool,
+}
+
+/// Why a mission could not run (as opposed to how it ended).
+#[derive(Debug)]
+pub enum MissionError {
+    /// The scenario cannot be simulated (world, start).
+    Setup(String),
+    /// The link or the protocol failed.
+    Session(SessionError),
+}
+
+impl core::fmt::Display for MissionError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            MissionError::Setup(s) => write!(f, "mission setup: {s}"),
+            MissionError::Session(e) => write!(f, "mission link: {e}"),
+        }
+    }
+}
+
+impl core::error::Error for MissionError {}
+
+impl From<SessionError> for MissionError {
+    fn from(e: SessionError) -> Self {
+        MissionError::Session(e)
+    }
+}
+
+/// The configuration the mission sends: the scripted defaults with the scenario's tether and budgets.
+pub fn mission_configure(sc: &Scenario, opts: &MissionOptions) -> Configure {
+    let mut c = crate::scripted::default_configure(opts.seed);
+    let r = sc.tether.root_anchor;
+    c.tether.root_anchor = Point3::new(r[0] as f32, r[1] as f32, r[2] as f32);
+    c.tether.max_payout_m = sc.tether.length_m as f32;
+    c.planner.max_iterations = sc.budgets.planner_iterations;
+    let m = &sc.mission;
+    let d = MissionConfig::DEFAULT;
+    c.mission = MissionConfig {
+        tracking: opts.tracking,
+        replan_cross_track_m: m.replan_cross_track_m.map_or(d.replan_cross_track_m, |v| v as f32),
+        payout_tolerance_m: m.payout_tolerance_m.map_or(d.payout_tolerance_m, |v| v as f32),
+        min_margin_n: m.min_margin_n.map_or(d.min_margin_n, |v| v as f32),
+    };
+    c
+}
+
+/// The true rover for the configured rover: the Axel model with the configured geometry, mass and friction.
+pub fn truth_for(sc: &Scenario, cfg: &Configure, m: &MissionSection) -> Result<MissionTruth, MissionError> {
+    let base = sc.build_world().map_err(|e| MissionError::Setup(e.to_string()))?;
+    let ledge = match sc.world_spec().map_err(|e| MissionError::Setup(e.to_string()))? {
+        WorldSpec::Ledge => Some(crate::world::ledge::LedgeWorld::new()),
+        WorldSpec::LedgePole => Some(crate::world::ledge::LedgeWorld::with_pole()),
+        _ => None,
+    };
+    let world = MissionWorld::new(base, ledge, m.obstacles.clone());
+    let mut rover = RoverParams::AXEL;
+    rover.wheel_radius_m = cfg.rover.wheel_radius_m;
+    rover.track_m = cfg.rover.axle_length_m;
+    rover.boom_length_m = cfg.rover.boom_length_m;
+    rover.wheel_mu = cfg.rover.friction_coefficient;
+    Ok(MissionTruth {
+        world,
+        root: sc.tether.root_anchor,
+        tether_length_m: sc.tether.length_m,
+        rover,
+        body: Body {
+            mass_kg: f64::from(cfg.rover.mass_kg),
+            gravity: f64::from(rover.gravity_mps2),
+            mu: f64::from(cfg.rover.friction_coefficient),
+            pretension_n: m.pretension_n,
+            winch_limit_n: m.winch_limit_n,
+        },
+        drift_coeff: m.drift_per_m,
+    })
+}
+
+/// The state of one mission on the host side.
+struct Sim<'a, L: FlightLink> {
+    s: HostSession<L>,
+    sc: &'a Scenario,
+    m: MissionSection,
+    truth: MissionTruth,
+    rover: TrueRover,
+    loc: Localiser,
+    rng: rand_pcg::Pcg64,
+    scan_id: u32,
+    next_reading_us: u64,
+    reading_period_us: u64,
+    last_scan_driven: f64,
+    estimate: firmware::geom::Pose3,
+    status: Option<MissionStatus>,
+    done: Option<Verdict>,
+    pending: Vec<(u32, Motion)>,
+    rep: MissionReport,
+    plan_parts: Vec<firmware::protocol::Waypoint>,
+    current_plan: Vec<P3>,
+    cross_sum: f64,
+    cross_n: u32,
+    live: bool,
+    last_live_us: u64,
+    /// Link time of the last drive command or mission-state change, microseconds.
+    last_news_us: u64,
+    /// A plan is being searched (Accepted seen, no final state yet).
+    planning: bool,
+    /// Host time spent in link calls while a plan was searched, seconds.
+    plan_host_s: f64,
+}
+
+impl<L: FlightLink> Sim<'_, L> {
+    fn now_s(&self) -> f64 {
+        self.s.link().now_us() as f64 / 1e6
+    }
+
+    /// Handles what the flight software sent during a link call of `host_s` seconds.
+    fn absorb(&mut self, msgs: Vec<Message>, host_s: f64) {
+        let now = self.s.link().now_us();
+        if self.planning || msgs.iter().any(|m| matches!(m, Message::PlanStatus(_))) {
+            self.plan_host_s += host_s;
+        }
+        for msg in msgs {
+            match msg {
+                Message::DriveCommand(d) => {
+                    self.last_news_us = now;
+                    self.pending.push((d.command_id, d.motion));
+                }
+                Message::MissionStatus(st) => {
+                    if self.status.is_none_or(|old| old.state != st.state) {
+                        self.last_news_us = now;
+                    }
+                    if matches!(st.state, MissionState::Arrived | MissionState::Safe) && self.done.is_none() {
+                        self.done = Some(match st.state {
+                            MissionState::Arrived => {
+                                let e = dist(self.rover.axle(), self.sc.goal.position);
+                                if e <= self.sc.goal.tolerance_m + self.m.arrival_slack_m {
+                                    Verdict::Arrived
+                                } else {
+                                    Verdict::FalseArrival
+                                }
+                            }
+                            _ => Verdict::SafeStop(st.reason),
+                        });
+                    }
+                    self.status = Some(st);
+                }
+                Message::Plan(p) => {
+                    if p.part == 0 {
+                        self.plan_parts.clear();
+                    }
+                    self.plan_parts.extend(p.waypoints.iter().cloned());
+                    if p.part + 1 == p.parts {
+                        let wps: Vec<P3> = self
+                            .plan_parts
+                            .iter()
+                            .map(|w| [f64::from(w.pose.position.x), f64::from(w.pose.position.y), f64::from(w.pose.position.z)])
+                            .collect();
+                        let margins = self.plan_parts.iter().map(|w| w.stability_margin).collect();
+                        if let Some(last) = self.rep.plans.last_mut() {
+                            if last.waypoints.is_empty() {
+                                last.waypoints = wps.clone();
+                                last.margins = margins;
+                            }
+                        }
+                        self.current_plan = wps;
+                    }
+                }
+                Message::PlanStatus(p) => {
+                    if matches!(p.state, PlanState::Accepted | PlanState::Searching) {
+                        self.planning = true;
+                    } else if p.state != PlanState::NoGoal {
+                        let t = self.now_s();
+                        self.rep.plans.push(PlanSeen {
+                            t_s: t,
+                            state: format!("{:?}", p.state),
+                            iterations: p.iterations,
+                            host_s: self.plan_host_s,
+                            waypoints: vec![],
+                            margins: vec![],
+                        });
+                        self.planning = false;
+                        self.plan_host_s = 0.0;
+                    }
+                }
+                Message::Telemetry(t) => {
+                    self.rep.map_blocks = self.rep.map_blocks.max(t.map.blocks_used);
+                    self.rep.map_blocks_capacity = t.map.blocks_capacity;
+                }
+                Message::Nack(_) => self.rep.nacks += 1,
+                _ => {}
+            }
+        }
+    }
+
+    /// Lets link time run to `t_us`, sending the tether readings that fall due.
+    fn run_to(&mut self, t_us: u64) -> Result<(), MissionError> {
+        while self.next_reading_us <= t_us {
+            let at = self.next_reading_us;
+            let t0 = Instant::now();
+            let got = self.s.advance_to(at)?;
+            self.absorb(got, t0.elapsed().as_secs_f64());
+            let r = tether_reading(&self.rover, self.truth.root, at, &self.m, &mut self.rng);
+            self.s.send(&Message::TetherReading(r))?;
+            self.next_reading_us += self.reading_period_us;
+        }
+        let t0 = Instant::now();
+        let got = self.s.advance_to(t_us)?;
+        self.absorb(got, t0.elapsed().as_secs_f64());
+        self.live_line();
+        Ok(())
+    }
+
+    fn live_line(&mut self) {
+        let now = self.s.link().now_us();
+        if !self.live || now < self.last_live_us + 2_000_000 {
+            return;
+        }
+        self.last_live_us = now;
+        let (state, margin) = self.status.map_or(("-".to_string(), f32::NAN), |s| (format!("{:?}", s.state), s.margin_n));
+        eprint!(
+            "\r  t {:7.1} s  {:<10} driven {:6.2} m  payout {:6.2} m  tension {:6.1} N  margin(board) {:7.1} N  margin(true) {:7.1} N   ",
+            now as f64 / 1e6,
+            state,
+            self.rover.driven_m,
+            self.rover.tether.length_m,
+            self.rover.statics.tension_n,
+            margin,
+            self.rover.statics.margin_n
+        );
+    }
+
+    /// Collects replies until the flight software is quiet.
+    fn recv(&mut self) -> Result<(), MissionError> {
+        let t0 = Instant::now();
+        let got = self.s.recv()?;
+        self.absorb(got, t0.elapsed().as_secs_f64());
+        Ok(())
+    }
+
+    fn send_scan(&mut self, scan: &Scan) -> Result<(), MissionError> {
+        self.scan_id += 1;
+        let chunks = scan.to_chunks(self.scan_id, CHUNK_POINTS).map_err(|e| MissionError::Setup(format!("{e:?}")))?;
+        for c in chunks {
+            self.s.send(&Message::SensorChunk(c))?;
+        }
+        self.recv()
+    }
+
+    fn scan_here(&mut self) -> Result<(), MissionError> {
+        let pose = self.rover.state.settled.pose;
+        self.estimate = self.loc.estimate(&pose);
+        let view = self.truth.world.sensed();
+        let scan = rover_scan(&view, &self.sc.sensor, &pose, &self.estimate, &mut self.rng);
+        self.last_scan_driven = self.rover.driven_m;
+        self.send_scan(&scan)
+    }
+
+    fn trace(&mut self) {
+        let p = self.rover.axle();
+        if !self.current_plan.is_empty() {
+            let c = polyline_distance_xy(&self.current_plan, p);
+            self.rep.max_cross_track_m = self.rep.max_cross_track_m.max(c);
+            self.cross_sum += c;
+            self.cross_n += 1;
+        }
+        let st = &self.rover.statics;
+        self.rep.min_true_margin_n = self.rep.min_true_margin_n.min(st.margin_n);
+        self.rep.max_tension_n = self.rep.max_tension_n.max(st.tension_n);
+        self.rep.max_payout_m = self.rep.max_payout_m.max(self.rover.tether.length_m);
+        if self.rep.trace.len() < MAX_TRACE {
+            let e = from_vec3(&self.estimate.translation.vector);
+            let t_s = self.now_s();
+            self.rep.trace.push(TracePoint {
+                t_s,
+                axle: p,
+                estimate: e,
+                margin_n: st.margin_n,
+                tension_n: st.tension_n,
+                payout_m: self.rover.tether.length_m,
+                driven_m: self.rover.driven_m,
+            });
+        }
+    }
+
+    fn snapshot_tether(&mut self) {
+        let mut pts = vec![self.truth.root];
+        pts.extend(self.rover.tether.contacts.iter().copied());
+        pts.push(self.rover.axle());
+        let t = self.now_s();
+        self.rep.tethers.push((t, pts));
+    }
+
+    /// Executes one drive command on the truth; returns false when the mission ended (fall).
+    fn execute(&mut self, id: u32, motion: Motion) -> Result<bool, MissionError> {
+        if matches!(motion, Motion::Stop) {
+            return Ok(true);
+        }
+        let scale = gaussian(&mut self.rng) * self.m.drive_scale_sigma;
+        let turn = gaussian(&mut self.rng) * self.m.turn_error_deg.to_radians();
+        let mut ex = Execution::new(id, motion, &self.rover, &self.m, scale, turn);
+        let dt_us = (ex.step_seconds(&self.m) * 1e6).round().max(1.0) as u64;
+        let (outcome, _blocked) = loop {
+            let before = self.rover.driven_m;
+            let progress = ex.step(&self.truth, &mut self.rover, self.m.slip_threshold_m);
+            self.loc.moved(self.rover.driven_m - before);
+            if self.truth.world.advance(self.rover.driven_m) > 0 {
+                log::info!("a rock appeared after {:.2} m", self.rover.driven_m);
+            }
+            self.trace();
+            let t = self.s.link().now_us() + dt_us;
+            self.run_to(t)?;
+            if let Progress::Ended(o, b) = progress {
+                break (o, b);
+            }
+            // a stop (or a new command) from the flight software ends the motion where it is
+            if self.pending.iter().any(|(_, m)| matches!(m, Motion::Stop)) {
+                self.pending.retain(|(_, m)| !matches!(m, Motion::Stop));
+                break (TrueOutcome::Stalled, Some(Blocked::StopCommanded));
+            }
+            if self.rover.driven_m - self.last_scan_driven >= self.m.scan_every_m {
+                self.scan_here()?;
+            }
+        };
+        self.rep.motions += 1;
+        if self.rep.motions % 8 == 1 {
+            self.snapshot_tether();
+        }
+        let wire = match outcome {
+            TrueOutcome::Fell => {
+                self.snapshot_tether();
+                self.done = Some(Verdict::Fell);
+                return Ok(false);
+            }
+            TrueOutcome::Completed => MotionOutcome::Completed,
+            TrueOutcome::Slipped => {
+                self.rep.slips += 1;
+                MotionOutcome::Slipped
+            }
+            TrueOutcome::Stalled => {
+                self.rep.stalls += 1;
+                MotionOutcome::Stalled
+            }
+        };
+        let pose = self.rover.state.settled.pose;
+        self.estimate = self.loc.estimate(&pose);
+        let report = MotionReport {
+            command_id: id,
+            outcome: wire,
+            achieved_yaw_rad: ex.achieved_yaw_rad as f32,
+            achieved_distance_m: ex.achieved_distance_m as f32,
+            pose: to_wire_pose(&self.estimate),
+        };
+        self.s.send(&Message::MotionReport(report))?;
+        self.recv()?;
+        // a scan after every motion, from where the rover stands (with the same pose estimate)
+        let view = self.truth.world.sensed();
+        let scan = rover_scan(&view, &self.sc.sensor, &pose, &self.estimate, &mut self.rng);
+        self.last_scan_driven = self.rover.driven_m;
+        self.send_scan(&scan)?;
+        Ok(true)
+    }
+}
+
+/// Horizontal distance from `p` to the polyline `pts`.
+pub fn polyline_distance_xy(pts: &[P3], p: P3) -> f64 {
+    let mut best = f64::INFINITY;
+    for w in pts.windows(2) {
+        best = best.min(crate::world::geometry::segment_distance_2d([p[0], p[1]], [w[0][0], w[0][1]], [w[1][0], w[1][1]]));
+    }
+    if pts.len() == 1 {
+        best = ((p[0] - pts[0][0]).powi(2) + (p[1] - pts[0][1]).powi(2)).sqrt();
+    }
+    best
+}
+
+/// Runs the mission of `sc` over `link`.
+pub fn run_mission(link: impl FlightLink, sc: &Scenario, opts: &MissionOptions) -> Result<MissionReport, MissionError> {
+    let host_t0 = Instant::now();
+    let m = if opts.noiseless { sc.mission.noiseless() } else { sc.mission.clone() };
+    let cfg = mission_configure(sc, opts);
+    let truth = truth_for(sc, &cfg, &m)?;
+    let start = sc.rover.start;
+    let st = truth
+        .settle(start[0], start[1], sc.rover.yaw_deg.to_radians())
+        .ok_or_else(|| MissionError::Setup(format!("the rover does not settle on the true world at {start:?}")))?;
+    let rover = truth
+        .place(st, None, 0.0)
+        .map_err(|b| MissionError::Setup(format!("the start cannot be held: {b:?}")))?;
+    let mut rng = rand_pcg::Pcg64::new(u128::from(opts.seed) ^ 0x6d69_7373_696f_6e00, 0x0a02_bdbf_7bb3_c0a7);
+    let loc = Localiser::new(&m, opts.seed ^ rng.next_u64());
+    let rep = MissionReport {
+        scenario: sc.name.clone(),
+        seed: opts.seed,
+        tracking: format!("{:?}", opts.tracking),
+        verdict: Verdict::TimeLimit,
+        last_status: None,
+        distance_m: 0.0,
+        goal_error_m: 0.0,
+        start_goal_m: dist(rover.axle(), sc.goal.position),
+        replans: 0,
+        motions: 0,
+        stalls: 0,
+        slips: 0,
+        min_true_margin_n: f64::INFINITY,
+        max_tension_n: 0.0,
+        max_payout_m: 0.0,
+        max_cross_track_m: 0.0,
+        mean_cross_track_m: 0.0,
+        plans: vec![],
+        map_blocks: 0,
+        map_blocks_capacity: 0,
+        nacks: 0,
+        link_s: 0.0,
+        host_s: 0.0,
+        trace: vec![],
+        tethers: vec![],
+        rocks: truth.world.rocks().map(|(r, _)| (r.centre, r.radius_m, r.visible)).collect(),
+        root: sc.tether.root_anchor,
+        start: rover.axle(),
+        goal: sc.goal.position,
+        tolerance_m: sc.goal.tolerance_m,
+    };
+    let estimate = rover.state.settled.pose;
+    let mut sim = Sim {
+        s: HostSession::new(link),
+        sc,
+        reading_period_us: (1e6 / m.tether_rate_hz).round().max(1.0) as u64,
+        m,
+        truth,
+        rover,
+        loc,
+        rng,
+        scan_id: 0,
+        next_reading_us: 0,
+        last_scan_driven: 0.0,
+        estimate,
+        status: None,
+        done: None,
+        pending: vec![],
+        rep,
+        plan_parts: vec![],
+        current_plan: vec![],
+        cross_sum: 0.0,
+        cross_n: 0,
+        live: opts.live && std::io::IsTerminal::is_terminal(&std::io::stderr()),
+        last_live_us: 0,
+        last_news_us: 0,
+        planning: false,
+        plan_host_s: 0.0,
+    };
+    sim.recv()?;
+    sim.s.send(&Message::Configure(cfg))?;
+    sim.recv()?;
+    sim.next_reading_us = sim.s.link().now_us();
+    let t = sim.s.link().now_us();
+    sim.run_to(t)?;
+    sim.snapshot_tether();
+    sim.trace();
+    if sim.m.overview_scan {
+        let tiles: Vec<(RangeSensorParams, _)> = overview_sensor(sim.truth.root, sim.sc.goal.position, &sim.sc.sensor, &sim.m);
+        for (params, pose) in tiles {
+            let view = sim.truth.world.sensed();
+            let scan = overview_scan(&view, &params, &pose, &mut sim.rng);
+            sim.send_scan(&scan)?;
+        }
+    }
+    sim.scan_here()?;
+    let g = sc.goal.position;
+    let goal = GoalRequest {
+        goal_id: 1,
+        position: Point3::new(g[0] as Real, g[1] as Real, g[2] as Real),
+        tolerance_m: sc.goal.tolerance_m as f32,
+        planner: PlannerChoice::Abit,
+        max_iterations: sc.budgets.planner_iterations,
+        time_budget_ms: 0,
+        allow_approximate: sim.m.allow_approximate,
+    };
+    sim.s.send(&Message::GoalRequest(goal))?;
+    sim.last_news_us = sim.s.link().now_us();
+    sim.recv()?;
+    let limit_us = (sim.m.time_limit_s * 1e6) as u64;
+    let quiet_us = (QUIET_LIMIT_S * 1e6) as u64;
+    while sim.done.is_none() {
+        let now = sim.s.link().now_us();
+        if now >= limit_us {
+            break;
+        }
+        if sim.pending.is_empty() && now > sim.last_news_us + quiet_us {
+            sim.done = Some(Verdict::FlightQuiet);
+            break;
+        }
+        if sim.pending.is_empty() {
+            sim.run_to(now + IDLE_STEP_US)?;
+            continue;
+        }
+        let (id, motion) = sim.pending.remove(0);
+        if !sim.execute(id, motion)? {
+            break;
+        }
+    }
+    if sim.live {
+        eprintln!();
+    }
+    // a last look: the flight software's final status and telemetry
+    sim.recv()?;
+    if let Ok(t) = sim.s.telemetry() {
+        sim.rep.map_blocks = sim.rep.map_blocks.max(t.map.blocks_used);
+        sim.rep.map_blocks_capacity = t.map.blocks_capacity;
+    }
+    sim.snapshot_tether();
+    let mut rep = sim.rep;
+    rep.verdict = sim.done.unwrap_or(Verdict::TimeLimit);
+    rep.last_status = sim.status;
+    rep.replans = sim.status.map_or(0, |s| s.replans);
+    rep.distance_m = sim.rover.driven_m;
+    rep.goal_error_m = dist(sim.rover.axle(), sc.goal.position);
+    rep.mean_cross_track_m = if sim.cross_n > 0 { sim.cross_sum / f64::from(sim.cross_n) } else { 0.0 };
+    rep.link_s = sim.s.link().now_us() as f64 / 1e6;
+    rep.host_s = host_t0.elapsed().as_secs_f64();
+    Ok(rep)
+}

@@ -1,0 +1,260 @@
+//! The simulator's own truth during a mission: the true tether from the root anchor to the rover, the tension
+//! the winch holds, the rover's static margin and whether the truth can hold the pose at all (a **fall**
+//! otherwise), and the tether's sideways pull that makes the rover drift. None of this uses the flight software's
+//! tether prediction or stability LP (`firmware::tether`, `firmware::stability`): the judge is independent.
+//!
+//! ## True tether
+//! - **Ledge worlds** (tests 1-3, no mission rocks): [`crate::truth::tether`]'s closed forms (straight, over the
+//!   lip or the back edge, around the pole in either wrap direction). Of the candidates that exist, the one whose
+//!   length is closest to the previous increment's is kept: the tether's length changes continuously along a
+//!   motion, so this follows its homotopy class (a wrap round the pole stays a wrap). At the first increment, the
+//!   shortest.
+//! - **Every other world** (DEMs, the crater wall, meshes, or a ledge with mission rocks): the taut tether in the
+//!   vertical plane through the root and the rover: the upper convex hull of the terrain profile under the
+//!   segment (sampled every `PROFILE_STEP_M`), from the root to the rover. Its interior vertices are the
+//!   contacts. This is exact for a tether over edges, crests and rocks in that plane; **the gap**: it cannot wrap
+//!   round the side of a rock or pole (no lateral contacts), which the general true tether of the physical-truth
+//!   work will add.
+//! - The tether ends at the axle centre (the boom's orifice is not modelled separately), as the flight software's
+//!   predicted payout does.
+//!
+//! ## Statics (the fall judge, interim)
+//! The rover is one rigid body of mass `m` on its settled pose (normal `n`: the settled pose's up axis), pulled
+//! by gravity and by the tether with tension `T` along `u` (from the axle to the last contact). The ground supplies
+//! the contact force `C = -(T u + m g)`; it holds the pose when `N = C.n >= 0` and `|C - N n| <= mu N` (one
+//! Coulomb cone for both wheels). The winch holds the tension that uses the least of the friction cone
+//! (`argmin_T |C_t| / (mu N)` over `[pretension, winch_limit]`, a quasi-convex function, found by golden-section
+//! search); the **margin** is `mu N - |C_t|` in newtons at that tension. A negative margin at the best tension is
+//! a pose the truth cannot hold: a **fall**. (The rapier3d physics judge of `host-sim/src/physics/` will take over
+//! this verdict.)
+//!
+//! ## Tether drift
+//! The lateral component (along the axle) of the non-contact forces, `F_lat = (T u + m g).y`, is held by the
+//! wheels' lateral traction `mu N`. While driving, the rover slips sideways by `drift_per_m * F_lat / (mu N)`
+//! metres per metre driven, towards the pull (`[mission] drift_per_m`, default 0.15): no slip when the tether is
+//! in line with the drive direction on a slope without side tilt, more the more the tether pulls across.
+
+use firmware::geom::p3::{add_scaled, dist, dot, norm, scale, sub, P3};
+use firmware::geom::Real;
+
+use super::world::MissionWorld;
+use crate::truth::tether::{true_tether as ledge_tether, Wrap};
+use crate::world::World;
+
+/// Sampling step of the terrain profile under the tether, metres.
+pub const PROFILE_STEP_M: f64 = 0.05;
+
+/// The true tether now.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrueTether {
+    /// Contacts from the root to the rover (the root itself not included).
+    pub contacts: Vec<P3>,
+    /// Length from the root to the rover, metres.
+    pub length_m: f64,
+}
+
+impl TrueTether {
+    /// The point the last straight piece leaves from.
+    pub fn last_anchor(&self, root: P3) -> P3 {
+        self.contacts.last().copied().unwrap_or(root)
+    }
+}
+
+/// The taut tether in the vertical plane through `root` and `end` over `world`'s height profile (module docs).
+pub fn profile_tether(world: &dyn World, root: P3, end: P3) -> TrueTether {
+    let (dx, dy) = (end[0] - root[0], end[1] - root[1]);
+    let l = (dx * dx + dy * dy).sqrt();
+    if l < 1e-6 {
+        return TrueTether { contacts: vec![], length_m: dist(root, end) };
+    }
+    let n = (l / PROFILE_STEP_M).ceil() as usize;
+    // (s, z) points: root, terrain samples strictly between, end
+    let mut pts: Vec<(f64, f64)> = Vec::with_capacity(n + 2);
+    pts.push((0.0, root[2]));
+    for k in 1..n {
+        let s = l * k as f64 / n as f64;
+        let (x, y) = (root[0] + dx * s / l, root[1] + dy * s / l);
+        if let Some(h) = world.height_at(x as Real, y as Real) {
+            pts.push((s, f64::from(h)));
+        }
+    }
+    pts.push((l, end[2]));
+    // upper hull (monotone chain), left to right
+    let mut hull: Vec<(f64, f64)> = Vec::with_capacity(pts.len());
+    for p in pts {
+        while hull.len() >= 2 {
+            let (a, b) = (hull[hull.len() - 2], hull[hull.len() - 1]);
+            // keep b only if it lies strictly above the segment a -> p
+            let cross = (b.0 - a.0) * (p.1 - a.1) - (b.1 - a.1) * (p.0 - a.0);
+            if cross >= 0.0 {
+                hull.pop();
+            } else {
+                break;
+            }
+        }
+        hull.push(p);
+    }
+    let to3 = |(s, z): (f64, f64)| [root[0] + dx * s / l, root[1] + dy * s / l, z];
+    let chain: Vec<P3> = hull.iter().map(|p| to3(*p)).collect();
+    let length_m = chain.windows(2).map(|w| dist(w[0], w[1])).sum();
+    let contacts = chain.get(1..chain.len().saturating_sub(1)).unwrap_or(&[]).to_vec();
+    TrueTether { contacts, length_m }
+}
+
+/// The true tether from `root` to `end` (module docs); `prev` is the previous increment's, for continuity.
+pub fn true_tether(world: &MissionWorld, root: P3, end: P3, prev: Option<&TrueTether>) -> TrueTether {
+    if let (Some(ledge), false) = (world.ledge(), world.has_present_rocks()) {
+        let mut cands: Vec<TrueTether> = Vec::new();
+        for wrap in [None, Some(Wrap::Ccw), Some(Wrap::Cw)] {
+            if let Some(t) = ledge_tether(ledge, root, end, wrap) {
+                cands.push(TrueTether { contacts: t.contacts, length_m: t.length });
+            }
+        }
+        let key = |t: &TrueTether| match prev {
+            Some(p) => (t.length_m - p.length_m).abs(),
+            None => t.length_m,
+        };
+        if let Some(best) = cands.into_iter().min_by(|a, b| key(a).total_cmp(&key(b))) {
+            return best;
+        }
+    }
+    profile_tether(&world.truth(), root, end)
+}
+
+/// The mass, friction and winch of the true rover.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Body {
+    /// Total mass, kg.
+    pub mass_kg: f64,
+    /// Gravity, m/s^2.
+    pub gravity: f64,
+    /// Wheel-ground friction coefficient.
+    pub mu: f64,
+    /// Smallest tension the winch holds, N.
+    pub pretension_n: f64,
+    /// Largest tension before the winch or tether gives way, N.
+    pub winch_limit_n: f64,
+}
+
+/// The statics of one pose.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Statics {
+    /// The tension the winch holds, N.
+    pub tension_n: f64,
+    /// Friction reserve `mu N - |C_t|`, N (negative: the pose cannot be held).
+    pub margin_n: f64,
+    /// Normal force, N.
+    pub normal_n: f64,
+    /// Lateral (along-axle) non-contact force, N (positive towards the rover's +y, its left).
+    pub lateral_n: f64,
+    /// Lateral slip per metre driven (signed like `lateral_n`), m/m.
+    pub drift_per_m: f64,
+}
+
+impl Statics {
+    /// True when the truth holds the pose.
+    pub fn holds(&self) -> bool {
+        self.margin_n >= 0.0 && self.normal_n > 0.0
+    }
+}
+
+/// The statics of a rover with up axis `n` and axle axis `y` (unit), tether direction `u` (unit, from the rover to
+/// the last contact; zero vector when slack), for `body`; `drift_coeff` is `[mission] drift_per_m`.
+pub fn statics(body: &Body, n: P3, y: P3, u: P3, drift_coeff: f64) -> Statics {
+    let w = [0.0, 0.0, -body.mass_kg * body.gravity];
+    let eval = |t: f64| {
+        let ext = add_scaled(w, u, t);
+        let c = scale(ext, -1.0);
+        let normal = dot(c, n);
+        let ct = norm(sub(c, scale(n, normal)));
+        (normal, ct, ext)
+    };
+    let usage = |t: f64| {
+        let (normal, ct, _) = eval(t);
+        if normal <= 0.0 {
+            f64::INFINITY
+        } else {
+            ct / (body.mu * normal)
+        }
+    };
+    // golden-section search of the quasi-convex usage over [pretension, limit]
+    let (mut a, mut b) = (body.pretension_n, body.winch_limit_n);
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    let mut c = b - g * (b - a);
+    let mut d = a + g * (b - a);
+    let (mut fc, mut fd) = (usage(c), usage(d));
+    for _ in 0..80 {
+        if fc <= fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - g * (b - a);
+            fc = usage(c);
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + g * (b - a);
+            fd = usage(d);
+        }
+    }
+    let mut t = 0.5 * (a + b);
+    // the ends of the interval (the search assumes an interior minimum)
+    for end in [body.pretension_n, body.winch_limit_n] {
+        if usage(end) < usage(t) {
+            t = end;
+        }
+    }
+    let (normal, ct, ext) = eval(t);
+    let lateral = dot(ext, y);
+    let traction = body.mu * normal.max(0.0);
+    let drift = if traction > 0.0 { drift_coeff * lateral / traction } else { 0.0 };
+    Statics { tension_n: t, margin_n: body.mu * normal - ct, normal_n: normal, lateral_n: lateral, drift_per_m: drift }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::world::ledge::LedgeWorld;
+
+    const BODY: Body = Body { mass_kg: 45.0, gravity: 3.71, mu: 0.7, pretension_n: 20.0, winch_limit_n: 2000.0 };
+
+    #[test]
+    fn profile_tether_runs_over_the_lip_like_the_closed_form() {
+        let w = LedgeWorld::new();
+        let (root, rover) = ([-6.4, 0.0, 6.35], [1.5, 0.0, 2.2]);
+        let hull = profile_tether(&w, root, rover);
+        let closed = ledge_tether(&w, root, rover, None).expect("a tether exists");
+        assert_eq!(hull.contacts.len(), 1, "{hull:?}");
+        // the lip at x = 0, z = 4 (sampled every 5 cm: within one step of it)
+        let c = hull.contacts[0];
+        assert!(c[0].abs() <= PROFILE_STEP_M + 1e-9 && (c[2] - 4.0).abs() < 0.08, "{c:?}");
+        assert!((hull.length_m - closed.length).abs() < 0.01, "{} vs {}", hull.length_m, closed.length);
+        // a rover in sight of the root: straight, no contact
+        let straight = profile_tether(&w, root, [-1.5, 0.0, 4.35]);
+        assert!(straight.contacts.is_empty());
+        assert!((straight.length_m - dist(root, [-1.5, 0.0, 4.35])).abs() < 1e-9);
+    }
+
+    #[test]
+    fn statics_hold_on_a_slope_with_the_tether_and_fail_without_it() {
+        let s = 40f64.to_radians();
+        // a 40-degree slope falling towards +x; rover facing downhill, its y axis horizontal
+        let n = [s.sin(), 0.0, s.cos()];
+        let y = [0.0, 1.0, 0.0];
+        let uphill = [-s.cos(), 0.0, s.sin()];
+        let held = statics(&BODY, n, y, uphill, 0.15);
+        assert!(held.holds(), "{held:?}");
+        // the tether carries the downslope weight: m g sin(40) ~ 107 N
+        assert!((held.tension_n - 45.0 * 3.71 * s.sin()).abs() < 2.0, "{held:?}");
+        assert!(held.drift_per_m.abs() < 1e-9);
+        // without a tether (slack: zero direction) 40 degrees exceed atan(0.7) = 35 degrees
+        let slack = statics(&BODY, n, y, [0.0, 0.0, 0.0], 0.15);
+        assert!(!slack.holds(), "{slack:?}");
+        // a tether pulling across the drive direction makes the rover drift towards it
+        let across = [-s.cos() * 0.7, 0.7, s.sin() * 0.7];
+        let l = norm(across);
+        let side = statics(&BODY, n, y, scale(across, 1.0 / l), 0.15);
+        assert!(side.drift_per_m > 0.0 && side.lateral_n > 0.0, "{side:?}");
+    }
+}
