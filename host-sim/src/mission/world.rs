@@ -172,7 +172,7 @@ impl MissionWorld {
     fn exact_geometry_with(&self, sensor: bool) -> ExactGeometry {
         let mut g = self.base.exact_geometry();
         for (r, present) in self.rocks() {
-            if present && !(sensor && !r.visible) {
+            if present && (r.visible || !sensor) {
                 g.solids.push(sphere_mesh(r.centre, r.radius_m));
             }
         }
