@@ -32,8 +32,20 @@ pub const TRACK_SEGMENT_M: f32 = 0.5;
 pub const HEADING_TOLERANCE_RAD: f32 = 0.03;
 /// A path segment counts as driven when less than this of it is left along the path, metres. Default 0.08 m.
 pub const SEGMENT_DONE_M: f32 = 0.08;
-/// Replans of one goal before the mission stops safe with `ReplanLimit`. Default 8.
+/// Replans of one goal without progress before the mission stops safe with `ReplanLimit`: the count restarts
+/// whenever the rover has come `REPLAN_PROGRESS_M` nearer the goal (horizontally) since it last restarted, so a
+/// long descent may replan as often as its map grows, while a rover that replans in place stops. Bounded: at
+/// most `MAX_REPLANS * (1 + d / REPLAN_PROGRESS_M)` replans for a start `d` metres from the goal. Default 8.
 pub const MAX_REPLANS: u32 = 8;
+/// Progress towards the goal that restarts the `MAX_REPLANS` count, metres. Default 0.5 m (one closed-loop
+/// sub-segment, `TRACK_SEGMENT_M`).
+pub const REPLAN_PROGRESS_M: f32 = 0.5;
+/// An approximate plan (allowed by the goal request) is driven only when its last state is at least this much
+/// nearer the goal than its start (axle to goal position), metres; else the mission stops safe with
+/// `NoSolution`. At its end the navigator replans from where the rover stands, on the map its scans have grown
+/// (a receding horizon, bounded by `MAX_REPLANS`). Default 0.25 m (half Axel's wheel base: less is not worth a
+/// drive).
+pub const MIN_APPROXIMATE_PROGRESS_M: f32 = 0.25;
 /// Consecutive stalled motions before the mission stops safe with `MotionStalled` (each stall replans first).
 /// Default 2.
 pub const MAX_STALLS: u32 = 2;

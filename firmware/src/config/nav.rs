@@ -34,6 +34,11 @@ pub const MIN_DRIVE_M: f32 = 1e-3;
 /// Margin added around the observed map's extent in `z` for the planning bounds, metres. Default 0.5 m, so the
 /// surface trace starts above the highest observed block.
 pub const BOUNDS_Z_MARGIN_M: f32 = 0.5;
+/// The planning window: the planning bounds are the map's extent cut to the horizontal box spanned by the start and
+/// the goal, grown by this margin on every side, metres. Default 3.0 m (three Axel lengths: room for detours
+/// round rocks and for traverses that keep the tether off an edge). A scan from a mast observes far beyond the
+/// descent; sampling all of it wastes most samples on terrain no plan to this goal would use.
+pub const PLAN_WINDOW_MARGIN_M: f32 = 3.0;
 /// Report the tree vertex closest to the goal as an approximate solution when no exact one exists (OMPL's
 /// approximate solutions). Default true: a goal behind an unpassable ledge yields the best reachable plan,
 /// reported as `ApproximateSolution`, never as exact.

@@ -4,6 +4,7 @@ use super::esdf::site_distance;
 use super::{
     local_coords, local_index, split, DistanceField, DistanceQuery, Map, VoxelIndex, BLOCK_EDGE, BLOCK_VOXELS, NO_SITE,
 };
+use crate::config::map::BELOW_SURFACE_FILL_VOXELS;
 use crate::geom::{normalize3, Real, Vec3};
 
 /// What the map knows about one voxel.
@@ -134,15 +135,23 @@ impl Map<'_> {
     /// Trilinear interpolation at `p` of the per-voxel field `f(slot, local index)`, with the gradient of the
     /// interpolant.
     fn trilinear(&self, p: &Vec3, f: impl Fn(usize, usize) -> Option<Real>) -> Option<(Real, Vec3)> {
-        let vs = self.cfg.voxel_size;
-        let u = p / vs - Vec3::new(0.5, 0.5, 0.5);
-        let i0 = [libm::floorf(u.x), libm::floorf(u.y), libm::floorf(u.z)];
-        let fx = u.x - i0[0];
-        let fy = u.y - i0[1];
-        let fz = u.z - i0[2];
-        let g0 = [i0[0] as i32, i0[1] as i32, i0[2] as i32];
+        let (g0, t) = self.interpolation_cell(p);
         let v = self.cell_values(g0, f)?;
-        let [v000, v100, v010, v110, v001, v101, v011, v111] = v;
+        Some(self.interpolate(&v, t))
+    }
+
+    /// The interpolation cell of `p`: its lowest voxel and `p`'s fractional position in it.
+    fn interpolation_cell(&self, p: &Vec3) -> (VoxelIndex, [Real; 3]) {
+        let u = p / self.cfg.voxel_size - Vec3::new(0.5, 0.5, 0.5);
+        let i0 = [libm::floorf(u.x), libm::floorf(u.y), libm::floorf(u.z)];
+        ([i0[0] as i32, i0[1] as i32, i0[2] as i32], [u.x - i0[0], u.y - i0[1], u.z - i0[2]])
+    }
+
+    /// The trilinear interpolant of the cell values `v` (x fastest, then y, then z) at fractions `t`, with its
+    /// gradient (metres).
+    fn interpolate(&self, v: &[Real; 8], t: [Real; 3]) -> (Real, Vec3) {
+        let [fx, fy, fz] = t;
+        let [v000, v100, v010, v110, v001, v101, v011, v111] = *v;
         let lerp = |a: Real, b: Real, t: Real| a + (b - a) * t;
         let x00 = lerp(v000, v100, fx);
         let x10 = lerp(v010, v110, fx);
@@ -154,7 +163,47 @@ impl Map<'_> {
         let dx = lerp(lerp(v100 - v000, v110 - v010, fy), lerp(v101 - v001, v111 - v011, fy), fz);
         let dy = lerp(x10 - x00, x11 - x01, fz);
         let dz = y1 - y0;
-        Some((value, Vec3::new(dx, dy, dz) / vs))
+        (value, Vec3::new(dx, dy, dz) / self.cfg.voxel_size)
+    }
+
+    /// The ESDF value of voxel `g`, or, when `g` is unknown, its value **below an observed surface**: the first
+    /// known voxel above `g` within [`BELOW_SURFACE_FILL_VOXELS`] is occupied (TSDF < 0), and `g` is taken to be
+    /// inside the terrain, deeper by its height difference: `esdf(above) - k * voxel_size`. `None` otherwise
+    /// (unknown space with free or no observed space above it stays unknown).
+    ///
+    /// Why: a range sensor sees a slope at a grazing angle, so the TSDF's band behind the surface (the truncation
+    /// distance along each ray) is thin and holed across the slope, while the settler's wheel rims, the footprint
+    /// ring and the sphere-traced drops query a few centimetres to decimetres under the surface. Terrain under an
+    /// observed solid surface is solid (no caves within the fill depth): the fill is conservative for collision
+    /// (more inside, never free) and places no surface where none was observed (the zero crossing stays between
+    /// observed voxels, since the first known voxel above is already inside).
+    pub fn esdf_or_below_surface(&self, g: VoxelIndex) -> Option<Real> {
+        if let Some(d) = self.esdf_voxel(g) {
+            return Some(d);
+        }
+        let vs = self.cfg.voxel_size;
+        for k in 1..=BELOW_SURFACE_FILL_VOXELS {
+            let above = [g[0], g[1], g[2].saturating_add(k)];
+            if let Some((tsdf, _)) = self.tsdf_voxel(above) {
+                if tsdf >= 0.0 {
+                    return None;
+                }
+                return Some(self.esdf_voxel(above)? - k as Real * vs);
+            }
+        }
+        None
+    }
+
+    /// [`Self::trilinear`] of the ESDF with unknown voxels below an observed surface filled
+    /// ([`Self::esdf_or_below_surface`]).
+    fn trilinear_below_surface(&self, p: &Vec3) -> Option<(Real, Vec3)> {
+        let (g0, t) = self.interpolation_cell(p);
+        let mut v = [0.0 as Real; 8];
+        for (k, vk) in v.iter_mut().enumerate() {
+            let g = [g0[0] + (k & 1) as i32, g0[1] + ((k >> 1) & 1) as i32, g0[2] + ((k >> 2) & 1) as i32];
+            *vk = self.esdf_or_below_surface(g)?;
+        }
+        Some(self.interpolate(&v, t))
     }
 
     /// Interpolated TSDF at `p` (metres) with its gradient, `None` if any of the 8 voxels is unknown.
@@ -220,7 +269,8 @@ impl DistanceField for Map<'_> {
         if !crate::geom::is_finite3(p) {
             return DistanceQuery::Unknown;
         }
-        match self.trilinear(p, |s, i| self.esdf_at(s, i)) {
+        let q = self.trilinear(p, |s, i| self.esdf_at(s, i)).or_else(|| self.trilinear_below_surface(p));
+        match q {
             Some((distance, gr)) => {
                 DistanceQuery::Known { distance, gradient: normalize3(&gr, 1e-6).unwrap_or_else(Vec3::zeros) }
             }

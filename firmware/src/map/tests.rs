@@ -128,8 +128,8 @@ fn plane_distance_and_gradient_match_analytic_plane() {
     }
     // Half a voxel covers the TSDF quantisation of the sign change plus interpolation.
     assert!(worst < 0.5 * cfg.voxel_size, "worst error {worst}");
-    // Deep under the plane nobody has looked: unknown, not occupied-and-known.
-    assert_eq!(map.query(&Vec3::new(0.0, 0.0, -0.6)), DistanceQuery::Unknown);
+    // Deep under the plane, below the observed band and the fill depth (`BELOW_SURFACE_FILL_VOXELS`): unknown.
+    assert_eq!(map.query(&Vec3::new(0.0, 0.0, -0.7)), DistanceQuery::Unknown);
     // Never observed (outside the sensor's cone, far away): unknown.
     assert_eq!(map.query(&Vec3::new(10.0, 10.0, 0.5)), DistanceQuery::Unknown);
     assert_eq!(map.voxel_state(map.voxel_index(&Vec3::new(0.0, 0.0, 0.6))), VoxelState::Free);
@@ -157,6 +157,92 @@ fn plane_distance_and_gradient_match_analytic_plane() {
         }
     }
     assert_eq!(&chunked[..], &all[..n]);
+}
+
+/// A plane through the origin sloping down in +x at `slope` (radians), seen at a grazing angle: points on a grid
+/// of the plane (1.2 m square around the origin) from a sensor 2.5 m up-slope and `eye_m` above the plane.
+fn grazing_plane_map(map: &mut Map<'_>, slope: Real, eye_m: Real) {
+    let t1 = Vec3::new(libm::cosf(slope), 0.0, -libm::sinf(slope));
+    let n = Vec3::new(libm::sinf(slope), 0.0, libm::cosf(slope));
+    let origin = t1 * -2.5 + n * eye_m;
+    let mut pts = Vec::new();
+    for a in 0..100 {
+        for b in 0..100 {
+            let (u, v) = (-0.6 + 1.2 * a as Real / 99.0, -0.6 + 1.2 * b as Real / 99.0);
+            pts.push(t1 * u + Vec3::y() * v - origin);
+        }
+    }
+    let pose = Pose3::from_parts(origin.into(), Rot3::identity());
+    for _ in 0..3 {
+        assert_eq!(map.integrate_points(&pose, &pts).pool_error, None);
+    }
+    assert!(map.update_esdf().converged);
+}
+
+/// Unknown space below an observed surface (`Map::esdf_or_below_surface`): a surface seen at a grazing angle has
+/// a thin observed band behind it (the truncation along the ray); under it the query answers "inside", never
+/// free, and no deeper than the fill allows. On level ground the fill is the true depth; on a slope it is deeper
+/// than the true distance (conservative). Free or unobserved columns stay unknown.
+#[test]
+fn unknown_space_under_an_observed_surface_is_inside() {
+    let cfg = MapConfig::with_voxel_size(0.05);
+    let vs = cfg.voxel_size;
+    for (slope_deg, level) in [(0.0 as Real, true), (35.0, false)] {
+        let (mut b, mut i) = slices(2048, 4096);
+        let mut map = Map::from_slices(cfg, &mut b, &mut i).unwrap();
+        let slope = slope_deg.to_radians();
+        grazing_plane_map(&mut map, slope, 0.4);
+        let n = Vec3::new(libm::sinf(slope), 0.0, libm::cosf(slope));
+        let mut filled = 0;
+        for &(x, y) in &[(0.0 as Real, 0.0 as Real), (0.2, -0.15), (-0.25, 0.1)] {
+            let surface_z = -libm::tanf(slope) * x;
+            for k in 1..=6 {
+                let depth = 0.05 * k as Real; // vertical depth under the plane
+                let p = Vec3::new(x, y, surface_z - depth);
+                let truth = -depth * libm::cosf(slope); // signed distance to the plane
+                let DistanceQuery::Known { distance, gradient } = map.query(&p) else {
+                    panic!("{slope_deg} deg: unknown {depth} m under the surface at ({x}, {y})");
+                };
+                if map.esdf_voxel(map.voxel_index(&p)).is_none() {
+                    filled += 1;
+                }
+                assert!(distance < 0.0, "{slope_deg} deg: {distance} at depth {depth}");
+                if level {
+                    assert!((distance - truth).abs() < 0.5 * vs, "level: {distance} vs {truth} at depth {depth}");
+                } else {
+                    // no shallower than the plane, up to the observed band's own grazing-angle error (a voxel)
+                    assert!(distance < truth + vs, "slope: {distance} vs {truth} at depth {depth}");
+                }
+                assert!(gradient.dot(&n) > 0.5, "{slope_deg} deg: gradient {gradient:?} at depth {depth}");
+            }
+            // on level ground, at the surface and just above it (the grazing rays observe no more) the field is
+            // the plane's distance: the fill moved no zero crossing. (On the grazing slope the projective TSDF is
+            // itself off by more than a voxel there, fill or no fill.)
+            for k in (0..=2).filter(|_| level) {
+                let h = 0.02 * k as Real;
+                let p = Vec3::new(x, y, surface_z) + n * h;
+                let DistanceQuery::Known { distance, .. } = map.query(&p) else { panic!("unknown {h} m above") };
+                assert!((distance - h).abs() < 0.5 * vs + 0.01, "level: {distance} at {h} m above");
+            }
+        }
+        // the grazing view leaves voxels under the surface unobserved: the fill answered for them
+        assert!(filled > 0, "{slope_deg} deg: every queried voxel was observed; the test does not reach the fill");
+    }
+    // A column with only free space observed above unknown space stays unknown (a hole could be anything), and
+    // so does a column nobody observed.
+    let (mut b, mut i) = slices(2048, 4096);
+    let mut map = Map::from_slices(cfg, &mut b, &mut i).unwrap();
+    let origin = Vec3::new(0.0, 0.0, 1.0);
+    let pose = Pose3::from_parts(origin.into(), Rot3::identity());
+    // rays straight down that end at z = 0.5 (a surface there), and a 2 m sideways ray carving free space only
+    let pts = [Vec3::new(0.0, 0.0, -0.5), Vec3::new(2.0, 0.0, -0.01)];
+    map.integrate_points(&pose, &pts);
+    map.update_esdf();
+    let under_free = Vec3::new(1.0, 0.0, 0.85);
+    assert_eq!(map.voxel_state(map.voxel_index(&(under_free + Vec3::z() * 0.1))), VoxelState::Free);
+    assert_eq!(map.esdf_or_below_surface(map.voxel_index(&under_free)), None);
+    assert_eq!(map.esdf_or_below_surface(map.voxel_index(&Vec3::new(5.0, 5.0, 0.0))), None);
+    assert_eq!(map.query(&Vec3::new(5.0, 5.0, 0.0)), DistanceQuery::Unknown);
 }
 
 /// Brute force: for every voxel of the grid, min over sites of (|c - c_s| + sign_v * site value), capped; the

@@ -18,7 +18,7 @@ use crate::protocol::{
 };
 use crate::tether::{predict_anchors, Anchor, AnchorHistory};
 
-use super::planning::{self, NavPlanStorage};
+use super::planning::{self, GoalRefusal, NavPlanStorage};
 use super::Navigator;
 
 /// The rover's body pose as the mission tracks it: axle centre and heading.
@@ -92,7 +92,6 @@ pub struct Mission {
     /// Segments left to re-check, starting at `recheck_at` (0 = nothing to re-check).
     recheck_left: usize,
     recheck_at: usize,
-    approximate: bool,
     tracked: AnchorHistory,
     /// Re-estimate in progress: the next executed position to propagate to (0 = none), and the history so far.
     reestimate_at: usize,
@@ -103,6 +102,10 @@ pub struct Mission {
     margin_n: f32,
     cross_track_m: f32,
     replans: u32,
+    /// Replans since the rover last came `REPLAN_PROGRESS_M` nearer the goal (the `ReplanLimit` count).
+    replans_stuck: u32,
+    /// The tracked pose's least horizontal distance to the goal when `replans_stuck` was last reset, metres.
+    progress_mark_m: f32,
     motions_done: u32,
     stalls: u32,
     pose_jump_run: u32,
@@ -137,7 +140,6 @@ impl Mission {
             next_open: 0,
             recheck_left: 0,
             recheck_at: 0,
-            approximate: false,
             tracked: AnchorHistory::empty(),
             reestimate_at: 0,
             reestimate_h: AnchorHistory::empty(),
@@ -147,6 +149,8 @@ impl Mission {
             margin_n: 0.0,
             cross_track_m: 0.0,
             replans: 0,
+            replans_stuck: 0,
+            progress_mark_m: f32::INFINITY,
             motions_done: 0,
             stalls: 0,
             pose_jump_run: 0,
@@ -306,6 +310,8 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         let m = &mut self.mission;
         m.goal = Some(*goal);
         m.replans = 0;
+        m.replans_stuck = 0;
+        m.progress_mark_m = f32::INFINITY;
         m.distance_driven_m = 0.0;
         m.motions_done = 0;
         m.stalls = 0;
@@ -330,17 +336,16 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         if !self.mission.active() {
             return;
         }
+        let progress = self.approximate_progress_m();
         let m = &mut self.mission;
         m.seg = 0;
         m.next_open = 0;
         match state {
             PlanState::ExactSolution => {
-                m.approximate = false;
                 m.state = MissionState::Driving;
             }
             PlanState::ApproximateSolution => {
-                if m.goal.is_some_and(|g| g.allow_approximate) {
-                    m.approximate = true;
+                if m.goal.is_some_and(|g| g.allow_approximate) && progress >= mcfg::MIN_APPROXIMATE_PROGRESS_M {
                     m.state = MissionState::Driving;
                 } else {
                     m.stop(StopReason::NoSolution);
@@ -351,6 +356,18 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         }
         if self.mission.state == MissionState::Driving && self.arrived() {
             self.mission.state = MissionState::Arrived;
+        }
+    }
+
+    /// How much nearer the goal the last state of the stored plan is than its start (axle to goal position),
+    /// metres; negative infinity without a plan.
+    fn approximate_progress_m(&mut self) -> Real {
+        let Some(goal) = self.mission.goal else { return Real::NEG_INFINITY };
+        let g = Vec3::new(goal.position.x, goal.position.y, goal.position.z);
+        let path = planning::path(&mut self.storage);
+        match (path.first(), path.last()) {
+            (Some((a, _)), Some((b, _))) => (a.axle() - g).norm() - (b.axle() - g).norm(),
+            _ => Real::NEG_INFINITY,
         }
     }
 
@@ -648,11 +665,9 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
                 if self.arrived() {
                     self.mission.state = MissionState::Arrived;
                     DriveStep::Finished
-                } else if self.mission.approximate {
-                    // an approximate plan is driven up to its last safe state, and no farther
-                    self.mission.stop(StopReason::NoSolution);
-                    DriveStep::Finished
                 } else {
+                    // the end of an exact plan short of the goal, or of an approximate one (driven up to its last
+                    // safe state and no farther): plan again from here on the map the drive has grown
                     self.replan(now)
                 }
             }
@@ -803,11 +818,19 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
     /// Plan again from the tracked pose and anchor history.
     fn replan(&mut self, now: Instant) -> DriveStep {
         let m = &mut self.mission;
-        if m.replans >= mcfg::MAX_REPLANS {
+        if let (Some(g), Some(b)) = (m.goal, m.body) {
+            let d = libm::hypotf(b.position.x - g.position.x, b.position.y - g.position.y);
+            if d <= m.progress_mark_m - mcfg::REPLAN_PROGRESS_M || !m.progress_mark_m.is_finite() {
+                m.progress_mark_m = d;
+                m.replans_stuck = 0;
+            }
+        }
+        if m.replans_stuck >= mcfg::MAX_REPLANS {
             m.stop(StopReason::ReplanLimit);
             return DriveStep::Finished;
         }
         m.replans = m.replans.saturating_add(1);
+        m.replans_stuck = m.replans_stuck.saturating_add(1);
         let (Some(goal), Some(setup)) = (m.goal, self.setup) else {
             m.stop(StopReason::GoalRefused);
             return DriveStep::Finished;
@@ -819,14 +842,18 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         planning::clear_plan(&mut self.storage);
         let budget = goal.max_iterations.min(MAX_PLAN_ITERATIONS);
         let set_up = match Map::reattach(self.cfg, self.blocks.borrow_mut(), self.index.borrow_mut(), self.used) {
-            Ok(map) => planning::set_up(&map, &setup, &pose, &goal, budget, now).ok(),
-            Err(_) => None,
+            Ok(map) => planning::set_up(&map, &setup, &pose, &goal, budget, now),
+            Err(_) => Err(GoalRefusal::MapEmpty),
         };
-        let Some(mut problem) = set_up else {
-            log::warn!("mission: replan could not be set up from the current pose");
-            self.problem = None;
-            self.mission.stop(StopReason::GoalRefused);
-            return DriveStep::Finished;
+        let mut problem = match set_up {
+            Ok(problem) => problem,
+            Err(why) => {
+                log::warn!("mission: replan could not be set up from the current pose");
+                self.refuse(why);
+                self.problem = None;
+                self.mission.stop(StopReason::GoalRefused);
+                return DriveStep::Finished;
+            }
         };
         // another sample sequence than the plan that failed
         problem.seed ^= u64::from(self.mission.replans).wrapping_mul(0xD1B5_4A32_D192_ED03);

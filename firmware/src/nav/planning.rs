@@ -137,6 +137,8 @@ pub struct NavPlanStats {
     /// The space's work and motion-failure counters of the last step (samples, settles, stability checks, motions
     /// invalid by reason).
     pub last_step: MotionStats,
+    /// The same counters summed over every step of every goal.
+    pub totals: MotionStats,
     /// Waypoints whose anchor history was shortened to `MAX_ANCHORS_PER_WAYPOINT` (root and most recent kept).
     pub anchors_truncated: u32,
 }
@@ -239,6 +241,21 @@ pub(crate) fn map_bounds(map: &Map<'_>, start: &Vec3) -> Option<PlanBounds> {
     b.is_valid().then_some(b)
 }
 
+/// `bounds` cut to the planning window: the horizontal box spanned by `start` and `goal`, grown by
+/// `PLAN_WINDOW_MARGIN_M` (see there). `bounds` contains the start, so the cut is never empty; a goal outside
+/// `bounds` stays an off-map goal.
+pub(crate) fn planning_window(bounds: PlanBounds, start: &Vec3, goal: &Vec3) -> PlanBounds {
+    let m = cfg::PLAN_WINDOW_MARGIN_M;
+    let mut b = bounds;
+    for (k, (s, g)) in [(start.x, goal.x), (start.y, goal.y)].into_iter().enumerate() {
+        if let (Some(lo), Some(hi)) = (b.min.get_mut(k), b.max.get_mut(k)) {
+            *lo = lo.max(s.min(g) - m);
+            *hi = hi.min(s.max(g) + m);
+        }
+    }
+    if b.is_valid() { b } else { bounds }
+}
+
 /// Set up a goal: settle the start under the last known pose, check the goal, and return the problem.
 pub(crate) fn set_up(
     map: &Map<'_>,
@@ -253,7 +270,9 @@ pub(crate) fn set_up(
     }
     let p = pose.position;
     let start_xy = Vec3::new(p.x, p.y, p.z);
+    let g = Vec3::new(goal.position.x, goal.position.y, goal.position.z);
     let bounds = map_bounds(map, &start_xy).ok_or(GoalRefusal::NoSurface)?;
+    let bounds = planning_window(bounds, &start_xy, &g);
     let mut rover = setup.rover;
     // As the campaign does on a map: one voxel of extra body clearance for the map's discretisation.
     rover.body_clearance_m += map.config().voxel_size;
@@ -261,7 +280,6 @@ pub(crate) fn set_up(
         TetherSpace::new(map, bounds, rover, TetherSpaceParams::DEFAULT).map_err(|_| GoalRefusal::PlannerRejected)?;
     let yaw = crate::geom::heading(&pose.to_isometry().rotation);
     let start = space.settle_state(p.x, p.y, yaw).map_err(|_| GoalRefusal::StartNotSettled)?;
-    let g = Vec3::new(goal.position.x, goal.position.y, goal.position.z);
     space.goal_state(g, 0.0).map_err(|_| GoalRefusal::GoalNotSettled)?;
     let mut abit = AbitParams::ompl_defaults();
     abit.samples_per_batch = setup.samples_per_batch;
@@ -473,6 +491,7 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
         }
     }
     stats.last_step = space.stats();
+    stats.totals.add(&stats.last_step);
     stats.settles_run = stats.settles_run.saturating_add(u64::from(stats.last_step.settles));
     stats.stability_checks_run = stats.stability_checks_run.saturating_add(u64::from(stats.last_step.stability_checks));
     if done {

@@ -172,6 +172,31 @@ pub struct MotionStats {
     pub catch_samples: u32,
 }
 
+impl MotionStats {
+    /// Adds `other`'s counts to these (saturating): a sum over several steps or searches.
+    pub fn add(&mut self, other: &MotionStats) {
+        let pairs: [(&mut u32, u32); 14] = [
+            (&mut self.samples_drawn, other.samples_drawn),
+            (&mut self.samples_settled, other.samples_settled),
+            (&mut self.settles, other.settles),
+            (&mut self.anchor_predictions, other.anchor_predictions),
+            (&mut self.stability_checks, other.stability_checks),
+            (&mut self.motions, other.motions),
+            (&mut self.motions_valid, other.motions_valid),
+            (&mut self.fail_settle, other.fail_settle),
+            (&mut self.fail_unknown, other.fail_unknown),
+            (&mut self.fail_tether, other.fail_tether),
+            (&mut self.fail_unstable, other.fail_unstable),
+            (&mut self.fail_too_long, other.fail_too_long),
+            (&mut self.catch_probes, other.catch_probes),
+            (&mut self.catch_samples, other.catch_samples),
+        ];
+        for (mine, theirs) in pairs {
+            *mine = mine.saturating_add(theirs);
+        }
+    }
+}
+
 /// The tether-aware state space over a distance field (the onboard map, or a world on the host).
 pub struct TetherSpace<'m, D> {
     pub(super) map: &'m D,
