@@ -18,7 +18,11 @@
 //! 2. Orientation: x is world x projected on the tangent plane (world y if x is parallel to `n`), turned by
 //!    `theta_m` about `n`; the start pose is at `p_m + delta n`.
 //! 3. Each wheel is `WHEEL_CONTACT_POINTS` = 12 points. Drop along `n` by sphere tracing (move by the smallest ESDF
-//!    distance of all contact points) until one touches (`contact_threshold_m`).
+//!    distance of all contact points) until one touches (`contact_threshold_m`). On a map, the points of a wheel's
+//!    upper half (above the axle) may lie in unobserved space (a slope seen from afar is observed only in a thin
+//!    layer above it): they are then no contact, and the search assumes no overhang there; the lower half, the
+//!    body and the footprint must be observed. When the start pose's wheels meet unobserved space, the rover starts
+//!    with its wheels just above `p_m` instead (`wheel_radius_m + 2 contact_threshold_m` up along `n`).
 //! 4. Search discrete roll perturbations (`roll_step_rad` steps, up to `SETTLE_ROLL_STEPS` each way) for the roll
 //!    at which the two wheels' lowest points are equally far from the surface; drop again; repeat until both wheels
 //!    touch (at most `SETTLE_MAX_ITERATIONS`).
@@ -135,6 +139,8 @@ fn wheel_points(params: &RoverParams) -> [[Vec3; WHEEL_CONTACT_POINTS]; 2] {
 }
 
 /// Smallest ESDF distance over each wheel's points (and the point index), for rover pose (origin, rotation).
+/// `None` when a point of a wheel's lower half (rover-frame z <= 0: the half that meets the ground) is in unknown
+/// space; an unknown point of the upper half is not a contact (step 3 of the module docs).
 fn wheel_gaps(
     map: &impl DistanceField,
     pts: &[[Vec3; WHEEL_CONTACT_POINTS]; 2],
@@ -145,7 +151,11 @@ fn wheel_gaps(
     for (o, wheel) in out.iter_mut().zip(pts.iter()) {
         for p in wheel {
             let q = origin + rot * p;
-            let (d, g) = query(map, &q)?;
+            let (d, g) = match query(map, &q) {
+                Some(dg) => dg,
+                None if p.z > 0.0 => continue,
+                None => return None,
+            };
             if d < o.0 {
                 *o = (d, q, g);
             }
@@ -246,6 +256,11 @@ pub fn settle(map: &impl DistanceField, p_m: &Vec3, theta_m: Real, params: &Rove
     let pts = wheel_points(params);
     let thr = params.contact_threshold_m;
     let mut origin = p_m + n * params.settle_delta_m;
+    if wheel_gaps(map, &pts, &origin, &base).is_none() {
+        // the space `settle_delta_m` above the surface is not observed: start with the wheels just above the query
+        // point (the drop and the roll search move them either way)
+        origin = p_m + n * (params.wheel_radius_m + 2.0 * thr);
+    }
     let mut roll: Real = 0.0;
     let mut rot = base;
     let mut iterations = 0;

@@ -9,6 +9,18 @@ pub const SURFACE_TRACE_STEPS: u32 = 64;
 /// Smallest step of the surface trace, metres (default 0.05 m: one voxel of the default map).
 pub const SURFACE_MIN_STEP_M: f32 = 0.05;
 
+/// Yaws tried when settling the rover under a goal position (the first that settles is the goal state), evenly
+/// round from the requested yaw. Default 8 (every 45 degrees).
+pub const GOAL_SETTLE_YAWS: u32 = 8;
+
+/// Step of the surface trace through unknown space, metres. Default 0.1 m: no thicker than the observed band
+/// round a surface (the map's truncation in front of it, 0.15 m by default, plus the fill under it), so the trace
+/// cannot step over an observed surface.
+pub const SURFACE_UNKNOWN_STEP_M: f32 = 0.1;
+/// Steps of the surface trace through unknown space, at most. Default 128: 12.8 m of unobserved column above the
+/// surface (a floor far below a rim or a mast's view).
+pub const SURFACE_UNKNOWN_STEPS: u32 = 128;
+
 /// Most interpolated states of one motion (turns and drive together). A motion that would need more is invalid
 /// (`MotionFailure::TooLong`): 256 states at the default 0.2 m resolution is a 51 m drive.
 pub const MAX_MOTION_STATES: u32 = 256;

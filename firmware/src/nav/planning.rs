@@ -273,14 +273,21 @@ pub(crate) fn set_up(
     let g = Vec3::new(goal.position.x, goal.position.y, goal.position.z);
     let bounds = map_bounds(map, &start_xy).ok_or(GoalRefusal::NoSurface)?;
     let bounds = planning_window(bounds, &start_xy, &g);
+    log::info!("nav: planning bounds {:?} .. {:?}", bounds.min, bounds.max);
     let mut rover = setup.rover;
     // As the campaign does on a map: one voxel of extra body clearance for the map's discretisation.
     rover.body_clearance_m += map.config().voxel_size;
     let space =
         TetherSpace::new(map, bounds, rover, TetherSpaceParams::DEFAULT).map_err(|_| GoalRefusal::PlannerRejected)?;
     let yaw = crate::geom::heading(&pose.to_isometry().rotation);
-    let start = space.settle_state(p.x, p.y, yaw).map_err(|_| GoalRefusal::StartNotSettled)?;
-    space.goal_state(g, 0.0).map_err(|_| GoalRefusal::GoalNotSettled)?;
+    let start = space.settle_state(p.x, p.y, yaw).map_err(|e| {
+        log::warn!("nav: the start does not settle at ({}, {}): {:?}", p.x, p.y, e);
+        GoalRefusal::StartNotSettled
+    })?;
+    space.goal_state(g, 0.0).map_err(|e| {
+        log::warn!("nav: the goal does not settle at ({}, {}): {:?}", g.x, g.y, e);
+        GoalRefusal::GoalNotSettled
+    })?;
     let mut abit = AbitParams::ompl_defaults();
     abit.samples_per_batch = setup.samples_per_batch;
     abit.track_approximate = cfg::TRACK_APPROXIMATE;

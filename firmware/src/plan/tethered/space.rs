@@ -7,7 +7,10 @@ use rand_core::Rng;
 
 use crate::config::rover::RoverParams;
 use crate::config::tether::ANCHOR_HISTORY_CAPACITY;
-use crate::config::tethered::{CATCH_PAIR_ATTEMPTS, MAX_WHEEL_CONTACT_INCLINE_RAD, SURFACE_MIN_STEP_M, SURFACE_TRACE_STEPS};
+use crate::config::tethered::{
+    CATCH_PAIR_ATTEMPTS, GOAL_SETTLE_YAWS, MAX_WHEEL_CONTACT_INCLINE_RAD, SURFACE_MIN_STEP_M, SURFACE_TRACE_STEPS, SURFACE_UNKNOWN_STEPS,
+    SURFACE_UNKNOWN_STEP_M,
+};
 use crate::geom::{angle_diff, norm3, Real, Vec3};
 use crate::map::{DistanceField, DistanceQuery};
 use crate::plan::space::{uniform01, CatchSample, StateSpace, StateValidityChecker};
@@ -55,16 +58,30 @@ impl RoverState {
     }
 }
 
-/// The surface under `(x, y)`: sphere tracing down the distance field from `z_top` to `z_bottom`. `None` when no
-/// surface is reached within [`SURFACE_TRACE_STEPS`] or a query meets unknown space.
+/// The surface under `(x, y)`: the highest **observed** surface of the column between `z_top` and `z_bottom`.
+/// Sphere tracing down the distance field; unknown space (a column nobody's ray crossed above the terrain: a floor
+/// far below a rim, a slope seen from below) is stepped through by [`SURFACE_UNKNOWN_STEP_M`], at most
+/// [`SURFACE_UNKNOWN_STEPS`] times, down to the first observed space. `None` when no surface is reached within
+/// [`SURFACE_TRACE_STEPS`] sphere-tracing steps or the unknown-space budget, or below `z_bottom`. Whatever lies
+/// unobserved above the surface found is the settler's to refuse: a pose needs observed space round the rover.
 pub fn surface_point(map: &impl DistanceField, x: Real, y: Real, z_top: Real, z_bottom: Real) -> Option<Vec3> {
     let mut z = z_top;
-    for _ in 0..SURFACE_TRACE_STEPS {
+    let mut traced = 0;
+    let mut unknown = 0;
+    while traced < SURFACE_TRACE_STEPS {
         if z < z_bottom {
             return None;
         }
         let p = Vec3::new(x, y, z);
-        let DistanceQuery::Known { distance, .. } = map.query(&p) else { return None };
+        let DistanceQuery::Known { distance, .. } = map.query(&p) else {
+            unknown += 1;
+            if unknown > SURFACE_UNKNOWN_STEPS {
+                return None;
+            }
+            z -= SURFACE_UNKNOWN_STEP_M;
+            continue;
+        };
+        traced += 1;
         if !distance.is_finite() {
             return None;
         }
@@ -250,10 +267,22 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
         self.count(|s| s.settles += 1);
         settle_at(self.map, &self.bounds, &self.rover, x, y, theta)
     }
-    /// A goal state: settled at `(x, y)` when inside the bounds, an off-map goal at `point` otherwise.
+    /// A goal state: settled at `(x, y)` when inside the bounds (at the first yaw that settles), an off-map goal at
+    /// `point` otherwise.
     pub fn goal_state(&self, point: Vec3, theta: Real) -> Result<RoverState, SettleFailure> {
         if self.bounds.contains_xy(point.x, point.y) {
-            self.settle_state(point.x, point.y, theta)
+            // The goal region is a position (the axle within the tolerance): the first of `GOAL_SETTLE_YAWS` yaws,
+            // from `theta` round, at which the rover settles there (one yaw may put the body on a ridge).
+            let mut first = Err(SettleFailure::InvalidInput);
+            for k in 0..GOAL_SETTLE_YAWS {
+                let yaw = theta + core::f32::consts::TAU * k as Real / GOAL_SETTLE_YAWS as Real;
+                match self.settle_state(point.x, point.y, crate::geom::wrap_angle(yaw)) {
+                    Ok(s) => return Ok(s),
+                    Err(e) if k == 0 => first = Err(e),
+                    Err(_) => {}
+                }
+            }
+            first
         } else if crate::geom::is_finite3(&point) {
             Ok(RoverState::off_map_goal(point))
         } else {

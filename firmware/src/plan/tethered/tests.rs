@@ -1,6 +1,6 @@
 use super::*;
 use crate::config::rover::RoverParams;
-use crate::config::tethered::SURFACE_MIN_STEP_M;
+use crate::config::tethered::{SURFACE_MIN_STEP_M, SURFACE_UNKNOWN_STEPS, SURFACE_UNKNOWN_STEP_M};
 use crate::geom::{Real, Vec3};
 use crate::map::{DistanceField, DistanceQuery};
 use crate::tether::{Anchor, AnchorHistory};
@@ -28,14 +28,28 @@ fn history(points: &[[Real; 3]]) -> AnchorHistory {
     h
 }
 
+/// The plane z = 0 observed only below `observed_above` metres (unknown higher up: a floor seen from a rim).
+struct ObservedBelow(Real);
+impl DistanceField for ObservedBelow {
+    fn query(&self, p: &Vec3) -> DistanceQuery {
+        if p.z > self.0 { DistanceQuery::Unknown } else { Ground.query(p) }
+    }
+}
+
 #[test]
-fn surface_point_finds_the_plane_and_refuses_unknown_space() {
+fn surface_point_finds_the_observed_surface_under_unknown_space_and_refuses_a_column_without_one() {
     let p = surface_point(&Ground, 1.0, 2.0, 5.0, -1.0).unwrap();
     assert!(p.z.abs() <= SURFACE_MIN_STEP_M * 0.5, "{p:?}");
     assert_eq!((p.x, p.y), (1.0, 2.0));
     assert_eq!(surface_point(&Nothing, 1.0, 2.0, 5.0, -1.0), None);
     // the surface is below the search range
     assert_eq!(surface_point(&Ground, 0.0, 0.0, 5.0, 1.0), None);
+    // 4.8 m of unknown space above a band observed 0.2 m up: stepped through, the surface found
+    let p = surface_point(&ObservedBelow(0.2), 1.0, 2.0, 5.0, -1.0).unwrap();
+    assert!(p.z.abs() <= SURFACE_MIN_STEP_M * 0.5, "{p:?}");
+    // more unknown space than the budget (`SURFACE_UNKNOWN_STEPS` x `SURFACE_UNKNOWN_STEP_M`): refused
+    let top = 0.2 + SURFACE_UNKNOWN_STEP_M * (SURFACE_UNKNOWN_STEPS + 2) as Real;
+    assert_eq!(surface_point(&ObservedBelow(0.2), 1.0, 2.0, top, -1.0), None);
 }
 
 #[test]
