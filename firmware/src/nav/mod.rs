@@ -19,9 +19,12 @@
 //!   track (`axle_length_m`), boom length, mass (split body / boom by `BOOM_MASS_FRACTION`), friction and the
 //!   tether's tension limit; one voxel of extra body clearance, as the campaign plans on a map;
 //! - **bounds** ([`PlanBounds`]): the extent of the map's blocks (grown to contain the start, plus
-//!   `BOUNDS_Z_MARGIN_M` in z). A goal outside it is an **off-map goal** (section VI-B): it connects from any state
+//!   `BOUNDS_Z_MARGIN_M` in z), cut to the **planning window** (the horizontal box spanned by the start and the
+//!   goal, grown by `PLAN_WINDOW_MARGIN_M`: a mast's scan observes far beyond the descent, and samples there are
+//!   wasted). A goal outside it is an **off-map goal** (section VI-B): it connects from any state
 //!   within `off_map_edge_m` of the bounds, and the plan ends at that state;
-//! - **goal region**: within `tolerance_m` (axle distance) of the rover settled under the goal position;
+//! - **goal region**: within `tolerance_m` (axle distance) of the rover settled under the goal position (at the
+//!   first of `GOAL_SETTLE_YAWS` yaws that settles);
 //! - **budget**: `min(goal.max_iterations, MAX_PLAN_ITERATIONS)` iterations, and `time_budget_ms` of flight time
 //!   when non-zero; the sampler is SplitMix64 ([`crate::plan::SplitMix64`]) seeded from `Configure.planner.rng_seed` and the goal id;
 //!   `batch_size` is the samples per batch (at most `SAMPLES_PER_BATCH`); `goal_bias` has no meaning for ABIT*
@@ -61,7 +64,7 @@
 //!   shutdown, the current state's margin below `min_margin_n` (`MarginBelowMinimum`), tension over
 //!   `max_tension_n` (`TensionLimit`), tracked tether and encoder inconsistent after a re-estimate
 //!   (`TetherInconsistent`), `MAX_POSE_JUMPS` rejected poses in a row (`PoseJump`), `MAX_STALLS` stalls in a row
-//!   (`MotionStalled`), more than `MAX_REPLANS` replans (`ReplanLimit`), no report in time (`MotionTimeout`),
+//!   (`MotionStalled`), more than `MAX_REPLANS` replans without `REPLAN_PROGRESS_M` of progress towards the goal (`ReplanLimit`), no report in time (`MotionTimeout`),
 //!   `MAX_SCAN_REJECTS` rejected scans in a row (`ScanInconsistent`). A goal request while driving replaces the
 //!   goal (the executive stops the motion in flight); a cancel stops safe (`Cancelled`).
 //! - **Tracked tether**: the anchor history starts at the root on `Configure` and is propagated with Alg. 1
@@ -73,6 +76,10 @@
 //!   `EXECUTED_CAPACITY` executed positions on the current map, which may now show the snag; `REESTIMATE_PER_STEP`
 //!   predictions per executive step, the rover waiting); then it stops safe (`TetherInconsistent`) if the last
 //!   payout still disagrees, else replans from the re-estimated history.
+//! - **Approximate plans (a receding horizon)**: an approximate plan is driven only when the goal request allows
+//!   it and its last state is at least `MIN_APPROXIMATE_PROGRESS_M` nearer the goal than its start (else
+//!   `NoSolution`); at its last (safe) state the navigator replans from there, on the map its scans have grown
+//!   on the way (terrain beyond a rise or a lip is observed only from near it).
 //! - **Re-checks and replans**: after each report the next `RECHECK_AFTER_MOTION` segments are re-checked
 //!   (the current state's margin and the motion from it to the segment's end, then the planned motions, each a
 //!   full motion check on the current map: collision, settling, anchors, stability), after each scan the whole
@@ -93,7 +100,7 @@
 //!   from the tracked pose is not integrated (`scans_rejected`); counters in `MissionStatus` and
 //!   [`MissionCounters`].
 //! - Parameters (`config::mission`): `TRACK_SEGMENT_M` 0.5, `HEADING_TOLERANCE_RAD` 0.03, `SEGMENT_DONE_M` 0.08,
-//!   `MAX_REPLANS` 8, `MAX_STALLS` 2, `POSE_JUMP_BASE_M` 0.5, `POSE_JUMP_PER_M` 0.5, `POSE_JUMP_YAW_RAD` 0.6,
+//!   `MAX_REPLANS` 8, `REPLAN_PROGRESS_M` 0.5, `MIN_APPROXIMATE_PROGRESS_M` 0.25, `MAX_STALLS` 2, `POSE_JUMP_BASE_M` 0.5, `POSE_JUMP_PER_M` 0.5, `POSE_JUMP_YAW_RAD` 0.6,
 //!   `MAX_POSE_JUMPS` 3, `SCAN_POSE_TOLERANCE_M` 2.0, `MAX_SCAN_REJECTS` 3, `MAX_PAYOUT_RATE_M_PER_S` 1.0,
 //!   `PAYOUT_JUMP_SLACK_M` 0.3, `RECHECK_AFTER_MOTION` 2, `EXECUTED_CAPACITY` 64, `REESTIMATE_PER_STEP` 4,
 //!   `DRIFT_GAIN_LIMIT` 1.0,
@@ -134,7 +141,7 @@
 //!   (default 256), the only stack buffer;
 //! - planning (`config::nav`): `NODE_CAPACITY` 512, `EDGE_QUEUE_CAPACITY` 4096, `EDGE_MEMO_CAPACITY` 256,
 //!   `MOTION_CHECKS_PER_STEP` 1, `SAMPLES_PER_BATCH` 100, `MAX_PLAN_ITERATIONS` 750, `PATH_CAPACITY` 64,
-//!   `MOTION_CAPACITY` 189, `MIN_TURN_RAD` 1e-3, `MIN_DRIVE_M` 1e-3, `BOUNDS_Z_MARGIN_M` 0.5,
+//!   `MOTION_CAPACITY` 189, `MIN_TURN_RAD` 1e-3, `MIN_DRIVE_M` 1e-3, `BOUNDS_Z_MARGIN_M` 0.5, `PLAN_WINDOW_MARGIN_M` 3.0,
 //!   `TRACK_APPROXIMATE` true, `BOOM_MASS_FRACTION` 0.2; the space's parameters are
 //!   [`TetherSpaceParams::DEFAULT`](crate::plan::tethered::TetherSpaceParams::DEFAULT) and ABIT*'s
 //!   [`AbitParams::ompl_defaults`](crate::plan::abit::AbitParams::ompl_defaults).
@@ -143,9 +150,14 @@
 //! - The tether sweep of anchor prediction ([`crate::tether::predict_anchors`]) fails in unknown space, so the
 //!   **root anchor must lie in observed space** (e.g. mapped from the rover's own scans): a root above an unmapped
 //!   crater rim makes every motion invalid (`NoSolutionWithinBudget`). The `protocol` scenario's root is such a case.
-//! - The surface search of a sample starts at the top of the planning bounds and fails in unknown space, so the
-//!   **space above the terrain up to the bounds' top must be observed** (rays crossing it, e.g. from a high or
-//!   overlapping sensor); the ground under the rover's own pose must be observed for the start to settle.
+//! - The surface search of a sample starts at the top of the planning bounds and steps through unknown space to
+//!   the **highest observed surface** of the column ([`crate::plan::tethered::surface_point`]); the settler then
+//!   needs observed space round the rover: the footprint, the lower halves of the wheels and the body (unobserved
+//!   space above the axle is taken as free: no overhangs; [`crate::rover`]). Unknown space **under** an observed
+//!   surface is inside the terrain ([`Map::esdf_or_below_surface`]): a slope seen at a grazing angle has only a
+//!   thin observed band behind its surface, and the settler's queries reach below it.
+//! - Rays leave unobserved stripes between them where they land more than a voxel apart (far from the sensor, at
+//!   grazing incidence): a goal column inside such a stripe does not settle (`GoalNotSettled`).
 //! - The executive integrates a whole scan in one step: on the emulated board an 8000-point scan at the flight
 //!   map's 5 cm voxels outlasts the 2 s watchdog (a 2000-point scan does not).
 //!
