@@ -12,7 +12,7 @@
 //! # Settling (Fig. 2)
 //! Input: a query point `p_m` near the surface and a yaw `theta_m` about the surface normal.
 //! 1. Surface normal `n`: the mean of the ESDF gradients at the query point and at `FOOTPRINT_POINTS` points on a
-//!    ring of radius `track/2` around it (the gradient points away from the terrain's interior, so `n` is oriented
+//!    ring of radius `track/2` around it (at least half of the ring observed; unobserved ring points left out) (the gradient points away from the terrain's interior, so `n` is oriented
 //!    as the paper asks). This replaces the paper's fit to the surface points of the footprint: for a plane both are
 //!    the plane's normal, and it needs only the `DistanceField` trait.
 //! 2. Orientation: x is world x projected on the tangent plane (world y if x is parallel to `n`), turned by
@@ -212,10 +212,12 @@ fn roll_matrix(base: &Matrix3<Real>, roll: Real) -> Matrix3<Real> {
     base * rx
 }
 
-/// The surface normal at `p` from the footprint (see the module docs), or `None` in unknown space.
+/// The surface normal at `p` from the footprint (see the module docs), or `None` when `p` or more than half of the
+/// ring's points are in unknown space (a ring point in an unobserved stripe between rays is left out).
 pub fn footprint_normal(map: &impl DistanceField, p: &Vec3, params: &RoverParams) -> Option<Vec3> {
     let (_, g0) = query(map, p)?;
     let mut sum = g0;
+    let mut unknown = 0;
     // ring in the plane perpendicular to the first gradient
     let n0 = normalize3(&g0, 1e-6)?;
     let alt = if libm::fabsf(n0.x) < 0.9 { Vec3::x() } else { Vec3::y() };
@@ -225,7 +227,13 @@ pub fn footprint_normal(map: &impl DistanceField, p: &Vec3, params: &RoverParams
     for k in 0..FOOTPRINT_POINTS {
         let a = 2.0 * core::f32::consts::PI * k as Real / FOOTPRINT_POINTS as Real;
         let q = p + (u * libm::cosf(a) + v * libm::sinf(a)) * r;
-        let (d, g) = query(map, &q)?;
+        let Some((d, g)) = query(map, &q) else {
+            unknown += 1;
+            if 2 * unknown > FOOTPRINT_POINTS {
+                return None;
+            }
+            continue;
+        };
         // project onto the surface and take the gradient there (its own closest-surface direction)
         let on = q - g * d;
         let (_, gs) = query(map, &(on + g * 0.02)).unwrap_or((d, g));

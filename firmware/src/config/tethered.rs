@@ -104,4 +104,7 @@ pub mod defaults {
     /// rover length): the sample lands within 0.25 m of the boundary of the tether shadow, and a 0.6 m shadow such
     /// as the one the ledge's pole casts is straddled.
     pub const CATCH_PAIR_RADIUS_M: f32 = 0.5;
+    /// Anchor prediction treats unobserved space as free (`TetherSpaceParams::tether_through_unobserved`). Default
+    /// false (Paton et al.: unknown space is unsafe); the navigator sets it (`TetherSpaceParams::ONBOARD`).
+    pub const TETHER_THROUGH_UNOBSERVED: bool = false;
 }

@@ -87,6 +87,25 @@ pub trait DistanceField {
     fn query(&self, p: &Vec3) -> DistanceQuery;
 }
 
+/// A distance field whose unobserved space reads as free, [`UNOBSERVED_FREE_DISTANCE_M`] from any surface: for
+/// the tether's anchor prediction only, where the tether physically runs through space the sensor did not see
+/// (see `TetherSpaceParams::tether_through_unobserved`). Never for the rover's own footprint.
+pub struct UnobservedAsFree<'a, D>(pub &'a D);
+
+/// The distance [`UnobservedAsFree`] reports for unobserved space, metres: farther than any contact distance.
+pub const UNOBSERVED_FREE_DISTANCE_M: Real = 1.0e3;
+
+impl<D: DistanceField> DistanceField for UnobservedAsFree<'_, D> {
+    fn query(&self, p: &Vec3) -> DistanceQuery {
+        match self.0.query(p) {
+            DistanceQuery::Unknown if crate::geom::is_finite3(p) => {
+                DistanceQuery::Known { distance: UNOBSERVED_FREE_DISTANCE_M, gradient: Vec3::zeros() }
+            }
+            q => q,
+        }
+    }
+}
+
 /// Bytes of voxel payload per voxel (TSDF 2 + weight 2 + site offset 3 + site distance 1).
 pub const VOXEL_BYTES: usize = 8;
 

@@ -177,9 +177,24 @@ impl Map<'_> {
     /// observed solid surface is solid (no caves within the fill depth): the fill is conservative for collision
     /// (more inside, never free) and places no surface where none was observed (the zero crossing stays between
     /// observed voxels, since the first known voxel above is already inside).
+    ///
+    /// Before that, a **gap between rays** is bridged: an unknown voxel whose two neighbours along x, or along y,
+    /// are both observed takes their mean. Far from the sensor and at grazing incidence, neighbouring rays land
+    /// more than a voxel apart and leave one-voxel stripes unobserved between observed ones (the crater floor and
+    /// the HiRISE slope from a mast); the field is continuous across one voxel there. Wider gaps stay unknown.
     pub fn esdf_or_below_surface(&self, g: VoxelIndex) -> Option<Real> {
         if let Some(d) = self.esdf_voxel(g) {
             return Some(d);
+        }
+        for axis in 0..2 {
+            let (mut lo, mut hi) = (g, g);
+            if let (Some(a), Some(b)) = (lo.get_mut(axis), hi.get_mut(axis)) {
+                *a = a.saturating_sub(1);
+                *b = b.saturating_add(1);
+            }
+            if let (Some(a), Some(b)) = (self.esdf_voxel(lo), self.esdf_voxel(hi)) {
+                return Some(0.5 * (a + b));
+            }
         }
         let vs = self.cfg.voxel_size;
         for k in 1..=BELOW_SURFACE_FILL_VOXELS {

@@ -245,6 +245,40 @@ fn unknown_space_under_an_observed_surface_is_inside() {
     assert_eq!(map.query(&Vec3::new(5.0, 5.0, 0.0)), DistanceQuery::Unknown);
 }
 
+/// A gap between rays (`Map::esdf_or_below_surface`): level ground observed everywhere but one column of voxels
+/// (x index 0) reads across the gap as the plane's distance; a two-voxel gap stays unknown.
+#[test]
+fn a_one_voxel_gap_between_observed_voxels_is_bridged_and_a_wider_one_is_not() {
+    let cfg = MapConfig::with_voxel_size(0.05);
+    let vs = cfg.voxel_size;
+    for gap in [1, 2] {
+        let (mut b, mut i) = slices(256, 512);
+        let mut map = Map::from_slices(cfg, &mut b, &mut i).unwrap();
+        for x in -6..6 {
+            if (0..gap).contains(&x) {
+                continue;
+            }
+            for y in -6..6 {
+                for z in -4..8 {
+                    let centre_z = (z as Real + 0.5) * vs;
+                    map.set_voxel([x, y, z], centre_z, 1.0).unwrap();
+                }
+            }
+        }
+        assert!(map.update_esdf().converged);
+        // points whose interpolation cell holds the unobserved voxel x = 0 (centres at x = 0.025)
+        for &(x, z) in &[(0.02 as Real, 0.1 as Real), (0.03, 0.04), (0.0, 0.2), (0.04, -0.05)] {
+            let q = map.query(&Vec3::new(x, 0.0, z));
+            if gap == 1 {
+                let DistanceQuery::Known { distance, .. } = q else { panic!("one-voxel gap: unknown at ({x}, {z})") };
+                assert!((distance - z).abs() < 0.5 * vs, "one-voxel gap: {distance} at ({x}, {z})");
+            } else {
+                assert_eq!(q, DistanceQuery::Unknown, "two-voxel gap at ({x}, {z})");
+            }
+        }
+    }
+}
+
 /// Brute force: for every voxel of the grid, min over sites of (|c - c_s| + sign_v * site value), capped; the
 /// voxel is inside (sign -1) only if it is itself a site with a negative value.
 fn brute_force(sites: &[([i32; 3], i8)], g: [i32; 3], dmax: Real) -> Option<Real> {

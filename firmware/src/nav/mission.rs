@@ -10,7 +10,7 @@ use crate::config::mission as mcfg;
 use crate::config::nav::MAX_PLAN_ITERATIONS;
 use crate::exec::DriveStep;
 use crate::geom::{wrap_angle, Real, Vec3};
-use crate::map::{Block, Map};
+use crate::map::{Block, Map, UnobservedAsFree};
 use crate::plan::tethered::{TetherSpace, TetherSpaceParams};
 use crate::protocol::{
     GoalRequest, MissionConfig, MissionState, MissionStatus, Motion, MotionOutcome, MotionReport, PlanState,
@@ -433,7 +433,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
             let (Some(a), Some(b)) = (m.executed.get(k.wrapping_sub(1)).copied(), m.executed.get(k).copied()) else {
                 break;
             };
-            if predict_anchors(&map, &m.reestimate_h, &a, &b, &mut out).is_ok() {
+            if predict_anchors(&UnobservedAsFree(&map), &m.reestimate_h, &a, &b, &mut out).is_ok() {
                 m.reestimate_h.clone_from(&out);
             } else {
                 m.counters.propagation_failures = m.counters.propagation_failures.saturating_add(1);
@@ -568,7 +568,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         };
         let m = &mut self.mission;
         let mut out = AnchorHistory::empty();
-        if predict_anchors(&map, &m.tracked, &from, &to, &mut out).is_ok() {
+        if predict_anchors(&UnobservedAsFree(&map), &m.tracked, &from, &to, &mut out).is_ok() {
             m.tracked = out;
         } else {
             m.counters.propagation_failures = m.counters.propagation_failures.saturating_add(1);
@@ -687,7 +687,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         let b = self.mission.body.or_else(|| self.plan_start().map(|s| BodyPose { position: s.axle(), yaw: s.heading() }))?;
         let gain = self.mission.drift_gain();
         let tracked = self.mission.tracked.clone();
-        let params = TetherSpaceParams::DEFAULT;
+        let params = TetherSpaceParams::ONBOARD;
         let path = planning::path(&mut self.storage);
         let mut seg = self.mission.seg;
         let mut out = None;
@@ -757,7 +757,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
             self.mission.state = MissionState::Driving;
             return DriveStep::Wait;
         };
-        let Ok(space) = TetherSpace::new(&map, problem.bounds, problem.rover, TetherSpaceParams::DEFAULT) else {
+        let Ok(space) = TetherSpace::new(&map, problem.bounds, problem.rover, TetherSpaceParams::ONBOARD) else {
             self.mission.recheck_left = 0;
             self.mission.state = MissionState::Driving;
             return DriveStep::Wait;

@@ -278,7 +278,7 @@ pub(crate) fn set_up(
     // As the campaign does on a map: one voxel of extra body clearance for the map's discretisation.
     rover.body_clearance_m += map.config().voxel_size;
     let space =
-        TetherSpace::new(map, bounds, rover, TetherSpaceParams::DEFAULT).map_err(|_| GoalRefusal::PlannerRejected)?;
+        TetherSpace::new(map, bounds, rover, TetherSpaceParams::ONBOARD).map_err(|_| GoalRefusal::PlannerRejected)?;
     let yaw = crate::geom::heading(&pose.to_isometry().rotation);
     let start = space.settle_state(p.x, p.y, yaw).map_err(|e| {
         log::warn!("nav: the start does not settle at ({}, {}): {:?}", p.x, p.y, e);
@@ -395,7 +395,7 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
     let out_of_time = problem.deadline.is_some_and(|d| now >= d);
     // With no time left, only the best solution so far is restored (no new iterations).
     let target = if out_of_time { problem.done } else { problem.done.saturating_add(iterations).min(problem.budget) };
-    let Ok(mut space) = TetherSpace::new(map, problem.bounds, problem.rover, TetherSpaceParams::DEFAULT) else {
+    let Ok(mut space) = TetherSpace::new(map, problem.bounds, problem.rover, TetherSpaceParams::ONBOARD) else {
         problem.finished = Some(PlanState::InvalidInput);
         return finished(problem, PlanState::InvalidInput);
     };

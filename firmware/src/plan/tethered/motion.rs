@@ -8,7 +8,7 @@ use crate::map::DistanceField;
 use crate::plan::space::{MotionCheck, MotionValidator};
 use crate::rover::{check_pose_stability, SettledPose};
 use crate::stability::StabilityOutcome;
-use crate::tether::{predict_anchors, AnchorHistory, TetherError};
+use crate::tether::{AnchorHistory, TetherError};
 
 use super::{RoverState, SettleFailure, TetherSpace, TetherSpaceParams};
 
@@ -120,7 +120,7 @@ impl<D: DistanceField> TetherSpace<'_, D> {
         let end = st.axle();
         if norm3(&(end - walk.tether_end)) >= self.params.tether_still_m {
             self.count(|s| s.anchor_predictions += 1);
-            predict_anchors(self.map, &walk.hist, &walk.tether_end, &end, &mut walk.scratch).map_err(MotionFailure::Tether)?;
+            self.predict(&walk.hist, &walk.tether_end, &end, &mut walk.scratch).map_err(MotionFailure::Tether)?;
             core::mem::swap(&mut walk.hist, &mut walk.scratch);
             walk.tether_end = end;
             if tether_bend(&walk.hist, &end) > self.params.max_tether_bend_rad {

@@ -46,6 +46,11 @@ pub struct TetherSpaceParams {
     /// Largest distance between the two surface points of a catch-boundary pair, metres
     /// ([`TetherSpace::sample_catch_boundary`](crate::plan::space::StateSpace::sample_catch_boundary)).
     pub catch_pair_radius_m: Real,
+    /// Anchor prediction (Alg. 1) treats unobserved space as free: the tether runs where the rover's sensor
+    /// cannot look (behind the rover, back over a rim to a root off the map), and what it meets there unseen shows
+    /// in the payout encoder, not in the map (the mission reconciles the two). Settling and stability still refuse
+    /// unobserved space.
+    pub tether_through_unobserved: bool,
 }
 
 impl TetherSpaceParams {
@@ -69,7 +74,12 @@ impl TetherSpaceParams {
         refine_substeps: defaults::REFINE_SUBSTEPS,
         surface_uncertainty_m: defaults::SURFACE_UNCERTAINTY_M,
         catch_pair_radius_m: defaults::CATCH_PAIR_RADIUS_M,
+        tether_through_unobserved: defaults::TETHER_THROUGH_UNOBSERVED,
     };
+
+    /// The navigator's parameters (on the onboard map, in flight): the defaults with
+    /// `tether_through_unobserved` set.
+    pub const ONBOARD: TetherSpaceParams = TetherSpaceParams { tether_through_unobserved: true, ..Self::DEFAULT };
 
     /// The first field that is out of range, with the reason.
     pub fn validate(&self) -> Result<(), (&'static str, &'static str)> {

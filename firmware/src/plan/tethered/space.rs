@@ -12,10 +12,10 @@ use crate::config::tethered::{
     SURFACE_UNKNOWN_STEP_M,
 };
 use crate::geom::{angle_diff, norm3, Real, Vec3};
-use crate::map::{DistanceField, DistanceQuery};
+use crate::map::{DistanceField, DistanceQuery, UnobservedAsFree};
 use crate::plan::space::{uniform01, CatchSample, StateSpace, StateValidityChecker};
 use crate::rover::{settle, SettleOutcome, SettledPose};
-use crate::tether::{predict_anchors, tether_touches, AnchorHistory};
+use crate::tether::{predict_anchors, tether_touches, AnchorHistory, PredictStats, TetherError};
 
 use super::{PlanBounds, TetherSpaceParams};
 
@@ -262,6 +262,15 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
         f(&mut s);
         self.stats.set(s);
     }
+    /// Anchor prediction (Alg. 1) from `a0` at `x0` to `x1`, through unobserved space as free when
+    /// `tether_through_unobserved` is set.
+    pub fn predict(&self, a0: &AnchorHistory, x0: &Vec3, x1: &Vec3, out: &mut AnchorHistory) -> Result<PredictStats, TetherError> {
+        if self.params.tether_through_unobserved {
+            predict_anchors(&UnobservedAsFree(self.map), a0, x0, x1, out)
+        } else {
+            predict_anchors(self.map, a0, x0, x1, out)
+        }
+    }
     /// Settle a state at the surface under `(x, y)` (counted).
     pub fn settle_state(&self, x: Real, y: Real, theta: Real) -> Result<RoverState, SettleFailure> {
         self.count(|s| s.settles += 1);
@@ -438,7 +447,7 @@ impl<D: DistanceField> StateSpace for TetherSpace<'_, D> {
         }
         self.count(|s| s.anchor_predictions += 1);
         let mut out = AnchorHistory::default();
-        predict_anchors(self.map, attachment, &from.axle(), &to.axle(), &mut out).ok()?;
+        self.predict(attachment, &from.axle(), &to.axle(), &mut out).ok()?;
         Some(out)
     }
     /// Near the edge of the tether shadow of the history's last anchor (see `catch_boundary_sample`).
