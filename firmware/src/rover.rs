@@ -12,7 +12,8 @@
 //! # Settling (Fig. 2)
 //! Input: a query point `p_m` near the surface and a yaw `theta_m` about the surface normal.
 //! 1. Surface normal `n`: the mean of the ESDF gradients at the query point and at `FOOTPRINT_POINTS` points on a
-//!    ring of radius `track/2` around it (at least half of the ring observed; unobserved ring points left out) (the gradient points away from the terrain's interior, so `n` is oriented
+//!    ring of radius `track/2` around it (at most `footprint_unobserved_max` ring points in unobserved space, left
+//!    out) (the gradient points away from the terrain's interior, so `n` is oriented
 //!    as the paper asks). This replaces the paper's fit to the surface points of the footprint: for a plane both are
 //!    the plane's normal, and it needs only the `DistanceField` trait.
 //! 2. Orientation: x is world x projected on the tangent plane (world y if x is parallel to `n`), turned by
@@ -212,8 +213,8 @@ fn roll_matrix(base: &Matrix3<Real>, roll: Real) -> Matrix3<Real> {
     base * rx
 }
 
-/// The surface normal at `p` from the footprint (see the module docs), or `None` when `p` or more than half of the
-/// ring's points are in unknown space (a ring point in an unobserved stripe between rays is left out).
+/// The surface normal at `p` from the footprint (see the module docs), or `None` when `p` or more than
+/// `footprint_unobserved_max` of the ring's points are in unknown space (those are left out).
 pub fn footprint_normal(map: &impl DistanceField, p: &Vec3, params: &RoverParams) -> Option<Vec3> {
     let (_, g0) = query(map, p)?;
     let mut sum = g0;
@@ -229,7 +230,7 @@ pub fn footprint_normal(map: &impl DistanceField, p: &Vec3, params: &RoverParams
         let q = p + (u * libm::cosf(a) + v * libm::sinf(a)) * r;
         let Some((d, g)) = query(map, &q) else {
             unknown += 1;
-            if 2 * unknown > FOOTPRINT_POINTS {
+            if unknown > params.footprint_unobserved_max {
                 return None;
             }
             continue;

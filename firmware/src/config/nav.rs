@@ -39,6 +39,10 @@ pub const BOUNDS_Z_MARGIN_M: f32 = 0.5;
 /// round rocks and for traverses that keep the tether off an edge). A scan from a mast observes far beyond the
 /// descent; sampling all of it wastes most samples on terrain no plan to this goal would use.
 pub const PLAN_WINDOW_MARGIN_M: f32 = 3.0;
+/// Footprint ring points (of `config::rover::FOOTPRINT_POINTS` = 8) that may lie in unobserved space when the
+/// navigator settles the rover on its map (`RoverParams::footprint_unobserved_max`). Default 4 (half the ring):
+/// far from the sensor, rays leave one- and two-voxel stripes unobserved, and a 0.5 m ring often crosses one.
+pub const FOOTPRINT_UNOBSERVED_MAX: u32 = 4;
 /// Report the tree vertex closest to the goal as an approximate solution when no exact one exists (OMPL's
 /// approximate solutions). Default true: a goal behind an unpassable ledge yields the best reachable plan,
 /// reported as `ApproximateSolution`, never as exact.

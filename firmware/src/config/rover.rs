@@ -66,6 +66,10 @@ pub struct RoverParams {
     pub body_clearance_m: f32,
     /// Largest drop below the query point before settling reports "no ground". Default 1.5 m.
     pub max_drop_m: f32,
+    /// Points of the footprint ring (of `FOOTPRINT_POINTS`) that may lie in unobserved space, left out of the
+    /// surface normal. Default 0 (Paton et al.: unknown space is unsafe); the navigator allows half the ring
+    /// (`nav`: far from the sensor, rays leave unobserved stripes that a 0.5 m ring often crosses).
+    pub footprint_unobserved_max: u32,
 }
 
 impl RoverParams {
@@ -87,5 +91,6 @@ impl RoverParams {
         roll_step_rad: 0.5 * core::f32::consts::PI / 180.0,
         body_clearance_m: 0.02,
         max_drop_m: 1.5,
+        footprint_unobserved_max: 0,
     };
 }

@@ -17,7 +17,8 @@
 //!   (`tether.root_anchor`) alone, i.e. a straight tether from the root;
 //! - **rover**: the Axel model ([`crate::config::rover::RoverParams::AXEL`]) with `Configure.rover`'s wheel radius,
 //!   track (`axle_length_m`), boom length, mass (split body / boom by `BOOM_MASS_FRACTION`), friction and the
-//!   tether's tension limit; one voxel of extra body clearance, as the campaign plans on a map;
+//!   tether's tension limit; one voxel of extra body clearance, as the campaign plans on a map; up to
+//!   `FOOTPRINT_UNOBSERVED_MAX` footprint ring points in unobserved space;
 //! - **bounds** ([`PlanBounds`]): the extent of the map's blocks (grown to contain the start, plus
 //!   `BOUNDS_Z_MARGIN_M` in z), cut to the **planning window** (the horizontal box spanned by the start and the
 //!   goal, grown by `PLAN_WINDOW_MARGIN_M`: a mast's scan observes far beyond the descent, and samples there are
@@ -142,14 +143,16 @@
 //! - planning (`config::nav`): `NODE_CAPACITY` 512, `EDGE_QUEUE_CAPACITY` 4096, `EDGE_MEMO_CAPACITY` 256,
 //!   `MOTION_CHECKS_PER_STEP` 1, `SAMPLES_PER_BATCH` 100, `MAX_PLAN_ITERATIONS` 750, `PATH_CAPACITY` 64,
 //!   `MOTION_CAPACITY` 189, `MIN_TURN_RAD` 1e-3, `MIN_DRIVE_M` 1e-3, `BOUNDS_Z_MARGIN_M` 0.5, `PLAN_WINDOW_MARGIN_M` 3.0,
+//!   `FOOTPRINT_UNOBSERVED_MAX` 4,
 //!   `TRACK_APPROXIMATE` true, `BOOM_MASS_FRACTION` 0.2; the space's parameters are
-//!   [`TetherSpaceParams::DEFAULT`](crate::plan::tethered::TetherSpaceParams::DEFAULT) and ABIT*'s
+//!   [`TetherSpaceParams::ONBOARD`](crate::plan::tethered::TetherSpaceParams::ONBOARD) and ABIT*'s
 //!   [`AbitParams::ompl_defaults`](crate::plan::abit::AbitParams::ompl_defaults).
 //!
 //! ## What the onboard map must hold
-//! - The tether sweep of anchor prediction ([`crate::tether::predict_anchors`]) fails in unknown space, so the
-//!   **root anchor must lie in observed space** (e.g. mapped from the rover's own scans): a root above an unmapped
-//!   crater rim makes every motion invalid (`NoSolutionWithinBudget`). The `protocol` scenario's root is such a case.
+//! - The tether sweep of anchor prediction ([`crate::tether::predict_anchors`]) runs through unobserved space as
+//!   free on board ([`TetherSpaceParams::ONBOARD`](crate::plan::tethered::TetherSpaceParams::ONBOARD), and the
+//!   mission's tracked tether): the root may lie off the map (behind the rover, above an unmapped rim), and what the
+//!   tether meets unseen shows as a payout the prediction does not explain (re-estimate, then `TetherInconsistent`).
 //! - The surface search of a sample starts at the top of the planning bounds and steps through unknown space to
 //!   the **highest observed surface** of the column ([`crate::plan::tethered::surface_point`]); the settler then
 //!   needs observed space round the rover: the footprint, the lower halves of the wheels and the body (unobserved

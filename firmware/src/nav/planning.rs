@@ -170,6 +170,7 @@ impl PlanSetup {
         rover.body_mass_kg = c.rover.mass_kg - rover.boom_mass_kg;
         rover.wheel_mu = c.rover.friction_coefficient;
         rover.tether_max_tension_n = c.tether.max_tension_n;
+        rover.footprint_unobserved_max = cfg::FOOTPRINT_UNOBSERVED_MAX;
         let r = c.tether.root_anchor;
         PlanSetup {
             root: Vec3::new(r.x, r.y, r.z),
