@@ -34,7 +34,7 @@ fn check_truth(rep: &MissionReport) {
 }
 
 #[test]
-fn crater_wall_mission_drives_and_the_truth_agrees_with_its_end() {
+fn crater_wall_mission_arrives_and_the_truth_agrees_with_its_end() {
     let sc = load("mission_crater_rocks.toml");
     let opts = MissionOptions { seed: 7, tracking: Tracking::ClosedLoop, noiseless: false, live: false };
     let rep = run_mission(mission_link(&sc).expect("link"), &sc, &opts).expect("mission runs");
@@ -45,6 +45,9 @@ fn crater_wall_mission_drives_and_the_truth_agrees_with_its_end() {
     assert!(rep.motions >= 1 && rep.distance_m > 0.2, "{} motions, {:.2} m", rep.motions, rep.distance_m);
     // the true path followed the plan it drove (kinematic truth, small drift on this wall)
     assert!(rep.max_cross_track_m < 0.5, "{}", rep.max_cross_track_m);
+    // and it arrived: the flight software said so and the truth's rover is within the tolerance (plus the
+    // localisation slack) of the goal (`Verdict::Arrived` is the simulator's judgement, not the flight software's)
+    assert_eq!(rep.verdict, Verdict::Arrived, "goal error {:.2} m", rep.goal_error_m);
 }
 
 #[test]
