@@ -11,7 +11,8 @@
 //! - **start**: the rover settled ([`crate::rover::settle`]) on the map under the tracked body pose (the last
 //!   accepted `MotionReport` pose, see the mission below); before the first report under the last scan's sensor
 //!   position, with the sensor's heading as yaw (the sensor mount's horizontal offset from the axle is not known on
-//!   board and is ignored);
+//!   board and is ignored); a start that collides only within the extra voxel of body clearance (below) is settled
+//!   with the rover's own clearance, so a rover next to a rock that appeared can be planned away from it;
 //! - **anchor history**: the mission's tracked anchor history once the rover has moved (replans and goal changes
 //!   start from the tether as it lies); before that the root anchor of the last `Configure`
 //!   (`tether.root_anchor`) alone, i.e. a straight tether from the root;

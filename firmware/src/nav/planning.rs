@@ -18,7 +18,7 @@ use crate::plan::space::{
     Budget, GoalState, MotionCheck, MotionValidator, Planner, PlannerStatus, ProblemDefinition, Termination,
 };
 use crate::plan::tethered::{
-    MotionPlan, MotionStats, PlanBounds, RoverState, TetherMotionValidator, TetherObjective, TetherSpace, TetherSpaceParams,
+    MotionPlan, MotionStats, PlanBounds, RoverState, SettleFailure, TetherMotionValidator, TetherObjective, TetherSpace, TetherSpaceParams,
     TetherValidity,
 };
 use crate::protocol::{Configure, Motion, PlanState, Point3, Pose, Quat, Waypoint};
@@ -281,7 +281,17 @@ pub(crate) fn set_up(
     let space =
         TetherSpace::new(map, bounds, rover, TetherSpaceParams::ONBOARD).map_err(|_| GoalRefusal::PlannerRejected)?;
     let yaw = crate::geom::heading(&pose.to_isometry().rotation);
-    let start = space.settle_state(p.x, p.y, yaw).map_err(|e| {
+    let start = match space.settle_state(p.x, p.y, yaw) {
+        Ok(s) => Ok(s),
+        // The rover stands here: within the map's extra voxel of an obstacle (a rock that appeared in front of it),
+        // not within its own clearance. Plan from the pose it settles in with its own clearance, so the planner can
+        // take it away; every other state keeps the extra voxel.
+        Err(SettleFailure::Collision) => TetherSpace::new(map, bounds, setup.rover, TetherSpaceParams::ONBOARD)
+            .map_err(|_| SettleFailure::InvalidInput)
+            .and_then(|own| own.settle_state(p.x, p.y, yaw)),
+        Err(e) => Err(e),
+    }
+    .map_err(|e| {
         log::warn!("nav: the start does not settle at ({}, {}): {:?}", p.x, p.y, e);
         GoalRefusal::StartNotSettled
     })?;
