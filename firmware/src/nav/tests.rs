@@ -486,3 +486,25 @@ fn segment_motions_end_at_the_next_state() {
     }
     assert_eq!(cases, 72);
 }
+
+/// The planning window (`PLAN_WINDOW_MARGIN_M`): the map's extent cut to the start-goal box grown by the margin;
+/// it always contains the start and, where the map does, the goal; a goal beyond the map stays beyond it (an
+/// off-map goal); z is not cut.
+#[test]
+fn the_planning_window_is_the_start_goal_box_within_the_map() {
+    use crate::config::nav::PLAN_WINDOW_MARGIN_M as M;
+    let map = PlanBounds { min: [-20.0, -20.0, -3.0], max: [20.0, 20.0, 9.0] };
+    let (start, goal) = (Vec3::new(-1.5, 0.5, 1.8), Vec3::new(3.5, -1.0, 0.3));
+    let w = super::planning::planning_window(map, &start, &goal);
+    assert_eq!(w.min, [-1.5 - M, -1.0 - M, -3.0]);
+    assert_eq!(w.max, [3.5 + M, 0.5 + M, 9.0]);
+    assert!(w.contains_xy(start.x, start.y) && w.contains_xy(goal.x, goal.y));
+    // a goal beyond the map's edge: the window ends at the map's edge, so the goal stays off the map
+    let far = Vec3::new(30.0, 0.0, 0.0);
+    let w = super::planning::planning_window(map, &start, &far);
+    assert_eq!(w.max[0], 20.0);
+    assert!(!w.contains_xy(far.x, far.y) && w.contains_xy(start.x, start.y));
+    // start and goal far inside a small map: the map's own extent
+    let small = PlanBounds { min: [-2.0, -2.0, 0.0], max: [2.0, 2.0, 1.0] };
+    assert_eq!(super::planning::planning_window(small, &Vec3::zeros(), &Vec3::new(1.0, 1.0, 0.0)), small);
+}
