@@ -265,11 +265,7 @@ pub fn settle(map: &impl DistanceField, p_m: &Vec3, theta_m: Real, params: &Rove
     let pts = wheel_points(params);
     let thr = params.contact_threshold_m;
     let mut origin = p_m + n * params.settle_delta_m;
-    if wheel_gaps(map, &pts, &origin, &base).is_none() {
-        // the space `settle_delta_m` above the surface is not observed: start with the wheels just above the query
-        // point (the drop and the roll search move them either way)
-        origin = p_m + n * (params.wheel_radius_m + 2.0 * thr);
-    }
+    let mut first_query = true;
     let mut roll: Real = 0.0;
     let mut rot = base;
     let mut iterations = 0;
@@ -280,8 +276,16 @@ pub fn settle(map: &impl DistanceField, p_m: &Vec3, theta_m: Real, params: &Rove
         let mut touched = false;
         for _ in 0..SETTLE_MAX_DROP_STEPS {
             let Some(g) = wheel_gaps(map, &pts, &origin, &rot) else {
+                if first_query {
+                    // the space `settle_delta_m` above the surface is not observed: start with the wheels just
+                    // above the query point (the drop and the roll search move them either way)
+                    first_query = false;
+                    origin = p_m + n * (params.wheel_radius_m + 2.0 * thr);
+                    continue;
+                }
                 return SettleOutcome::UnknownSpace;
             };
+            first_query = false;
             let dmin = if g[0].0 < g[1].0 { g[0].0 } else { g[1].0 };
             if libm::fabsf(dmin) <= thr {
                 touched = true;

@@ -25,7 +25,7 @@ pub const FLIGHT_INDEX: usize = 8192;
 /// probes on average; 32 is a generous bound that keeps every lookup O(1) and bounded.
 pub const MAX_PROBE: usize = 32;
 
-/// Unknown space below an observed surface (`Map::esdf_or_below_surface`): an unknown voxel whose first known
+/// Unknown space below an observed surface (`Map::esdf_filled`): an unknown voxel whose first known
 /// voxel above, within this many voxels, is occupied is taken as inside the terrain. Default 8 (0.4 m at 5 cm,
 /// 0.8 m at 10 cm: deeper than the settler's wheel rims and drops reach under a surface). Each query that meets
 /// unknown space looks up at most this many voxels per cell corner.

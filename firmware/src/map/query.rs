@@ -166,23 +166,22 @@ impl Map<'_> {
         (value, Vec3::new(dx, dy, dz) / self.cfg.voxel_size)
     }
 
-    /// The ESDF value of voxel `g`, or, when `g` is unknown, its value **below an observed surface**: the first
-    /// known voxel above `g` within [`BELOW_SURFACE_FILL_VOXELS`] is occupied (TSDF < 0), and `g` is taken to be
-    /// inside the terrain, deeper by its height difference: `esdf(above) - k * voxel_size`. `None` otherwise
-    /// (unknown space with free or no observed space above it stays unknown).
-    ///
-    /// Why: a range sensor sees a slope at a grazing angle, so the TSDF's band behind the surface (the truncation
-    /// distance along each ray) is thin and holed across the slope, while the settler's wheel rims, the footprint
-    /// ring and the sphere-traced drops query a few centimetres to decimetres under the surface. Terrain under an
-    /// observed solid surface is solid (no caves within the fill depth): the fill is conservative for collision
-    /// (more inside, never free) and places no surface where none was observed (the zero crossing stays between
-    /// observed voxels, since the first known voxel above is already inside).
-    ///
-    /// Before that, a **gap between rays** is bridged: an unknown voxel whose two neighbours along x, or along y,
-    /// are both observed takes their mean. Far from the sensor and at grazing incidence, neighbouring rays land
-    /// more than a voxel apart and leave one-voxel stripes unobserved between observed ones (the crater floor and
-    /// the HiRISE slope from a mast); the field is continuous across one voxel there. Wider gaps stay unknown.
-    pub fn esdf_or_below_surface(&self, g: VoxelIndex) -> Option<Real> {
+    /// The ESDF value of voxel `g`, or, when `g` is unknown, a value filled in from observed neighbours (`None`
+    /// when neither rule applies):
+    /// 1. **a gap between rays**: its two neighbours along x, or along y, are observed: their mean. Far from the
+    ///    sensor and at grazing incidence, neighbouring rays land more than a voxel apart and leave one-voxel
+    ///    stripes unobserved between observed ones (the crater floor and the HiRISE slope seen from a mast); the
+    ///    field is continuous across one voxel. Wider gaps stay unknown.
+    /// 2. **below an observed surface**: the first known voxel above `g` within [`BELOW_SURFACE_FILL_VOXELS`] is
+    ///    occupied (TSDF < 0): `g` is inside the terrain, deeper by its height difference,
+    ///    `esdf(above) - k * voxel_size`. A range sensor sees a slope at a grazing angle, so the TSDF's band behind
+    ///    the surface (the truncation along each ray) is thin and holed, while the settler's wheel rims, footprint
+    ///    ring and sphere-traced drops query a few centimetres to decimetres under the surface. Terrain under an
+    ///    observed solid surface is solid (no caves within the fill depth): the fill is conservative for collision
+    ///    (more inside, never free) and places no surface where none was observed (the zero crossing stays
+    ///    between observed voxels, since the first known voxel above is already inside). Unknown space with free or
+    ///    no observed space above it stays unknown.
+    pub fn esdf_filled(&self, g: VoxelIndex) -> Option<Real> {
         if let Some(d) = self.esdf_voxel(g) {
             return Some(d);
         }
@@ -209,14 +208,14 @@ impl Map<'_> {
         None
     }
 
-    /// [`Self::trilinear`] of the ESDF with unknown voxels below an observed surface filled
-    /// ([`Self::esdf_or_below_surface`]).
-    fn trilinear_below_surface(&self, p: &Vec3) -> Option<(Real, Vec3)> {
+    /// [`Self::trilinear`] of the ESDF with unknown voxels filled in where it can be
+    /// ([`Self::esdf_filled`]).
+    fn trilinear_filled(&self, p: &Vec3) -> Option<(Real, Vec3)> {
         let (g0, t) = self.interpolation_cell(p);
         let mut v = [0.0 as Real; 8];
         for (k, vk) in v.iter_mut().enumerate() {
             let g = [g0[0] + (k & 1) as i32, g0[1] + ((k >> 1) & 1) as i32, g0[2] + ((k >> 2) & 1) as i32];
-            *vk = self.esdf_or_below_surface(g)?;
+            *vk = self.esdf_filled(g)?;
         }
         Some(self.interpolate(&v, t))
     }
@@ -284,7 +283,7 @@ impl DistanceField for Map<'_> {
         if !crate::geom::is_finite3(p) {
             return DistanceQuery::Unknown;
         }
-        let q = self.trilinear(p, |s, i| self.esdf_at(s, i)).or_else(|| self.trilinear_below_surface(p));
+        let q = self.trilinear(p, |s, i| self.esdf_at(s, i)).or_else(|| self.trilinear_filled(p));
         match q {
             Some((distance, gr)) => {
                 DistanceQuery::Known { distance, gradient: normalize3(&gr, 1e-6).unwrap_or_else(Vec3::zeros) }

@@ -179,7 +179,7 @@ fn grazing_plane_map(map: &mut Map<'_>, slope: Real, eye_m: Real) {
     assert!(map.update_esdf().converged);
 }
 
-/// Unknown space below an observed surface (`Map::esdf_or_below_surface`): a surface seen at a grazing angle has
+/// Unknown space below an observed surface (`Map::esdf_filled`): a surface seen at a grazing angle has
 /// a thin observed band behind it (the truncation along the ray); under it the query answers "inside", never
 /// free, and no deeper than the fill allows. On level ground the fill is the true depth; on a slope it is deeper
 /// than the true distance (conservative). Free or unobserved columns stay unknown.
@@ -240,12 +240,12 @@ fn unknown_space_under_an_observed_surface_is_inside() {
     map.update_esdf();
     let under_free = Vec3::new(1.0, 0.0, 0.85);
     assert_eq!(map.voxel_state(map.voxel_index(&(under_free + Vec3::z() * 0.1))), VoxelState::Free);
-    assert_eq!(map.esdf_or_below_surface(map.voxel_index(&under_free)), None);
-    assert_eq!(map.esdf_or_below_surface(map.voxel_index(&Vec3::new(5.0, 5.0, 0.0))), None);
+    assert_eq!(map.esdf_filled(map.voxel_index(&under_free)), None);
+    assert_eq!(map.esdf_filled(map.voxel_index(&Vec3::new(5.0, 5.0, 0.0))), None);
     assert_eq!(map.query(&Vec3::new(5.0, 5.0, 0.0)), DistanceQuery::Unknown);
 }
 
-/// A gap between rays (`Map::esdf_or_below_surface`): level ground observed everywhere but one column of voxels
+/// A gap between rays (`Map::esdf_filled`): level ground observed everywhere but one column of voxels
 /// (x index 0) reads across the gap as the plane's distance; a two-voxel gap stays unknown.
 #[test]
 fn a_one_voxel_gap_between_observed_voxels_is_bridged_and_a_wider_one_is_not() {

@@ -9,7 +9,7 @@ use hal::Instant;
 use crate::config::mission as mcfg;
 use crate::config::nav::MAX_PLAN_ITERATIONS;
 use crate::exec::DriveStep;
-use crate::geom::{wrap_angle, Real, Vec3};
+use crate::geom::{norm3, wrap_angle, Real, Vec3};
 use crate::map::{Block, Map, UnobservedAsFree};
 use crate::plan::tethered::{TetherSpace, TetherSpaceParams};
 use crate::protocol::{
@@ -366,7 +366,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         let g = Vec3::new(goal.position.x, goal.position.y, goal.position.z);
         let path = planning::path(&mut self.storage);
         match (path.first(), path.last()) {
-            (Some((a, _)), Some((b, _))) => (a.axle() - g).norm() - (b.axle() - g).norm(),
+            (Some((a, _)), Some((b, _))) => norm3(&(a.axle() - g)) - norm3(&(b.axle() - g)),
             _ => Real::NEG_INFINITY,
         }
     }

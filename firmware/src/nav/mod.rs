@@ -66,7 +66,8 @@
 //!   shutdown, the current state's margin below `min_margin_n` (`MarginBelowMinimum`), tension over
 //!   `max_tension_n` (`TensionLimit`), tracked tether and encoder inconsistent after a re-estimate
 //!   (`TetherInconsistent`), `MAX_POSE_JUMPS` rejected poses in a row (`PoseJump`), `MAX_STALLS` stalls in a row
-//!   (`MotionStalled`), more than `MAX_REPLANS` replans without `REPLAN_PROGRESS_M` of progress towards the goal (`ReplanLimit`), no report in time (`MotionTimeout`),
+//!   (`MotionStalled`), more than `MAX_REPLANS` replans without `REPLAN_PROGRESS_M` of progress towards the goal
+//!   (`ReplanLimit`), no report in time (`MotionTimeout`),
 //!   `MAX_SCAN_REJECTS` rejected scans in a row (`ScanInconsistent`). A goal request while driving replaces the
 //!   goal (the executive stops the motion in flight); a cancel stops safe (`Cancelled`).
 //! - **Tracked tether**: the anchor history starts at the root on `Configure` and is propagated with Alg. 1
@@ -102,7 +103,8 @@
 //!   from the tracked pose is not integrated (`scans_rejected`); counters in `MissionStatus` and
 //!   [`MissionCounters`].
 //! - Parameters (`config::mission`): `TRACK_SEGMENT_M` 0.5, `HEADING_TOLERANCE_RAD` 0.03, `SEGMENT_DONE_M` 0.08,
-//!   `MAX_REPLANS` 8, `REPLAN_PROGRESS_M` 0.5, `MIN_APPROXIMATE_PROGRESS_M` 0.25, `MAX_STALLS` 2, `POSE_JUMP_BASE_M` 0.5, `POSE_JUMP_PER_M` 0.5, `POSE_JUMP_YAW_RAD` 0.6,
+//!   `MAX_REPLANS` 8, `REPLAN_PROGRESS_M` 0.5, `MIN_APPROXIMATE_PROGRESS_M` 0.25, `MAX_STALLS` 2,
+//!   `POSE_JUMP_BASE_M` 0.5, `POSE_JUMP_PER_M` 0.5, `POSE_JUMP_YAW_RAD` 0.6,
 //!   `MAX_POSE_JUMPS` 3, `SCAN_POSE_TOLERANCE_M` 2.0, `MAX_SCAN_REJECTS` 3, `MAX_PAYOUT_RATE_M_PER_S` 1.0,
 //!   `PAYOUT_JUMP_SLACK_M` 0.3, `RECHECK_AFTER_MOTION` 2, `EXECUTED_CAPACITY` 64, `REESTIMATE_PER_STEP` 4,
 //!   `DRIFT_GAIN_LIMIT` 1.0,
@@ -143,8 +145,8 @@
 //!   (default 256), the only stack buffer;
 //! - planning (`config::nav`): `NODE_CAPACITY` 512, `EDGE_QUEUE_CAPACITY` 4096, `EDGE_MEMO_CAPACITY` 256,
 //!   `MOTION_CHECKS_PER_STEP` 1, `SAMPLES_PER_BATCH` 100, `MAX_PLAN_ITERATIONS` 750, `PATH_CAPACITY` 64,
-//!   `MOTION_CAPACITY` 189, `MIN_TURN_RAD` 1e-3, `MIN_DRIVE_M` 1e-3, `BOUNDS_Z_MARGIN_M` 0.5, `PLAN_WINDOW_MARGIN_M` 3.0,
-//!   `FOOTPRINT_UNOBSERVED_MAX` 4,
+//!   `MOTION_CAPACITY` 189, `MIN_TURN_RAD` 1e-3, `MIN_DRIVE_M` 1e-3, `BOUNDS_Z_MARGIN_M` 0.5,
+//!   `PLAN_WINDOW_MARGIN_M` 3.0, `FOOTPRINT_UNOBSERVED_MAX` 4,
 //!   `TRACK_APPROXIMATE` true, `BOOM_MASS_FRACTION` 0.2; the space's parameters are
 //!   [`TetherSpaceParams::ONBOARD`](crate::plan::tethered::TetherSpaceParams::ONBOARD) and ABIT*'s
 //!   [`AbitParams::ompl_defaults`](crate::plan::abit::AbitParams::ompl_defaults).
@@ -158,7 +160,7 @@
 //!   the **highest observed surface** of the column ([`crate::plan::tethered::surface_point`]); the settler then
 //!   needs observed space round the rover: the footprint, the lower halves of the wheels and the body (unobserved
 //!   space above the axle is taken as free: no overhangs; [`crate::rover`]). Unknown space **under** an observed
-//!   surface is inside the terrain ([`Map::esdf_or_below_surface`]): a slope seen at a grazing angle has only a
+//!   surface is inside the terrain ([`Map::esdf_filled`]): a slope seen at a grazing angle has only a
 //!   thin observed band behind its surface, and the settler's queries reach below it.
 //! - Rays leave unobserved stripes between them where they land more than a voxel apart (far from the sensor, at
 //!   grazing incidence): a goal column inside such a stripe does not settle (`GoalNotSettled`).
