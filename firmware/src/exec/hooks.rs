@@ -91,8 +91,13 @@ pub trait Autonomy {
     }
     /// A validated tether-encoder reading.
     fn tether_reading(&mut self, _reading: &TetherReading, _now: Instant) {}
-    /// A complete scan (integrate it into the map within the map's own budget).
-    fn scan(&mut self, _scan: &Scan<'_>, _now: Instant) {}
+    /// One accepted chunk of a scan, as it arrives (`part.points` holds that chunk's points only; chunks come in
+    /// order). Integrating a scan chunk by chunk bounds each executive step's work by `FRAMES_PER_STEP` chunks
+    /// instead of a whole scan (on the emulated board an 8000-point scan outlasts the watchdog in one step).
+    fn scan_part(&mut self, _part: &Scan<'_>, _now: Instant) {}
+    /// A complete scan: every chunk of it has been passed to [`Self::scan_part`]; `scan.points` holds them all.
+    /// A scan abandoned incomplete (a new scan started first) gets no call: its parts stay delivered.
+    fn scan_complete(&mut self, _scan: &Scan<'_>, _now: Instant) {}
     /// A goal request (Idle / Mapping, configured). Return `Accepted` to start planning (the executive then calls
     /// [`Self::plan_step`] every step), or a final state (`InvalidInput`, `PlannerUnavailable`) to refuse it.
     fn goal(&mut self, _goal: &GoalRequest, _now: Instant) -> PlanState {

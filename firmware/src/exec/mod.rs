@@ -368,6 +368,12 @@ where
         }
         let storage = self.storage.borrow_mut();
         let accepted = self.assembler.accept(chunk, &mut storage.scan_points)?;
+        let part = Scan {
+            scan_id: chunk.scan_id,
+            sensor_pose: chunk.sensor_pose,
+            points: &chunk.points,
+        };
+        self.autonomy.scan_part(&part, self.now);
         if let Some(old) = accepted.abandoned {
             self.counters.scans_abandoned += 1;
             self.note(
@@ -382,7 +388,7 @@ where
                 sensor_pose: done.sensor_pose,
                 points: storage.scan_points.get(..done.points).unwrap_or(&[]),
             };
-            self.autonomy.scan(&scan, self.now);
+            self.autonomy.scan_complete(&scan, self.now);
             self.counters.scans_completed += 1;
             log::debug!("scan {} complete: {} points", done.scan_id, done.points);
         }

@@ -168,10 +168,14 @@ struct Scripted {
     steps: u32,
     motions: u32,
     scans: StdVec<(u32, usize)>,
+    parts: StdVec<(u32, usize)>,
 }
 
 impl Autonomy for Scripted {
-    fn scan(&mut self, scan: &Scan<'_>, _now: Instant) {
+    fn scan_part(&mut self, part: &Scan<'_>, _now: Instant) {
+        self.parts.push((part.scan_id, part.points.len()));
+    }
+    fn scan_complete(&mut self, scan: &Scan<'_>, _now: Instant) {
         self.scans.push((scan.scan_id, scan.points.len()));
     }
     fn goal(&mut self, _g: &GoalRequest, _now: Instant) -> PlanState {
@@ -549,7 +553,7 @@ fn shutdown_stops_and_safe_mode_refuses_work() {
 }
 
 #[test]
-fn a_scan_in_three_chunks_reaches_the_hook_once() {
+fn a_scan_in_three_chunks_reaches_the_part_hook_per_chunk_and_the_complete_hook_once() {
     let mut e = exec(Scripted::default());
     exchange(&mut e, &[Message::Configure(configure())]);
     let chunk = |i: u16| {
@@ -565,8 +569,12 @@ fn a_scan_in_three_chunks_reaches_the_hook_once() {
             points,
         })
     };
-    let r = exchange(&mut e, &[chunk(0), chunk(1), chunk(2)]);
+    // chunk 1 twice (the second is a duplicate, Nacked) and chunk 2 before chunk 1 (out of order, Nacked):
+    // neither reaches the autonomy
+    let r = exchange(&mut e, &[chunk(0), chunk(2), chunk(1), chunk(1), chunk(2)]);
     assert_eq!(r.iter().filter(|m| matches!(m, Message::Ack(_))).count(), 3);
+    assert_eq!(r.iter().filter(|m| matches!(m, Message::Nack(_))).count(), 2);
+    assert_eq!(e.autonomy().parts, [(4, 100), (4, 100), (4, 100)]);
     assert_eq!(e.autonomy().scans, [(4, 300)]);
     assert_eq!(e.mode(), Mode::Mapping);
 }

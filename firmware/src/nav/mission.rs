@@ -457,12 +457,6 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         let (dx, dy) = (sensor.position.x - b.position.x, sensor.position.y - b.position.y);
         if libm::sqrtf(dx * dx + dy * dy) <= mcfg::SCAN_POSE_TOLERANCE_M {
             m.scan_reject_run = 0;
-            // the map changes: re-check the whole remaining plan
-            if matches!(m.state, MissionState::Driving | MissionState::Verifying) {
-                m.recheck_at = m.seg;
-                m.recheck_left = usize::MAX;
-                m.state = MissionState::Verifying;
-            }
             return true;
         }
         m.counters.scans_rejected = m.counters.scans_rejected.saturating_add(1);
@@ -472,6 +466,16 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
             m.stop(StopReason::ScanInconsistent);
         }
         false
+    }
+
+    /// An accepted scan is integrated: re-check the whole remaining plan on the changed map.
+    pub(super) fn mission_map_changed(&mut self) {
+        let m = &mut self.mission;
+        if matches!(m.state, MissionState::Driving | MissionState::Verifying) {
+            m.recheck_at = m.seg;
+            m.recheck_left = usize::MAX;
+            m.state = MissionState::Verifying;
+        }
     }
 
     /// The report of the motion in flight (the executive checked the command id).

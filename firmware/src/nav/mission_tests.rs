@@ -65,7 +65,7 @@ fn scan_ground(nav: &mut TestNav, id: u32, cx: f32, seen: &dyn Fn(f32) -> bool) 
         }
     }
     let pose = Pose { position: Point3 { x: cx, y: 0.0, z: SENSOR_H }, orientation: Quat { x: 0.0, y: 0.0, z: 0.0, w: 1.0 } };
-    nav.scan(&Scan { scan_id: id, sensor_pose: pose, points: &pts }, Instant::from_micros(0));
+    nav.integrate_scan(&Scan { scan_id: id, sensor_pose: pose, points: &pts }, Instant::from_micros(0));
 }
 
 /// A navigator configured with `root` and `mission`, the flat world mapped over x in [-1, 5], y in [-2.2, 2.2]; the

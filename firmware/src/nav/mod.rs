@@ -227,6 +227,8 @@ pub struct Navigator<B, I, P> {
     stats: NavPlanStats,
     mission: Mission,
     replan_pending: bool,
+    /// The scan whose chunks are arriving, and whether its pose passed the mission's check.
+    scan_in: Option<(u32, bool)>,
 }
 
 impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> Navigator<B, I, P> {
@@ -252,12 +254,20 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
             stats: NavPlanStats::default(),
             mission: Mission::new(),
             replan_pending: false,
+            scan_in: None,
         })
     }
 
     /// The onboard map (a view over the navigator's storage), for planners, tests and pictures.
     pub fn map(&mut self) -> Option<Map<'_>> {
         Map::reattach(self.cfg, self.blocks.borrow_mut(), self.index.borrow_mut(), self.used).ok()
+    }
+
+    /// A whole scan at once: [`Autonomy::scan_part`] then [`Autonomy::scan_complete`] (what the executive does
+    /// chunk by chunk).
+    pub fn integrate_scan(&mut self, scan: &Scan<'_>, now: Instant) {
+        self.scan_part(scan, now);
+        self.scan_complete(scan, now);
     }
 
     /// Counters of on-board planning.
@@ -305,14 +315,20 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
         self.mission_tether(reading);
     }
 
-    fn scan(&mut self, scan: &Scan<'_>, _now: Instant) {
-        if !self.mission_scan_accepted(&scan.sensor_pose) {
+    fn scan_part(&mut self, part: &Scan<'_>, _now: Instant) {
+        // The pose check runs once per scan, at its first chunk; a rejected scan's later chunks are skipped.
+        let accepted = match self.scan_in {
+            Some((id, accepted)) if id == part.scan_id => accepted,
+            _ => {
+                let accepted = self.mission_scan_accepted(&part.sensor_pose);
+                self.scan_in = Some((part.scan_id, accepted));
+                accepted
+            }
+        };
+        if !accepted {
             return;
         }
-        self.pose = Some(scan.sensor_pose);
-        // The map changes: the suspended search's motion checks no longer hold; the next step starts anew.
-        planning::forget_search(&mut self.storage);
-        let sensor_pose = scan.sensor_pose.to_isometry();
+        let sensor_pose = part.sensor_pose.to_isometry();
         let mut status = self.status;
         let Some(mut map) = self.map() else {
             // Unreachable with storage that `new` accepted; counted rather than ignored.
@@ -322,7 +338,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
         };
         let mut batch = [Vec3::zeros(); NAV_POINT_BATCH];
         let mut pool_error = false;
-        for chunk in scan.points.chunks(NAV_POINT_BATCH) {
+        for chunk in part.points.chunks(NAV_POINT_BATCH) {
             for (dst, p) in batch.iter_mut().zip(chunk) {
                 *dst = Vec3::new(p.x, p.y, p.z);
             }
@@ -334,15 +350,31 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
         }
         if pool_error {
             count_up(&mut status.pool_errors, 1);
-            log::warn!("map: pool full or index probe exhausted during scan {}", scan.scan_id);
+            log::warn!("map: pool full or index probe exhausted during scan {}", part.scan_id);
         }
+        self.used = map.blocks_used();
+        status.blocks_used = u32::try_from(self.used).unwrap_or(u32::MAX);
+        self.status = status;
+    }
+
+    fn scan_complete(&mut self, scan: &Scan<'_>, _now: Instant) {
+        if self.scan_in.take() != Some((scan.scan_id, true)) {
+            return;
+        }
+        self.pose = Some(scan.sensor_pose);
+        // The map changes: the suspended search's motion checks no longer hold; the next step starts anew.
+        planning::forget_search(&mut self.storage);
+        self.mission_map_changed();
+        let mut status = self.status;
+        let Some(mut map) = self.map() else {
+            count_up(&mut status.pool_errors, 1);
+            self.status = status;
+            return;
+        };
         if !map.update_esdf().converged {
             count_up(&mut status.esdf_budget_exhausted, 1);
         }
-        let used = map.blocks_used();
-        status.blocks_used = u32::try_from(used).unwrap_or(u32::MAX);
         count_up(&mut status.scans_integrated, 1);
-        self.used = used;
         self.status = status;
     }
 

@@ -22,7 +22,7 @@ fn scans_build_the_map_and_report_status() {
         position: Point3 { x: 0.0, y: 0.0, z: 2.0 },
         orientation: Quat { x: 0.0, y: 0.0, z: 0.0, w: 1.0 },
     };
-    nav.scan(&Scan { scan_id: 1, sensor_pose: pose, points: &pts }, Instant::from_micros(0));
+    nav.integrate_scan(&Scan { scan_id: 1, sensor_pose: pose, points: &pts }, Instant::from_micros(0));
     let st = nav.map_status();
     assert_eq!(st.scans_integrated, 1);
     assert_eq!(st.points_integrated, 900);
@@ -46,7 +46,7 @@ fn full_pool_is_counted_not_fatal() {
         position: Point3 { x: 0.0, y: 0.0, z: 1.0 },
         orientation: Quat { x: 0.0, y: 0.0, z: 0.0, w: 1.0 },
     };
-    nav.scan(&Scan { scan_id: 7, sensor_pose: pose, points: &pts }, Instant::from_micros(0));
+    nav.integrate_scan(&Scan { scan_id: 7, sensor_pose: pose, points: &pts }, Instant::from_micros(0));
     let st = nav.map_status();
     assert_eq!(st.blocks_used, 2);
     assert_eq!(st.pool_errors, 1);
@@ -122,7 +122,7 @@ mod planning {
             }
         }
         let pose = Pose { position: Point3 { x: cx, y: 0.0, z: top }, orientation: Quat { x: 0.0, y: 0.0, z: 0.0, w: 1.0 } };
-        nav.scan(&Scan { scan_id: id, sensor_pose: pose, points: &pts }, Instant::from_micros(0));
+        nav.integrate_scan(&Scan { scan_id: id, sensor_pose: pose, points: &pts }, Instant::from_micros(0));
     }
 
     /// Map `f` over `x in [x0, x1]` with scans every half metre, the last one from `x_rover` (the rover's pose).
