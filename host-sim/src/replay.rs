@@ -19,63 +19,6 @@ pub struct RunConfig {
     pub link: String,
     /// Executive period of the in-process link, microseconds.
     pub step_us: u64,
-    /// The navigator's map configuration when it is not `MapConfig::DEFAULT` (missions on a scenario's `[map]`);
-    /// replay builds the same navigator.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub map: Option<MapParams>,
-}
-
-/// `firmware::config::map::MapConfig`, field for field, as stored in a field log.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-#[allow(missing_docs)]
-pub struct MapParams {
-    pub voxel_size: f32,
-    pub truncation: f32,
-    pub max_weight: f32,
-    pub max_carve_length: f32,
-    pub max_ray_voxels: usize,
-    pub max_range: f32,
-    pub min_range: f32,
-    pub esdf_band: f32,
-    pub esdf_site_tolerance: f32,
-    pub esdf_max_distance: f32,
-    pub esdf_max_sweeps: usize,
-}
-
-impl From<firmware::config::map::MapConfig> for MapParams {
-    fn from(c: firmware::config::map::MapConfig) -> Self {
-        MapParams {
-            voxel_size: c.voxel_size,
-            truncation: c.truncation,
-            max_weight: c.max_weight,
-            max_carve_length: c.max_carve_length,
-            max_ray_voxels: c.max_ray_voxels,
-            max_range: c.max_range,
-            min_range: c.min_range,
-            esdf_band: c.esdf_band,
-            esdf_site_tolerance: c.esdf_site_tolerance,
-            esdf_max_distance: c.esdf_max_distance,
-            esdf_max_sweeps: c.esdf_max_sweeps,
-        }
-    }
-}
-
-impl From<MapParams> for firmware::config::map::MapConfig {
-    fn from(c: MapParams) -> Self {
-        firmware::config::map::MapConfig {
-            voxel_size: c.voxel_size,
-            truncation: c.truncation,
-            max_weight: c.max_weight,
-            max_carve_length: c.max_carve_length,
-            max_ray_voxels: c.max_ray_voxels,
-            max_range: c.max_range,
-            min_range: c.min_range,
-            esdf_band: c.esdf_band,
-            esdf_site_tolerance: c.esdf_site_tolerance,
-            esdf_max_distance: c.esdf_max_distance,
-            esdf_max_sweeps: c.esdf_max_sweeps,
-        }
-    }
 }
 
 /// The outcome of a replay.
@@ -123,6 +66,14 @@ impl core::fmt::Display for ReplayOutcome {
 /// Why a log is not replayed at all.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum ReplayRefusal {
+    /// The log was recorded in another protocol version than this build speaks (every frame would be answered
+    /// `WrongVersion`).
+    WrongProtocol {
+        /// The log header's protocol version.
+        log: u8,
+        /// This build's `PROTOCOL_VERSION`.
+        build: u8,
+    },
     /// The configuration's executive period is 0 (link time would never advance).
     ZeroStep,
     /// A record's time is before the previous record's (a recording's link time only grows).
@@ -150,6 +101,11 @@ pub enum ReplayRefusal {
 impl core::fmt::Display for ReplayRefusal {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
+            ReplayRefusal::WrongProtocol { log, build } => write!(
+                f,
+                "the log was recorded in protocol version {log}; this build speaks version {build}: replay it with a \
+                 build of version {log}"
+            ),
             ReplayRefusal::ZeroStep => write!(f, "the log's configuration has step_us = 0: link time cannot advance"),
             ReplayRefusal::TimeGoesBack { record, t_us, previous_us } => write!(
                 f,
@@ -175,6 +131,10 @@ impl core::error::Error for ReplayRefusal {}
 /// `max_link_time_us` (the replay steps the executive every `step_us` up to the last record's time, so one time
 /// stamp of `u64::MAX` would otherwise run for ever).
 pub fn check_replayable(log: &FieldLog, step_us: u64, max_link_time_us: u64) -> Result<(), ReplayRefusal> {
+    let build = firmware::config::protocol::PROTOCOL_VERSION;
+    if log.header.protocol_version != build {
+        return Err(ReplayRefusal::WrongProtocol { log: log.header.protocol_version, build });
+    }
     if step_us == 0 {
         return Err(ReplayRefusal::ZeroStep);
     }

@@ -110,6 +110,7 @@ pub fn default_configure(seed: u64) -> Configure {
             forward_log_level: LogLevel::Info,
         },
         mission: MissionConfig::DEFAULT,
+        map: None,
     }
 }
 

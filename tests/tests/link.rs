@@ -33,10 +33,9 @@ fn record(seed: u64) -> Vec<u8> {
         scenario: "protocol".into(),
         link: "inproc".into(),
         step_us: DEFAULT_STEP_US,
-        map: None,
     };
     let header = fieldlog::Header {
-        protocol_version: 1,
+        protocol_version: firmware::config::protocol::PROTOCOL_VERSION,
         created_at_unix_ms: 1_700_000_000_000,
         seed,
         config: serde_json_string(&config),

@@ -6,8 +6,9 @@
 
 use firmware::protocol::{Message, MotionOutcome, MotionReport, NackReason, Point3, Pose, Quat, StopReason, Tracking};
 use host_sim::fieldlog::{self, Writer};
+use host_sim::link::inproc::InProcLink;
 use host_sim::link::recording::RecordingLink;
-use host_sim::mission::link::{inproc_with_map, mission_link};
+use host_sim::mission::link::mission_link;
 use host_sim::mission::run::{run_mission, MissionOptions, MissionReport, Verdict};
 use host_sim::replay::{replay, ReplayOutcome, RunConfig};
 use host_sim::scenario::{self, Scenario};
@@ -54,9 +55,9 @@ fn crater_wall_mission_arrives_and_the_truth_agrees_with_its_end() {
 fn a_mission_log_replays_byte_for_byte() {
     let sc = load("mission_corridor_rock.toml");
     let opts = MissionOptions { seed: 11, tracking: Tracking::ClosedLoop, noiseless: false, live: false };
-    let map = sc.map_config().expect("map");
-    // the CLI writes this as JSON; `replay` itself only needs the records
-    let config = RunConfig { scenario: sc.name.clone(), link: "inproc".into(), step_us: 1000, map: Some(map.into()) };
+    // the CLI writes this as JSON; `replay` itself only needs the records (the scenario's map configuration
+    // travels in the mission's `Configure`)
+    let config = RunConfig { scenario: sc.name.clone(), link: "inproc".into(), step_us: 1000 };
     let header = fieldlog::Header {
         protocol_version: firmware::config::protocol::PROTOCOL_VERSION,
         created_at_unix_ms: 0,
@@ -70,7 +71,7 @@ fn a_mission_log_replays_byte_for_byte() {
     let (_, bytes) = rec.finish().expect("finish");
     let log = fieldlog::parse(&bytes).expect("log");
     assert!(log.damage.is_none());
-    let mut fresh = inproc_with_map(map, 1000).expect("link");
+    let mut fresh = InProcLink::new(1000);
     match replay(&log, &mut fresh).expect("replay") {
         ReplayOutcome::Identical { records_fed, bytes_compared } => {
             assert!(records_fed > 100 && bytes_compared > 1000, "{records_fed} {bytes_compared}");

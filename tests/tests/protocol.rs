@@ -96,6 +96,7 @@ fn one_of_every_kind() -> Vec<Message> {
                 forward_log_level: LogLevel::Debug,
             },
             mission: MissionConfig::DEFAULT,
+            map: Some(MapSettings::from(firmware::config::map::MapConfig::DEFAULT)),
         }),
         Message::Shutdown(Shutdown),
         Message::TelemetryRequest(TelemetryRequest),

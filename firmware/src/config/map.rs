@@ -39,6 +39,13 @@ pub const BELOW_SURFACE_FILL_VOXELS: i32 = 8;
 /// overflow.
 pub const MAX_VOXEL_COORD: Real = 4_194_304.0;
 
+/// Largest [`MapConfig::max_ray_voxels`] accepted: 1024 voxels per ray (51 m at 5 cm). A map configuration can
+/// come over the link (`Configure.map`); this keeps the work per point, and so per executive step, bounded.
+pub const MAX_RAY_VOXELS_LIMIT: usize = 1024;
+/// Largest [`MapConfig::esdf_max_sweeps`] accepted: 256 sweeps per ESDF update (8 times the default), for the
+/// same reason.
+pub const ESDF_SWEEPS_LIMIT: usize = 256;
+
 /// Per-mission map parameters (runtime). Every field is validated by [`MapConfig::validate`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MapConfig {
@@ -114,8 +121,8 @@ impl MapConfig {
         if !pos(self.max_carve_length) {
             return Err(ConfigError { field: "max_carve_length", reason: "must be finite and > 0" });
         }
-        if self.max_ray_voxels == 0 {
-            return Err(ConfigError { field: "max_ray_voxels", reason: "must be > 0" });
+        if self.max_ray_voxels == 0 || self.max_ray_voxels > MAX_RAY_VOXELS_LIMIT {
+            return Err(ConfigError { field: "max_ray_voxels", reason: "must be in 1..=1024" });
         }
         if !pos(self.max_range) || self.min_range.is_nan() || self.min_range < 0.0 || self.min_range >= self.max_range {
             return Err(ConfigError { field: "max_range", reason: "need 0 <= min_range < max_range, finite" });
@@ -132,8 +139,8 @@ impl MapConfig {
                 reason: "must be > 0 and at most 127 voxels (site offsets are stored as i8)",
             });
         }
-        if self.esdf_max_sweeps == 0 {
-            return Err(ConfigError { field: "esdf_max_sweeps", reason: "must be > 0" });
+        if self.esdf_max_sweeps == 0 || self.esdf_max_sweeps > ESDF_SWEEPS_LIMIT {
+            return Err(ConfigError { field: "esdf_max_sweeps", reason: "must be in 1..=256" });
         }
         Ok(())
     }

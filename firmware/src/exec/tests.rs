@@ -82,6 +82,7 @@ fn configure() -> Configure {
             forward_log_level: LogLevel::Info,
         },
         mission: MissionConfig::DEFAULT,
+        map: None,
     }
 }
 

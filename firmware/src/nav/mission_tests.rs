@@ -33,6 +33,7 @@ fn configure(root: Point3, mission: MissionConfig) -> Configure {
         planner: PlannerConfig { rng_seed: 11, max_iterations: 750, batch_size: 100, goal_bias: 0.0 },
         telemetry: TelemetryConfig { period_ms: 0, forward_log_level: LogLevel::Off },
         mission,
+        map: None,
     }
 }
 

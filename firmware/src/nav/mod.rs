@@ -306,6 +306,27 @@ fn count_up(counter: &mut u32, n: u32) {
 
 impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> Autonomy for Navigator<B, I, P> {
     fn configure(&mut self, cfg: &Configure) -> Result<(), Refused> {
+        if let Some(settings) = cfg.map {
+            let map_cfg = MapConfig::from(settings);
+            if map_cfg != self.cfg {
+                // A new resolution: the map is rebuilt empty (its voxels mean nothing at another size).
+                // `from_slices` checks the configuration before it clears anything, so a refusal changes nothing.
+                let capacity = Map::from_slices(map_cfg, self.blocks.borrow_mut(), self.index.borrow_mut())
+                    .map_err(|_| Refused)?
+                    .blocks_capacity();
+                log::info!("map: reconfigured to {} m voxels; the map is cleared", map_cfg.voxel_size);
+                self.cfg = map_cfg;
+                self.used = 0;
+                self.status = MapStatus {
+                    blocks_capacity: u32::try_from(capacity).unwrap_or(u32::MAX),
+                    ..MapStatus::default()
+                };
+                self.scan_in = None;
+                self.pose = None;
+                self.problem = None;
+                planning::forget_search(&mut self.storage);
+            }
+        }
         self.setup = Some(PlanSetup::from_configure(cfg));
         self.mission.configure(cfg);
         Ok(())

@@ -53,6 +53,44 @@ fn full_pool_is_counted_not_fatal() {
     assert!(st.voxels_dropped > 0);
 }
 
+/// `Configure.map` (protocol v3): settings that differ rebuild the map empty at the new resolution; the same
+/// settings, or none, keep it.
+#[test]
+fn a_configure_with_other_map_settings_rebuilds_the_map_and_equal_ones_keep_it() {
+    let mut nav = Navigator::new(
+        MapConfig::with_voxel_size(0.05),
+        vec![Block::EMPTY; 512],
+        vec![0u32; 1024],
+        std::boxed::Box::<NavPlanStorage>::default(),
+    )
+    .unwrap();
+    let pts: vec::Vec<Point3> =
+        (0..400).map(|i| Point3 { x: -1.0 + 0.1 * (i % 20) as f32, y: -1.0 + 0.1 * (i / 20) as f32, z: -2.0 }).collect();
+    let pose = Pose { position: Point3 { x: 0.0, y: 0.0, z: 2.0 }, orientation: Quat::IDENTITY };
+    let scan = |nav: &mut Navigator<_, _, _>, id| {
+        nav.integrate_scan(&Scan { scan_id: id, sensor_pose: pose, points: &pts }, Instant::from_micros(0))
+    };
+    scan(&mut nav, 1);
+    let used_fine = nav.map_status().blocks_used;
+    assert!(used_fine > 0);
+    let mut cfg = planning::configure(1);
+    // no settings, then the same settings: the map stays
+    nav.configure(&cfg).unwrap();
+    cfg.map = Some(MapConfig::with_voxel_size(0.05).into());
+    nav.configure(&cfg).unwrap();
+    assert_eq!(nav.map_status().blocks_used, used_fine);
+    assert_eq!(nav.map_status().scans_integrated, 1);
+    // 10 cm voxels: the map is empty, then the same scan needs fewer blocks and lands at the new size
+    cfg.map = Some(MapConfig::with_voxel_size(0.1).into());
+    nav.configure(&cfg).unwrap();
+    assert_eq!((nav.map_status().blocks_used, nav.map_status().scans_integrated), (0, 0));
+    assert_eq!(nav.map().unwrap().query(&Vec3::new(0.0, 0.0, 0.5)), DistanceQuery::Unknown);
+    scan(&mut nav, 2);
+    let used_coarse = nav.map_status().blocks_used;
+    assert!(used_coarse > 0 && used_coarse < used_fine, "{used_coarse} vs {used_fine}");
+    assert_eq!(nav.map().unwrap().config().voxel_size, 0.1);
+}
+
 // ------------------------------------------------------------------------------------------- goal planning
 
 mod planning {
@@ -75,7 +113,7 @@ mod planning {
             .unwrap()
     }
 
-    fn configure(seed: u64) -> Configure {
+    pub(super) fn configure(seed: u64) -> Configure {
         Configure {
             rover: RoverConfig {
                 mass_kg: 50.0,
@@ -87,7 +125,8 @@ mod planning {
             tether: TetherConfig { root_anchor: Point3 { x: -1.5, y: 0.0, z: 1.5 }, max_payout_m: 50.0, max_tension_n: 2000.0 },
             planner: PlannerConfig { rng_seed: seed, max_iterations: 750, batch_size: 100, goal_bias: 0.0 },
             telemetry: TelemetryConfig { period_ms: 0, forward_log_level: LogLevel::Off },
-        mission: MissionConfig::DEFAULT,
+            mission: MissionConfig::DEFAULT,
+            map: None,
         }
     }
 

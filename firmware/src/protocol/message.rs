@@ -1,8 +1,9 @@
-//! Message set v2: the bodies of frames, as serde types encoded with postcard.
+//! Message set v3: the bodies of frames, as serde types encoded with postcard.
 //!
-//! Version 2 adds the closed-loop mission: `GoalRequest.allow_approximate`, `Configure.mission`
+//! Version 2 added the closed-loop mission: `GoalRequest.allow_approximate`, `Configure.mission`
 //! ([`MissionConfig`]), the host -> flight [`MotionReport`] and [`GoalCancel`], and the flight -> host
-//! [`MissionStatus`] (see `firmware/PROTOCOL.md`).
+//! [`MissionStatus`]. Version 3 adds `Configure.map` ([`MapSettings`]): the ground sets the onboard map's
+//! resolution per mission (see `firmware/PROTOCOL.md`).
 //!
 //! Every float is validated on decode ([`Validate`]): NaN and infinities are an error everywhere, pose quaternions
 //! must be unit within [`QUATERNION_NORM_TOLERANCE`], lengths and counts must be inside their `config::protocol`
@@ -12,6 +13,7 @@
 use heapless::{String, Vec};
 use serde::{Deserialize, Serialize};
 
+use crate::config::map::MapConfig;
 use crate::config::mission as mission_cfg;
 use crate::config::protocol::{
     MAX_ANCHORS_PER_WAYPOINT, MAX_LOG_TEXT, MAX_POINTS_PER_CHUNK, MAX_WAYPOINTS_PER_PLAN_FRAME,
@@ -322,6 +324,65 @@ pub struct Configure {
     pub telemetry: TelemetryConfig,
     /// The closed-loop mission (v2). Defaults: `MissionConfig::DEFAULT` (`firmware::config::mission`).
     pub mission: MissionConfig,
+    /// The onboard map's configuration (v3). `None` keeps the map as it is (at boot `MapConfig::DEFAULT`); a
+    /// configuration different from the map's clears the map and rebuilds it at the new resolution.
+    pub map: Option<MapSettings>,
+}
+
+/// The onboard map's parameters in a `Configure` (v3): `firmware::config::map::MapConfig` field for field (the
+/// defaults and meaning of each are listed there), counts as `u32`. Validated by `MapConfig::validate`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[allow(missing_docs)]
+pub struct MapSettings {
+    pub voxel_size_m: f32,
+    pub truncation_m: f32,
+    pub max_weight: f32,
+    pub max_carve_length_m: f32,
+    pub max_ray_voxels: u32,
+    pub max_range_m: f32,
+    pub min_range_m: f32,
+    pub esdf_band_voxels: f32,
+    pub esdf_site_tolerance_voxels: f32,
+    pub esdf_max_distance_m: f32,
+    pub esdf_max_sweeps: u32,
+}
+
+impl From<MapConfig> for MapSettings {
+    fn from(c: MapConfig) -> Self {
+        let count = |n: usize| u32::try_from(n).unwrap_or(u32::MAX);
+        MapSettings {
+            voxel_size_m: c.voxel_size,
+            truncation_m: c.truncation,
+            max_weight: c.max_weight,
+            max_carve_length_m: c.max_carve_length,
+            max_ray_voxels: count(c.max_ray_voxels),
+            max_range_m: c.max_range,
+            min_range_m: c.min_range,
+            esdf_band_voxels: c.esdf_band,
+            esdf_site_tolerance_voxels: c.esdf_site_tolerance,
+            esdf_max_distance_m: c.esdf_max_distance,
+            esdf_max_sweeps: count(c.esdf_max_sweeps),
+        }
+    }
+}
+
+impl From<MapSettings> for MapConfig {
+    fn from(m: MapSettings) -> Self {
+        let count = |n: u32| usize::try_from(n).unwrap_or(usize::MAX);
+        MapConfig {
+            voxel_size: m.voxel_size_m,
+            truncation: m.truncation_m,
+            max_weight: m.max_weight,
+            max_carve_length: m.max_carve_length_m,
+            max_ray_voxels: count(m.max_ray_voxels),
+            max_range: m.max_range_m,
+            min_range: m.min_range_m,
+            esdf_band: m.esdf_band_voxels,
+            esdf_site_tolerance: m.esdf_site_tolerance_voxels,
+            esdf_max_distance: m.esdf_max_distance_m,
+            esdf_max_sweeps: count(m.esdf_max_sweeps),
+        }
+    }
 }
 
 /// How straight drives are executed (v2).
@@ -981,7 +1042,8 @@ impl Validate for Configure {
         if period != 0 && period < MIN_TELEMETRY_PERIOD_MS {
             return Err(Invalid::OutOfRange);
         }
-        self.mission.validate()
+        self.mission.validate()?;
+        self.map.map_or(Ok(()), |m| m.validate())
     }
 }
 
@@ -990,6 +1052,25 @@ impl Validate for MissionConfig {
         positive(self.replan_cross_track_m)?;
         positive(self.payout_tolerance_m)?;
         non_negative(self.min_margin_n)
+    }
+}
+
+impl Validate for MapSettings {
+    fn validate(&self) -> Result<(), Invalid> {
+        [
+            self.voxel_size_m,
+            self.truncation_m,
+            self.max_weight,
+            self.max_carve_length_m,
+            self.max_range_m,
+            self.min_range_m,
+            self.esdf_band_voxels,
+            self.esdf_site_tolerance_voxels,
+            self.esdf_max_distance_m,
+        ]
+        .into_iter()
+        .try_for_each(finite)?;
+        MapConfig::from(*self).validate().map_err(|_| Invalid::OutOfRange)
     }
 }
 

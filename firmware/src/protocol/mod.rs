@@ -1,9 +1,9 @@
-//! # Wire protocol between the simulator / ground station and the flight software (version 2)
+//! # Wire protocol between the simulator / ground station and the flight software (version 3)
 //!
 //! The byte-level specification, with limits and example bytes, is `firmware/PROTOCOL.md`; this module is its
 //! implementation and the unit tests check the document's example bytes.
 //!
-//! - [`message`]: the message set v2 (serde types, postcard bodies; v2 adds the closed-loop mission messages) and
+//! - [`message`]: the message set v3 (serde types, postcard bodies; v2 added the closed-loop mission messages, v3 `Configure.map`) and
 //!   their validation ([`Validate`]).
 //! - [`frame`]: `header | body | CRC-32` frames, the [`Frame`] view with a checked constructor, [`encode`] and
 //!   [`decode`] / [`decode_frame`].

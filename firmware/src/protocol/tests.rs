@@ -32,7 +32,7 @@ fn spec_example_time_tick() {
     let mut raw = [0u8; 64];
     let n = build_raw(
         Header {
-            version: 2,
+            version: 3,
             kind: 1,
             seq: 1,
         },
@@ -141,7 +141,7 @@ fn header_errors_and_nonfinite_values() {
         Err(NackReason::Truncated)
     );
     let mut raw = [0u8; 64];
-    for version in [0u8, 1, 3, 0xFF] {
+    for version in [0u8, 1, 2, 4, 0xFF] {
         let n = build_raw(
             Header {
                 version,
@@ -160,7 +160,7 @@ fn header_errors_and_nonfinite_values() {
     }
     let n = build_raw(
         Header {
-            version: 2,
+            version: crate::config::protocol::PROTOCOL_VERSION,
             kind: 0x42,
             seq: 0,
         },
@@ -246,6 +246,7 @@ fn periodic_telemetry_faster_than_the_limit_is_out_of_range() {
             forward_log_level: LogLevel::Off,
         },
         mission: MissionConfig::DEFAULT,
+        map: None,
     };
     for (period, ok) in [
         (0, true),
@@ -289,6 +290,7 @@ fn sample_configure() -> Configure {
             payout_tolerance_m: 0.4,
             min_margin_n: 1.5,
         },
+        map: Some(MapSettings::from(crate::config::map::MapConfig::with_voxel_size(0.1))),
     }
 }
 
@@ -298,7 +300,7 @@ fn round_trip(m: &Message) -> Message {
     let (n, ev) = d.push(&w);
     assert_eq!(n, w.len());
     let (h, back) = decode_frame(ev.unwrap().unwrap()).unwrap();
-    assert_eq!(h.version, 2);
+    assert_eq!(h.version, 3);
     assert_eq!(h.kind, m.kind() as u8);
     back
 }
@@ -389,11 +391,11 @@ fn spec_examples_v2() {
     let mut d = Deframer::new();
     let (_, ev) = d.push(&w);
     assert_eq!(ev.unwrap().unwrap(), &frame[..]);
-    // a real version-1 frame (the v1 document's example) is a wrong version, not a CRC or kind error
-    assert_eq!(
-        decode_frame(&spec_bytes("example-v1-time-tick-frame")).map(|_| ()),
-        Err(NackReason::WrongVersion)
-    );
+    // real version-1 and version-2 frames (the earlier documents' example) are a wrong version, not a CRC or
+    // kind error
+    for old in ["example-v1-time-tick-frame", "example-v2-time-tick-frame"] {
+        assert_eq!(decode_frame(&spec_bytes(old)).map(|_| ()), Err(NackReason::WrongVersion));
+    }
 }
 
 #[test]
@@ -427,6 +429,31 @@ fn v2_bad_values_have_their_reasons() {
     assert_eq!(
         decode_frame(&frame_with_body(MessageKind::Configure, &b[..n])).map(|_| ()),
         Err(NackReason::NonFinite)
+    );
+    // v3 map settings: each out-of-range or non-finite field is refused with its reason
+    let good = sample_configure();
+    let with_map = |f: &dyn Fn(&mut MapSettings)| {
+        let mut c = good;
+        if let Some(m) = c.map.as_mut() {
+            f(m);
+        }
+        c.validate()
+    };
+    assert_eq!(with_map(&|_| ()), Ok(()));
+    assert_eq!(with_map(&|m| m.voxel_size_m = 0.0), Err(Invalid::OutOfRange));
+    assert_eq!(with_map(&|m| m.truncation_m = f32::NAN), Err(Invalid::NonFinite));
+    assert_eq!(with_map(&|m| m.truncation_m = 0.01), Err(Invalid::OutOfRange), "truncation below a voxel");
+    assert_eq!(with_map(&|m| m.max_ray_voxels = 5000), Err(Invalid::OutOfRange), "unbounded work per point");
+    assert_eq!(with_map(&|m| m.esdf_max_sweeps = 0), Err(Invalid::OutOfRange));
+    assert_eq!(with_map(&|m| m.esdf_max_distance_m = f32::INFINITY), Err(Invalid::NonFinite));
+    // a v2 Configure body (no map byte) under a v3 header is cut short
+    let mut v2 = sample_configure();
+    v2.map = None;
+    let n = Message::Configure(v2).encode_body(&mut b).unwrap();
+    assert_eq!(b[n - 1], 0, "None is one zero byte, the body's last");
+    assert_eq!(
+        decode_frame(&frame_with_body(MessageKind::Configure, &b[..n - 1])).map(|_| ()),
+        Err(NackReason::BodyTooShort)
     );
     // a motion report with a non-unit quaternion, a NaN distance, and an unknown outcome index
     let mut r = MotionReport {
@@ -473,7 +500,7 @@ fn v2_bad_values_have_their_reasons() {
         decode_frame(&frame_with_body(MessageKind::GoalRequest, &b[..n])).map(|_| ()),
         Err(NackReason::MalformedBody)
     );
-    // a v1 GoalRequest body (no allow_approximate byte) under a v2 header is cut short
+    // a v1 GoalRequest body (no allow_approximate byte) under a v3 header is cut short
     assert_eq!(
         decode_frame(&frame_with_body(MessageKind::GoalRequest, &b[..n - 1])).map(|_| ()),
         Err(NackReason::BodyTooShort)

@@ -129,7 +129,7 @@ fn one(args: &MissionArgs, sc: &Scenario) -> Result<(MissionReport, Vec<PathBuf>
     std::fs::create_dir_all(&args.out).map_err(|e| format!("cannot create {}: {e}", args.out.display()))?;
     let log_path = args.log.clone().unwrap_or_else(|| args.out.join(format!("{}.fieldlog", sc.name)));
     let opts = MissionOptions { seed: args.seed, tracking: args.tracking.into(), noiseless: false, live: !args.quiet };
-    let map_cfg = sc.map_config()?;
+    sc.map_config()?;
     let config = RunConfig {
         scenario: sc.name.clone(),
         link: match args.link {
@@ -137,7 +137,6 @@ fn one(args: &MissionArgs, sc: &Scenario) -> Result<(MissionReport, Vec<PathBuf>
             LinkKind::Qemu => "qemu".into(),
         },
         step_us: crate::link::inproc::DEFAULT_STEP_US,
-        map: (map_cfg != firmware::config::map::MapConfig::DEFAULT).then(|| map_cfg.into()),
     };
     let created = args.created_at_ms.unwrap_or_else(|| {
         std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_millis() as u64)
@@ -166,12 +165,6 @@ fn one(args: &MissionArgs, sc: &Scenario) -> Result<(MissionReport, Vec<PathBuf>
             rep
         }
         LinkKind::Qemu => {
-            if !crate::mission::link::board_equivalent(sc) {
-                eprintln!(
-                    "note: the board runs MapConfig::DEFAULT; this scenario's [map] differs, so the board's mission \
-                     is not the in-process one"
-                );
-            }
             super::board::with_link(LinkKind::Qemu, crate::link::inproc::DEFAULT_STEP_US, run)?
         }
     };

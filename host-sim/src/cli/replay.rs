@@ -46,16 +46,7 @@ pub fn main(args: &ReplayArgs) -> ExitCode {
     let run = |mut link: &mut dyn crate::link::FlightLink| -> Result<ReplayOutcome, Box<dyn core::error::Error>> {
         Ok(replay(&log, &mut link)?)
     };
-    let outcome = match (config.map, args.link) {
-        // a mission on a scenario's own map configuration: the same navigator in-process
-        (Some(map), LinkKind::Inproc) => crate::mission::link::inproc_with_map(map.into(), config.step_us)
-            .map_err(Into::into)
-            .and_then(|mut link| run(&mut link)),
-        (Some(_), LinkKind::Qemu) => Err("this log's navigator used a non-default map configuration; the board runs \
-                                          MapConfig::DEFAULT: replay it with --link inproc"
-            .into()),
-        (None, kind) => super::board::with_link(kind, config.step_us, run),
-    };
+    let outcome = super::board::with_link(args.link, config.step_us, run);
     let outcome = match outcome {
         Ok(o) => o,
         Err(e) => return super::fail(e),

@@ -65,7 +65,6 @@ pub fn run_on(
         scenario: args.scenario.clone(),
         link: link.name().into(),
         step_us: args.step_us,
-        map: None,
     };
     let created = args.created_at_ms.unwrap_or_else(|| {
         std::time::SystemTime::now()

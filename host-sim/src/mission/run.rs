@@ -25,7 +25,7 @@ use firmware::config::rover::RoverParams;
 use firmware::geom::p3::{dist, from_vec3, P3};
 use firmware::geom::Real;
 use firmware::protocol::{
-    Configure, GoalRequest, Message, MissionConfig, MissionState, MissionStatus, Motion, MotionOutcome,
+    Configure, GoalRequest, MapSettings, Message, MissionConfig, MissionState, MissionStatus, Motion, MotionOutcome,
     MotionReport, PlanState, PlannerChoice, Point3, StopReason, Tracking,
 };
 use rand_core::Rng;
@@ -244,6 +244,8 @@ pub fn mission_configure(sc: &Scenario, opts: &MissionOptions) -> Configure {
         payout_tolerance_m: m.payout_tolerance_m.map_or(d.payout_tolerance_m, |v| v as f32),
         min_margin_n: m.min_margin_n.map_or(d.min_margin_n, |v| v as f32),
     };
+    // The scenario's map configuration (checked when the mission's link was made; `mission_link`).
+    c.map = sc.map_config().ok().map(MapSettings::from);
     c
 }
 
