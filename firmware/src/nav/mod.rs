@@ -1,9 +1,11 @@
 //! The navigator: the flight executive's [`Autonomy`] implementation.
 //!
 //! Paton et al. (section IV) plan on a map the rover builds itself from its own range sensor. The navigator is
-//! where that happens on board: every complete scan the executive reassembles from the link is integrated into
-//! the onboard TSDF ([`Map::integrate_points`]) and the ESDF is brought up to date ([`Map::update_esdf`]) within the
-//! map's own budgets; the map's state goes out in every `Telemetry` frame ([`MapStatus`]).
+//! where that happens on board: each scan chunk the executive accepts from the link is integrated into the onboard
+//! TSDF as it arrives ([`Autonomy::scan_part`], [`Map::integrate_points`]); when the scan is complete the ESDF is
+//! brought up to date ([`Map::update_esdf`]) within the map's own budgets ([`Autonomy::scan_complete`]); the map's
+//! state goes out in every `Telemetry` frame ([`MapStatus`]). The map's configuration comes with `Configure.map`
+//! (protocol v3; the navigator boots with [`MapConfig::DEFAULT`]); another resolution rebuilds the map empty.
 //!
 //! ## Goals: tethered ABIT* on the onboard map (Paton et al. V)
 //! A `GoalRequest` for [`PlannerChoice::Abit`] sets up the problem of [`crate::plan::tethered`] on the onboard map
@@ -164,11 +166,15 @@
 //!   thin observed band behind its surface, and the settler's queries reach below it.
 //! - Rays leave unobserved stripes between them where they land more than a voxel apart (far from the sensor, at
 //!   grazing incidence): a goal column inside such a stripe does not settle (`GoalNotSettled`).
-//! - The executive integrates a whole scan in one step: on the emulated board an 8000-point scan at the flight
-//!   map's 5 cm voxels outlasts the 2 s watchdog (a 2000-point scan does not).
+//! - A scan is integrated chunk by chunk (at most `FRAMES_PER_STEP` chunks of 128 points per executive step):
+//!   integrated whole, an 8000-point scan at 5 cm voxels outlasted the emulated board's watchdog in one step. The
+//!   mission's pose check runs at a scan's first chunk; a rejected scan's chunks are all skipped. Chunks of a scan
+//!   abandoned incomplete stay in the TSDF (each ray is a measurement of its own); the ESDF and the plan re-check
+//!   follow the next complete scan.
 //!
 //! ## Budgets
-//! Work per scan is bounded by `points * max_ray_voxels` voxel updates plus `esdf_max_sweeps` ESDF sweeps; an
+//! Work per chunk is bounded by `points * max_ray_voxels` voxel updates, per complete scan by `esdf_max_sweeps` ESDF
+//! sweeps (`Configure.map` keeps both within `MAX_RAY_VOXELS_LIMIT` and `ESDF_SWEEPS_LIMIT`); an
 //! ESDF that runs out of sweeps is counted and continues with the next scan. Work per `plan_step` is bounded by
 //! its new iterations and `MOTION_CHECKS_PER_STEP`, each iteration bounded by the planner's own budgets.
 //!

@@ -9,7 +9,10 @@
 //! Per call: [`QemuLink::send`] writes the bytes to UART0 at once and counts them; [`QemuLink::recv_until_quiet`]
 //! and [`QemuLink::advance_to`] send one `R` command (announcing the bytes written since the last one, the start
 //! time, the period and the step count) and collect the board's output bytes and its `D` reply. Every wait is
-//! bounded by [`QemuLink::reply_timeout`].
+//! bounded by [`QemuLink::reply_timeout`]. A step that may work (the first after bytes were sent, or any step
+//! after a busy one: planning, scan integration, plan re-checks) is sent as a run command of its own, so the bound
+//! applies to one step, whose length the flight software bounds (and the board's watchdog catches); idle steps go
+//! in runs of up to [`IDLE_RUN_STEPS`]. The split does not change the bytes: the steps run at the same times.
 
 use core::time::Duration;
 use std::io;
@@ -18,8 +21,14 @@ use std::time::Instant;
 use super::{FlightLink, LinkError};
 use crate::qemu::{QemuBoard, QemuConfig, QemuError, QemuExit};
 
-/// Default bound on one lockstep run command's reply (generous: thousands of steps on a loaded 2-core machine).
+/// Default bound on one lockstep run command's reply: one busy step (a mission's planning step on the emulated
+/// Cortex-M7 takes seconds of host time) or a run of idle ones, on a loaded 2-core machine. Default 60 s, twice the
+/// board's lockstep watchdog, which ends a wedged step first.
 pub const DEFAULT_REPLY_TIMEOUT: Duration = Duration::from_secs(60);
+
+/// Steps per run command while the executive is idle (no bytes sent, the last step reported no work). Default
+/// 1024: an idle step costs microseconds on the board, so a run stays far inside the reply timeout.
+pub const IDLE_RUN_STEPS: u64 = 1024;
 
 /// The board in lockstep behind the host's link interface.
 pub struct QemuLink {
@@ -32,6 +41,8 @@ pub struct QemuLink {
     steps: u64,
     round_trips: u64,
     busy_wall: Duration,
+    /// The board's last step reported work.
+    last_busy: bool,
 }
 
 impl QemuLink {
@@ -54,6 +65,7 @@ impl QemuLink {
             steps: 0,
             round_trips: 0,
             busy_wall: Duration::ZERO,
+            last_busy: false,
         })
     }
 
@@ -107,10 +119,11 @@ impl QemuLink {
 
     fn run(&mut self, mut steps: u64, until_quiet: bool) -> io::Result<Vec<u8>> {
         let mut out = Vec::new();
-        // Split very long runs so a count always fits the command's u32.
         while steps > 0 {
-            let chunk = steps.min(u64::from(u32::MAX));
+            // One step per command while the executive may work; idle runs in blocks (module docs).
+            let chunk = if self.unannounced > 0 || self.last_busy { 1 } else { steps.min(IDLE_RUN_STEPS) };
             let (ran, busy) = self.run_once(chunk as u32, until_quiet, &mut out)?;
+            self.last_busy = busy;
             steps -= chunk;
             if until_quiet && (!busy || u64::from(ran) < chunk) {
                 break;
