@@ -778,11 +778,13 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
                         Ok(margin) => {
                             m.margin_n = margin as f32 * m.weight_n;
                             if m.margin_n < m.cfg.min_margin_n {
+                                log::warn!("mission: margin {} N below the minimum on the map", m.margin_n);
                                 m.stop(StopReason::MarginBelowMinimum);
                                 return DriveStep::Finished;
                             }
                         }
-                        Err(_) => {
+                        Err(e) => {
+                            log::warn!("mission: the current state is not stable on the map: {:?}", e);
                             m.margin_n = 0.0;
                             m.stop(StopReason::MarginBelowMinimum);
                             return DriveStep::Finished;
