@@ -159,6 +159,14 @@ fn one(args: &MissionArgs, sc: &Scenario) -> Result<(MissionReport, Vec<PathBuf>
         LinkKind::Inproc => {
             let mut link = crate::mission::link::mission_link(sc)?;
             let rep = run(&mut link)?;
+            if let (Some(l), false) = (link.longest_step(), args.quiet) {
+                println!(
+                    "  longest executive step {:.3} s host time (link time {:.3} s, {:?}; host-dependent, not logged)",
+                    l.wall.as_secs_f64(),
+                    l.t_us as f64 * 1e-6,
+                    l.mode
+                );
+            }
             if std::env::var_os("TETHERBOT_PLAN_STATS").is_some() {
                 eprintln!("navigator planning counters: {:?}", link.executive().autonomy().plan_stats());
             }

@@ -100,6 +100,18 @@ pub struct InProcLink<A: Autonomy = FlightAutonomy> {
     exec: InProcExecutive<A>,
     step_us: u64,
     last_step: StepReport,
+    longest: Option<LongestStep>,
+}
+
+/// The executive step that took the most host wall time (a measurement of this host, not part of the output).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LongestStep {
+    /// Host wall time of the step.
+    pub wall: core::time::Duration,
+    /// Link time at which it ran, microseconds.
+    pub t_us: u64,
+    /// The executive's mode before the step.
+    pub mode: firmware::protocol::Mode,
 }
 
 impl InProcLink<FlightAutonomy> {
@@ -124,6 +136,7 @@ impl<A: Autonomy> InProcLink<A> {
             exec,
             step_us: step_us.max(1),
             last_step: StepReport::default(),
+            longest: None,
         }
     }
 
@@ -147,9 +160,20 @@ impl<A: Autonomy> InProcLink<A> {
         self.last_step
     }
 
+    /// The step that took the most host wall time so far (`None` before the first step). The flight software
+    /// bounds each step's work, not its time; this shows how long the longest bounded step is on this host.
+    pub fn longest_step(&self) -> Option<LongestStep> {
+        self.longest
+    }
+
     /// Runs one executive step at the current time, then advances the clock by one period.
     pub fn step_once(&mut self) -> Vec<u8> {
+        let (t0, mode) = (std::time::Instant::now(), self.exec.mode());
         self.last_step = self.exec.step();
+        let wall = t0.elapsed();
+        if self.longest.is_none_or(|l| wall > l.wall) {
+            self.longest = Some(LongestStep { wall, t_us: self.exec.clock_mut().now_us, mode });
+        }
         self.exec.clock_mut().now_us += self.step_us;
         core::mem::take(&mut self.exec.link_mut().to_host)
     }
