@@ -32,6 +32,20 @@ pub fn is_finite3(v: &Vec3) -> bool {
     v.x.is_finite() && v.y.is_finite() && v.z.is_finite()
 }
 
+/// `x` limited to `[lo, hi]`: the result of `Real::clamp` whenever that does not panic (`lo <= hi`, neither NaN;
+/// a NaN `x` stays NaN), and no panic path when the bounds come from a configuration that could break that rule
+/// (then `lo` wins below, `hi` above). The flight build is proven free of reachable panics (`.ci/run`), and
+/// `clamp`'s bounds assertion survives optimisation wherever the bounds are not constants.
+pub fn clamp(x: Real, lo: Real, hi: Real) -> Real {
+    if x < lo {
+        lo
+    } else if x > hi {
+        hi
+    } else {
+        x
+    }
+}
+
 /// Euclidean norm through `libm` (bit-identical on every target).
 pub fn norm3(v: &Vec3) -> Real {
     libm::sqrtf(v.x * v.x + v.y * v.y + v.z * v.z)
