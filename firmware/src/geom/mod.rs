@@ -78,4 +78,20 @@ mod tests {
         let u = normalize3(&Vec3::new(3.0, 0.0, 4.0), 1e-6);
         assert_eq!(u.map(|u| norm3(&u)), Some(1.0));
     }
+
+    #[test]
+    fn clamp_equals_the_core_clamp_where_that_does_not_panic_and_never_panics() {
+        let xs = [-2.0, -1.0, -0.5, 0.0, 0.25, 1.0, 3.0, Real::INFINITY, Real::NEG_INFINITY];
+        for (lo, hi) in [(-1.0, 1.0), (0.0, 0.0), (0.0, 2.5), (Real::NEG_INFINITY, 0.0)] {
+            for x in xs {
+                assert_eq!(clamp(x, lo, hi).to_bits(), x.clamp(lo, hi).to_bits(), "{x} in [{lo}, {hi}]");
+            }
+            assert!(clamp(Real::NAN, lo, hi).is_nan());
+        }
+        // Bounds `Real::clamp` would panic on (lo > hi, NaN): a value, no panic.
+        assert_eq!(clamp(5.0, 1.0, -1.0), -1.0);
+        assert_eq!(clamp(-5.0, 1.0, -1.0), 1.0);
+        assert_eq!(clamp(0.5, Real::NAN, 1.0), 0.5);
+        assert_eq!(clamp(2.0, 0.0, Real::NAN), 2.0);
+    }
 }

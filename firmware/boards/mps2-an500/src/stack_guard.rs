@@ -2,7 +2,7 @@
 //!
 //! ARMv7-M has no stack-limit register (ARMv8-M's `MSPLIM` / `PSPLIM`), so the Cortex-M7's MPU (PMSAv7, 8
 //! regions on the M7 and in QEMU's model) does it: one region, [`_stack_guard_start`, `_stack_end`) right below
-//! the painted stack (`memory.x`; default 64 KiB), is no-access and execute-never for all code. Every other
+//! the painted stack (`memory.x`; default 128 KiB), is no-access and execute-never for all code. Every other
 //! address keeps the default memory map (`PRIVDEFENA`; the board runs privileged). A push, a spill or an
 //! exception frame that lands in the guard raises MemManage (`SCB.SHCSR.MEMFAULTENA`, enabled here) before a
 //! byte of `.bss` or `.uninit` is corrupted.
@@ -17,11 +17,14 @@
 //! idle loop's critical section), the HardFault handler recognises it from the same status registers and prints
 //! the same report. Either way the run ends with exit status 1.
 //!
-//! **Why 64 KiB.** A function whose frame is larger than the guard could move the stack pointer past the guard in
-//! one step and write below it without touching it. The largest frame of the flight build (`sub sp` in the
-//! disassembly) is far below 64 KiB (see the board README for the measured figure); the guard costs 64 KiB of the
-//! 1.2 MiB of SRAM left between `.uninit` and the stacks. The MPU requires a region's base to be aligned to its
-//! size (power of two, at least 32 B); `memory.x` asserts both.
+//! **Why 128 KiB.** A function whose frame is larger than the guard could move the stack pointer past the guard
+//! in one step and write below it without touching it. The largest frame in the binary (the sum of the `sub sp`
+//! immediates of one function in the disassembly) is `firmware::stability::check_stability`'s, 65 956 B,
+//! measured 2026-12-02 in the flight and the test build: a 64 KiB guard would not do. `.ci/run` fails when a
+//! frame reaches the guard's size (`tools/max-frame.sh`; no function sets `sp` from a register, which that
+//! check would miss, and it reports any that does). The guard costs 128 KiB of the ~1.2 MiB of SRAM left
+//! between `.uninit` and the stacks. The MPU requires a region's base to be aligned to its size (power of two,
+//! at least 32 B); `memory.x` asserts both.
 //!
 //! The stack paint (`stack.rs`, cortex-m-rt's `paint-stack`) covers [`_stack_end`, `_stack_start`) only, so the
 //! high-water scan never reads the guard; the paint is written at reset, before the MPU is on.
