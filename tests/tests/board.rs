@@ -1,5 +1,7 @@
-//! The emulated flight computer (QEMU mps2-an500): faults end the run with a failure status and a report, the
-//! benchmark mode counts instructions exactly, the ELF's memory layout is what `memory.x` promises.
+//! The emulated flight computer (QEMU mps2-an500): faults end the run with a failure status and a report (a stack
+//! overflow as it happens, through the MPU guard), the watchdog's reset output reboots the board, the clock and
+//! periodic telemetry run on across the 32-bit millisecond wrap, the benchmark mode counts instructions exactly,
+//! the ELF's memory layout is what `memory.x` promises.
 //!
 //! These tests build the board binary on first use (about a minute cold, under a second when up to date) and
 //! skip with a plain message when `qemu-system-arm` is absent, unless `CI=true`.
@@ -64,6 +66,134 @@ fn stalled_loop_is_caught_by_the_watchdog_and_fails_the_run() {
         return;
     };
     assert!(text.contains("board: WATCHDOG expired"), "output: {text}");
+}
+
+/// The `0x...` number after `key` in `text`.
+fn hex_after(text: &str, key: &str) -> Option<u64> {
+    let rest = &text[text.find(key)? + key.len()..];
+    let digits: String = rest
+        .trim_start_matches("0x")
+        .chars()
+        .take_while(char::is_ascii_hexdigit)
+        .collect();
+    u64::from_str_radix(&digits, 16).ok()
+}
+
+#[test]
+fn stack_overflow_is_trapped_by_the_mpu_guard_as_it_happens() {
+    // The probe recurses with 1 KiB frames; without the guard it runs through the guard's 128 KiB and returns
+    // (measured with the guard switched off: "stack probe returned after ... frames: the overflow was NOT
+    // trapped").
+    let Some(text) = failed_probe("tetherbot.probe=stack") else {
+        return;
+    };
+    assert!(
+        text.contains("board: STACK OVERFLOW into the guard [0x"),
+        "no stack-overflow report in: {text}"
+    );
+    assert!(!text.contains("NOT trapped"), "output: {text}");
+    // The fault is the first access in the guard: the faulting address (or, for a failed exception entry, the
+    // stack pointer) lies in the guard's top frame, not somewhere below it.
+    let (start, end) = (
+        hex_after(&text, "guard [0x").unwrap_or_else(|| panic!("{text}")),
+        hex_after(&text, ", 0x").unwrap_or_else(|| panic!("{text}")),
+    );
+    assert_eq!(end - start, 128 * 1024, "guard size: {text}");
+    let psp = hex_after(&text, "psp=0x").unwrap_or_else(|| panic!("{text}"));
+    assert!(
+        psp < end && psp + 2048 >= end,
+        "the stack pointer 0x{psp:x} is not in the guard's top 2 KiB [0x{start:x}, 0x{end:x}): {text}"
+    );
+    let cfsr = hex_after(&text, "cfsr=0x").unwrap_or_else(|| panic!("{text}"));
+    if cfsr & 0x80 != 0 {
+        let mmfar = hex_after(&text, "mmfar=0x").unwrap_or_else(|| panic!("{text}"));
+        assert!((start..end).contains(&mmfar), "mmfar 0x{mmfar:x} outside the guard: {text}");
+    }
+}
+
+#[test]
+fn watchdog_reset_output_reboots_the_board() {
+    // The probe's NMI handler lets the bite pass; the second expiry (RESEN) resets the machine, and the rebooted
+    // board finds the probe's mark in `.uninit`.
+    let Some(text) = failed_probe("tetherbot.probe=watchdog-reset") else {
+        return;
+    };
+    let bite = text.find("board: WATCHDOG expired: probe lets the reset output act");
+    let reboot = text.find("board: REBOOTED by the watchdog's reset output");
+    assert!(
+        matches!((bite, reboot), (Some(b), Some(r)) if b < r),
+        "no bite then reboot in: {text}"
+    );
+    assert!(!text.contains("did not reset"), "output: {text}");
+}
+
+#[test]
+fn telemetry_keeps_its_period_across_the_32_bit_millisecond_wrap() {
+    use firmware::protocol::{self, Deframer, Message};
+    // Regression (issue 24): the board's millisecond count was a u32; at 2^32 ms (49.7 days) the clock fell back
+    // to 0 and periodic telemetry (every 1 s by default) stopped. Start the clock 1.5 s before the wrap and
+    // watch four telemetry frames go by, free-running (QEMU's virtual clock follows the host's).
+    let Some(elf) = board("clock wrap") else {
+        return;
+    };
+    const WRAP_MS: u64 = 1 << 32;
+    let mut cfg = QemuConfig::new(elf);
+    cfg.boot_words = Some(format!("tetherbot.clock_start_ms={}", WRAP_MS - 1500));
+    let mut board = qemu::QemuBoard::start(&cfg).unwrap_or_else(|e| panic!("{e}"));
+    let mut deframer = Deframer::new();
+    let mut times = Vec::new();
+    let deadline = std::time::Instant::now() + Duration::from_secs(20);
+    let mut buf = [0u8; 4096];
+    while times.len() < 4 && std::time::Instant::now() < deadline {
+        let n = board
+            .recv(&mut buf, Duration::from_millis(100))
+            .unwrap_or_else(|e| panic!("{e}: {}", board.output().both()));
+        let mut rest = &buf[..n];
+        while !rest.is_empty() {
+            let (used, event) = deframer.push(rest);
+            rest = &rest[used.max(1).min(rest.len())..];
+            if let Some(Ok(frame)) = event {
+                if let Ok((_, Message::Telemetry(t))) = protocol::decode_frame(frame) {
+                    times.push(t.time_us);
+                }
+            }
+        }
+    }
+    let exit = board
+        .quit(Duration::from_secs(10))
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(times.len(), 4, "telemetry times (us) {times:?}; {}", exit.output.both());
+    assert!(
+        times[0] >= (WRAP_MS - 1500) * 1000 && times[0] < WRAP_MS * 1000,
+        "boot telemetry at {} us, before the wrap expected",
+        times[0]
+    );
+    assert!(
+        times[3] > WRAP_MS * 1000 + 1_000_000,
+        "telemetry stopped at the wrap: {times:?}"
+    );
+    for w in times.windows(2) {
+        let dt = w[1].saturating_sub(w[0]);
+        assert!(
+            (1_000_000..2_000_000).contains(&dt),
+            "telemetry period {dt} us, 1 s expected: {times:?}"
+        );
+    }
+    // The quit report carries both stacks' high-water marks; neither is exhausted.
+    let value = |k: &str| -> u64 {
+        exit.output
+            .value(k)
+            .and_then(|v| v.parse().ok())
+            .unwrap_or_else(|| panic!("no {k} in {}", exit.output.both()))
+    };
+    assert!(exit.status.success(), "{}", exit.output.both());
+    for (hw, size) in [
+        ("stack_high_water_bytes", "stack_size_bytes"),
+        ("handler_stack_high_water_bytes", "handler_stack_size_bytes"),
+    ] {
+        let (hw, size) = (value(hw), value(size));
+        assert!(hw > 0 && hw < size, "{hw} of {size}");
+    }
 }
 
 #[test]

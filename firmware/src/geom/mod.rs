@@ -32,6 +32,20 @@ pub fn is_finite3(v: &Vec3) -> bool {
     v.x.is_finite() && v.y.is_finite() && v.z.is_finite()
 }
 
+/// `x` limited to `[lo, hi]`: the result of `Real::clamp` whenever that does not panic (`lo <= hi`, neither NaN;
+/// a NaN `x` stays NaN), and no panic path when the bounds come from a configuration that could break that rule
+/// (then `lo` wins below, `hi` above). The flight build is proven free of reachable panics (`.ci/run`), and
+/// `clamp`'s bounds assertion survives optimisation wherever the bounds are not constants.
+pub fn clamp(x: Real, lo: Real, hi: Real) -> Real {
+    if x < lo {
+        lo
+    } else if x > hi {
+        hi
+    } else {
+        x
+    }
+}
+
 /// Euclidean norm through `libm` (bit-identical on every target).
 pub fn norm3(v: &Vec3) -> Real {
     libm::sqrtf(v.x * v.x + v.y * v.y + v.z * v.z)
@@ -63,5 +77,21 @@ mod tests {
         assert!(normalize3(&Vec3::new(Real::NAN, 0.0, 0.0), 1e-6).is_none());
         let u = normalize3(&Vec3::new(3.0, 0.0, 4.0), 1e-6);
         assert_eq!(u.map(|u| norm3(&u)), Some(1.0));
+    }
+
+    #[test]
+    fn clamp_equals_the_core_clamp_where_that_does_not_panic_and_never_panics() {
+        let xs = [-2.0, -1.0, -0.5, 0.0, 0.25, 1.0, 3.0, Real::INFINITY, Real::NEG_INFINITY];
+        for (lo, hi) in [(-1.0, 1.0), (0.0, 0.0), (0.0, 2.5), (Real::NEG_INFINITY, 0.0)] {
+            for x in xs {
+                assert_eq!(clamp(x, lo, hi).to_bits(), x.clamp(lo, hi).to_bits(), "{x} in [{lo}, {hi}]");
+            }
+            assert!(clamp(Real::NAN, lo, hi).is_nan());
+        }
+        // Bounds `Real::clamp` would panic on (lo > hi, NaN): a value, no panic.
+        assert_eq!(clamp(5.0, 1.0, -1.0), -1.0);
+        assert_eq!(clamp(-5.0, 1.0, -1.0), 1.0);
+        assert_eq!(clamp(0.5, Real::NAN, 1.0), 0.5);
+        assert_eq!(clamp(2.0, 0.0, Real::NAN), 2.0);
     }
 }

@@ -396,7 +396,7 @@ impl<'a> Map<'a> {
 
     pub(crate) fn quantize_tsdf(&self, sdf: Real) -> i16 {
         let t = self.cfg.truncation;
-        let r = (sdf.clamp(-t, t) / t) * 32767.0;
+        let r = (crate::geom::clamp(sdf, -t, t) / t) * 32767.0;
         libm::roundf(r) as i16
     }
 
@@ -419,7 +419,7 @@ impl<'a> Map<'a> {
 pub(crate) const WEIGHT_SCALE: Real = 64.0;
 
 pub(crate) fn quantize_weight(w: Real, max_weight: Real) -> u16 {
-    let w = if w.is_finite() { w.clamp(0.0, max_weight) } else { 0.0 };
+    let w = if w.is_finite() { crate::geom::clamp(w, 0.0, max_weight) } else { 0.0 };
     libm::roundf(w * WEIGHT_SCALE) as u16
 }
 

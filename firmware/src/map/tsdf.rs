@@ -171,7 +171,7 @@ impl Map<'_> {
         let d_old = *tq as Real * (trunc / 32767.0);
         let w_new = w_old + w;
         let d_new = (d_old * w_old + sdf * w) / w_new;
-        let q = libm::roundf((d_new.clamp(-trunc, trunc) / trunc) * 32767.0) as i16;
+        let q = libm::roundf((crate::geom::clamp(d_new, -trunc, trunc) / trunc) * 32767.0) as i16;
         let wn = quantize_weight(w_new, max_w).max(1);
         // The ESDF depends on: observed or not, the sign, and the fixed-band site value (with hysteresis).
         let was_observed = *wq > 0;

@@ -289,7 +289,7 @@ fn segment_offset(a: &Vec3, b: &Vec3, p: &Vec3) -> (Real, Real, Real, Real) {
     let (ux, uy) = (dx / len, dy / len);
     let along = px * ux + py * uy;
     let lat = ux * py - uy * px;
-    let t = along.clamp(0.0, len);
+    let t = crate::geom::clamp(along, 0.0, len);
     let (cx, cy) = (px - t * ux, py - t * uy);
     (libm::sqrtf(cx * cx + cy * cy), lat, along, len)
 }

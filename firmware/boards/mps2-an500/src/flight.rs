@@ -26,7 +26,7 @@
 //! everything. Any control byte other than `R` / `Q` is a harness bug: reported, failure exit.
 
 use cortex_m::peripheral::NVIC;
-use cortex_m_semihosting::{debug, heprintln, hprintln};
+use cortex_m_semihosting::debug;
 use firmware::config::map::{MapConfig, FLIGHT_BLOCKS, FLIGHT_INDEX};
 use firmware::exec::{ExecStorage, Executive};
 use firmware::map::Block;
@@ -174,15 +174,19 @@ fn le_u64(b: &[u8], at: usize) -> u64 {
 /// Prints the resource report and ends the run successfully.
 fn quit(exec: &BoardExecutive) -> ! {
     let stack = crate::stack::usage();
+    let handler_stack = crate::stack::handler_usage();
     let t = exec.telemetry();
     let hw = t.high_water;
-    hprintln!(
-        "board: stack_high_water_bytes={} stack_size_bytes={} exec_storage_bytes={} scan_points_peak={} \
+    host_println!(
+        "board: stack_high_water_bytes={} stack_size_bytes={} handler_stack_high_water_bytes={} \
+         handler_stack_size_bytes={} exec_storage_bytes={} scan_points_peak={} \
          scan_points_capacity={} tx_queue_peak={} tx_queue_capacity={} rx_staging_peak={} frame_len_peak={} \
          log_queue_peak={} map_blocks_peak={} map_blocks_capacity={} map_storage_bytes={} nav_plan_storage_bytes={} \
          steps={} frames_accepted={} frames_sent={}",
         stack.high_water_bytes,
         stack.size_bytes,
+        handler_stack.high_water_bytes,
+        handler_stack.size_bytes,
         core::mem::size_of::<ExecStorage>(),
         hw.scan_points,
         firmware::config::protocol::SCAN_POINTS_CAPACITY,
@@ -199,11 +203,17 @@ fn quit(exec: &BoardExecutive) -> ! {
         t.frames_accepted,
         t.frames_sent
     );
-    if stack.high_water_bytes >= stack.size_bytes {
-        // The paint is gone down to the bottom of the region: the stack reached (and may have passed) its limit.
-        heprintln!(
-            "board: STACK region of {} bytes exhausted (overflow not trapped on ARMv7-M)",
-            stack.size_bytes
+    if stack.high_water_bytes >= stack.size_bytes
+        || handler_stack.high_water_bytes >= handler_stack.size_bytes
+    {
+        // The paint is gone down to the bottom of a region. The flight stack cannot pass its limit (the MPU guard
+        // faults first, `stack_guard.rs`) but has used all of it; the handler stack has no guard of its own.
+        host_eprintln!(
+            "board: STACK region exhausted: flight {} of {} bytes, handler {} of {} bytes",
+            stack.high_water_bytes,
+            stack.size_bytes,
+            handler_stack.high_water_bytes,
+            handler_stack.size_bytes
         );
         crate::fault::fail()
     }
@@ -227,7 +237,7 @@ pub fn run(systick: SysTickClock, lockstep: bool) -> ! {
         unsafe { NVIC::unmask(Irq(irq as u16)) };
     }
     let Some(storage) = EXEC_STORAGE.take() else {
-        heprintln!("board: executive storage lent twice");
+        host_eprintln!("board: executive storage lent twice");
         crate::fault::fail()
     };
     let link = BoardLink {
@@ -240,17 +250,23 @@ pub fn run(systick: SysTickClock, lockstep: bool) -> ! {
         lockstep_now: lockstep.then_some(Instant::from_micros(0)),
     };
     let (Some(blocks), Some(index)) = (MAP_BLOCKS.take(), MAP_INDEX.take()) else {
-        heprintln!("board: map storage lent twice");
+        host_eprintln!("board: map storage lent twice");
         crate::fault::fail()
     };
     let Some(planning) = NAV_PLAN.take() else {
-        heprintln!("board: planning storage lent twice");
+        host_eprintln!("board: planning storage lent twice");
         crate::fault::fail()
     };
     let autonomy = match Navigator::new(MapConfig::DEFAULT, &mut blocks[..], &mut index[..], planning) {
         Ok(nav) => nav,
         Err(e) => {
-            heprintln!("board: onboard map refused its storage: {:?}", e);
+            let why = match e {
+                firmware::map::MapError::Config(_) => "invalid configuration",
+                firmware::map::MapError::BadStorage => "bad storage",
+                firmware::map::MapError::PoolFull => "pool full",
+                firmware::map::MapError::IndexProbeExhausted => "index probe exhausted",
+            };
+            host_eprintln!("board: onboard map refused its storage: {}", why);
             crate::fault::fail()
         }
     };
@@ -268,7 +284,7 @@ pub fn run(systick: SysTickClock, lockstep: bool) -> ! {
             if tag == *b"Q" {
                 quit(&exec);
             }
-            heprintln!(
+            host_eprintln!(
                 "board: bad control byte 0x{:02x} in free-running mode",
                 tag[0]
             );
@@ -293,7 +309,7 @@ fn run_lockstep(exec: &mut BoardExecutive, ctl: &mut Uart) -> ! {
             b"Q" => quit(exec),
             b"R" => {}
             _ => {
-                heprintln!("board: bad control byte 0x{:02x} in lockstep mode", tag[0]);
+                host_eprintln!("board: bad control byte 0x{:02x} in lockstep mode", tag[0]);
                 crate::fault::fail()
             }
         }

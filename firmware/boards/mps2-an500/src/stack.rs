@@ -1,9 +1,15 @@
-//! Stack high-water mark from the paint left by cortex-m-rt's `paint-stack` feature.
+//! Stack high-water marks from the paint: the flight stack's, left by cortex-m-rt's `paint-stack` feature, and
+//! the handler stack's, painted by `stack_guard::run_on_process_stack` at boot.
 //!
 //! At reset, before `main`, the runtime fills `[_stack_end, _stack_start)` (the top `_stack_size` bytes of RAM,
 //! see `memory.x`) with `0xCCCC_CCCC`. The stack grows down from `_stack_start`; the lowest word that no longer
 //! holds the paint marks the deepest the stack has been. A frame that happens to store `0xCCCC_CCCC` at its
-//! deepest word would hide 4 bytes: the figure is exact to within that.
+//! deepest word would hide 4 bytes: the figure is exact to within that. The guard region below `_stack_end`
+//! (`stack_guard.rs`) is not painted and never read here: reading it would fault.
+//!
+//! Thread mode runs on the flight stack; exceptions run on the handler stack (`stack_guard.rs`), but each
+//! exception entry in thread mode still pushes its frame (up to 104 bytes with the FPU state) onto the flight
+//! stack, so the flight figure includes the deepest interrupt frame.
 
 use core::ptr::{addr_of, read_volatile};
 
@@ -23,20 +29,27 @@ pub struct StackUsage {
     pub size_bytes: usize,
 }
 
-/// Scans the painted region from its low end (a bounded loop: `size_bytes / 4` words).
+/// The flight (thread-mode) stack.
 pub fn usage() -> StackUsage {
     // Only the addresses of the linker symbols are taken; their contents are never read through them.
-    let (low, high) = (
-        addr_of!(_stack_end) as usize,
-        addr_of!(_stack_start) as usize,
-    );
+    scan(addr_of!(_stack_end) as usize, addr_of!(_stack_start) as usize)
+}
+
+/// The handler (exception) stack.
+pub fn handler_usage() -> StackUsage {
+    let (low, high) = crate::stack_guard::handler_stack();
+    scan(low, high)
+}
+
+/// Scans a painted region `[low, high)` from its low end (a bounded loop: `(high - low) / 4` words).
+fn scan(low: usize, high: usize) -> StackUsage {
     let size_bytes = high.saturating_sub(low);
     let mut untouched_words = 0usize;
     let mut addr = low;
     while addr < high {
-        // SAFETY: `addr` lies in [_stack_end, _stack_start), RAM reserved for the stack by memory.x, 4-aligned
-        // (both symbols are aligned by cortex-m-rt's linker script). Reading stack memory below the current
-        // stack pointer is harmless.
+        // SAFETY: `addr` lies in one of the two stack regions memory.x reserves ([_stack_end, _stack_start) or
+        // [_handler_stack_end, _handler_stack_start)), 4-aligned (memory.x and cortex-m-rt align them), outside
+        // the MPU guard. Reading stack memory below a stack pointer is harmless.
         let word = unsafe { read_volatile(addr as *const u32) };
         if word != PAINT {
             break;

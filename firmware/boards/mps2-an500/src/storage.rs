@@ -5,6 +5,7 @@
 //! creates a mutable reference to a static, and the `taken` flag makes a second one impossible.
 
 use core::cell::UnsafeCell;
+#[cfg(feature = "bench")]
 use core::mem::MaybeUninit;
 use core::sync::atomic::{AtomicBool, Ordering};
 
@@ -46,12 +47,14 @@ impl<T> Lent<T> {
     }
 }
 
+#[cfg(feature = "bench")]
 /// A value with a compile-time initial state (the empty arena), copied into an [`UninitSlot`] on first use.
 pub trait ConstInit: Sized {
     /// The initial value.
     const INIT: Self;
 }
 
+#[cfg(feature = "bench")]
 /// A static that starts uninitialised and is lent once, initialised in place when taken, so the flight mode's boot
 /// never pays for the benchmark's arenas:
 /// - in `.psram` (NOLOAD, zeroed at boot) for a value whose initial state is not all zero bytes:
@@ -64,9 +67,11 @@ pub struct UninitSlot<T> {
     value: UnsafeCell<MaybeUninit<T>>,
 }
 
+#[cfg(feature = "bench")]
 // SAFETY: as for `Lent`: the memory is reachable only through the single `&'static mut` handed out by `claim`.
 unsafe impl<T: Send> Sync for UninitSlot<T> {}
 
+#[cfg(feature = "bench")]
 impl<T> UninitSlot<T> {
     /// An unused slot (all-zero bytes, as `.psram` requires).
     pub const fn new() -> Self {
@@ -140,6 +145,7 @@ pub fn zero_psram() {
     }
 }
 
+#[cfg(feature = "bench")]
 /// A type whose all-zero bit pattern is a valid (empty) value: empty `heapless` containers and the arenas made of
 /// them. Implementing it is a promise that [`UninitSlot::take_zeroed`] may zero the bytes and use them as a `T`.
 ///

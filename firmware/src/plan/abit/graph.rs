@@ -179,8 +179,19 @@ impl<St, A, const NV: usize> ImplicitGraph<St, A, NV> {
                 }
             }
             // Insertion sort (bounded by NEIGHBOUR_CAPACITY).
+            // `push`, then swap down to `pos`, rather than heapless' `insert` or `rotate_right`, whose index and
+            // length assertions are panic paths the optimiser does not remove (the flight build is proven
+            // panic-free, `.ci/run`): the same order, and a loop bounded by NEIGHBOUR_CAPACITY.
             let pos = out.iter().position(|e| entry < *e).unwrap_or(out.len());
-            let _ = out.insert(pos, entry);
+            if out.push(entry).is_ok() {
+                let mut j = out.len().saturating_sub(1);
+                while j > pos {
+                    if let Some([a, b]) = out.get_mut(j - 1..=j) {
+                        core::mem::swap(a, b);
+                    }
+                    j -= 1;
+                }
+            }
         }
         (out, left_out)
     }

@@ -6,7 +6,6 @@
 //! The storage (~1.5 MB) is in SRAM's `.uninit` (NOLOAD, not zeroed at boot; zeroed when taken,
 //! `UninitSlot::take_zeroed`), because the flight map's blocks leave under 1 MiB of `.psram`.
 
-use cortex_m_semihosting::hprintln;
 use workloads::ledge_pole::{LedgePoleArena, LedgePolePath, LedgePoleStorage};
 
 use super::measure::Board;
@@ -26,7 +25,7 @@ pub fn run(clock: &mut SysTickClock, iterations: u32) {
     let Some(storage) = LEDGE_POLE.take_zeroed() else {
         return;
     };
-    hprintln!(
+    host_println!(
         "bench: test3_storage_bytes={} arena_bytes={} path_bytes={}",
         core::mem::size_of::<LedgePoleStorage>(),
         core::mem::size_of::<LedgePoleArena>(),

@@ -1,7 +1,6 @@
 //! The measurement of one benchmark (SysTick ticks around the work, converted to instructions) and the harness
 //! through which the `workloads` crate's planning workloads are timed and reported on target.
 
-use cortex_m_semihosting::hprintln;
 use workloads::Harness;
 
 use crate::clock::{SysTickClock, INSTRUCTIONS_PER_TICK};
@@ -12,7 +11,7 @@ pub fn measure(clock: &mut SysTickClock, name: &str, iterations: u32, work: impl
     work();
     let ticks = clock.ticks().saturating_sub(start);
     let instructions = ticks * INSTRUCTIONS_PER_TICK;
-    hprintln!(
+    host_println!(
         "bench: name={} iterations={} ticks={} instructions={} instructions_per_iteration={}",
         name,
         iterations,
@@ -36,8 +35,8 @@ impl Harness for Board<'_> {
         measure(self.clock, name, self.iterations, work);
     }
     fn result(&mut self, name: &'static str, summary: &str) {
-        hprintln!("bench: result name={} summary={}", name, summary);
-        hprintln!(
+        host_println!("bench: result name={} summary={}", name, summary);
+        host_println!(
             "bench: stack name={} high_water_bytes={}",
             name,
             crate::stack::usage().high_water_bytes

@@ -23,7 +23,6 @@ mod measure;
 mod planning;
 mod protocol;
 
-use cortex_m_semihosting::hprintln;
 
 use crate::clock::SysTickClock;
 use measure::measure;
@@ -46,7 +45,7 @@ fn calibration_loop(n: u32) {
 
 /// Runs every workload (boot word `tetherbot.mode=bench`).
 pub fn run(clock: &mut SysTickClock) {
-    hprintln!(
+    host_println!(
         "bench: calibration expected_instructions={}",
         2 * u64::from(CALIBRATION_LOOPS) + 1
     );
@@ -56,7 +55,7 @@ pub fn run(clock: &mut SysTickClock) {
     protocol::run(clock);
     planning::run(clock);
     let stack = crate::stack::usage();
-    hprintln!(
+    host_println!(
         "bench: stack_high_water_bytes={} stack_size_bytes={}",
         stack.high_water_bytes,
         stack.size_bytes
@@ -66,7 +65,7 @@ pub fn run(clock: &mut SysTickClock) {
 /// The opt-in ledge-with-pole planning workload (`ledge_pole::run`, `iterations` ABIT* iterations) after the
 /// calibration loop.
 pub fn run_ledge_pole(clock: &mut SysTickClock, iterations: u32) {
-    hprintln!(
+    host_println!(
         "bench: calibration expected_instructions={}",
         2 * u64::from(CALIBRATION_LOOPS) + 1
     );
@@ -75,7 +74,7 @@ pub fn run_ledge_pole(clock: &mut SysTickClock, iterations: u32) {
     });
     ledge_pole::run(clock, iterations);
     let stack = crate::stack::usage();
-    hprintln!(
+    host_println!(
         "bench: stack_high_water_bytes={} stack_size_bytes={}",
         stack.high_water_bytes,
         stack.size_bytes

@@ -4,7 +4,6 @@
 //! [`BENCH_FRAMES`] `TimeTick` frames over an in-memory link). Each decode and the executive run are followed by a
 //! `bench: check name=... ` line (frames decoded, wire bytes, frames accepted, bytes out).
 
-use cortex_m_semihosting::hprintln;
 use firmware::exec::{Executive, NoAutonomy};
 use hal::{ByteLink, Instant};
 
@@ -100,7 +99,7 @@ pub fn run(clock: &mut SysTickClock) {
         measure(clock, &dec_name, BENCH_FRAMES, || {
             decoded = deframe_decode(&frame, BENCH_FRAMES)
         });
-        hprintln!(
+        host_println!(
             "bench: check name={} wire_bytes={} decoded={}",
             dec_name,
             frame.len,
@@ -183,7 +182,7 @@ fn exec_dispatch_workload(clock: &mut SysTickClock, tick: &firmware::protocol::M
         }
     });
     let t = exec.telemetry();
-    hprintln!(
+    host_println!(
         "bench: check name=exec_dispatch_time_tick steps={} frames_accepted={} bytes_out={}",
         steps,
         t.frames_accepted,
