@@ -59,8 +59,9 @@ pub const POSE_JUMP_PER_M: f32 = 0.5;
 pub const POSE_JUMP_YAW_RAD: f32 = 0.6;
 /// Consecutive rejected poses before the mission stops safe with `PoseJump`. Default 3.
 pub const MAX_POSE_JUMPS: u32 = 3;
-/// A scan whose sensor position is horizontally farther than this from the body pose estimate is not integrated
-/// (counted), metres. Default 2.0 m: the sensor mount's offset from the axle is not known on board.
+/// A scan whose sensor position is horizontally farther than this from the body pose estimate (while a straight
+/// drive runs: from the drive's segment) is not integrated (counted), metres. Default 2.0 m: the sensor mount's
+/// offset from the axle is not known on board.
 pub const SCAN_POSE_TOLERANCE_M: f32 = 2.0;
 /// Consecutive rejected scans before the mission stops safe with `ScanInconsistent`. Default 3.
 pub const MAX_SCAN_REJECTS: u32 = 3;

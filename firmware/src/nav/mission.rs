@@ -51,6 +51,10 @@ struct InFlight {
     from: BodyPose,
     /// Lateral tether direction at the start (see [`lateral_pull`]), for the drift estimate.
     pull: Real,
+    /// Horizontal unit direction of a straight drive (signed for reverse) and its length (0 for a turn): a scan
+    /// taken while the motion runs may come from anywhere along it.
+    dir: (Real, Real),
+    reach_m: Real,
 }
 
 /// Counters of the mission's input checks (also in `MissionStatus`).
@@ -454,14 +458,23 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
     pub(super) fn mission_scan_accepted(&mut self, sensor: &Pose) -> bool {
         let m = &mut self.mission;
         let Some(b) = m.body else { return true };
-        let (dx, dy) = (sensor.position.x - b.position.x, sensor.position.y - b.position.y);
-        if libm::sqrtf(dx * dx + dy * dy) <= mcfg::SCAN_POSE_TOLERANCE_M {
+        // While a drive runs (scans every few cm of it), the sensor may be anywhere along it: the distance is to
+        // the drive's segment from the pose it started at, not to that pose.
+        let (origin, dir, reach) = match m.in_flight {
+            Some(f) => (f.from.position, f.dir, f.reach_m),
+            None => (b.position, (0.0, 0.0), 0.0),
+        };
+        let (dx, dy) = (sensor.position.x - origin.x, sensor.position.y - origin.y);
+        let along = crate::geom::clamp(dx * dir.0 + dy * dir.1, 0.0, reach);
+        let (ex, ey) = (dx - along * dir.0, dy - along * dir.1);
+        let off = libm::sqrtf(ex * ex + ey * ey);
+        if off <= mcfg::SCAN_POSE_TOLERANCE_M {
             m.scan_reject_run = 0;
             return true;
         }
         m.counters.scans_rejected = m.counters.scans_rejected.saturating_add(1);
         m.scan_reject_run = m.scan_reject_run.saturating_add(1);
-        log::warn!("mission: scan rejected: sensor {} m from the body pose", libm::sqrtf(dx * dx + dy * dy));
+        log::warn!("mission: scan rejected: sensor {} m from the body pose (or the drive in flight)", off);
         if m.scan_reject_run >= mcfg::MAX_SCAN_REJECTS && m.active() {
             m.stop(StopReason::ScanInconsistent);
         }
@@ -662,7 +675,11 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
                     _ => (libm::cosf(b.yaw), libm::sinf(b.yaw)),
                 };
                 let pull = lateral_pull(&self.mission.tracked, &b.position, dir);
-                self.mission.in_flight = Some(InFlight { from: b, pull });
+                let reach_m = match m {
+                    Motion::Straight { distance_m } => libm::fabsf(distance_m),
+                    _ => 0.0,
+                };
+                self.mission.in_flight = Some(InFlight { from: b, pull, dir, reach_m });
                 DriveStep::Motion(m)
             }
             None => {

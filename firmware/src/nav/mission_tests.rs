@@ -401,6 +401,40 @@ fn a_scan_whose_pose_disagrees_with_odometry_is_not_integrated() {
 }
 
 #[test]
+fn a_scan_along_the_drive_in_flight_is_integrated_and_one_past_it_is_not() {
+    let t0 = Instant::from_micros(0);
+    let mut nav = mapped(ROOT, MissionConfig { tracking: Tracking::OpenLoop, ..MissionConfig::DEFAULT });
+    assert_eq!(nav.goal(&goal(1, 4.0, 0.0), t0), PlanState::Accepted);
+    assert!(matches!(plan(&mut nav), PlanProgress::Finished { state: PlanState::ExactSolution, .. }));
+    let mut world = World::new(ROOT, 0.0);
+    // report motions until a straight drive longer than the scan tolerance is in flight
+    let mut long = None;
+    for _ in 0..40 {
+        match nav.drive_step(t0) {
+            DriveStep::Motion(Motion::Straight { distance_m }) if distance_m > 2.6 => {
+                long = Some(distance_m);
+                break;
+            }
+            DriveStep::Motion(m) => {
+                let r = world.report(0, m);
+                nav.motion_report(&r, m, t0);
+            }
+            DriveStep::Wait => {}
+            other => panic!("driving ended: {other:?}"),
+        }
+    }
+    let Some(d) = long else { panic!("no straight drive over 2.6 m in the open-loop plan") };
+    let before = nav.map_status().scans_integrated;
+    // taken 2.5 m along the drive: more than the 2 m tolerance from the pose it started at, on the drive
+    scan_down(&mut nav, 200, world.x + 2.5);
+    assert_eq!(nav.map_status().scans_integrated, before + 1, "a scan along the drive was rejected");
+    // 2.5 m past the drive's end: rejected
+    scan_down(&mut nav, 201, world.x + d + 2.5);
+    assert_eq!(nav.map_status().scans_integrated, before + 1, "a scan past the drive's end was integrated");
+    assert_eq!(nav.mission_status().unwrap().scans_rejected, 1);
+}
+
+#[test]
 fn no_waypoint_below_the_minimum_margin_is_sent_or_driven() {
     // a minimum margin no state on this map can have (the rover's whole weight)
     let mission = MissionConfig { min_margin_n: 1.0e6, ..MissionConfig::DEFAULT };
