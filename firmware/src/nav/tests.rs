@@ -300,6 +300,33 @@ mod planning {
         }
     }
 
+    /// A start whose body is within the map's extra voxel of clearance from a rock under it (not within the rover's
+    /// own clearance: the rock appeared beside a rover that stands there) is planned from; a rock that touches the
+    /// rover's own clearance is refused.
+    #[test]
+    fn a_start_within_only_the_extra_voxel_of_a_rock_is_planned_from() {
+        let now = Instant::from_micros(0);
+        let own = crate::config::rover::RoverParams::AXEL.body_radius_m + crate::config::rover::RoverParams::AXEL.body_clearance_m;
+        let axle_z = Z0 + crate::config::rover::RoverParams::AXEL.wheel_radius_m;
+        // the body's clearance to a rock top under the axle centre, between its own (0.17 m) and its own plus one
+        // voxel; then inside its own
+        for (clearance, accepted) in [(own + 0.5 * VOXEL, true), (own - 0.07, false)] {
+            let top = axle_z - clearance;
+            let rock = move |x: f32, y: f32| Some(if x.abs() < 0.2 && y.abs() < 0.2 { top } else { Z0 });
+            let mut n = nav();
+            n.configure(&configure(1)).unwrap();
+            map_world(&mut n, -1.0, 4.0, 0.0, &rock);
+            let want = if accepted { PlanState::Accepted } else { PlanState::InvalidInput };
+            assert_eq!(n.goal(&goal(3.0, 0.0, 10), now), want, "rock top {top} m, body clearance {clearance} m");
+            let refused = n.plan_stats().refusals[GoalRefusal::StartNotSettled as usize];
+            assert_eq!(refused, u32::from(!accepted));
+            if accepted {
+                let start = n.plan_start().unwrap().axle();
+                assert!(start.x.abs() < 0.05 && (start.z - axle_z).abs() < 0.05, "start {start:?}");
+            }
+        }
+    }
+
     #[test]
     fn bad_goals_are_refused_with_a_reason() {
         let now = Instant::from_micros(0);
