@@ -20,6 +20,11 @@ pub const EDGE_MEMO_CAPACITY: usize = 256;
 pub const MOTION_CHECKS_PER_STEP: u32 = 1;
 /// Samples per ABIT* batch on board when `Configure.planner.batch_size` asks for more. Default 100 (OMPL's).
 pub const SAMPLES_PER_BATCH: u32 = 100;
+/// ABIT* sample draws per `plan_step` call while a batch is drawn (`AbitParams::draws_per_step`). Default 20: a draw
+/// settles a sample and checks its stability (a few ms on the host); a whole batch of 100 samples (up to 200 draws)
+/// in one executive step took 0.4-0.8 s on the host and tens of seconds on the emulated board. The search is the
+/// same draw for draw; only where the steps end moves.
+pub const DRAWS_PER_STEP: u32 = 20;
 /// Largest iteration budget of one goal (the goal request's `max_iterations` is capped to it). Default 750 (the
 /// budget of Paton et al.'s Table I).
 pub const MAX_PLAN_ITERATIONS: u32 = 750;

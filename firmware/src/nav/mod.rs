@@ -40,8 +40,10 @@
 //! is answered `PlannerUnavailable`.
 //!
 //! [`Autonomy::plan_step`] runs at most `iterations` new ABIT* iterations, and stops earlier (after at least one)
-//! once `MOTION_CHECKS_PER_STEP` new motion checks were computed, so one executive step does a bounded amount of
-//! geometry (on the emulated board a motion check costs ~0.2-0.5 s against the 2 s watchdog). When the budget is spent (or the
+//! once `MOTION_CHECKS_PER_STEP` new motion checks were computed, or after a step that drew `DRAWS_PER_STEP` more
+//! samples of a batch (ABIT* draws a batch over several steps, `AbitParams::draws_per_step`), so one executive step
+//! does a bounded amount of geometry (on the emulated board a motion check costs ~0.2-0.5 s against the 2 s
+//! watchdog). When the budget is spent (or the
 //! planner converges, fills its arena, or the time budget passes) it reports the final state: `ExactSolution`,
 //! `ApproximateSolution` (the tree vertex closest to the goal, `TRACK_APPROXIMATE`), `NoSolutionWithinBudget`, and
 //! fills the plan buffer with the path's settled states (their anchor histories, root and most recent anchors up
@@ -146,7 +148,7 @@
 //! - [`NAV_POINT_BATCH`](crate::config::map::NAV_POINT_BATCH): points converted and integrated per batch
 //!   (default 256), the only stack buffer;
 //! - planning (`config::nav`): `NODE_CAPACITY` 512, `EDGE_QUEUE_CAPACITY` 4096, `EDGE_MEMO_CAPACITY` 256,
-//!   `MOTION_CHECKS_PER_STEP` 1, `SAMPLES_PER_BATCH` 100, `MAX_PLAN_ITERATIONS` 750, `PATH_CAPACITY` 64,
+//!   `MOTION_CHECKS_PER_STEP` 1, `SAMPLES_PER_BATCH` 100, `DRAWS_PER_STEP` 20, `MAX_PLAN_ITERATIONS` 750, `PATH_CAPACITY` 64,
 //!   `MOTION_CAPACITY` 189, `MIN_TURN_RAD` 1e-3, `MIN_DRIVE_M` 1e-3, `BOUNDS_Z_MARGIN_M` 0.5,
 //!   `PLAN_WINDOW_MARGIN_M` 3.0, `FOOTPRINT_UNOBSERVED_MAX` 4,
 //!   `TRACK_APPROXIMATE` true, `BOOM_MASS_FRACTION` 0.2; the space's parameters are
@@ -176,7 +178,8 @@
 //! Work per chunk is bounded by `points * max_ray_voxels` voxel updates, per complete scan by `esdf_max_sweeps` ESDF
 //! sweeps (`Configure.map` keeps both within `MAX_RAY_VOXELS_LIMIT` and `ESDF_SWEEPS_LIMIT`); an
 //! ESDF that runs out of sweeps is counted and continues with the next scan. Work per `plan_step` is bounded by
-//! its new iterations and `MOTION_CHECKS_PER_STEP`, each iteration bounded by the planner's own budgets.
+//! its new iterations, `MOTION_CHECKS_PER_STEP` and `DRAWS_PER_STEP`, each iteration bounded by the planner's own
+//! budgets.
 //!
 //! ## Tests
 //! Mission tests (`nav::mission_tests`, a kinematic world in the test): a mission that arrives, a cancel, a goal

@@ -301,6 +301,7 @@ pub(crate) fn set_up(
     })?;
     let mut abit = AbitParams::ompl_defaults();
     abit.samples_per_batch = setup.samples_per_batch;
+    abit.draws_per_step = cfg::DRAWS_PER_STEP;
     abit.track_approximate = cfg::TRACK_APPROXIMATE;
     let deadline = (goal.time_budget_ms > 0)
         .then(|| Instant::from_micros(now.micros.saturating_add(u64::from(goal.time_budget_ms) * 1000)));
@@ -456,10 +457,12 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
     };
     // The search's own iteration counts (the goal's minus the iterations of searches on earlier maps).
     let first_new = problem.done.saturating_sub(problem.search_base);
-    // At least one new iteration, then stop after MOTION_CHECKS_PER_STEP motion checks: the geometric work of one
-    // call stays bounded whatever the iteration count.
+    let first_sampling = planner.counters().sampling_steps;
+    // At least one new iteration, then stop after MOTION_CHECKS_PER_STEP motion checks, or after a step that went
+    // on drawing a batch (DRAWS_PER_STEP draws): the geometric work of one call stays bounded whatever the
+    // iteration count.
     let report = planner.solve_until(&Budget::iterations(target.saturating_sub(problem.search_base)), |c| {
-        c.iterations > first_new && new_checks.get() >= cfg::MOTION_CHECKS_PER_STEP
+        c.sampling_steps > first_sampling || (c.iterations > first_new && new_checks.get() >= cfg::MOTION_CHECKS_PER_STEP)
     });
     let c = report.counters;
     stats.iterations_run = stats.iterations_run.saturating_add(u64::from(c.iterations.saturating_sub(first_new)));

@@ -373,32 +373,38 @@ mod planning {
 
     #[test]
     fn planning_stops_within_the_iteration_budget() {
-        // every call: at least one new iteration, at most the allowance, at most MOTION_CHECKS_PER_STEP new motion
-        // checks; the goal's budget is never exceeded and is capped by MAX_PLAN_ITERATIONS
+        // every call: at least one new iteration or (a batch drawn over several calls) new draws, at most the
+        // allowance, at most MOTION_CHECKS_PER_STEP new motion checks; the goal's budget is never exceeded and is
+        // capped by MAX_PLAN_ITERATIONS
         let gap = |x: f32, _: f32| (!(1.2..=2.4).contains(&x)).then_some(Z0);
         let mut n = nav();
         n.configure(&configure(4)).unwrap();
         map_world(&mut n, -1.0, 5.0, 0.0, &gap);
         assert_eq!(n.goal(&goal(3.5, 0.0, 13), Instant::from_micros(0)), PlanState::Accepted);
         let mut plan = PlanBuffer::new();
-        let (mut last_its, mut last_checks) = (0, 0);
-        let mut final_its = None;
-        for k in 0..20u64 {
+        let (mut last_its, mut last_checks, mut last_settles) = (0, 0, n.plan_stats().settles_run);
+        let (mut final_its, mut drawing_calls) = (None, 0);
+        for k in 0..200u64 {
             let p = n.plan_step(Instant::from_micros(k * 1000), 5, &mut plan);
             let (its, done) = match p {
                 PlanProgress::Searching { iterations, .. } => (iterations, false),
                 PlanProgress::Finished { iterations, .. } => (iterations, true),
             };
-            let checks = n.plan_stats().motion_checks_run;
-            assert!(its > last_its && its - last_its <= 5, "call {k}: {last_its} -> {its}");
+            let (checks, settles) = (n.plan_stats().motion_checks_run, n.plan_stats().settles_run);
+            assert!(its >= last_its && its - last_its <= 5, "call {k}: {last_its} -> {its}");
+            if its == last_its {
+                drawing_calls += 1;
+                assert!(settles > last_settles, "call {k}: no iteration and no draw");
+            }
             assert!(checks - last_checks <= crate::config::nav::MOTION_CHECKS_PER_STEP, "call {k}: {checks}");
-            (last_its, last_checks) = (its, checks);
+            (last_its, last_checks, last_settles) = (its, checks, settles);
             if done {
                 final_its = Some(its);
                 break;
             }
         }
         assert_eq!(final_its, Some(13));
+        assert!(drawing_calls > 0, "no batch was drawn over several calls");
         let mut g = goal(3.5, 0.0, u32::MAX);
         g.goal_id = 2;
         assert_eq!(n.goal(&g, Instant::from_micros(0)), PlanState::Accepted);

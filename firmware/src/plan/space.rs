@@ -415,6 +415,8 @@ pub struct Counters {
     pub catch_samples: u32,
     /// Neighbour lists truncated at `NEIGHBOUR_CAPACITY`.
     pub neighbour_lists_truncated: u32,
+    /// Steps that went on drawing a batch without an iteration (`AbitParams::draws_per_step`).
+    pub sampling_steps: u32,
     /// Iteration at which the first solution was found (0 = none yet).
     pub first_solution_iteration: u32,
     /// Number of solution improvements.
@@ -460,7 +462,8 @@ pub trait Planner {
     /// Run `step` until the budget, convergence, a full arena or `stop` ends it. `stop` is asked before every
     /// iteration (the host passes a wall-clock test; the board passes `|_| false`).
     fn solve_until<F: FnMut(&Counters) -> bool>(&mut self, budget: &Budget, mut stop: F) -> SolveReport {
-        // Bounded: every iteration increments `counters().iterations`, which the budget caps at u32::MAX.
+        // Bounded: every iteration increments `counters().iterations`, which the budget caps at u32::MAX; a step that
+        // is not an iteration (ABIT* drawing a batch over several steps) uses up a bounded number of draws.
         loop {
             let c = self.counters();
             let exhausted = if c.iterations >= budget.iterations {

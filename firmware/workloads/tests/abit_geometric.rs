@@ -135,6 +135,51 @@ fn a_suspended_and_resumed_search_is_the_uninterrupted_search() {
     assert!(found >= 2, "only {found} of the three searches found a path: the comparison needs paths");
 }
 
+/// `draws_per_step`: a batch drawn over several steps, the planner suspended and resumed between every step (as
+/// the on-board navigator does between executive steps), is the search that draws each batch at once: the same
+/// counters (but the sampling steps), cost and path.
+#[test]
+fn a_batch_drawn_over_steps_is_the_batch_drawn_at_once() {
+    let w2 = wall_gap::<2>("w2");
+    let mut found = 0;
+    for (seed, draws) in [(3u64, 7u32), (7, 1), (11, 64)] {
+        let whole = run(&w2, seed, 3000);
+        let mut arena: Box<AbitArena<[f64; 2], (), 4096, 16384, 4096>> = Box::default();
+        let (mut space, mut v, mut m) = (w2.space, w2.obstacles.clone(), w2.obstacles.clone());
+        let pd = pdef(&w2);
+        let mut rng = Pcg64::seed_from_u64(seed);
+        let params = AbitParams { draws_per_step: draws, ..AbitParams::ompl_defaults() };
+        let mut suspended = AbitStar::new(&mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, params).suspend();
+        for _ in 0..100_000 {
+            let c0 = suspended.counters();
+            if c0.iterations >= 3000 {
+                break;
+            }
+            let mut planner =
+                AbitStar::resume(&mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, suspended.clone());
+            // one iteration or one step of drawing per call
+            planner.solve_until(&Budget::iterations(3000), |c| {
+                c.iterations > c0.iterations || c.sampling_steps > c0.sampling_steps
+            });
+            suspended = planner.suspend();
+        }
+        let planner = AbitStar::resume(&mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, suspended);
+        let mut got = planner.counters();
+        assert!(got.sampling_steps > 0, "seed {seed}: no batch was drawn over several steps");
+        got.sampling_steps = 0;
+        assert_eq!(got, whole.report.counters, "seed {seed}, {draws} draws per step");
+        assert_eq!(planner.best_cost().to_bits(), whole.costs[0].to_bits());
+        let mut out: Vec<([f64; 2], ()), 512> = Vec::new();
+        let path = match planner.write_path(&mut out) {
+            Ok(_) => out.iter().map(|(s, _)| *s).collect(),
+            Err(_) => StdVec::new(),
+        };
+        assert_eq!(path, whole.path);
+        found += usize::from(whole.report.status.is_exact());
+    }
+    assert!(found >= 2, "only {found} of the three searches found a path: the comparison needs paths");
+}
+
 #[test]
 fn finds_valid_paths_on_the_shared_problems() {
     let w2 = wall_gap::<2>("w2");

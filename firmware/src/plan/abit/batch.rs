@@ -8,6 +8,7 @@ use crate::geom::unit_ball_measure;
 use crate::plan::space::{uniform01, Arena, InformedSample, OptimizationObjective, StateSpace, StateValidityChecker};
 use super::attachments::CatchHistories;
 use super::node::F_INCONSISTENT;
+use super::suspend::BatchSampling;
 use super::{AbitStar, NONE, START};
 
 impl<'a, S, V, M, O, G, R, const NV: usize, const NQ: usize, const NM: usize> AbitStar<'a, S, V, M, O, G, R, NV, NQ, NM>
@@ -43,6 +44,40 @@ where
             self.prune();
         }
         self.new_batch();
+        self.continue_batch();
+    }
+
+    /// Draw the batch's samples, at most `draws_per_step` of them per call when that is set; when the batch is
+    /// complete, begin its search.
+    pub(super) fn continue_batch(&mut self) {
+        let Some(mut b) = self.st.sampling.take() else { return };
+        let batch = self.st.params.samples_per_batch as usize;
+        let limit = match self.st.params.draws_per_step {
+            0 => usize::MAX,
+            n => n as usize,
+        };
+        let mut draws = 0usize;
+        while b.draws_left > 0 && b.added < batch && draws < limit {
+            b.draws_left -= 1;
+            draws += 1;
+            match self.draw_one(&mut b.catch) {
+                Draw::Added => b.added += 1,
+                Draw::Rejected => {}
+                Draw::ArenaFull => {
+                    self.st.pending_full = Some(Arena::Nodes);
+                    b.draws_left = 0;
+                }
+            }
+        }
+        if b.draws_left > 0 && b.added < batch {
+            self.st.sampling = Some(b);
+            return;
+        }
+        self.begin_batch_search();
+    }
+
+    /// The search of a drawn batch: the initial inflation factor, from the start's edges.
+    fn begin_batch_search(&mut self) {
         self.st.inflation = self.st.params.initial_inflation_factor;
         let arena = &mut *self.arena;
         arena.queue.clear(arena.graph.nodes_mut());
@@ -123,43 +158,51 @@ where
         );
         self.st.r = self.st.params.rewire_factor * r_rgg * libm::pow(libm::log(qf) / qf, 1.0 / d);
 
-        let mut catch_histories = if S::NON_MARKOVIAN && self.st.params.catch_sample_fraction > 0.0 {
+        let catch_histories = if S::NON_MARKOVIAN && self.st.params.catch_sample_fraction > 0.0 {
             self.arena.graph.distinct_attachment_vertices(&*self.space)
         } else {
             CatchHistories::new()
         };
-        let attempts = self.st.params.sample_attempts_per_sample as usize * batch;
-        let mut added = 0usize;
-        for _ in 0..attempts {
-            if added >= batch {
-                break;
-            }
-            let Some(x) = self.draw_sample(&mut catch_histories) else { continue };
-            self.st.counters.states_checked += 1;
-            if !self.validity.is_valid(&x) {
-                continue;
-            }
-            let attachment = if S::NON_MARKOVIAN
-                && self.st.params.attachment_copy_fraction > 0.0
-                && uniform01(self.rng) < self.st.params.attachment_copy_fraction
-            {
-                self.copied_attachment(&x)
-            } else {
-                None
-            };
-            // A copied attachment makes the sample's attachment-dependent validity checkable now (Paton V-A).
-            if let Some(a) = attachment.as_ref() {
-                if !self.space.valid_with_attachment(&x, a) {
-                    self.st.counters.samples_invalid_with_copy += 1;
-                    continue;
-                }
-            }
-            if self.alloc(x, attachment, 0).is_none() {
-                self.st.pending_full = Some(Arena::Nodes);
-                break;
-            }
-            added += 1;
-            self.st.counters.samples_added += 1;
-        }
+        let draws_left = self.st.params.sample_attempts_per_sample as usize * batch;
+        self.st.sampling = Some(BatchSampling { draws_left, added: 0, catch: catch_histories });
     }
+
+    /// One draw of a batch: a sample, checked, with a copied attachment perhaps, into the graph.
+    fn draw_one(&mut self, catch_histories: &mut CatchHistories) -> Draw {
+        let Some(x) = self.draw_sample(catch_histories) else { return Draw::Rejected };
+        self.st.counters.states_checked += 1;
+        if !self.validity.is_valid(&x) {
+            return Draw::Rejected;
+        }
+        let attachment = if S::NON_MARKOVIAN
+            && self.st.params.attachment_copy_fraction > 0.0
+            && uniform01(self.rng) < self.st.params.attachment_copy_fraction
+        {
+            self.copied_attachment(&x)
+        } else {
+            None
+        };
+        // A copied attachment makes the sample's attachment-dependent validity checkable now (Paton V-A).
+        if let Some(a) = attachment.as_ref() {
+            if !self.space.valid_with_attachment(&x, a) {
+                self.st.counters.samples_invalid_with_copy += 1;
+                return Draw::Rejected;
+            }
+        }
+        if self.alloc(x, attachment, 0).is_none() {
+            return Draw::ArenaFull;
+        }
+        self.st.counters.samples_added += 1;
+        Draw::Added
+    }
+}
+
+/// What one draw of a batch gave.
+enum Draw {
+    /// A valid sample went into the graph.
+    Added,
+    /// Nothing drawn, or the draw was invalid.
+    Rejected,
+    /// No node left for a valid sample.
+    ArenaFull,
 }

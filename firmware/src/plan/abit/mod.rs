@@ -121,6 +121,7 @@
 //! | `reveal_attachments` | true | revealing edges (above) |
 //! | `goal_edges` | true | goal edges (above) |
 //! | `catch_sample_fraction` | 0.1 | catch-boundary samples (above) |
+//! | `draws_per_step` | 0 (OMPL: a whole batch in one iteration) | sample draws per `step` while a batch is drawn; the on-board navigator bounds it so that one executive step never draws a whole batch |
 //!
 //! The last five act only in non-Markovian spaces, so on R^n the planner is OMPL's ABIT* with OMPL's defaults.
 //! Capacities and bounds (`config::abit`): `NODE_CAPACITY` 4096, `EDGE_QUEUE_CAPACITY` 16384,
@@ -505,6 +506,16 @@ where
     fn step(&mut self) -> StepOutcome {
         if self.st.invalid.is_some() {
             return StepOutcome::Converged;
+        }
+        // A batch drawn over several steps (`draws_per_step`): go on drawing; the iteration that started the batch
+        // counted it.
+        if self.st.sampling.is_some() {
+            self.st.counters.sampling_steps += 1;
+            self.continue_batch();
+            return match self.st.pending_full.take() {
+                Some(a) => StepOutcome::ArenaFull(a),
+                None => StepOutcome::NewBatch,
+            };
         }
         // OMPL stops iterating when no better solution is possible (minCost >= bestCost).
         if self.has_solution() && self.st.best_cost <= self.st.min_cost {

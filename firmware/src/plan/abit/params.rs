@@ -62,6 +62,11 @@ pub struct AbitParams {
     /// ([`StateSpace::sample_catch_boundary`](crate::plan::space::StateSpace::sample_catch_boundary); non-Markovian
     /// spaces only; see the module docs).
     pub catch_sample_fraction: f64,
+    /// Sample draws per `step` while a batch is drawn; 0 draws the whole batch in the iteration that starts it
+    /// (OMPL). With a bound, a batch is drawn over several steps that are not iterations (counted in
+    /// `Counters::sampling_steps`), so a caller that bounds its work per call (the on-board navigator, per
+    /// executive step) can stop between them; the search is the same draw for draw.
+    pub draws_per_step: u32,
 }
 
 impl AbitParams {
@@ -86,6 +91,7 @@ impl AbitParams {
             goal_edges: true,
             reveal_attachments: true,
             catch_sample_fraction: cfg::CATCH_SAMPLE_FRACTION,
+            draws_per_step: 0,
         }
     }
 

@@ -1,6 +1,7 @@
 //! Suspending and resuming a search: [`AbitSuspended`] holds everything the planner keeps outside its arena.
 
 use crate::plan::space::{Arena, Cost, Counters, InvalidInput, ProblemDefinition, StateSpace};
+use super::attachments::CatchHistories;
 use super::{AbitArena, AbitParams, AbitStar, ArenaUse, NONE};
 
 /// The search state of a suspended [`AbitStar`]: everything the planner keeps outside its arena (inflation and
@@ -29,6 +30,18 @@ pub struct AbitSuspended<St> {
     pub(super) counters: Counters,
     pub(super) invalid: Option<InvalidInput>,
     pub(super) high_water: ArenaUse,
+    pub(super) sampling: Option<BatchSampling>,
+}
+
+/// A batch being drawn over several steps (`AbitParams::draws_per_step`).
+#[derive(Debug, Clone)]
+pub(super) struct BatchSampling {
+    /// Draws left of the batch's `sample_attempts_per_sample * samples_per_batch`.
+    pub(super) draws_left: usize,
+    /// Samples added so far.
+    pub(super) added: usize,
+    /// The batch's catch-boundary histories.
+    pub(super) catch: CatchHistories,
 }
 
 impl<St> AbitSuspended<St> {
@@ -54,6 +67,7 @@ impl<St> AbitSuspended<St> {
             counters: Counters::default(),
             invalid: None,
             high_water: ArenaUse::default(),
+            sampling: None,
         }
     }
 
