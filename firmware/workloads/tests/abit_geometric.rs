@@ -11,7 +11,7 @@ use rand_pcg::Pcg64;
 
 use firmware::plan::abit::{AbitArena, AbitParams, AbitStar, DefaultAbitArena};
 use firmware::plan::space::{
-    uniform01, Arena, Budget, BudgetKind, CatchSample, Ended, GoalState, InvalidInput, MotionCheck, MotionValidator, PathLength,
+    uniform01, Arena, Budget, BudgetKind, CatchSample, Counters, Ended, GoalState, InvalidInput, MotionCheck, MotionValidator, PathLength,
     Planner, PlannerStatus, ProblemDefinition, SolveReport, StateSpace, StateValidityChecker, StepOutcome, Termination,
 };
 use workloads::geometric::{
@@ -95,6 +95,37 @@ fn open_space_direct_edge_is_the_first_iteration() {
     assert_valid_path(&p, &r.path, 1.6);
 }
 
+/// The wall-gap problem `w2` on `seed` with `params`, the planner suspended and resumed on the same arena and
+/// generator after every `solve_until` call, which stops when `stop(counters at the call's start, counters)`, until
+/// 3000 iterations; returns the calls made, the counters, the best cost and the path.
+fn suspended_search(
+    w2: &GeometricProblem<2>,
+    seed: u64,
+    params: AbitParams,
+    stop: impl Fn(&Counters, &Counters) -> bool,
+) -> (u32, Counters, f64, StdVec<[f64; 2]>) {
+    let mut arena: Box<AbitArena<[f64; 2], (), 4096, 16384, 4096>> = Box::default();
+    let (mut space, mut v, mut m) = (w2.space, w2.obstacles.clone(), w2.obstacles.clone());
+    let pd = pdef(w2);
+    let mut rng = Pcg64::seed_from_u64(seed);
+    let mut suspended = AbitStar::new(&mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, params).suspend();
+    let mut calls = 0;
+    while suspended.counters().iterations < 3000 && calls < 100_000 {
+        let c0 = suspended.counters();
+        let mut planner = AbitStar::resume(&mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, suspended.clone());
+        planner.solve_until(&Budget::iterations(3000), |c| stop(&c0, c));
+        suspended = planner.suspend();
+        calls += 1;
+    }
+    let planner = AbitStar::resume(&mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, suspended);
+    let mut out: Vec<([f64; 2], ()), 512> = Vec::new();
+    let path = match planner.write_path(&mut out) {
+        Ok(_) => out.iter().map(|(s, _)| *s).collect(),
+        Err(_) => StdVec::new(),
+    };
+    (calls, planner.counters(), planner.best_cost(), path)
+}
+
 /// Suspending the planner every few iterations and resuming it on the same arena and generator is the same
 /// search as one uninterrupted solve: same counters, same cost, same path.
 #[test]
@@ -103,32 +134,12 @@ fn a_suspended_and_resumed_search_is_the_uninterrupted_search() {
     let mut found = 0;
     for (seed, chunk) in [(3u64, 1u32), (7, 13), (11, 250)] {
         let whole = run(&w2, seed, 3000);
-        let mut arena: Box<AbitArena<[f64; 2], (), 4096, 16384, 4096>> = Box::default();
-        let (mut space, mut v, mut m) = (w2.space, w2.obstacles.clone(), w2.obstacles.clone());
-        let pd = pdef(&w2);
-        let mut rng = Pcg64::seed_from_u64(seed);
-        let mut suspended =
-            AbitStar::new(&mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, AbitParams::ompl_defaults())
-                .suspend();
-        let mut calls = 0;
-        while suspended.counters().iterations < 3000 {
-            let target = (suspended.counters().iterations + chunk).min(3000);
-            let mut planner =
-                AbitStar::resume(&mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, suspended.clone());
-            let report = planner.solve(&Budget::iterations(target));
-            assert_eq!(report.counters.iterations, target);
-            suspended = planner.suspend();
-            calls += 1;
-        }
+        let (calls, counters, cost, path) = suspended_search(&w2, seed, AbitParams::ompl_defaults(), |c0, c| {
+            c.iterations >= c0.iterations + chunk
+        });
         assert_eq!(calls, 3000_u32.div_ceil(chunk));
-        let planner = AbitStar::resume(&mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, suspended);
-        assert_eq!(planner.counters(), whole.report.counters, "seed {seed}, chunks of {chunk}");
-        assert_eq!(planner.best_cost().to_bits(), whole.costs[0].to_bits());
-        let mut out: Vec<([f64; 2], ()), 512> = Vec::new();
-        let path = match planner.write_path(&mut out) {
-            Ok(_) => out.iter().map(|(s, _)| *s).collect(),
-            Err(_) => StdVec::new(),
-        };
+        assert_eq!(counters, whole.report.counters, "seed {seed}, chunks of {chunk}");
+        assert_eq!(cost.to_bits(), whole.costs[0].to_bits());
         assert_eq!(path, whole.path);
         found += usize::from(whole.report.status.is_exact());
     }
@@ -144,36 +155,15 @@ fn a_batch_drawn_over_steps_is_the_batch_drawn_at_once() {
     let mut found = 0;
     for (seed, draws) in [(3u64, 7u32), (7, 1), (11, 64)] {
         let whole = run(&w2, seed, 3000);
-        let mut arena: Box<AbitArena<[f64; 2], (), 4096, 16384, 4096>> = Box::default();
-        let (mut space, mut v, mut m) = (w2.space, w2.obstacles.clone(), w2.obstacles.clone());
-        let pd = pdef(&w2);
-        let mut rng = Pcg64::seed_from_u64(seed);
         let params = AbitParams { draws_per_step: draws, ..AbitParams::ompl_defaults() };
-        let mut suspended = AbitStar::new(&mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, params).suspend();
-        for _ in 0..100_000 {
-            let c0 = suspended.counters();
-            if c0.iterations >= 3000 {
-                break;
-            }
-            let mut planner =
-                AbitStar::resume(&mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, suspended.clone());
-            // one iteration or one step of drawing per call
-            planner.solve_until(&Budget::iterations(3000), |c| {
-                c.iterations > c0.iterations || c.sampling_steps > c0.sampling_steps
-            });
-            suspended = planner.suspend();
-        }
-        let planner = AbitStar::resume(&mut arena, &mut space, &mut v, &mut m, &pd, &mut rng, suspended);
-        let mut got = planner.counters();
-        assert!(got.sampling_steps > 0, "seed {seed}: no batch was drawn over several steps");
-        got.sampling_steps = 0;
-        assert_eq!(got, whole.report.counters, "seed {seed}, {draws} draws per step");
-        assert_eq!(planner.best_cost().to_bits(), whole.costs[0].to_bits());
-        let mut out: Vec<([f64; 2], ()), 512> = Vec::new();
-        let path = match planner.write_path(&mut out) {
-            Ok(_) => out.iter().map(|(s, _)| *s).collect(),
-            Err(_) => StdVec::new(),
-        };
+        // one iteration or one step of drawing per call
+        let (_, mut counters, cost, path) = suspended_search(&w2, seed, params, |c0, c| {
+            c.iterations > c0.iterations || c.sampling_steps > c0.sampling_steps
+        });
+        assert!(counters.sampling_steps > 0, "seed {seed}: no batch was drawn over several steps");
+        counters.sampling_steps = 0;
+        assert_eq!(counters, whole.report.counters, "seed {seed}, {draws} draws per step");
+        assert_eq!(cost.to_bits(), whole.costs[0].to_bits());
         assert_eq!(path, whole.path);
         found += usize::from(whole.report.status.is_exact());
     }
