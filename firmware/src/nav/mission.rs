@@ -827,9 +827,17 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         }
         if !ok {
             m.counters.recheck_failures = m.counters.recheck_failures.saturating_add(1);
-            log::info!("mission: re-check of segment {k} failed on the current map: replan");
             m.recheck_left = 0;
             m.state = MissionState::Driving;
+            if k > m.seg {
+                // A later segment fails; those before it passed on this map (the re-check runs in order from the
+                // current one): drive them and plan again at their end, on the map the drive grows (a receding
+                // horizon), instead of planning again from here on what is seen from here.
+                log::info!("mission: re-check of segment {k} failed on the current map: the plan ends before it");
+                planning::truncate_plan(&mut self.storage, k, &TetherSpaceParams::ONBOARD);
+                return DriveStep::Wait;
+            }
+            log::info!("mission: re-check of segment {k} failed on the current map: replan");
             return self.replan(now);
         }
         if m.recheck_left == 0 {

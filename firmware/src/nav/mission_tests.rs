@@ -434,6 +434,72 @@ fn a_scan_along_the_drive_in_flight_is_integrated_and_one_past_it_is_not() {
     assert_eq!(nav.mission_status().unwrap().scans_rejected, 1);
 }
 
+/// A rock seen on a later segment of the plan: the segments before it passed the re-check on the same map, so the
+/// plan ends before the failing segment (driven, then planned again there), instead of a replan from here.
+#[test]
+fn a_later_segment_that_fails_its_re_check_ends_the_plan_before_it() {
+    use core::borrow::BorrowMut;
+    let t0 = Instant::from_micros(0);
+    let mut nav = mapped(ROOT, MissionConfig::DEFAULT);
+    assert_eq!(nav.goal(&goal(1, 4.0, 0.0), t0), PlanState::Accepted);
+    assert!(matches!(plan(&mut nav), PlanProgress::Finished { state: PlanState::ExactSolution, .. }));
+    // the stored plan as five states along the line, settled every metre (four segments)
+    {
+        let problem = nav.problem.unwrap();
+        let map = Map::reattach(nav.cfg, nav.blocks.borrow_mut(), nav.index.borrow_mut(), nav.used).unwrap();
+        let params = crate::plan::tethered::TetherSpaceParams::ONBOARD;
+        let space = crate::plan::tethered::TetherSpace::new(&map, problem.bounds, problem.rover, params).unwrap();
+        let store = &mut nav.storage;
+        let h = store.path[0].1.clone();
+        store.path.clear();
+        store.motions.clear();
+        for i in 0..5 {
+            store.path.push((space.settle_state(i as f32, 0.0, 0.0).unwrap(), h.clone())).unwrap();
+        }
+        for w in store.path.clone().windows(2) {
+            for m in segment_motions(&w[0].0, &w[1].0, &params).into_iter().flatten() {
+                store.motions.push(m).unwrap();
+            }
+        }
+    }
+    // one motion, so the navigator has a body pose
+    let mut world = World::new(ROOT, 0.0);
+    let DriveStep::Motion(m) = nav.drive_step(t0) else { panic!("no motion") };
+    let r = world.report(0, m);
+    nav.motion_report(&r, m, t0);
+    // a rock 0.5 m high between the wheels on the fourth segment (x 3.6-3.9), seen from above it
+    let rock = |x: f32, y: f32| if (3.6..=3.9).contains(&x) && y.abs() <= 0.3 { Z0 + 0.5 } else { Z0 };
+    // the sensor within the scan pose tolerance of the rover, the rays on x 2.5-4.5
+    let (sx, step) = (world.x + 1.9, 0.5 * VOXEL);
+    let mut pts = Vec::new();
+    for i in 0..=40 {
+        for j in -30..=30 {
+            let (x, y) = (2.5 + i as f32 * step, j as f32 * step);
+            pts.push(Point3 { x: x - sx, y, z: rock(x, y) - SENSOR_H });
+        }
+    }
+    let pose = Pose { position: Point3 { x: sx, y: 0.0, z: SENSOR_H }, orientation: Quat::IDENTITY };
+    // the TSDF averages: enough looks at the rock to outweigh the free space seen there before
+    for id in 900..912 {
+        nav.integrate_scan(&Scan { scan_id: id, sensor_pose: pose, points: &pts }, t0);
+    }
+    assert_eq!(nav.mission().state().0, MissionState::Verifying);
+    let mut next = None;
+    for _ in 0..20 {
+        match nav.drive_step(t0) {
+            DriveStep::Wait => {}
+            other => {
+                next = Some(other);
+                break;
+            }
+        }
+    }
+    assert!(nav.mission().counters.recheck_failures >= 1, "the rock did not fail a re-check");
+    assert!(matches!(next, Some(DriveStep::Motion(_))), "after the failed re-check: {next:?}");
+    assert_eq!(nav.plan_path().len(), 4, "the plan ends at the state before the rock's segment");
+    assert_eq!(nav.mission_status().unwrap().replans, 0);
+}
+
 #[test]
 fn no_waypoint_below_the_minimum_margin_is_sent_or_driven() {
     // a minimum margin no state on this map can have (the rover's whole weight)

@@ -90,9 +90,11 @@
 //! - **Re-checks and replans**: after each report the next `RECHECK_AFTER_MOTION` segments are re-checked
 //!   (the current state's margin and the motion from it to the segment's end, then the planned motions, each a
 //!   full motion check on the current map: collision, settling, anchors, stability), after each scan the whole
-//!   remaining plan; one check per executive step (`Wait`). A failed check, a stall, a cross-track distance over
-//!   `replan_cross_track_m`, or the end of an exact plan short of the goal replans from the tracked pose and
-//!   history (a new seed per replan).
+//!   remaining plan; one check per executive step (`Wait`). A failed check of a later segment ends the plan
+//!   before that segment (the segments before it passed on the same map: they are driven, and the navigator
+//!   plans again at their end, where it sees more). A failed check of the current segment, a stall, a cross-track
+//!   distance over `replan_cross_track_m`, or the end of a plan short of the goal replans from the tracked pose
+//!   and history (a new seed per replan).
 //! - **Tracking** (`Configure.mission.tracking`): `OpenLoop` hands out the plan's motions as planned (the
 //!   baseline). `ClosedLoop` is the tether-aware path-tracking controller: along the current segment it aims at
 //!   the point `TRACK_SEGMENT_M` ahead of the rover's projection, turns when the heading error exceeds

@@ -589,6 +589,23 @@ fn fill_plan<D: DistanceField>(
     cut
 }
 
+/// Cut the stored plan after state `last` (the states up to it and the motions of their segments stay): the mission
+/// drives the prefix and plans again at its end. `params` must be the space's the motions were made with.
+pub(crate) fn truncate_plan<P: BorrowMut<NavPlanStorage>>(storage: &mut P, last: usize, params: &TetherSpaceParams) {
+    let s = storage.borrow_mut();
+    s.path.truncate(last.saturating_add(1));
+    // as `fill_plan` made them: the segments between the on-map states
+    let mut count = 0usize;
+    let mut prev: Option<&RoverState> = None;
+    for (st, _) in s.path.iter().filter(|(st, _)| !st.off_map) {
+        if let Some(a) = prev {
+            count += segment_motions(a, st, params).into_iter().flatten().count();
+        }
+        prev = Some(st);
+    }
+    s.motions.truncate(count);
+}
+
 /// The motion primitive at `index` of the last plan.
 pub(crate) fn motion_at<P: BorrowMut<NavPlanStorage>>(storage: &mut P, index: usize) -> Option<Motion> {
     storage.borrow_mut().motions.get(index).copied()
