@@ -45,7 +45,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::physics::path::{judge_path, PathJudgement, PathPose};
 use crate::physics::PhysicsJudge;
-use crate::shard::Shard;
+use crate::shard::{RunTiming, Shard};
 use crate::truth::taut::WrapEdges;
 use crate::world::World;
 
@@ -722,20 +722,6 @@ pub struct CampaignTiming {
     pub trials: Vec<TrialTiming>,
 }
 
-/// The wall-clock figures of one run (a whole campaign or one shard).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct RunTiming {
-    /// The shard (absent: the whole campaign).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub shard: Option<Shard>,
-    /// Worker threads.
-    pub threads: usize,
-    /// Seconds to build the planning map.
-    pub map_build_s: f64,
-    /// Seconds of the whole run.
-    pub wall_s: f64,
-}
-
 /// The wall-clock figures of one trial.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TrialTiming {
@@ -751,7 +737,7 @@ impl CampaignResult {
     /// This run's timing.
     pub fn timing(&self) -> CampaignTiming {
         CampaignTiming {
-            runs: vec![RunTiming { shard: self.shard, threads: self.threads, map_build_s: self.map_build_s, wall_s: self.wall_s }],
+            runs: vec![RunTiming { shard: self.shard, threads: self.threads, wall_s: self.wall_s, map_build_s: Some(self.map_build_s) }],
             trials: self
                 .trials
                 .iter()
@@ -771,7 +757,7 @@ impl CampaignResult {
         }
         let max = |f: &dyn Fn(&RunTiming) -> f64| timing.runs.iter().map(f).fold(0.0, f64::max);
         self.wall_s = max(&|r| r.wall_s);
-        self.map_build_s = max(&|r| r.map_build_s);
+        self.map_build_s = max(&|r| r.map_build_s.unwrap_or(0.0));
         self.threads = timing.runs.iter().map(|r| r.threads).max().unwrap_or(0);
     }
 }
@@ -884,10 +870,7 @@ fn run_trials<D: DistanceField + Sync>(
         for _ in 0..spec.threads.max(1) {
             let worker = std::thread::Builder::new().stack_size(WORKER_STACK).spawn_scoped(s, || {
                 let mut arena: Box<TrialArena> = Box::default();
-                loop {
-                    let Some(&i) = indices.get(next.fetch_add(1, Ordering::SeqCst)) else {
-                        break;
-                    };
+                while let Some(&i) = indices.get(next.fetch_add(1, Ordering::SeqCst)) {
                     let mut r = run_trial(field, spec, i, &mut arena);
                     if let (Ok(t), Some(j)) = (r.as_mut(), judge) {
                         j.judge_trial(spec, t);

@@ -89,6 +89,21 @@ pub fn fingerprint(bytes: &[u8]) -> String {
     format!("{:016x}", CRC.checksum(bytes))
 }
 
+/// The wall-clock figures of one run (a whole campaign or one shard), in the timing files of both kinds.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunTiming {
+    /// The shard (absent: the whole campaign).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<Shard>,
+    /// Worker threads.
+    pub threads: usize,
+    /// Seconds of the whole run.
+    pub wall_s: f64,
+    /// Seconds to build the planning map (planning campaigns only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub map_build_s: Option<f64>,
+}
+
 /// One shard's file as read by a merge.
 pub struct ShardFile<I, T> {
     /// Where it was read from.

@@ -25,9 +25,9 @@ use crate::link::recording::RecordingLink;
 use crate::link::{FlightLink, LinkKind};
 use crate::mission::run::{run_mission, MissionOptions, MissionReport, Verdict};
 use crate::replay::RunConfig;
-use crate::mission::campaign::{CampaignFile, CampaignIdentity, CampaignTiming, MissionRow, MissionTiming, RunTiming};
+use crate::mission::campaign::{CampaignFile, CampaignIdentity, CampaignTiming, MissionRow, MissionTiming};
 use crate::scenario::{self, Scenario};
-use crate::shard::{self, Shard, ShardFile};
+use crate::shard::{self, RunTiming, Shard, ShardFile};
 
 /// `tetherbot mission`: run a mission or a mission campaign (or one shard of it), or merge the shards' files.
 #[derive(Debug, Clone, clap::Args)]
@@ -323,7 +323,7 @@ fn campaign(args: &MissionArgs, sc: &Scenario) -> Result<bool, String> {
     let shard = (!shard.is_whole()).then_some(shard);
     let file = CampaignFile { campaign: identity, shard, missions: reports.iter().map(MissionRow::of).collect(), failed };
     let timing = CampaignTiming {
-        runs: vec![RunTiming { shard, threads, wall_s: t0.elapsed().as_secs_f64() }],
+        runs: vec![RunTiming { shard, threads, wall_s: t0.elapsed().as_secs_f64(), map_build_s: None }],
         missions: reports.iter().map(|r| MissionTiming { seed: r.seed, host_s: r.host_s }).collect(),
     };
     for r in &file.missions {

@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 
 use super::run::{run_mission, MissionOptions, MissionReport, Verdict};
 use crate::scenario::Scenario;
-use crate::shard::{Shard, ShardFile};
+use crate::shard::{RunTiming, Shard, ShardFile};
 
 /// Stack of a mission worker thread (the flight software's storage is built before it is boxed).
 const WORKER_STACK: usize = 64 << 20;
@@ -213,18 +213,6 @@ pub struct CampaignTiming {
     pub runs: Vec<RunTiming>,
     /// Host seconds per mission, in seed order.
     pub missions: Vec<MissionTiming>,
-}
-
-/// The wall-clock figures of one run.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct RunTiming {
-    /// The shard (absent: the whole campaign).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub shard: Option<Shard>,
-    /// Worker threads.
-    pub threads: usize,
-    /// Seconds of the whole run.
-    pub wall_s: f64,
 }
 
 /// The host time of one mission.
