@@ -210,6 +210,22 @@ mod tests {
         assert!(Shard { index: 0, count: 4 }.check_fits(4, "trials").is_ok());
     }
 
+    /// Regression (ledge test 3, 8 trials in 4 shards, release): without serde_json's `float_roundtrip` the merge
+    /// read -0.11706714332103729 as ...728 and wrote a results.json 1 ULP off the unsharded run's.
+    #[test]
+    fn every_finite_f64_survives_a_json_round_trip_to_the_bit() {
+        use rand_core::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(23);
+        let mut xs = vec![-0.11706714332103729, 0.19527274370193481, 0.24475063383579254, 5e-324, f64::MAX, -0.0];
+        xs.extend((0..200_000).map(|_| f64::from_bits(rng.next_u64())).filter(|x| x.is_finite()));
+        xs.extend((0..200_000).map(|_| (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64 * 20.0 - 10.0));
+        for x in xs {
+            let text = serde_json::to_string(&x).expect("finite");
+            let back: f64 = serde_json::from_str(&text).expect("parses");
+            assert_eq!(back.to_bits(), x.to_bits(), "{text}");
+        }
+    }
+
     fn file(path: &str, id: u32, k: u32, n: u32) -> ShardFile<serde_json::Value, ()> {
         ShardFile { path: path.into(), identity: serde_json::json!({ "trials": id }), shard: Shard { index: k, count: n }, body: () }
     }
