@@ -2,7 +2,7 @@
 //! `host-sim/doc/campaign.md`); `--shard K/N` runs trials `i` with `i mod N == K` only ([`crate::shard`]), and
 //! `tetherbot campaign merge OUT SHARD...` joins the N shards' results into the files the unsharded run writes
 //! (`results.json`, `results.csv` and `paths.svg` byte for byte; `timing.json` keeps each shard's wall-clock
-//! figures). `merge` is a word the scenario argument cannot take (a scenario file called so is `./merge.toml`).
+//! figures). `merge` is a word the scenario argument cannot take: a scenario file `merge.toml` is given as its path.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
