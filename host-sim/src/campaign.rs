@@ -17,7 +17,11 @@
 //!
 //! Outputs: Table I's columns (found stable / found unstable, time and iterations to the first solution, mean and
 //! sd) plus batches, edges evaluated and states checked; `results.json` and `results.csv` (one row per trial);
-//! `paths.svg` (all paths with their anchors over a height-shaded top view and a side view, like Fig. 9).
+//! `paths.svg` (all paths with their anchors over a height-shaded top view and a side view, like Fig. 9);
+//! `timing.json` ([`CampaignTiming`]). Everything measured in wall-clock time (time to the first solution, trial
+//! time, map build time, the campaign's wall time, and the thread count it ran on) is in `timing.json` only: the
+//! other three files are a pure function of the scenario and the options, the same bytes on any machine, any
+//! thread count and any split into shards ([`crate::shard`]; [`merge`] joins the shards' results).
 
 use core::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -37,10 +41,11 @@ use firmware::plan::tethered::{
 use firmware::tether::{Anchor, AnchorHistory};
 use heapless::Vec as HVec;
 use rand_core::SeedableRng;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::physics::path::{judge_path, PathJudgement, PathPose};
 use crate::physics::PhysicsJudge;
+use crate::shard::{RunTiming, Shard};
 use crate::truth::taut::WrapEdges;
 use crate::world::World;
 
@@ -59,7 +64,7 @@ const WORKER_STACK: usize = 256 << 20;
 pub type TrialArena = AbitArena<RoverState, AnchorHistory, TRIAL_NODES, TRIAL_QUEUE, TRIAL_MEMO>;
 
 /// Which distance field the planner sees.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum PlanningField {
     /// The onboard map filled from the world's signed distance (default).
     Map,
@@ -99,6 +104,8 @@ pub struct CampaignSpec {
     pub trials: u32,
     /// Seed of the first trial (trial `i` uses `first_seed + i`).
     pub first_seed: u64,
+    /// The trials this run does ([`Shard::WHOLE`]: all of them).
+    pub shard: Shard,
     /// Worker threads.
     pub threads: usize,
     /// Planning map or exact world.
@@ -221,7 +228,7 @@ impl PlanningMap {
 }
 
 /// A state of a returned path, for the outputs.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct PathState {
     /// Axle centre.
     pub axle: [f64; 3],
@@ -236,7 +243,7 @@ pub struct PathState {
 }
 
 /// Ground-truth re-validation of a path.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Revalidation {
     /// Every state settles and every motion is valid and stable on the true terrain.
     pub stable: bool,
@@ -246,8 +253,8 @@ pub struct Revalidation {
     pub final_anchors: Vec<[f64; 3]>,
 }
 
-/// One trial.
-#[derive(Debug, Clone, Serialize)]
+/// One trial. The wall-clock fields are not serialised into `results.json` (see [`CampaignTiming`]).
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct TrialResult {
     /// Trial index.
     pub trial: u32,
@@ -257,7 +264,8 @@ pub struct TrialResult {
     pub found: bool,
     /// Iteration of the first solution.
     pub first_iteration: Option<u32>,
-    /// Seconds to the first solution.
+    /// Seconds to the first solution (wall clock; in `timing.json`, not `results.json`).
+    #[serde(skip)]
     pub first_time_s: Option<f64>,
     /// Cost of the best path after the budget.
     pub final_cost: Option<f64>,
@@ -269,7 +277,8 @@ pub struct TrialResult {
     pub edges_evaluated: u32,
     /// States checked.
     pub states_checked: u32,
-    /// Seconds of the whole trial.
+    /// Seconds of the whole trial (wall clock; in `timing.json`, not `results.json`).
+    #[serde(skip)]
     pub total_time_s: f64,
     /// Why the planner stopped.
     pub termination: String,
@@ -535,26 +544,33 @@ impl CampaignJudge {
     }
 }
 
-/// The outcome of a campaign.
-#[derive(Debug, Clone, Serialize)]
+/// The outcome of a campaign (or of one shard of it). The wall-clock fields and the thread count are not
+/// serialised into `results.json` (see [`CampaignTiming`]).
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct CampaignResult {
     /// Scenario name.
     pub name: String,
+    /// The part of the campaign these trials are (absent for the whole campaign, and so in a merge's result).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<Shard>,
     /// Field planned on.
     pub field: PlanningField,
     /// Planning-map voxel, metres.
     pub voxel_m: f64,
     /// Planning-map blocks.
     pub map_blocks: usize,
-    /// Seconds to build the planning map.
+    /// Seconds to build the planning map (wall clock; in `timing.json`).
+    #[serde(skip)]
     pub map_build_s: f64,
     /// Iterations per trial.
     pub iterations: u32,
     /// Trials, in trial order.
     pub trials: Vec<TrialResult>,
-    /// Wall-clock seconds of the whole campaign.
+    /// Wall-clock seconds of the whole campaign (in `timing.json`).
+    #[serde(skip)]
     pub wall_s: f64,
-    /// Worker threads.
+    /// Worker threads (in `timing.json`).
+    #[serde(skip)]
     pub threads: usize,
     /// The rover's wheel-terrain friction coefficient.
     pub wheel_mu: f32,
@@ -665,19 +681,18 @@ impl CampaignResult {
         s
     }
 
-    /// One CSV row per trial.
+    /// One CSV row per trial (no wall-clock columns: those are in [`CampaignTiming`]).
     pub fn csv(&self) -> String {
-        let mut s = String::from("trial,seed,found,stable_on_truth,first_iteration,first_time_s,final_cost,iterations,batches,edges_evaluated,states_checked,settles,stability_checks,anchor_predictions,total_time_s,path_states,final_anchors,termination,model_stable,physics_stable\n");
+        let mut s = String::from("trial,seed,found,stable_on_truth,first_iteration,final_cost,iterations,batches,edges_evaluated,states_checked,settles,stability_checks,anchor_predictions,path_states,final_anchors,termination,model_stable,physics_stable\n");
         let o = |v: Option<String>| v.unwrap_or_default();
         for t in &self.trials {
             s += &format!(
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.6},{},{},{},{},{}\n",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
                 t.trial,
                 t.seed,
                 t.found,
                 t.found_stable(),
                 o(t.first_iteration.map(|v| v.to_string())),
-                o(t.first_time_s.map(|v| format!("{v:.6}"))),
                 o(t.final_cost.map(|v| format!("{v:.6}"))),
                 t.iterations,
                 t.batches,
@@ -686,7 +701,6 @@ impl CampaignResult {
                 t.settles,
                 t.stability_checks,
                 t.anchor_predictions,
-                t.total_time_s,
                 t.path.len(),
                 t.path.last().map_or(0, |p| p.anchors.len()),
                 t.termination,
@@ -698,13 +712,109 @@ impl CampaignResult {
     }
 }
 
-/// Run the campaign: build the planning field once, then the trials on `spec.threads` workers. `progress` is
-/// called after every finished trial with (done, total).
+/// The wall-clock side of a campaign (`timing.json`): what is measured, not computed, so it differs between any
+/// two runs and is kept out of `results.json` and `results.csv`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CampaignTiming {
+    /// One entry per run: the unsharded run, or each shard of a merge (in shard order).
+    pub runs: Vec<RunTiming>,
+    /// Per trial, in trial order.
+    pub trials: Vec<TrialTiming>,
+}
+
+/// The wall-clock figures of one trial.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrialTiming {
+    /// Trial index.
+    pub trial: u32,
+    /// Seconds to the first solution.
+    pub first_time_s: Option<f64>,
+    /// Seconds of the whole trial.
+    pub total_time_s: f64,
+}
+
+impl CampaignResult {
+    /// This run's timing.
+    pub fn timing(&self) -> CampaignTiming {
+        CampaignTiming {
+            runs: vec![RunTiming { shard: self.shard, threads: self.threads, wall_s: self.wall_s, map_build_s: Some(self.map_build_s) }],
+            trials: self
+                .trials
+                .iter()
+                .map(|t| TrialTiming { trial: t.trial, first_time_s: t.first_time_s, total_time_s: t.total_time_s })
+                .collect(),
+        }
+    }
+
+    /// Puts `timing`'s figures back into the result (after reading `results.json`, which has none); the run's
+    /// figures are the largest over `timing.runs` (the shards ran side by side).
+    pub fn apply_timing(&mut self, timing: &CampaignTiming) {
+        for t in &mut self.trials {
+            if let Some(m) = timing.trials.iter().find(|m| m.trial == t.trial) {
+                t.first_time_s = m.first_time_s;
+                t.total_time_s = m.total_time_s;
+            }
+        }
+        let max = |f: &dyn Fn(&RunTiming) -> f64| timing.runs.iter().map(f).fold(0.0, f64::max);
+        self.wall_s = max(&|r| r.wall_s);
+        self.map_build_s = max(&|r| r.map_build_s.unwrap_or(0.0));
+        self.threads = timing.runs.iter().map(|r| r.threads).max().unwrap_or(0);
+    }
+}
+
+/// Joins the results of the N shards of one campaign, given in shard order and already checked to be one
+/// complete set ([`crate::shard::check_set`]): the trials in trial order, the shard mark removed. The result
+/// serialises to the bytes of the unsharded run's `results.json`. Refuses shards whose header fields differ (the
+/// same options on different code) or whose trials are not exactly the shard's (a file edited by hand).
+pub fn merge(shards: Vec<(String, CampaignResult)>, trials: u32, first_seed: u64) -> Result<CampaignResult, String> {
+    let header = |r: &CampaignResult| {
+        serde_json::to_value(CampaignResult { trials: Vec::new(), shard: None, ..r.clone() }).unwrap_or_default()
+    };
+    let mut it = shards.into_iter();
+    let Some((p0, mut merged)) = it.next() else { return Err("no shard files given".into()) };
+    let h0 = header(&merged);
+    let mut all = core::mem::take(&mut merged.trials);
+    let mut parts = vec![(p0.clone(), merged.shard, all.len())];
+    for (p, r) in it {
+        if header(&r) != h0 {
+            return Err(format!(
+                "{p0} and {p} record the same options but different campaign headers ({} vs {}): were they run by different builds of tetherbot?",
+                h0, header(&r)
+            ));
+        }
+        parts.push((p, r.shard, r.trials.len()));
+        all.extend(r.trials);
+    }
+    let mut at = 0;
+    for (p, shard, n) in &parts {
+        let shard = shard.unwrap_or(Shard::WHOLE);
+        let want = shard.indices(trials);
+        let mine = &all[at..at + n];
+        let got: Vec<u32> = mine.iter().map(|t| t.trial).collect();
+        if let Some(t) = mine.iter().find(|t| Some(t.seed) != first_seed.checked_add(u64::from(t.trial))) {
+            return Err(format!("{p}: trial {} has seed {}, not the campaign's {first_seed} + {} (an edited file)", t.trial, t.seed, t.trial));
+        }
+        if got != want {
+            return Err(format!(
+                "{p}: shard {shard} of {trials} trials should hold trials {want:?}, it holds {got:?} (an incomplete or edited file)"
+            ));
+        }
+        at += n;
+    }
+    all.sort_by_key(|t| t.trial);
+    merged.trials = all;
+    merged.shard = None;
+    Ok(merged)
+}
+
+/// Run the campaign (the trials of `spec.shard`): build the planning field once, then the trials on
+/// `spec.threads` workers. `progress` is called after every finished trial with (done, total of this shard).
 pub fn run(spec: &CampaignSpec, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<CampaignResult, String> {
     let t0 = Instant::now();
     if spec.first_seed.checked_add(u64::from(spec.trials.saturating_sub(1))).is_none() {
         return Err(format!("seed {} with {} trials: the trial seeds would pass u64::MAX", spec.first_seed, spec.trials));
     }
+    spec.shard.check_fits(spec.trials, "trials")?;
     let b = spec.bounds;
     let lo = [
         f64::from(b.min[0]).min(spec.root[0] - 1.0),
@@ -730,6 +840,7 @@ pub fn run(spec: &CampaignSpec, progress: &(dyn Fn(usize, usize) + Sync)) -> Res
     };
     Ok(CampaignResult {
         name: spec.name.clone(),
+        shard: (!spec.shard.is_whole()).then_some(spec.shard),
         field: spec.field,
         voxel_m: spec.voxel_m,
         map_blocks,
@@ -750,7 +861,8 @@ fn run_trials<D: DistanceField + Sync>(
 ) -> Result<Vec<TrialResult>, String> {
     let judge = if spec.physics_judge { Some(CampaignJudge::new(spec)?) } else { None };
     let judge = judge.as_ref();
-    let total = spec.trials as usize;
+    let indices = spec.shard.indices(spec.trials);
+    let total = indices.len();
     let next = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);
     let results: Mutex<Vec<Result<TrialResult, String>>> = Mutex::new(Vec::new());
@@ -758,12 +870,8 @@ fn run_trials<D: DistanceField + Sync>(
         for _ in 0..spec.threads.max(1) {
             let worker = std::thread::Builder::new().stack_size(WORKER_STACK).spawn_scoped(s, || {
                 let mut arena: Box<TrialArena> = Box::default();
-                loop {
-                    let i = next.fetch_add(1, Ordering::SeqCst);
-                    if i >= total {
-                        break;
-                    }
-                    let mut r = run_trial(field, spec, i as u32, &mut arena);
+                while let Some(&i) = indices.get(next.fetch_add(1, Ordering::SeqCst)) {
+                    let mut r = run_trial(field, spec, i, &mut arena);
                     if let (Ok(t), Some(j)) = (r.as_mut(), judge) {
                         j.judge_trial(spec, t);
                     }

@@ -13,6 +13,9 @@
 //! NumPy, OBJ import), [`scenario`] (scenario files, TOML), [`sensor`] (range sensor), [`truth`] (the true
 //! tether), [`mapcheck`] (onboard map against ground truth).
 //!
+//! Campaigns: [`campaign`] (Paton et al.'s Table I), [`mission::campaign`], [`shard`] (a campaign split over a
+//! cluster and merged back, byte for byte).
+//!
 //! Planning: [`harness`] (every planner on every shared problem), [`homotopy`] (tether-demand planes, closed
 //! loop), [`team`] and [`movingai`] (tethered climbing teams, grid benchmarks).
 
@@ -33,6 +36,7 @@ pub mod scenario;
 pub mod scripted;
 pub mod sensor;
 pub mod session;
+pub mod shard;
 pub mod team;
 pub mod terrain;
 pub mod testkit;

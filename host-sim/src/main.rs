@@ -18,7 +18,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// A closed-loop mission with the flight software in the loop (the main job; default: a crater-wall descent).
-    Mission(cli::mission::MissionArgs),
+    Mission(cli::mission::MissionCli),
     /// Run a scenario against the flight software on the in-process link (the main job).
     Run(cli::run::RunArgs),
     /// Run a scenario and record every byte into a field log (same as `run --log LOG`).
@@ -40,7 +40,7 @@ enum Command {
     /// Time a full distance transform: the onboard ESDF vs libdynamicedt3d on the same grid.
     EdtBench(cli::map::EdtBenchArgs),
     /// Paton et al.'s Table I for a scenario: N planning trials, each path re-validated on the true terrain.
-    Campaign(cli::campaign::CampaignArgs),
+    Campaign(cli::campaign::CampaignCli),
     /// ABIT* side by side with OMPL 1.5.2's ABIT* on the shared geometric problems.
     AbitBench(cli::abit_bench::Args),
     /// Homotopy planning on a tether-demand plane (scenarios B, C; closed loop with a range sensor).
@@ -56,7 +56,7 @@ enum Command {
 fn main() -> ExitCode {
     env_logger_lite();
     match Cli::parse().command {
-        Command::Mission(a) => cli::mission::main(&a),
+        Command::Mission(a) => cli::mission::cli_main(&a),
         Command::Run(a) => cli::run::main(&a),
         Command::Record(a) => {
             if a.log.is_none() {
@@ -72,7 +72,7 @@ fn main() -> ExitCode {
         Command::MapCheck(a) => cli::done(cli::map::map_check(&a)),
         Command::RenderMap(a) => cli::done(cli::map::render_map(&a)),
         Command::EdtBench(a) => cli::done(cli::map::edt_bench(&a)),
-        Command::Campaign(a) => cli::campaign::main(&a),
+        Command::Campaign(a) => cli::campaign::cli_main(&a),
         Command::AbitBench(a) => cli::printed(cli::abit_bench::run(&a)),
         Command::Homotopy(a) => cli::homotopy::main(&a),
         Command::Board(a) => cli::board::main(&a),

@@ -279,3 +279,74 @@ fn a_truncated_moving_ai_scen_file_is_an_error() {
     assert_eq!(code, 2, "{out}");
     assert!(out.contains("truncated"), "{out}");
 }
+
+#[test]
+fn mission_campaign_seeds_past_u64_max_are_refused_before_any_mission() {
+    let d = dir("mission-seed");
+    let out = d.join("out");
+    let (code, text) = tetherbot(&["mission", "--seed", "18446744073709551615", "--seeds", "2", "--quiet", "--out", s(&out)]);
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("passes u64::MAX; use a seed of at most 18446744073709551614"), "{text}");
+    assert!(!text.contains("mission campaign") && !out.exists(), "it ran: {text}");
+}
+
+#[test]
+fn a_mission_scenario_name_cannot_write_outside_the_output_directory() {
+    let d = dir("mission-name");
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/mission_ledge_test3.toml")).unwrap();
+    assert!(text.contains("name = \"mission_ledge_test3\""));
+    let sc = scenario(&d, "escape.toml", &text.replace("name = \"mission_ledge_test3\"", "name = \"../../escape\""));
+    let out = d.join("a").join("b");
+    // one mission (field log, MCAP, picture, JSON) and a campaign of two, as a shard too
+    let (code, text) = tetherbot(&["mission", s(&sc), "--quiet", "--created-at-ms", "0", "--out", s(&out)]);
+    assert_eq!(code, 0, "{text}");
+    let (code, text) = tetherbot(&["mission", s(&sc), "--seeds", "2", "--threads", "1", "--out", s(&out)]);
+    assert_eq!(code, 0, "{text}");
+    let (code, text) = tetherbot(&["mission", s(&sc), "--seeds", "2", "--shard", "1/2", "--threads", "1", "--out", s(&out)]);
+    assert_eq!(code, 0, "{text}");
+    let mut names: Vec<String> = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            ".._.._escape-campaign-shard-1-of-2-timing.json",
+            ".._.._escape-campaign-shard-1-of-2.json",
+            ".._.._escape-campaign-timing.json",
+            ".._.._escape-campaign.json",
+            ".._.._escape.fieldlog",
+            ".._.._escape.json",
+            ".._.._escape.mcap",
+            ".._.._escape.svg",
+        ]
+    );
+    assert_eq!(std::fs::read_dir(&d).unwrap().count(), 2, "only escape.toml and a/ in {}", d.display());
+}
+
+#[test]
+fn shard_options_and_merge_inputs_are_checked_with_a_reason() {
+    let d = dir("shard");
+    let cases: [(&[&str], &str); 6] = [
+        (&["campaign", "ledge_test1", "--shard", "4/4"], "K must be below N"),
+        (&["campaign", "ledge_test1", "--shard", "2"], "no '/'"),
+        (&["campaign", "ledge_test1", "--trials", "3", "--shard", "0/4"], "4 shards for 3 trials would leave a shard empty"),
+        (&["mission", "--seeds", "2", "--shard", "0/3"], "3 shards for 2 missions would leave a shard empty"),
+        (&["campaign", "merge", "OUT", "/no/such/results.json"], "/no/such/results.json: cannot read it"),
+        (&["mission", "merge", "OUT", "/no/such/x-campaign-shard-0-of-2.json"], "cannot read it"),
+    ];
+    for (args, want) in cases {
+        let args: Vec<String> = args.iter().map(|a| if *a == "OUT" { s(&d.join("merged")).to_string() } else { a.to_string() }).collect();
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (code, out) = tetherbot(&args);
+        assert_eq!(code, 2, "{args:?}: {out}");
+        assert!(out.contains(want), "{args:?}: {out}");
+        assert!(!out.contains("found stable") && !out.contains("mission campaign"), "{args:?} ran: {out}");
+    }
+    let junk = d.join("junk.json");
+    std::fs::write(&junk, "{\"trials\": [").unwrap();
+    for kind in ["campaign", "mission"] {
+        let (code, out) = tetherbot(&[kind, "merge", s(&d.join("merged")), s(&junk)]);
+        assert_eq!(code, 2, "{out}");
+        assert!(out.contains("junk.json: not a") && out.contains("(corrupt, truncated or another kind of file)"), "{out}");
+    }
+    assert!(!d.join("merged").exists());
+}

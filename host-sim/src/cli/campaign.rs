@@ -1,5 +1,8 @@
 //! `tetherbot campaign SCENARIO`: Paton et al.'s Table I for any scenario (see [`crate::campaign`] and
-//! `host-sim/doc/campaign.md`).
+//! `host-sim/doc/campaign.md`); `--shard K/N` runs trials `i` with `i mod N == K` only ([`crate::shard`]), and
+//! `tetherbot campaign merge OUT SHARD...` joins the N shards' results into the files the unsharded run writes
+//! (`results.json`, `results.csv` and `paths.svg` byte for byte; `timing.json` keeps each shard's wall-clock
+//! figures). `merge` is a word the scenario argument cannot take: a scenario file `merge.toml` is given as its path.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -9,8 +12,43 @@ use firmware::geom::Real;
 use firmware::plan::abit::AbitParams;
 use firmware::plan::tethered::{PlanBounds, TetherSpaceParams};
 use indicatif::{ProgressBar, ProgressStyle};
+use serde::{Deserialize, Serialize};
 
-use crate::campaign::{self, CampaignSpec, PlanningField};
+use crate::campaign::{self, CampaignResult, CampaignSpec, CampaignTiming, PlanningField};
+use crate::shard::{self, Shard, ShardFile};
+
+/// `tetherbot campaign`: run a campaign (or one shard of it), or merge the shards' results.
+#[derive(Debug, Clone, clap::Args)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+pub struct CampaignCli {
+    /// `merge`, or nothing to run a campaign.
+    #[command(subcommand)]
+    pub command: Option<CampaignCommand>,
+    /// The campaign to run.
+    #[command(flatten)]
+    pub run: Option<CampaignArgs>,
+}
+
+/// Subcommands of `campaign`.
+#[derive(Debug, Clone, clap::Subcommand)]
+pub enum CampaignCommand {
+    /// Join the results of the N shards of one campaign (`--shard K/N` runs) into OUT: results.json, results.csv
+    /// and paths.svg as the unsharded run writes them, byte for byte, and timing.json with every shard's timing.
+    Merge(MergeArgs),
+}
+
+/// Arguments of `campaign merge`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct MergeArgs {
+    /// Output directory.
+    pub out: PathBuf,
+    /// Each shard's results.json, or the directory that holds it (its timing.json is read from beside it).
+    #[arg(required = true, num_args = 1..)]
+    pub shards: Vec<PathBuf>,
+    /// Replace an existing OUT/results.json.
+    #[arg(long)]
+    pub force: bool,
+}
 
 /// Arguments of `campaign`.
 #[derive(Debug, Clone, clap::Args)]
@@ -23,9 +61,14 @@ pub struct CampaignArgs {
     /// Planner iterations per trial (default: the scenario's `budgets.planner_iterations`).
     #[arg(long)]
     pub iterations: Option<u32>,
-    /// Seed of the first trial (default: the scenario's `seeds.planner`).
+    /// Seed of the first trial (default: the scenario's `seeds.planner`); trial i uses seed + i, which must not
+    /// pass u64::MAX.
     #[arg(long)]
     pub seed: Option<u64>,
+    /// Run only trials i with i mod N == K (0 <= K < N, N at most the trials; default: all, 0/1); each trial keeps
+    /// its seed, so `campaign merge` of the N shards gives the unsharded run's files.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<Shard>,
     /// Worker threads (default: the machine's cores).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -36,7 +79,8 @@ pub struct CampaignArgs {
     /// Plan on the onboard `map` (filled from the world's signed distance) or the exact world (`truth`).
     #[arg(long, default_value = "map")]
     pub field: String,
-    /// Output directory for results.json, results.csv and paths.svg (default target/campaign/<scenario>).
+    /// Output directory for results.json, results.csv, paths.svg and timing.json (default
+    /// target/campaign/<scenario>, or target/campaign/<scenario>-shard-K-of-N with --shard).
     #[arg(long, short)]
     pub out: Option<PathBuf>,
     /// ABIT* samples per batch (default: OMPL's 100).
@@ -94,6 +138,7 @@ impl CampaignArgs {
             trials: None,
             iterations: None,
             seed: None,
+            shard: None,
             threads: None,
             voxel: None,
             field: "map".into(),
@@ -249,6 +294,8 @@ pub fn spec_from_scenario(sc: &crate::scenario::Scenario, a: &CampaignArgs) -> R
         }
         rover.wheel_mu = mu;
     }
+    let shard = a.shard.unwrap_or(Shard::WHOLE);
+    shard.check_fits(trials, "trials")?;
     let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())).max(1);
     Ok(CampaignSpec {
         name: sc.name.clone(),
@@ -265,6 +312,7 @@ pub fn spec_from_scenario(sc: &crate::scenario::Scenario, a: &CampaignArgs) -> R
         iterations,
         trials,
         first_seed,
+        shard,
         threads,
         field,
         params,
@@ -272,6 +320,124 @@ pub fn spec_from_scenario(sc: &crate::scenario::Scenario, a: &CampaignArgs) -> R
         abit,
         physics_judge: !a.no_physics,
     })
+}
+
+/// What makes two runs the same campaign (recorded as `campaign` in `results.json`): the scenario as given and
+/// the fingerprint of its file's bytes, the resolved counts and seeds, and every option that changes a trial's
+/// result. Not in it: `--threads`, `--out`, `--shard` and `--require-stable` (they change no trial).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CampaignIdentity {
+    /// The scenario argument (a name from `host-sim/scenarios/` or a path).
+    pub scenario: String,
+    /// [`shard::fingerprint`] of the scenario file.
+    pub scenario_fingerprint: String,
+    /// Trials of the whole campaign.
+    pub trials: u32,
+    /// Seed of trial 0.
+    pub first_seed: u64,
+    /// Planner iterations per trial.
+    pub iterations: u32,
+    /// `--field`.
+    pub field: String,
+    /// Planning-map voxel, metres.
+    pub voxel_m: f64,
+    /// `--samples-per-batch`.
+    pub samples_per_batch: Option<u32>,
+    /// `--rewire-factor`.
+    pub rewire_factor: Option<f64>,
+    /// `--copy-fraction`.
+    pub copy_fraction: Option<f64>,
+    /// `--no-twins`.
+    pub no_twins: bool,
+    /// `--no-goal-edges`.
+    pub no_goal_edges: bool,
+    /// `--no-reveal`.
+    pub no_reveal: bool,
+    /// `--catch-fraction`.
+    pub catch_fraction: Option<f64>,
+    /// `--min-margin`.
+    pub min_margin: Option<f64>,
+    /// `--drop-dead-edges`.
+    pub drop_dead_edges: bool,
+    /// `--wheel-mu`.
+    pub wheel_mu: Option<f32>,
+    /// `--yaw-spread-deg`.
+    pub yaw_spread_deg: Option<f32>,
+    /// `--no-physics`.
+    pub no_physics: bool,
+}
+
+impl CampaignIdentity {
+    /// The identity of the campaign `a` asks for, with the counts and seeds `spec` resolved.
+    pub fn of(a: &CampaignArgs, spec: &CampaignSpec, scenario_bytes: &[u8]) -> CampaignIdentity {
+        CampaignIdentity {
+            scenario: a.scenario.clone(),
+            scenario_fingerprint: shard::fingerprint(scenario_bytes),
+            trials: spec.trials,
+            first_seed: spec.first_seed,
+            iterations: spec.iterations,
+            field: a.field.clone(),
+            voxel_m: spec.voxel_m,
+            samples_per_batch: a.samples_per_batch,
+            rewire_factor: a.rewire_factor,
+            copy_fraction: a.copy_fraction,
+            no_twins: a.no_twins,
+            no_goal_edges: a.no_goal_edges,
+            no_reveal: a.no_reveal,
+            catch_fraction: a.catch_fraction,
+            min_margin: a.min_margin,
+            drop_dead_edges: a.drop_dead_edges,
+            wheel_mu: a.wheel_mu,
+            yaw_spread_deg: a.yaw_spread_deg,
+            no_physics: a.no_physics,
+        }
+    }
+
+    /// The arguments that run this campaign again (whole, on the machine's cores).
+    pub fn args(&self) -> CampaignArgs {
+        CampaignArgs {
+            trials: Some(self.trials),
+            iterations: Some(self.iterations),
+            seed: Some(self.first_seed),
+            voxel: Some(self.voxel_m),
+            field: self.field.clone(),
+            samples_per_batch: self.samples_per_batch,
+            rewire_factor: self.rewire_factor,
+            copy_fraction: self.copy_fraction,
+            no_twins: self.no_twins,
+            no_goal_edges: self.no_goal_edges,
+            no_reveal: self.no_reveal,
+            catch_fraction: self.catch_fraction,
+            min_margin: self.min_margin,
+            drop_dead_edges: self.drop_dead_edges,
+            wheel_mu: self.wheel_mu,
+            yaw_spread_deg: self.yaw_spread_deg,
+            no_physics: self.no_physics,
+            ..CampaignArgs::new(&self.scenario)
+        }
+    }
+}
+
+/// `results.json`: the campaign's identity, then its result (a shard's carries `shard`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ResultsFile {
+    /// Which campaign.
+    pub campaign: CampaignIdentity,
+    /// The result.
+    #[serde(flatten)]
+    pub result: CampaignResult,
+}
+
+/// `tetherbot campaign ...` entry point.
+pub fn cli_main(c: &CampaignCli) -> ExitCode {
+    match (&c.command, &c.run) {
+        (Some(CampaignCommand::Merge(m)), _) => match merge(m) {
+            Ok(_) => ExitCode::SUCCESS,
+            Err(e) => super::fail(e),
+        },
+        (None, Some(a)) => main(a),
+        (None, None) => super::fail("campaign needs a SCENARIO (or `campaign merge OUT SHARD...`); see `tetherbot campaign --help`"),
+    }
 }
 
 /// Run the command.
@@ -283,36 +449,122 @@ pub fn main(a: &CampaignArgs) -> ExitCode {
     }
 }
 
+/// Writes a campaign's files into `out`: `results.json`, `results.csv`, `paths.svg` (when drawn) and
+/// `timing.json`.
+fn write_outputs(out: &Path, file: &ResultsFile, timing: &CampaignTiming, svg: Option<&str>) -> Result<(), String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let write = |name: &str, text: &str| {
+        let p = out.join(name);
+        std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))
+    };
+    write("results.json", &serde_json::to_string_pretty(file).map_err(|e| e.to_string())?)?;
+    write("results.csv", &file.result.csv())?;
+    if let Some(svg) = svg {
+        write("paths.svg", svg)?;
+    }
+    write("timing.json", &serde_json::to_string_pretty(timing).map_err(|e| e.to_string())?)?;
+    let names = if svg.is_some() { "results.json,results.csv,paths.svg,timing.json" } else { "results.json,results.csv,timing.json" };
+    println!("wrote {}/{{{names}}}", out.display());
+    Ok(())
+}
+
 fn run(a: &CampaignArgs) -> Result<bool, String> {
-    let sc = crate::scenario::load(&scenario_file(&a.scenario)).map_err(|e| e.to_string())?;
+    let file = scenario_file(&a.scenario);
+    let sc = crate::scenario::load(&file).map_err(|e| e.to_string())?;
     let spec = spec_from_scenario(&sc, a)?;
+    let bytes = std::fs::read(&file).map_err(|e| format!("{}: {e}", file.display()))?;
+    let identity = CampaignIdentity::of(a, &spec, &bytes);
     for note in unused_scenario_fields(&sc) {
         eprintln!("note: {note}");
     }
-    let bar = ProgressBar::new(u64::from(spec.trials));
+    let bar = ProgressBar::new(spec.shard.indices(spec.trials).len() as u64);
     if let Ok(style) = ProgressStyle::with_template("{prefix} [{bar:40}] {pos}/{len} trials, {elapsed} elapsed, eta {eta}") {
         bar.set_style(style.progress_chars("=> "));
     }
-    bar.set_prefix(spec.name.clone());
+    bar.set_prefix(if spec.shard.is_whole() { spec.name.clone() } else { format!("{} shard {}", spec.name, spec.shard) });
     let result = campaign::run(&spec, &|done, _| bar.set_position(done as u64))?;
     bar.finish_and_clear();
+    if !spec.shard.is_whole() {
+        println!("shard {} of the campaign: trials i with i mod {} == {}", spec.shard, spec.shard.count, spec.shard.index);
+    }
     print!("{}", result.table());
     if let Some(p) = paper_row(&result.name) {
         println!("{p}");
     }
     let out = a.out.clone().unwrap_or_else(|| {
         // The name comes from the scenario file: made one safe path component, so it cannot leave target/campaign.
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/campaign").join(crate::scenario::file_safe(&result.name))
+        let mut dir = crate::scenario::file_safe(&result.name);
+        if !spec.shard.is_whole() {
+            dir += &format!("-shard-{}-of-{}", spec.shard.index, spec.shard.count);
+        }
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/campaign").join(dir)
     });
-    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
-    let json = serde_json::to_string_pretty(&result).map_err(|e| e.to_string())?;
-    let write = |name: &str, text: &str| {
-        let p = out.join(name);
-        std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))
+    let svg = campaign::paths_svg(spec.world.as_ref(), &spec, &result);
+    let timing = result.timing();
+    let stable = result.found_stable();
+    write_outputs(&out, &ResultsFile { campaign: identity, result }, &timing, Some(&svg))?;
+    Ok(a.require_stable.is_none_or(|n| stable >= n))
+}
+
+/// `campaign merge`: checks that the files are the N shards of one campaign ([`shard::check_set`],
+/// [`campaign::merge`]), then writes the merged files into `m.out` and prints the table. `paths.svg` needs the
+/// scenario (and its world) again: when it cannot be loaded, or its file changed since the shards ran, the merge
+/// says so and writes the other files. Returns the merged result.
+pub fn merge(m: &MergeArgs) -> Result<CampaignResult, String> {
+    let mut files = Vec::new();
+    for p in &m.shards {
+        let path = if p.is_dir() { p.join("results.json") } else { p.clone() };
+        let f: ResultsFile = shard::read_json(&path, "a campaign shard's results.json")?;
+        let Some(sh) = f.result.shard else {
+            return Err(format!(
+                "{}: the result of a whole campaign (no \"shard\" field), not a shard's: merge the files of --shard K/N runs",
+                path.display()
+            ));
+        };
+        files.push(ShardFile { path, identity: f.campaign, shard: sh, body: f.result });
+    }
+    let files = shard::check_set(files)?;
+    let count = files.len();
+    let results = m.out.join("results.json");
+    let inputs: Vec<&Path> = files.iter().map(|f| f.path.as_path()).collect();
+    super::check_output(&results, m.force, &inputs)?;
+    let identity = files[0].identity.clone();
+    let mut timing = CampaignTiming { runs: Vec::new(), trials: Vec::new() };
+    let mut parts = Vec::new();
+    for f in files {
+        let tp = f.path.with_file_name("timing.json");
+        match shard::read_json::<CampaignTiming>(&tp, "a campaign's timing.json") {
+            Ok(t) => {
+                timing.runs.extend(t.runs);
+                timing.trials.extend(t.trials);
+            }
+            Err(e) => eprintln!("note: no timing for shard {}: {e}", f.shard),
+        }
+        parts.push((f.path.display().to_string(), f.body));
+    }
+    timing.trials.sort_by_key(|t| t.trial);
+    let mut merged = campaign::merge(parts, identity.trials, identity.first_seed)?;
+    merged.apply_timing(&timing);
+    let svg = (|| {
+        let a = identity.args();
+        let file = scenario_file(&a.scenario);
+        let bytes = std::fs::read(&file).map_err(|e| format!("{}: {e}", file.display()))?;
+        if shard::fingerprint(&bytes) != identity.scenario_fingerprint {
+            return Err(format!("{} changed since the shards ran (fingerprint)", file.display()));
+        }
+        let spec = spec_from(&a)?;
+        Ok::<_, String>(campaign::paths_svg(spec.world.as_ref(), &spec, &merged))
+    })();
+    let svg = match svg {
+        Ok(s) => Some(s),
+        Err(e) => {
+            eprintln!("note: paths.svg not drawn: {e}");
+            None
+        }
     };
-    write("results.json", &json)?;
-    write("results.csv", &result.csv())?;
-    write("paths.svg", &campaign::paths_svg(spec.world.as_ref(), &spec, &result))?;
-    println!("wrote {}/{{results.json,results.csv,paths.svg}}", out.display());
-    Ok(a.require_stable.is_none_or(|n| result.found_stable() >= n))
+    println!("merged {count} shards of {} trials", identity.trials);
+    print!("{}", merged.table());
+    let file = ResultsFile { campaign: identity, result: merged };
+    write_outputs(&m.out, &file, &timing, svg.as_deref())?;
+    Ok(file.result)
 }

@@ -4,7 +4,13 @@
 //! With one seed: a live progress line (state, distance, payout, tension, margin), a closing summary, and in the
 //! output directory (`--out`, default `mission-out/`) the field log (`<name>.fieldlog`, or `-o LOG`), its MCAP
 //! export (`<name>.mcap`), the picture (`<name>.svg`) and the JSON summary (`<name>.json`). With `--seeds N`: N
-//! seeds in parallel (in-process) and the campaign table, plus `<name>-campaign.json`.
+//! seeds in parallel (in-process) and the campaign table, plus `<name>-campaign.json` (no wall-clock figures; those
+//! are in `<name>-campaign-timing.json`). `--shard K/N` runs the missions `i` (seed `--seed + i`) with
+//! `i mod N == K` and writes `<name>-campaign-shard-K-of-N.json` (and its `-timing.json`);
+//! `tetherbot mission merge OUT SHARD...` joins the N shards' files into `OUT/<name>-campaign.json`, byte for byte
+//! the unsharded run's ([`crate::shard`], [`crate::mission::campaign::merge`]). Output files are named after the
+//! scenario's `name` made one safe path component ([`crate::scenario::file_safe`]), so a name such as `../x` or
+//! `/etc/x` cannot write outside `--out`.
 //! Without a scenario: the embedded default, `host-sim/scenarios/mission_crater_rocks.toml` (a crater wall with
 //! rocks hidden until seen). The real-terrain Mars Yard descent (`mission_marsyard.toml`) is refused by today's
 //! onboard map (`host-sim/doc/mission.md`, "What the onboard map must observe"), so it is not the default.
@@ -19,7 +25,42 @@ use crate::link::recording::RecordingLink;
 use crate::link::{FlightLink, LinkKind};
 use crate::mission::run::{run_mission, MissionOptions, MissionReport, Verdict};
 use crate::replay::RunConfig;
+use crate::mission::campaign::{CampaignFile, CampaignIdentity, CampaignTiming, MissionRow, MissionTiming};
 use crate::scenario::{self, Scenario};
+use crate::shard::{self, RunTiming, Shard, ShardFile};
+
+/// `tetherbot mission`: run a mission or a mission campaign (or one shard of it), or merge the shards' files.
+#[derive(Debug, Clone, clap::Args)]
+#[command(args_conflicts_with_subcommands = true)]
+pub struct MissionCli {
+    /// `merge`, or nothing to run missions.
+    #[command(subcommand)]
+    pub command: Option<MissionCommand>,
+    /// The mission(s) to run.
+    #[command(flatten)]
+    pub run: MissionArgs,
+}
+
+/// Subcommands of `mission`.
+#[derive(Debug, Clone, clap::Subcommand)]
+pub enum MissionCommand {
+    /// Join the files of the N shards of one mission campaign (`--seeds S --shard K/N` runs) into
+    /// OUT/<name>-campaign.json (byte for byte the unsharded run's) and OUT/<name>-campaign-timing.json.
+    Merge(MissionMergeArgs),
+}
+
+/// Arguments of `mission merge`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct MissionMergeArgs {
+    /// Output directory.
+    pub out: PathBuf,
+    /// Each shard's `<name>-campaign-shard-K-of-N.json` (its `-timing.json` is read from beside it).
+    #[arg(required = true, num_args = 1..)]
+    pub shards: Vec<PathBuf>,
+    /// Replace an existing campaign file in OUT.
+    #[arg(long)]
+    pub force: bool,
+}
 
 /// The embedded default scenario (its terrain path is relative to `host-sim/scenarios/`).
 pub const DEFAULT_SCENARIO: &str = include_str!("../../scenarios/mission_crater_rocks.toml");
@@ -55,9 +96,13 @@ pub struct MissionArgs {
     /// Run this many seeds (a campaign, in parallel, in-process), starting at `--seed`.
     #[arg(long, default_value_t = 1)]
     pub seeds: u32,
-    /// The (first) seed.
+    /// The (first) seed; mission i of a campaign uses seed + i, which must not pass u64::MAX.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Run only the campaign's missions i with i mod N == K (0 <= K < N, N at most --seeds; default: all); each
+    /// keeps its seed, so `mission merge` of the N shards' files gives the unsharded campaign file.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<Shard>,
     /// Tracking mode sent in `MissionConfig`.
     #[arg(long, value_enum, default_value_t = TrackingArg::Closed)]
     pub tracking: TrackingArg,
@@ -127,7 +172,8 @@ pub fn summary(rep: &MissionReport) -> String {
 
 fn one(args: &MissionArgs, sc: &Scenario) -> Result<(MissionReport, Vec<PathBuf>), Box<dyn core::error::Error>> {
     std::fs::create_dir_all(&args.out).map_err(|e| format!("cannot create {}: {e}", args.out.display()))?;
-    let log_path = args.log.clone().unwrap_or_else(|| args.out.join(format!("{}.fieldlog", sc.name)));
+    let name = sc.file_safe_name();
+    let log_path = args.log.clone().unwrap_or_else(|| args.out.join(format!("{name}.fieldlog")));
     let opts = MissionOptions { seed: args.seed, tracking: args.tracking.into(), noiseless: false, live: !args.quiet };
     sc.map_config()?;
     let config = RunConfig {
@@ -178,49 +224,194 @@ fn one(args: &MissionArgs, sc: &Scenario) -> Result<(MissionReport, Vec<PathBuf>
     };
     let mut written = vec![log_path.clone()];
     let log = fieldlog::read_file(&log_path)?;
-    let mcap_path = args.out.join(format!("{}.mcap", sc.name));
+    let mcap_path = args.out.join(format!("{name}.mcap"));
     let f = std::fs::File::create(&mcap_path).map_err(|e| format!("cannot create {}: {e}", mcap_path.display()))?;
     crate::mcap_export::export(&log, std::io::BufWriter::new(f))?;
     written.push(mcap_path);
     let world = crate::mission::run::truth_for(sc, &crate::mission::run::mission_configure(sc, &opts), &sc.mission)?;
-    let svg_path = args.out.join(format!("{}.svg", sc.name));
+    let svg_path = args.out.join(format!("{name}.svg"));
     std::fs::write(&svg_path, crate::mission::svg::render(&rep, &world.world.truth()))?;
     written.push(svg_path);
-    let json_path = args.out.join(format!("{}.json", sc.name));
+    let json_path = args.out.join(format!("{name}.json"));
     std::fs::write(&json_path, serde_json::to_string_pretty(&rep)?)?;
     written.push(json_path);
     Ok((rep, written))
 }
 
-fn campaign(args: &MissionArgs, sc: &Scenario) -> Result<Vec<MissionReport>, Box<dyn core::error::Error>> {
+/// The identity of the campaign `args` asks for on `sc`.
+fn identity(args: &MissionArgs, sc: &Scenario) -> Result<CampaignIdentity, String> {
+    let (scenario, text) = match &args.scenario {
+        Some(p) => (p.display().to_string(), std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()))?),
+        None => ("(default)".to_string(), DEFAULT_SCENARIO.as_bytes().to_vec()),
+    };
+    Ok(CampaignIdentity {
+        scenario,
+        scenario_name: sc.name.clone(),
+        scenario_fingerprint: shard::fingerprint(&text),
+        seeds: args.seeds,
+        first_seed: args.seed,
+        tracking: format!("{:?}", Tracking::from(args.tracking)),
+    })
+}
+
+/// The campaign file's path for `name` (the scenario's name, made one safe path component) and `shard`, and its
+/// timing file's.
+pub fn campaign_paths(out: &Path, name: &str, shard: Option<Shard>) -> (PathBuf, PathBuf) {
+    let stem = match shard {
+        Some(s) => format!("{}-campaign-shard-{}-of-{}", scenario::file_safe(name), s.index, s.count),
+        None => format!("{}-campaign", scenario::file_safe(name)),
+    };
+    (out.join(format!("{stem}.json")), out.join(format!("{stem}-timing.json")))
+}
+
+/// One mission's line of a campaign's listing.
+fn row_line(r: &MissionRow) -> String {
+    let f = |x: Option<f64>, w: usize, p: usize| x.map_or(format!("{:>w$}", "-"), |v| format!("{v:w$.p$}"));
+    format!(
+        "  seed {:>4}: {:<28} {} m, {} replans, min margin {} N, goal error {} m",
+        r.seed,
+        r.verdict,
+        f(r.distance_m, 6, 2),
+        r.replans,
+        f(r.min_true_margin_n, 7, 1),
+        f(r.goal_error_m, 0, 2)
+    )
+}
+
+/// Whether a campaign file holds a fall, a false arrival or a mission that could not run.
+fn campaign_failed(f: &CampaignFile) -> bool {
+    !f.failed.is_empty() || f.missions.iter().any(|r| r.verdict == Verdict::Fell.name() || r.verdict == Verdict::FalseArrival.name())
+}
+
+fn write_campaign(json: &Path, timing_path: &Path, file: &CampaignFile, timing: &CampaignTiming) -> Result<(), String> {
+    let write = |p: &Path, text: Result<String, serde_json::Error>| {
+        std::fs::write(p, text.map_err(|e| e.to_string())?).map_err(|e| format!("cannot write {}: {e}", p.display()))
+    };
+    write(json, serde_json::to_string_pretty(file))?;
+    write(timing_path, serde_json::to_string_pretty(timing))?;
+    println!("  wrote {}", json.display());
+    println!("  wrote {}", timing_path.display());
+    Ok(())
+}
+
+/// Runs the campaign (or its shard) and writes its files; `Ok(true)` when no mission fell, arrived falsely or
+/// could not run.
+fn campaign(args: &MissionArgs, sc: &Scenario) -> Result<bool, String> {
     if args.link != LinkKind::Inproc {
         return Err("a campaign (--seeds > 1) runs in-process; run one seed at a time on the board".into());
     }
-    let seeds: Vec<u64> = (0..u64::from(args.seeds)).map(|k| args.seed + k).collect();
+    let shard = args.shard.unwrap_or(Shard::WHOLE);
+    let seeds = crate::mission::campaign::shard_seeds(args.seed, args.seeds, shard)?;
+    let identity = identity(args, sc)?;
+    std::fs::create_dir_all(&args.out).map_err(|e| format!("cannot create {}: {e}", args.out.display()))?;
     let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let t0 = std::time::Instant::now();
     let bar = indicatif::ProgressBar::new(seeds.len() as u64);
     let tick = |_: &MissionReport| bar.inc(1);
     let results = crate::mission::campaign::run_seeds(sc, &seeds, args.tracking.into(), threads, &tick);
     bar.finish_and_clear();
     let mut reports = Vec::new();
+    let mut failed = Vec::new();
     for (seed, r) in seeds.iter().zip(results) {
         match r {
             Ok(rep) => reports.push(rep),
-            Err(e) => eprintln!("seed {seed}: could not run: {e}"),
+            Err(e) => {
+                eprintln!("seed {seed}: could not run: {e}");
+                failed.push(crate::mission::campaign::FailedMission { seed: *seed, error: e });
+            }
         }
     }
-    Ok(reports)
+    let shard = (!shard.is_whole()).then_some(shard);
+    let file = CampaignFile { campaign: identity, shard, missions: reports.iter().map(MissionRow::of).collect(), failed };
+    let timing = CampaignTiming {
+        runs: vec![RunTiming { shard, threads, wall_s: t0.elapsed().as_secs_f64(), map_build_s: None }],
+        missions: reports.iter().map(|r| MissionTiming { seed: r.seed, host_s: r.host_s }).collect(),
+    };
+    for r in &file.missions {
+        println!("{}", row_line(r));
+    }
+    if let Some(s) = shard {
+        println!("shard {s} of the campaign: missions i (seed {} + i) with i mod {} == {}", args.seed, s.count, s.index);
+    }
+    print!("{}", crate::mission::campaign::table(&sc.name, &reports));
+    let (json, timing_path) = campaign_paths(&args.out, &sc.name, shard);
+    write_campaign(&json, &timing_path, &file, &timing)?;
+    Ok(!campaign_failed(&file) && reports.len() == seeds.len())
+}
+
+/// `mission merge`: checks that the files are the N shards of one mission campaign ([`shard::check_set`]), joins
+/// them ([`crate::mission::campaign::merge`]), writes `OUT/<name>-campaign.json` and its timing file, and prints
+/// the missions. Returns the merged file.
+pub fn merge(m: &MissionMergeArgs) -> Result<CampaignFile, String> {
+    let mut files = Vec::new();
+    for path in &m.shards {
+        let f: CampaignFile = shard::read_json(path, "a mission campaign shard's <name>-campaign-shard-K-of-N.json")?;
+        let Some(sh) = f.shard else {
+            return Err(format!(
+                "{}: the file of a whole campaign (no \"shard\" field), not a shard's: merge the files of --shard K/N runs",
+                path.display()
+            ));
+        };
+        files.push(ShardFile { path: path.clone(), identity: f.campaign.clone(), shard: sh, body: f });
+    }
+    let files = shard::check_set(files)?;
+    let count = files.len();
+    let (json, timing_path) = campaign_paths(&m.out, &files[0].identity.scenario_name, None);
+    let inputs: Vec<&Path> = files.iter().map(|f| f.path.as_path()).collect();
+    super::check_output(&json, m.force, &inputs)?;
+    let mut timing = CampaignTiming::default();
+    for f in &files {
+        let tp = PathBuf::from(f.path.to_string_lossy().trim_end_matches(".json").to_string() + "-timing.json");
+        match shard::read_json::<CampaignTiming>(&tp, "a mission campaign's timing file") {
+            Ok(t) => {
+                timing.runs.extend(t.runs);
+                timing.missions.extend(t.missions);
+            }
+            Err(e) => eprintln!("note: no timing for shard {}: {e}", f.shard),
+        }
+    }
+    timing.missions.sort_by_key(|t| t.seed);
+    let merged = crate::mission::campaign::merge(files)?;
+    std::fs::create_dir_all(&m.out).map_err(|e| format!("cannot create {}: {e}", m.out.display()))?;
+    for r in &merged.missions {
+        println!("{}", row_line(r));
+    }
+    for f in &merged.failed {
+        println!("  seed {:>4}: could not run: {}", f.seed, f.error);
+    }
+    let arrived = merged.missions.iter().filter(|r| r.verdict == Verdict::Arrived.name()).count();
+    let fell = merged.missions.iter().filter(|r| r.verdict == Verdict::Fell.name()).count();
+    println!(
+        "merged {count} shards of mission campaign {}: {} missions, {arrived} arrived, {fell} fell, {} could not run",
+        merged.campaign.scenario_name,
+        merged.campaign.seeds,
+        merged.failed.len()
+    );
+    write_campaign(&json, &timing_path, &merged, &timing)?;
+    Ok(merged)
+}
+
+/// `tetherbot mission ...` entry point.
+pub fn cli_main(c: &MissionCli) -> ExitCode {
+    match &c.command {
+        Some(MissionCommand::Merge(m)) => match merge(m) {
+            Ok(f) if campaign_failed(&f) => ExitCode::from(super::EXIT_FAILED),
+            Ok(_) => ExitCode::SUCCESS,
+            Err(e) => super::fail(e),
+        },
+        None => main(&c.run),
+    }
 }
 
 /// `mission` entry point: exit 0 when every mission arrived or stopped safe with a reason and none fell, 1 on a
-/// fall or a false arrival, 2 when it could not run.
+/// fall, a false arrival or a campaign's mission that could not run, 2 when it could not run at all.
 pub fn main(args: &MissionArgs) -> ExitCode {
     let sc = match load_scenario(args.scenario.as_deref()) {
         Ok(s) => s,
         Err(e) => return super::fail(e),
     };
     let bad = |v: &Verdict| matches!(v, Verdict::Fell | Verdict::FalseArrival);
-    if args.seeds <= 1 {
+    if args.seeds <= 1 && args.shard.is_none() {
         match one(args, &sc) {
             Ok((rep, written)) => {
                 print!("{}", summary(&rep));
@@ -237,45 +428,38 @@ pub fn main(args: &MissionArgs) -> ExitCode {
         }
     } else {
         match campaign(args, &sc) {
-            Ok(reports) => {
-                for r in &reports {
-                    println!(
-                        "  seed {:>4}: {:<28} {:6.2} m, {} replans, min margin {:7.1} N, goal error {:.2} m",
-                        r.seed,
-                        r.verdict.name(),
-                        r.distance_m,
-                        r.replans,
-                        r.min_true_margin_n,
-                        r.goal_error_m
-                    );
-                }
-                print!("{}", crate::mission::campaign::table(&sc.name, &reports));
-                let _ = std::fs::create_dir_all(&args.out);
-                let path = args.out.join(format!("{}-campaign.json", sc.name));
-                let rows: Vec<serde_json::Value> = reports
-                    .iter()
-                    .map(|r| {
-                        serde_json::json!({
-                            "seed": r.seed, "verdict": r.verdict.name(), "distance_m": r.distance_m,
-                            "replans": r.replans, "min_true_margin_n": r.min_true_margin_n,
-                            "max_tension_n": r.max_tension_n, "max_payout_m": r.max_payout_m,
-                            "goal_error_m": r.goal_error_m, "mean_cross_track_m": r.mean_cross_track_m,
-                            "max_cross_track_m": r.max_cross_track_m, "plans": r.plans.len(),
-                            "map_blocks": r.map_blocks, "host_s": r.host_s,
-                        })
-                    })
-                    .collect();
-                if let Ok(text) = serde_json::to_string_pretty(&rows) {
-                    let _ = std::fs::write(&path, text);
-                    println!("  wrote {}", path.display());
-                }
-                if reports.iter().any(|r| bad(&r.verdict)) || reports.len() < args.seeds as usize {
-                    ExitCode::from(super::EXIT_FAILED)
-                } else {
-                    ExitCode::SUCCESS
-                }
-            }
+            Ok(true) => ExitCode::SUCCESS,
+            Ok(false) => ExitCode::from(super::EXIT_FAILED),
             Err(e) => super::fail(e),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_scenario_name_cannot_put_campaign_files_outside_the_output_directory() {
+        let out = Path::new("/tmp/mission-out");
+        for name in ["../../escape", "/etc/passwd", "..", "a/b"] {
+            for shard in [None, Some(Shard { index: 1, count: 4 })] {
+                let (json, timing) = campaign_paths(out, name, shard);
+                for p in [&json, &timing] {
+                    assert_eq!(p.parent(), Some(out), "{name:?}: {}", p.display());
+                    assert!(!p.components().any(|c| c == std::path::Component::ParentDir), "{name:?}: {}", p.display());
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn campaign_seeds_that_pass_u64_max_are_refused_not_wrapped() {
+        use crate::mission::campaign::shard_seeds;
+        let e = shard_seeds(u64::MAX, 2, Shard::WHOLE).expect_err("wraps");
+        assert!(e.contains("passes u64::MAX") && e.contains(&format!("at most {}", u64::MAX - 1)), "{e}");
+        assert_eq!(shard_seeds(u64::MAX - 1, 2, Shard::WHOLE), Ok(vec![u64::MAX - 1, u64::MAX]));
+        assert_eq!(shard_seeds(10, 5, Shard { index: 1, count: 2 }), Ok(vec![11, 13]));
+        assert!(shard_seeds(10, 2, Shard { index: 0, count: 3 }).is_err_and(|e| e.contains("leave a shard empty")));
     }
 }

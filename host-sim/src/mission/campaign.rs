@@ -6,6 +6,12 @@
 //! **Autonomy by distance** (Paton et al. VII: 44 of 46 m): the distance the flight software drove, over that
 //! distance plus, for every mission that did not arrive, the straight-line distance from where it stopped to the
 //! goal (what an operator would still have had to drive).
+//!
+//! **The campaign file** (`<name>-campaign.json`, [`CampaignFile`]): the campaign's identity, the shard (when the
+//! run was one, [`crate::shard`]), one row per mission in seed order ([`MissionRow`]) and the seeds that could not
+//! run. It holds nothing measured in wall-clock time (the host time of each mission is in
+//! `<name>-campaign-timing.json`, [`CampaignTiming`]), so the same campaign gives the same bytes on any machine,
+//! thread count and split; [`merge`] joins the shards' files into the unsharded run's.
 
 use core::sync::atomic::{AtomicUsize, Ordering};
 use std::collections::BTreeMap;
@@ -13,9 +19,11 @@ use core::fmt::Write as _;
 use std::sync::Mutex;
 
 use firmware::protocol::Tracking;
+use serde::{Deserialize, Serialize};
 
 use super::run::{run_mission, MissionOptions, MissionReport, Verdict};
 use crate::scenario::Scenario;
+use crate::shard::{RunTiming, Shard, ShardFile};
 
 /// Stack of a mission worker thread (the flight software's storage is built before it is boxed).
 const WORKER_STACK: usize = 64 << 20;
@@ -105,4 +113,152 @@ pub fn table(name: &str, reports: &[MissionReport]) -> String {
     );
     let _ = writeln!(s, "  link time per mission        {:.0} s (mean); host time {:.1} s (mean)", mean(&|r| r.link_s), mean(&|r| r.host_s));
     s
+}
+
+/// What makes two runs the same mission campaign: the scenario as given (a path, or the embedded default) and
+/// the fingerprint of its text, the seeds and the tracking mode.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CampaignIdentity {
+    /// The scenario argument (`(default)` for the embedded crater-wall descent).
+    pub scenario: String,
+    /// The scenario's `name`.
+    pub scenario_name: String,
+    /// [`crate::shard::fingerprint`] of the scenario's text.
+    pub scenario_fingerprint: String,
+    /// Missions of the whole campaign.
+    pub seeds: u32,
+    /// Seed of mission 0 (mission `i` uses `first_seed + i`).
+    pub first_seed: u64,
+    /// Tracking mode.
+    pub tracking: String,
+}
+
+/// One mission of a campaign file. Non-finite figures (a margin never measured) are `null`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MissionRow {
+    /// Seed.
+    pub seed: u64,
+    /// [`Verdict::name`].
+    pub verdict: String,
+    /// Distance driven (truth), metres.
+    pub distance_m: Option<f64>,
+    /// Replans.
+    pub replans: u32,
+    /// Smallest true stability margin on the path, newtons.
+    pub min_true_margin_n: Option<f64>,
+    /// Largest tension, newtons.
+    pub max_tension_n: Option<f64>,
+    /// Largest payout, metres.
+    pub max_payout_m: Option<f64>,
+    /// Distance from the goal at the end (truth), metres.
+    pub goal_error_m: Option<f64>,
+    /// Mean cross-track from the plan, metres.
+    pub mean_cross_track_m: Option<f64>,
+    /// Largest cross-track from the plan, metres.
+    pub max_cross_track_m: Option<f64>,
+    /// Plans made.
+    pub plans: usize,
+    /// Onboard map high-water, blocks.
+    pub map_blocks: u32,
+}
+
+impl MissionRow {
+    /// The row of `r`.
+    pub fn of(r: &MissionReport) -> MissionRow {
+        let fin = |x: f64| x.is_finite().then_some(x);
+        MissionRow {
+            seed: r.seed,
+            verdict: r.verdict.name(),
+            distance_m: fin(r.distance_m),
+            replans: r.replans,
+            min_true_margin_n: fin(r.min_true_margin_n),
+            max_tension_n: fin(r.max_tension_n),
+            max_payout_m: fin(r.max_payout_m),
+            goal_error_m: fin(r.goal_error_m),
+            mean_cross_track_m: fin(r.mean_cross_track_m),
+            max_cross_track_m: fin(r.max_cross_track_m),
+            plans: r.plans.len(),
+            map_blocks: r.map_blocks,
+        }
+    }
+}
+
+/// A seed whose mission could not run, and why.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FailedMission {
+    /// Seed.
+    pub seed: u64,
+    /// The error.
+    pub error: String,
+}
+
+/// `<name>-campaign.json` (module docs).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct CampaignFile {
+    /// Which campaign.
+    pub campaign: CampaignIdentity,
+    /// The part of the campaign (absent for the whole campaign, and so in a merge's file).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<Shard>,
+    /// The missions that ran, in seed order.
+    pub missions: Vec<MissionRow>,
+    /// The seeds that could not run, in seed order.
+    pub failed: Vec<FailedMission>,
+}
+
+/// `<name>-campaign-timing.json`: the wall-clock side of a mission campaign.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct CampaignTiming {
+    /// One entry per run (the unsharded run, or each shard of a merge).
+    pub runs: Vec<RunTiming>,
+    /// Host seconds per mission, in seed order.
+    pub missions: Vec<MissionTiming>,
+}
+
+/// The host time of one mission.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MissionTiming {
+    /// Seed.
+    pub seed: u64,
+    /// Host seconds.
+    pub host_s: f64,
+}
+
+/// The seeds of `shard` of a campaign of `seeds` missions from `first_seed` (mission `i` uses `first_seed + i`),
+/// or the reason they pass `u64::MAX`.
+pub fn shard_seeds(first_seed: u64, seeds: u32, shard: Shard) -> Result<Vec<u64>, String> {
+    if first_seed.checked_add(u64::from(seeds.saturating_sub(1))).is_none() {
+        return Err(format!(
+            "--seed {first_seed} with --seeds {seeds}: mission i uses seed {first_seed} + i, which passes u64::MAX; use a seed of at most {}",
+            u64::MAX - u64::from(seeds.saturating_sub(1))
+        ));
+    }
+    shard.check_fits(seeds, "missions")?;
+    Ok(shard.indices(seeds).into_iter().map(|i| first_seed + u64::from(i)).collect())
+}
+
+/// Joins the files of the N shards of one campaign, already checked to be one complete set
+/// ([`crate::shard::check_set`], in shard order): the rows and failures in seed order, the shard mark removed.
+/// Refuses a shard whose seeds are not exactly its own (a file edited by hand or cut short).
+pub fn merge(shards: Vec<ShardFile<CampaignIdentity, CampaignFile>>) -> Result<CampaignFile, String> {
+    let Some(first) = shards.first() else { return Err("no shard files given".into()) };
+    let campaign = first.identity.clone();
+    let (mut missions, mut failed) = (Vec::new(), Vec::new());
+    for f in shards {
+        let want = shard_seeds(campaign.first_seed, campaign.seeds, f.shard)?;
+        let mut got: Vec<u64> = f.body.missions.iter().map(|r| r.seed).chain(f.body.failed.iter().map(|r| r.seed)).collect();
+        got.sort_unstable();
+        if got != want {
+            return Err(format!(
+                "{}: shard {} should hold seeds {want:?}, it holds {got:?} (an incomplete or edited file)",
+                f.path.display(),
+                f.shard
+            ));
+        }
+        missions.extend(f.body.missions);
+        failed.extend(f.body.failed);
+    }
+    missions.sort_by_key(|r| r.seed);
+    failed.sort_by_key(|r| r.seed);
+    Ok(CampaignFile { campaign, shard: None, missions, failed })
 }

@@ -15,7 +15,7 @@
 //! **stable** iff every pose holds. A pose that cannot be placed or a tether that cannot be computed is a failure
 //! with its reason (unsafe, never skipped).
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::{BoomSetting, GroundPose, HoldOutcome, PhysicsJudge, TetherSpec};
 use crate::truth::taut::{TautTether, WrapEdges, SHORTEST_SAMPLE_M};
@@ -36,7 +36,7 @@ pub struct PathPose {
 }
 
 /// The physics judge's verdict on a path.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PathJudgement {
     /// Every pose holds.
     pub stable: bool,
