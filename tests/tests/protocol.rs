@@ -166,6 +166,10 @@ fn one_of_every_kind() -> Vec<Message> {
                 pool_errors: 31,
                 esdf_budget_exhausted: 32,
             },
+            seq_gaps: 36,
+            seq_late: 37,
+            seq_resyncs: 38,
+            cycle: CycleStats { budget_us: 39, max_step_us: 40, period_max_step_us: 41, slips: 42 },
         }),
         Message::Log(Log {
             level: LogLevel::Warn,
