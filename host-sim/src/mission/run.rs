@@ -660,7 +660,7 @@ pub fn run_mission(link: impl FlightLink, sc: &Scenario, opts: &MissionOptions) 
     sim.snapshot_tether();
     sim.trace();
     if sim.m.overview_scan {
-        let tiles: Vec<(RangeSensorParams, _)> = overview_sensor(sim.truth.root, sim.sc.goal.position, &sim.sc.sensor, &sim.m);
+        let tiles: Vec<(RangeSensorParams, _)> = overview_sensor(sim.truth.root, sim.sc.goal.position, sim.sc.rover.start, &sim.sc.sensor, &sim.m);
         for (params, pose) in tiles {
             let view = sim.truth.world.sensed();
             let scan = overview_scan(&view, &params, &pose, &mut sim.rng);
