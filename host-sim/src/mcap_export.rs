@@ -36,11 +36,11 @@ use std::sync::Arc;
 
 use firmware::protocol::{self, Deframer, LogLevel, Message, Waypoint};
 use foxglove::messages::{
-    log::Level, packed_element_field::NumericType, Color, CubePrimitive, FrameTransform, FrameTransforms,
-    LinePrimitive, Log, PackedElementField, Point3, PointCloud, Pose, Quaternion, SceneEntity, SceneUpdate,
-    SpherePrimitive, Timestamp, TriangleListPrimitive, Vector3,
+    log::Level, packed_element_field::NumericType, Color, CubePrimitive, FrameTransform,
+    FrameTransforms, LinePrimitive, Log, PackedElementField, Point3, PointCloud, Pose, Quaternion,
+    SceneEntity, SceneUpdate, SpherePrimitive, Timestamp, TriangleListPrimitive, Vector3,
 };
-use foxglove::{Channel, Context, FoxgloveError, RawChannel, Schema};
+use foxglove::{Channel, Context, FoxgloveError, PartialMetadata, RawChannel, Schema};
 
 use crate::fieldlog::{Direction, FieldLog};
 use crate::link::{FlightLink, LinkError};
@@ -138,9 +138,16 @@ pub fn message_json(m: &Message) -> serde_json::Value {
 
 /// A JSON channel whose messages are flat objects of the named fields (a JSON schema, so the Plot panel offers
 /// them and a reader can validate them).
-fn series_channel(ctx: &Arc<Context>, topic: &str, name: &str, fields: &[(&str, &str)]) -> Result<Arc<RawChannel>, FoxgloveError> {
-    let props: serde_json::Map<String, serde_json::Value> =
-        fields.iter().map(|(f, t)| (f.to_string(), serde_json::json!({ "type": t }))).collect();
+fn series_channel(
+    ctx: &Arc<Context>,
+    topic: &str,
+    name: &str,
+    fields: &[(&str, &str)],
+) -> Result<Arc<RawChannel>, FoxgloveError> {
+    let props: serde_json::Map<String, serde_json::Value> = fields
+        .iter()
+        .map(|(f, t)| (f.to_string(), serde_json::json!({ "type": t })))
+        .collect();
     let required: Vec<&str> = fields.iter().map(|(f, _)| *f).collect();
     let schema = serde_json::json!({
         "title": name,
@@ -151,8 +158,16 @@ fn series_channel(ctx: &Arc<Context>, topic: &str, name: &str, fields: &[(&str, 
     });
     ctx.channel_builder(topic)
         .message_encoding("json")
-        .schema(Schema::new(name, "jsonschema", serde_json::to_vec(&schema).unwrap_or_default()))
+        .schema(Schema::new(
+            name,
+            "jsonschema",
+            serde_json::to_vec(&schema).unwrap_or_default(),
+        ))
         .build_raw()
+}
+
+fn log_raw(ch: &RawChannel, bytes: &[u8], t_ns: u64) {
+    ch.log_with_meta(bytes, PartialMetadata::with_log_time(t_ns));
 }
 
 fn stamp(t_ns: u64) -> Timestamp {
@@ -164,11 +179,19 @@ fn v3(x: f64, y: f64, z: f64) -> Vector3 {
 }
 
 fn p3(p: [f64; 3]) -> Point3 {
-    Point3 { x: p[0], y: p[1], z: p[2] }
+    Point3 {
+        x: p[0],
+        y: p[1],
+        z: p[2],
+    }
 }
 
 fn wire_p3(p: &protocol::Point3) -> Point3 {
-    Point3 { x: f64::from(p.x), y: f64::from(p.y), z: f64::from(p.z) }
+    Point3 {
+        x: f64::from(p.x),
+        y: f64::from(p.y),
+        z: f64::from(p.z),
+    }
 }
 
 fn rgba(r: f64, g: f64, b: f64, a: f64) -> Color {
@@ -179,16 +202,33 @@ fn wire_pose(p: &protocol::Pose) -> Pose {
     let (t, q) = (&p.position, &p.orientation);
     Pose {
         position: Some(v3(f64::from(t.x), f64::from(t.y), f64::from(t.z))),
-        orientation: Some(Quaternion { x: f64::from(q.x), y: f64::from(q.y), z: f64::from(q.z), w: f64::from(q.w) }),
+        orientation: Some(Quaternion {
+            x: f64::from(q.x),
+            y: f64::from(q.y),
+            z: f64::from(q.z),
+            w: f64::from(q.w),
+        }),
     }
 }
 
 fn at(p: [f64; 3]) -> Pose {
-    Pose { position: Some(v3(p[0], p[1], p[2])), orientation: Some(Quaternion { x: 0.0, y: 0.0, z: 0.0, w: 1.0 }) }
+    Pose {
+        position: Some(v3(p[0], p[1], p[2])),
+        orientation: Some(Quaternion {
+            x: 0.0,
+            y: 0.0,
+            z: 0.0,
+            w: 1.0,
+        }),
+    }
 }
 
 fn sphere(p: [f64; 3], diameter: f64, color: Color) -> SpherePrimitive {
-    SpherePrimitive { pose: Some(at(p)), size: Some(v3(diameter, diameter, diameter)), color: Some(color) }
+    SpherePrimitive {
+        pose: Some(at(p)),
+        size: Some(v3(diameter, diameter, diameter)),
+        color: Some(color),
+    }
 }
 
 fn line(points: Vec<Point3>, thickness: f64, color: Color) -> LinePrimitive {
@@ -205,11 +245,21 @@ fn line(points: Vec<Point3>, thickness: f64, color: Color) -> LinePrimitive {
 }
 
 fn entity(t_ns: u64, id: String) -> SceneEntity {
-    SceneEntity { timestamp: Some(stamp(t_ns)), frame_id: frame::WORLD.into(), id, ..Default::default() }
+    SceneEntity {
+        timestamp: Some(stamp(t_ns)),
+        frame_id: frame::WORLD.into(),
+        id,
+        ..Default::default()
+    }
 }
 
 /// Colours of successive plans (the first planned, the rest replanned).
-const PLAN_COLOURS: [(f64, f64, f64); 4] = [(0.1, 0.8, 0.2), (0.1, 0.6, 0.9), (0.9, 0.5, 0.1), (0.8, 0.2, 0.8)];
+const PLAN_COLOURS: [(f64, f64, f64); 4] = [
+    (0.1, 0.8, 0.2),
+    (0.1, 0.6, 0.9),
+    (0.9, 0.5, 0.1),
+    (0.8, 0.2, 0.8),
+];
 /// Diameter of anchor spheres, metres.
 const ANCHOR_D: f64 = 0.15;
 /// Height-field samples of the terrain mesh per side at most (the mesh's vertices are this squared).
@@ -251,7 +301,11 @@ pub struct Scene {
 impl Scene {
     /// Makes the scene's channels in `ctx` (its sinks, an MCAP writer or a WebSocket server, receive them).
     pub fn new(ctx: &Arc<Context>) -> Result<Self, FoxgloveError> {
-        let raw = |t: &str| ctx.channel_builder(t).message_encoding("tetherbot-wire-v1").build_raw();
+        let raw = |t: &str| {
+            ctx.channel_builder(t)
+                .message_encoding("tetherbot-wire-v1")
+                .build_raw()
+        };
         let json = |t: &str| ctx.channel_builder(t).message_encoding("json").build_raw();
         Ok(Self {
             raw: [raw(topic::RAW_H2F)?, raw(topic::RAW_F2H)?],
@@ -264,7 +318,11 @@ impl Scene {
                 ctx,
                 topic::TETHER,
                 "tetherbot.TetherReading",
-                &[("payout_m", "number"), ("tension_n", "number"), ("boom_angle_rad", "number")],
+                &[
+                    ("payout_m", "number"),
+                    ("tension_n", "number"),
+                    ("boom_angle_rad", "number"),
+                ],
             )?,
             status: series_channel(
                 ctx,
@@ -301,7 +359,12 @@ impl Scene {
                 ctx,
                 topic::TRUTH_SERIES,
                 "tetherbot.Truth",
-                &[("margin_n", "number"), ("tension_n", "number"), ("payout_m", "number"), ("driven_m", "number")],
+                &[
+                    ("margin_n", "number"),
+                    ("tension_n", "number"),
+                    ("payout_m", "number"),
+                    ("driven_m", "number"),
+                ],
             )?,
             log: ctx.channel_builder(topic::LOG).build(),
             deframers: [Deframer::new(), Deframer::new()],
@@ -334,14 +397,16 @@ impl Scene {
             Direction::FlightToHost => 1,
         };
         let t_ns = t_us.saturating_mul(1000);
-        self.raw[side].log_with_time(bytes, t_ns);
+        log_raw(&self.raw[side], bytes, t_ns);
         self.stats.raw_records += 1;
         let mut rest = bytes;
         while !rest.is_empty() {
             let (n, ev) = self.deframers[side].push(rest);
             rest = rest.get(n..).unwrap_or_default();
             let Some(ev) = ev else { continue };
-            let decoded = ev.map_err(protocol::NackReason::from).and_then(protocol::decode_frame);
+            let decoded = ev
+                .map_err(protocol::NackReason::from)
+                .and_then(protocol::decode_frame);
             let value = match &decoded {
                 Ok((h, m)) => {
                     serde_json::json!({"seq": h.seq, "kind": format!("{:?}", m.kind()), "body": message_json(m)})
@@ -351,7 +416,11 @@ impl Scene {
                     serde_json::json!({"error": format!("{reason:?}")})
                 }
             };
-            self.frames[side].log_with_time(&serde_json::to_vec(&value).unwrap_or_default(), t_ns);
+            log_raw(
+                &self.frames[side],
+                &serde_json::to_vec(&value).unwrap_or_default(),
+                t_ns,
+            );
             self.stats.frames += 1;
             if let Ok((_, m)) = decoded {
                 self.message(t_ns, &m);
@@ -360,7 +429,7 @@ impl Scene {
     }
 
     fn json(ch: &RawChannel, v: serde_json::Value, t_ns: u64) {
-        ch.log_with_time(&serde_json::to_vec(&v).unwrap_or_default(), t_ns);
+        log_raw(ch, &serde_json::to_vec(&v).unwrap_or_default(), t_ns);
     }
 
     fn transform(&self, t_ns: u64, child: &str, pose: &Pose) {
@@ -371,7 +440,12 @@ impl Scene {
             translation: pose.position,
             rotation: pose.orientation,
         };
-        self.tf.log_with_time(&FrameTransforms { transforms: vec![tf] }, t_ns);
+        self.tf.log_with_time(
+            &FrameTransforms {
+                transforms: vec![tf],
+            },
+            t_ns,
+        );
     }
 
     /// One decoded message.
@@ -383,14 +457,30 @@ impl Scene {
                 self.root = Some(root);
                 let mut e = entity(t_ns, "root_anchor".into());
                 e.spheres.push(sphere(root, 0.3, rgba(0.9, 0.1, 0.1, 1.0)));
-                self.wire.log_with_time(&SceneUpdate { deletions: vec![], entities: vec![e] }, t_ns);
+                self.wire.log_with_time(
+                    &SceneUpdate {
+                        deletions: vec![],
+                        entities: vec![e],
+                    },
+                    t_ns,
+                );
             }
             Message::GoalRequest(g) => {
                 let p = &g.position;
                 let mut e = entity(t_ns, "goal".into());
                 let d = 2.0 * f64::from(g.tolerance_m);
-                e.spheres.push(sphere([f64::from(p.x), f64::from(p.y), f64::from(p.z)], d, rgba(1.0, 0.85, 0.0, 0.5)));
-                self.wire.log_with_time(&SceneUpdate { deletions: vec![], entities: vec![e] }, t_ns);
+                e.spheres.push(sphere(
+                    [f64::from(p.x), f64::from(p.y), f64::from(p.z)],
+                    d,
+                    rgba(1.0, 0.85, 0.0, 0.5),
+                ));
+                self.wire.log_with_time(
+                    &SceneUpdate {
+                        deletions: vec![],
+                        entities: vec![e],
+                    },
+                    t_ns,
+                );
             }
             Message::SensorChunk(c) => self.chunk(t_ns, c),
             Message::MotionReport(r) => {
@@ -399,7 +489,8 @@ impl Scene {
                 self.stats.poses += 1;
                 self.estimates.push(wire_p3(&r.pose.position));
                 let mut e = entity(t_ns, "estimated_path".into());
-                e.lines.push(line(self.estimates.clone(), 0.04, rgba(0.2, 0.4, 1.0, 1.0)));
+                e.lines
+                    .push(line(self.estimates.clone(), 0.04, rgba(0.2, 0.4, 1.0, 1.0)));
                 let mut body = entity(t_ns, "rover_body".into());
                 body.frame_id = frame::ROVER.into();
                 body.frame_locked = true;
@@ -408,7 +499,13 @@ impl Scene {
                     size: Some(v3(0.3, 0.6, 0.3)),
                     color: Some(rgba(0.2, 0.4, 1.0, 0.8)),
                 });
-                self.wire.log_with_time(&SceneUpdate { deletions: vec![], entities: vec![e, body] }, t_ns);
+                self.wire.log_with_time(
+                    &SceneUpdate {
+                        deletions: vec![],
+                        entities: vec![e, body],
+                    },
+                    t_ns,
+                );
             }
             Message::Plan(p) => {
                 if p.part == 0 {
@@ -482,8 +579,14 @@ impl Scene {
             if self.scan.is_some() {
                 self.stats.broken_scans += 1;
             }
-            self.scan =
-                Some(ScanInProgress { scan_id: c.scan_id, next: 0, count: c.chunk_count, pose: c.sensor_pose, t_ns, data: vec![] });
+            self.scan = Some(ScanInProgress {
+                scan_id: c.scan_id,
+                next: 0,
+                count: c.chunk_count,
+                pose: c.sensor_pose,
+                t_ns,
+                data: vec![],
+            });
         }
         let Some(s) = self.scan.as_mut() else {
             self.stats.broken_scans += 1;
@@ -506,7 +609,11 @@ impl Scene {
         let Some(s) = self.scan.take() else { return };
         let pose = wire_pose(&s.pose);
         self.transform(s.t_ns, frame::SENSOR, &pose);
-        let field = |name: &str, offset: u32| PackedElementField { name: name.into(), offset, r#type: NumericType::Float32 as i32 };
+        let field = |name: &str, offset: u32| PackedElementField {
+            name: name.into(),
+            offset,
+            r#type: NumericType::Float32 as i32,
+        };
         let cloud = PointCloud {
             timestamp: Some(stamp(s.t_ns)),
             frame_id: frame::WORLD.into(),
@@ -525,26 +632,51 @@ impl Scene {
         self.stats.plans += 1;
         let (r, g, b) = PLAN_COLOURS[k % PLAN_COLOURS.len()];
         let mut e = entity(t_ns, format!("plan/{k}"));
-        e.lines.push(line(self.plan_parts.iter().map(|w| wire_p3(&w.pose.position)).collect(), 0.05, rgba(r, g, b, 1.0)));
+        e.lines.push(line(
+            self.plan_parts
+                .iter()
+                .map(|w| wire_p3(&w.pose.position))
+                .collect(),
+            0.05,
+            rgba(r, g, b, 1.0),
+        ));
         if let Some(last) = self.plan_parts.last() {
             let mut tether: Vec<Point3> = self.root.map(p3).into_iter().collect();
             tether.extend(last.anchors.iter().map(wire_p3));
             tether.push(wire_p3(&last.pose.position));
             e.lines.push(line(tether, 0.02, rgba(r, g, b, 0.6)));
             for a in &last.anchors {
-                e.spheres.push(sphere([f64::from(a.x), f64::from(a.y), f64::from(a.z)], ANCHOR_D, rgba(r, g, b, 1.0)));
+                e.spheres.push(sphere(
+                    [f64::from(a.x), f64::from(a.y), f64::from(a.z)],
+                    ANCHOR_D,
+                    rgba(r, g, b, 1.0),
+                ));
             }
         }
-        self.wire.log_with_time(&SceneUpdate { deletions: vec![], entities: vec![e] }, t_ns);
+        self.wire.log_with_time(
+            &SceneUpdate {
+                deletions: vec![],
+                entities: vec![e],
+            },
+            t_ns,
+        );
     }
 
     /// The true terrain as a triangle mesh over the mission's region, at `t_ns` (the world's height field
     /// sampled on a grid; a world without one, such as the ledge, has no mesh).
     pub fn terrain(&self, world: &dyn World, points: &[[f64; 3]], t_ns: u64) -> bool {
-        let Some(mesh) = terrain_mesh(world, points) else { return false };
+        let Some(mesh) = terrain_mesh(world, points) else {
+            return false;
+        };
         let mut e = entity(t_ns, "terrain".into());
         e.triangles.push(mesh);
-        self.truth.log_with_time(&SceneUpdate { deletions: vec![], entities: vec![e] }, t_ns);
+        self.truth.log_with_time(
+            &SceneUpdate {
+                deletions: vec![],
+                entities: vec![e],
+            },
+            t_ns,
+        );
         true
     }
 
@@ -558,13 +690,24 @@ impl Scene {
         let mut rocks = entity(0, "rocks".into());
         for (c, radius, visible) in &rep.rocks {
             let a = if *visible { 1.0 } else { 0.4 };
-            rocks.spheres.push(sphere(*c, 2.0 * radius, rgba(0.55, 0.35, 0.2, a)));
+            rocks
+                .spheres
+                .push(sphere(*c, 2.0 * radius, rgba(0.55, 0.35, 0.2, a)));
         }
-        self.truth.log_with_time(&SceneUpdate { deletions: vec![], entities: vec![rocks] }, 0);
+        self.truth.log_with_time(
+            &SceneUpdate {
+                deletions: vec![],
+                entities: vec![rocks],
+            },
+            0,
+        );
         for tp in &rep.trace {
             let t_ns = (tp.t_s * 1e9).round() as u64;
             let [x, y, z, w] = tp.orientation;
-            let pose = Pose { position: Some(v3(tp.axle[0], tp.axle[1], tp.axle[2])), orientation: Some(Quaternion { x, y, z, w }) };
+            let pose = Pose {
+                position: Some(v3(tp.axle[0], tp.axle[1], tp.axle[2])),
+                orientation: Some(Quaternion { x, y, z, w }),
+            };
             self.transform(t_ns, frame::ROVER_TRUE, &pose);
             self.stats.true_poses += 1;
             Self::json(
@@ -576,19 +719,45 @@ impl Scene {
         let mut body = entity(0, "rover_true_body".into());
         body.frame_id = frame::ROVER_TRUE.into();
         body.frame_locked = true;
-        body.cubes.push(CubePrimitive { pose: Some(at([0.0; 3])), size: Some(v3(0.3, 0.6, 0.3)), color: Some(rgba(0.9, 0.3, 0.1, 0.8)) });
-        self.truth.log_with_time(&SceneUpdate { deletions: vec![], entities: vec![body] }, 0);
+        body.cubes.push(CubePrimitive {
+            pose: Some(at([0.0; 3])),
+            size: Some(v3(0.3, 0.6, 0.3)),
+            color: Some(rgba(0.9, 0.3, 0.1, 0.8)),
+        });
+        self.truth.log_with_time(
+            &SceneUpdate {
+                deletions: vec![],
+                entities: vec![body],
+            },
+            0,
+        );
         for (t_s, tether) in &rep.tethers {
             let t_ns = (t_s * 1e9).round() as u64;
             let mut e = entity(t_ns, "true_tether".into());
-            e.lines.push(line(tether.iter().copied().map(p3).collect(), 0.03, rgba(0.9, 0.1, 0.1, 1.0)));
+            e.lines.push(line(
+                tether.iter().copied().map(p3).collect(),
+                0.03,
+                rgba(0.9, 0.1, 0.1, 1.0),
+            ));
             for c in tether.iter().skip(1).take(tether.len().saturating_sub(2)) {
-                e.spheres.push(sphere(*c, ANCHOR_D, rgba(0.9, 0.1, 0.1, 1.0)));
+                e.spheres
+                    .push(sphere(*c, ANCHOR_D, rgba(0.9, 0.1, 0.1, 1.0)));
             }
             let mut path = entity(t_ns, "true_path".into());
-            let done: Vec<Point3> = rep.trace.iter().take_while(|p| p.t_s <= *t_s).map(|p| p3(p.axle)).collect();
+            let done: Vec<Point3> = rep
+                .trace
+                .iter()
+                .take_while(|p| p.t_s <= *t_s)
+                .map(|p| p3(p.axle))
+                .collect();
             path.lines.push(line(done, 0.04, rgba(0.9, 0.3, 0.1, 1.0)));
-            self.truth.log_with_time(&SceneUpdate { deletions: vec![], entities: vec![e, path] }, t_ns);
+            self.truth.log_with_time(
+                &SceneUpdate {
+                    deletions: vec![],
+                    entities: vec![e, path],
+                },
+                t_ns,
+            );
         }
     }
 }
@@ -608,33 +777,64 @@ pub fn terrain_mesh(world: &dyn World, points: &[[f64; 3]]) -> Option<TriangleLi
         return None;
     }
     let n = TERRAIN_SAMPLES;
-    let step = [(hi[0] - lo[0]) / (n - 1) as f64, (hi[1] - lo[1]) / (n - 1) as f64];
+    let step = [
+        (hi[0] - lo[0]) / (n - 1) as f64,
+        (hi[1] - lo[1]) / (n - 1) as f64,
+    ];
     let mut heights = Vec::with_capacity(n * n);
     for j in 0..n {
         for i in 0..n {
             let (x, y) = (lo[0] + i as f64 * step[0], lo[1] + j as f64 * step[1]);
-            heights.push(world.height_at(x as f32, y as f32).map(f64::from).filter(|h| h.is_finite()));
+            heights.push(
+                world
+                    .height_at(x as f32, y as f32)
+                    .map(f64::from)
+                    .filter(|h| h.is_finite()),
+            );
         }
     }
-    let (zmin, zmax) = heights.iter().flatten().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &h| (a.min(h), b.max(h)));
+    let (zmin, zmax) = heights
+        .iter()
+        .flatten()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &h| {
+            (a.min(h), b.max(h))
+        });
     if !zmin.is_finite() {
         return None;
     }
-    let mut mesh = TriangleListPrimitive { pose: Some(at([0.0; 3])), color: Some(rgba(0.6, 0.6, 0.6, 1.0)), ..Default::default() };
+    let mut mesh = TriangleListPrimitive {
+        pose: Some(at([0.0; 3])),
+        color: Some(rgba(0.6, 0.6, 0.6, 1.0)),
+        ..Default::default()
+    };
     let mut index = vec![None; n * n];
     for j in 0..n {
         for i in 0..n {
             if let Some(h) = heights[j * n + i] {
                 index[j * n + i] = Some(mesh.points.len() as u32);
-                mesh.points.push(Point3 { x: lo[0] + i as f64 * step[0], y: lo[1] + j as f64 * step[1], z: h });
-                let s = if zmax > zmin { (h - zmin) / (zmax - zmin) } else { 0.5 };
-                mesh.colors.push(rgba(0.35 + 0.5 * s, 0.3 + 0.45 * s, 0.25 + 0.4 * s, 1.0));
+                mesh.points.push(Point3 {
+                    x: lo[0] + i as f64 * step[0],
+                    y: lo[1] + j as f64 * step[1],
+                    z: h,
+                });
+                let s = if zmax > zmin {
+                    (h - zmin) / (zmax - zmin)
+                } else {
+                    0.5
+                };
+                mesh.colors
+                    .push(rgba(0.35 + 0.5 * s, 0.3 + 0.45 * s, 0.25 + 0.4 * s, 1.0));
             }
         }
     }
     for j in 0..n - 1 {
         for i in 0..n - 1 {
-            let (a, b, c, d) = (index[j * n + i], index[j * n + i + 1], index[(j + 1) * n + i], index[(j + 1) * n + i + 1]);
+            let (a, b, c, d) = (
+                index[j * n + i],
+                index[j * n + i + 1],
+                index[(j + 1) * n + i],
+                index[(j + 1) * n + i + 1],
+            );
             if let (Some(a), Some(b), Some(c), Some(d)) = (a, b, c, d) {
                 mesh.indices.extend_from_slice(&[a, b, d, a, d, c]);
             }
@@ -645,9 +845,15 @@ pub fn terrain_mesh(world: &dyn World, points: &[[f64; 3]]) -> Option<TriangleLi
 
 fn metadata(log: &FieldLog) -> BTreeMap<String, String> {
     let mut meta = BTreeMap::new();
-    meta.insert("protocol_version".to_string(), log.header.protocol_version.to_string());
+    meta.insert(
+        "protocol_version".to_string(),
+        log.header.protocol_version.to_string(),
+    );
     meta.insert("seed".to_string(), log.header.seed.to_string());
-    meta.insert("created_at_unix_ms".to_string(), log.header.created_at_unix_ms.to_string());
+    meta.insert(
+        "created_at_unix_ms".to_string(),
+        log.header.created_at_unix_ms.to_string(),
+    );
     meta.insert("config".to_string(), log.header.config.clone());
     meta
 }
@@ -673,7 +879,10 @@ pub fn export_with<W: Write + Seek + Send + 'static>(
 }
 
 /// Writes `log` as MCAP into `out` (what the wire says).
-pub fn export<W: Write + Seek + Send + 'static>(log: &FieldLog, out: W) -> Result<ExportStats, FoxgloveError> {
+pub fn export<W: Write + Seek + Send + 'static>(
+    log: &FieldLog,
+    out: W,
+) -> Result<ExportStats, FoxgloveError> {
     export_with(log, None, out)
 }
 
@@ -698,17 +907,20 @@ impl<L: FlightLink> FlightLink for SceneLink<'_, L> {
         self.inner.now_us()
     }
     fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
-        self.scene.bytes(Direction::HostToFlight, self.inner.now_us(), bytes);
+        self.scene
+            .bytes(Direction::HostToFlight, self.inner.now_us(), bytes);
         self.inner.send(bytes)
     }
     fn recv_until_quiet(&mut self, max_wait_us: u64) -> Result<Vec<u8>, LinkError> {
         let got = self.inner.recv_until_quiet(max_wait_us)?;
-        self.scene.bytes(Direction::FlightToHost, self.inner.now_us(), &got);
+        self.scene
+            .bytes(Direction::FlightToHost, self.inner.now_us(), &got);
         Ok(got)
     }
     fn advance_to(&mut self, t_us: u64) -> Result<Vec<u8>, LinkError> {
         let got = self.inner.advance_to(t_us)?;
-        self.scene.bytes(Direction::FlightToHost, self.inner.now_us(), &got);
+        self.scene
+            .bytes(Direction::FlightToHost, self.inner.now_us(), &got);
         Ok(got)
     }
 }

@@ -15,14 +15,26 @@ use host_sim::fieldlog::{self, Direction};
 
 /// A short mission: the lateral-tether descent, 5 minutes of link time at most.
 const SCENARIO: &str = "scenarios/mission_lateral.toml";
-const MODULES: &str = "import mcap, mcap_protobuf, foxglove_schemas_protobuf, jsonschema, websockets";
+const MODULES: &str =
+    "import mcap, mcap_protobuf, foxglove_schemas_protobuf, jsonschema, websockets";
 
 fn python() -> Option<PathBuf> {
     let bin = PathBuf::from(env!("CARGO_BIN_EXE_tetherbot"));
-    let venv = bin.parent().and_then(Path::parent).map(|t| t.join("foxglove-venv/bin/python"));
-    let candidates = std::env::var_os("TETHERBOT_PYTHON").map(PathBuf::from).into_iter().chain(venv).chain([PathBuf::from("python3")]);
+    let venv = bin
+        .parent()
+        .and_then(Path::parent)
+        .map(|t| t.join("foxglove-venv/bin/python"));
+    let candidates = std::env::var_os("TETHERBOT_PYTHON")
+        .map(PathBuf::from)
+        .into_iter()
+        .chain(venv)
+        .chain([PathBuf::from("python3")]);
     for p in candidates {
-        if Command::new(&p).args(["-c", MODULES]).output().is_ok_and(|o| o.status.success()) {
+        if Command::new(&p)
+            .args(["-c", MODULES])
+            .output()
+            .is_ok_and(|o| o.status.success())
+        {
             return Some(p);
         }
     }
@@ -35,7 +47,10 @@ fn python_or_skip(test: &str) -> Option<PathBuf> {
     if p.is_none() {
         let why = "no python with mcap, mcap-protobuf-support, foxglove-schemas-protobuf, jsonschema and websockets \
                    (bash .ci/run makes the venv <target>/foxglove-venv; or set TETHERBOT_PYTHON)";
-        assert!(std::env::var("CI").as_deref() != Ok("true"), "{test}: {why}");
+        assert!(
+            std::env::var("CI").as_deref() != Ok("true"),
+            "{test}: {why}"
+        );
         eprintln!("{test}: skipped: {why}");
     }
     p
@@ -63,7 +78,16 @@ fn expectations(log_path: &Path, summary: &Path, out: &Path) {
     let mut frames = [0usize; 2];
     let mut raw = [Vec::new(), Vec::new()];
     let mut deframers = [Deframer::new(), Deframer::new()];
-    let (mut bad, mut scans, mut points, mut plans, mut logs, mut readings, mut status, mut telemetry) = (0, 0, 0, 0, 0, 0, 0, 0);
+    let (
+        mut bad,
+        mut scans,
+        mut points,
+        mut plans,
+        mut logs,
+        mut readings,
+        mut status,
+        mut telemetry,
+    ) = (0, 0, 0, 0, 0, 0, 0, 0);
     let mut poses = Vec::new();
     let mut scan: Option<(u32, u16, u16, usize)> = None;
     for r in &log.records {
@@ -76,7 +100,10 @@ fn expectations(log_path: &Path, summary: &Path, out: &Path) {
             rest = &rest[n..];
             let Some(ev) = ev else { continue };
             frames[side] += 1;
-            let Ok((_, m)) = ev.map_err(protocol::NackReason::from).and_then(protocol::decode_frame) else {
+            let Ok((_, m)) = ev
+                .map_err(protocol::NackReason::from)
+                .and_then(protocol::decode_frame)
+            else {
                 bad += 1;
                 continue;
             };
@@ -85,12 +112,20 @@ fn expectations(log_path: &Path, summary: &Path, out: &Path) {
                 Message::MotionReport(m) => {
                     let (p, q) = (m.pose.position, m.pose.orientation);
                     let v = [p.x, p.y, p.z, q.x, q.y, q.z, q.w].map(f64::from);
-                    poses.push(serde_json::json!([t_ns, v[0], v[1], v[2], v[3], v[4], v[5], v[6]]));
+                    poses.push(serde_json::json!([
+                        t_ns, v[0], v[1], v[2], v[3], v[4], v[5], v[6]
+                    ]));
                 }
                 Message::SensorChunk(c) => {
                     scan = match scan {
-                        _ if c.chunk_index == 0 => Some((c.scan_id, 1, c.chunk_count, c.points.len())),
-                        Some((id, next, count, n)) if id == c.scan_id && next == c.chunk_index && count == c.chunk_count => {
+                        _ if c.chunk_index == 0 => {
+                            Some((c.scan_id, 1, c.chunk_count, c.points.len()))
+                        }
+                        Some((id, next, count, n))
+                            if id == c.scan_id
+                                && next == c.chunk_index
+                                && count == c.chunk_count =>
+                        {
                             Some((id, next + 1, count, n + c.points.len()))
                         }
                         _ => None,
@@ -131,7 +166,10 @@ fn expectations(log_path: &Path, summary: &Path, out: &Path) {
         "tether_snapshots": rep["tethers"].as_array().unwrap().len(),
         "layout": s(&Path::new(env!("CARGO_MANIFEST_DIR")).join("doc/foxglove/tetherbot-layout.json")),
     });
-    assert!(n_poses > 0 && scans > 0 && plans > 0, "the mission drove, scanned and planned: {exp:?}");
+    assert!(
+        n_poses > 0 && scans > 0 && plans > 0,
+        "the mission drove, scanned and planned: {exp:?}"
+    );
     std::fs::write(out, serde_json::to_vec(&exp).unwrap()).unwrap();
     let stem = out.with_extension("");
     std::fs::write(format!("{}-h2f.bin", s(&stem)), &raw[0]).unwrap();
@@ -140,7 +178,8 @@ fn expectations(log_path: &Path, summary: &Path, out: &Path) {
 
 fn run(cmd: &mut Command) -> (i32, String) {
     let out = cmd.output().unwrap();
-    let text = String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+    let text =
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
     (out.status.code().unwrap_or(-1), text)
 }
 
@@ -151,21 +190,39 @@ fn checker() -> String {
 /// One test for both readers: a mission run twice (plain, then `--live`) is the costly part.
 #[test]
 fn a_missions_mcap_and_live_view_decode_with_foxglove_published_schemas_and_match_the_field_log() {
-    let Some(py) = python_or_skip("foxglove checks") else { return };
+    let Some(py) = python_or_skip("foxglove checks") else {
+        return;
+    };
     let d = dir("mcap");
     let bin = env!("CARGO_BIN_EXE_tetherbot");
     let sc = scenario();
     let plain = d.join("plain");
-    let (code, out) =
-        run(Command::new(bin).args(["mission", &sc, "--quiet", "--out", s(&plain), "--created-at-ms", "0"]));
+    let (code, out) = run(Command::new(bin).args([
+        "mission",
+        &sc,
+        "--quiet",
+        "--out",
+        s(&plain),
+        "--created-at-ms",
+        "0",
+    ]));
     assert_eq!(code, 0, "{out}");
     let stem = plain.join("mission_lateral");
-    let (log, mcap, summary) = (stem.with_extension("fieldlog"), stem.with_extension("mcap"), stem.with_extension("json"));
+    let (log, mcap, summary) = (
+        stem.with_extension("fieldlog"),
+        stem.with_extension("mcap"),
+        stem.with_extension("json"),
+    );
     let exp = d.join("expected.json");
     expectations(&log, &summary, &exp);
     let (code, out) = run(Command::new(&py).args([&checker(), "mcap", s(&mcap), s(&exp)]));
     println!("{out}");
-    assert_eq!(code, 0, "the Python reader found faults in {}:\n{out}", mcap.display());
+    assert_eq!(
+        code,
+        0,
+        "the Python reader found faults in {}:\n{out}",
+        mcap.display()
+    );
     assert!(out.contains(" passed, 0 failed"), "{out}");
 
     // the export of the field log alone (what the wire says): the wire checks pass, the truth's fail
@@ -174,7 +231,10 @@ fn a_missions_mcap_and_live_view_decode_with_foxglove_published_schemas_and_matc
     assert_eq!(code, 0, "{out}");
     let (code, out) = run(Command::new(&py).args([&checker(), "mcap", s(&wire), s(&exp)]));
     assert_ne!(code, 0, "a field log alone has no truth channels: {out}");
-    assert!(out.contains("FAIL: /tf rover_true") && !out.contains("FAIL: /tf rover:"), "{out}");
+    assert!(
+        out.contains("FAIL: /tf rover_true") && !out.contains("FAIL: /tf rover:"),
+        "{out}"
+    );
 
     // the live view, received by a WebSocket client on loopback
     let live = d.join("live");
@@ -201,6 +261,9 @@ fn a_missions_mcap_and_live_view_decode_with_foxglove_published_schemas_and_matc
     // the live view observes the link and changes nothing in it: the field log is the one written without it
     let a = std::fs::read(&log).unwrap();
     let b = std::fs::read(live.join("mission_lateral.fieldlog")).unwrap();
-    assert!(a == b, "the field log with --live differs from the one without");
+    assert!(
+        a == b,
+        "the field log with --live differs from the one without"
+    );
     std::fs::remove_dir_all(&d).unwrap();
 }

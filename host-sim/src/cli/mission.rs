@@ -243,7 +243,13 @@ fn one(args: &MissionArgs, sc: &Scenario) -> Result<(MissionReport, Vec<PathBuf>
         Some(addr) => {
             let live = start_live(addr)?;
             println!("  waiting up to {:.0} s for a viewer to subscribe", args.live_wait);
+            let t0 = std::time::Instant::now();
             wait_while(args.live_wait, || !live.scene.subscribed());
+            if live.scene.subscribed() {
+                println!("  a viewer subscribed after {:.1} s; the mission starts", t0.elapsed().as_secs_f64());
+            } else {
+                println!("  no viewer subscribed; the mission starts");
+            }
             let pts = [sc.tether.root_anchor, sc.rover.start, sc.goal.position];
             live.scene.terrain(&world.world.truth(), &pts, 0);
             Some(live)
