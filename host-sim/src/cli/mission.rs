@@ -164,7 +164,7 @@ fn start_live(addr: &str) -> Result<Live, String> {
 fn wait_while(secs: f64, busy: impl Fn() -> bool) {
     let t0 = std::time::Instant::now();
     while busy() && t0.elapsed().as_secs_f64() < secs {
-        std::thread::sleep(std::time::Duration::from_millis(50));
+        std::thread::sleep(core::time::Duration::from_millis(50));
     }
 }
 
