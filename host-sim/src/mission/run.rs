@@ -95,6 +95,10 @@ pub struct TracePoint {
     pub payout_m: f64,
     /// Distance driven, m.
     pub driven_m: f64,
+    /// True body orientation (quaternion x, y, z, w): for the Foxglove export's `rover_true` frame, not in the
+    /// JSON summary.
+    #[serde(skip)]
+    pub orientation: [f64; 4],
 }
 
 /// A plan the flight software sent.
@@ -472,6 +476,7 @@ impl<L: FlightLink> Sim<'_, L> {
         self.rep.max_payout_m = self.rep.max_payout_m.max(self.rover.tether.length_m);
         if self.rep.trace.len() < MAX_TRACE {
             let e = from_vec3(&self.estimate.translation.vector);
+            let q = self.rover.state.settled.pose.rotation.quaternion().coords;
             let t_s = self.now_s();
             self.rep.trace.push(TracePoint {
                 t_s,
@@ -481,6 +486,7 @@ impl<L: FlightLink> Sim<'_, L> {
                 tension_n: st.tension_n,
                 payout_m: self.rover.tether.length_m,
                 driven_m: self.rover.driven_m,
+                orientation: [f64::from(q.x), f64::from(q.y), f64::from(q.z), f64::from(q.w)],
             });
         }
     }
