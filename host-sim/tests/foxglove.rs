@@ -29,16 +29,7 @@ fn python() -> Option<PathBuf> {
         .into_iter()
         .chain(venv)
         .chain([PathBuf::from("python3")]);
-    for p in candidates {
-        if Command::new(&p)
-            .args(["-c", MODULES])
-            .output()
-            .is_ok_and(|o| o.status.success())
-        {
-            return Some(p);
-        }
-    }
-    None
+    candidates.into_iter().find(|p| Command::new(p).args(["-c", MODULES]).output().is_ok_and(|o| o.status.success()))
 }
 
 /// The Python with the packages, or `None` after saying why (a failure under `CI=true`).
