@@ -34,6 +34,7 @@ use crate::link::{FlightLink, LinkKind};
 use crate::mission::campaign::{
     CampaignFile, CampaignIdentity, CampaignTiming, MissionRow, MissionTiming,
 };
+use crate::mcap_export::SceneLink;
 use crate::mission::run::{run_mission, MissionOptions, MissionReport, Verdict};
 use crate::replay::RunConfig;
 use crate::scenario::{self, Scenario};
@@ -149,6 +150,15 @@ pub struct MissionArgs {
     /// a run does not replay byte for byte.
     #[arg(long)]
     pub charge_host_time: bool,
+    /// Serve the running mission to the Foxglove app over the Foxglove SDK's WebSocket server at HOST:PORT
+    /// (default 127.0.0.1:8765; port 0 picks a free one); one seed only. The line `live view: ws://HOST:PORT`
+    /// on stdout names the address.
+    #[arg(long, value_name = "HOST:PORT", num_args = 0..=1, default_missing_value = "127.0.0.1:8765")]
+    pub live: Option<String>,
+    /// With `--live`: seconds to wait for a viewer to subscribe before the mission starts, and for the viewers
+    /// to disconnect after it ends (the server then stops).
+    #[arg(long, default_value_t = 120.0, value_name = "SECONDS")]
+    pub live_wait: f64,
 }
 
 fn parse_kind(s: &str) -> Result<FaultKind, String> {
@@ -160,6 +170,41 @@ fn parse_kind(s: &str) -> Result<FaultKind, String> {
             let names: Vec<&str> = FaultKind::ALL.iter().map(|k| k.name()).collect();
             format!("unknown fault kind `{s}` (kinds: {})", names.join(", "))
         })
+}
+
+/// The live view of one mission: the scene's channels in a context whose sink is the WebSocket server.
+struct Live {
+    server: foxglove::WebSocketServerHandle,
+    scene: crate::mcap_export::Scene,
+    /// Keeps the channels' context alive while the server runs.
+    _ctx: std::sync::Arc<foxglove::Context>,
+}
+
+/// Starts the WebSocket server at `addr` (HOST:PORT) and prints its address.
+fn start_live(addr: &str) -> Result<Live, String> {
+    let (host, port) = addr
+        .rsplit_once(':')
+        .and_then(|(h, p)| Some((h.trim_matches(['[', ']']), p.parse::<u16>().ok()?)))
+        .ok_or_else(|| format!("--live {addr}: expected HOST:PORT, such as 127.0.0.1:8765"))?;
+    let ctx = foxglove::Context::new();
+    let scene = crate::mcap_export::Scene::new(&ctx).map_err(|e| format!("live view: {e}"))?;
+    let server = ctx
+        .websocket_server()
+        .name("tetherbot mission")
+        .bind(host, port)
+        .start_blocking()
+        .map_err(|e| format!("live view: cannot serve on {addr}: {e}"))?;
+    println!("live view: ws://{host}:{} (Foxglove: Open connection, Foxglove WebSocket)", server.port());
+    let _ = std::io::Write::flush(&mut std::io::stdout());
+    Ok(Live { server, scene, _ctx: ctx })
+}
+
+/// Waits up to `secs` of wall time while `busy` holds, looking every 50 ms.
+fn wait_while(secs: f64, busy: impl Fn() -> bool) {
+    let t0 = std::time::Instant::now();
+    while busy() && t0.elapsed().as_secs_f64() < secs {
+        std::thread::sleep(core::time::Duration::from_millis(50));
+    }
 }
 
 /// Loads the scenario of `args` (the embedded default when none is given).
@@ -234,10 +279,36 @@ fn one(args: &MissionArgs, sc: &Scenario) -> Result<(MissionReport, Vec<PathBuf>
         seed: args.seed,
         config: serde_json::to_string(&config)?,
     };
+    let world = crate::mission::run::truth_for(sc, &crate::mission::run::mission_configure(sc, &opts), &sc.mission)?;
+    let mut live = match &args.live {
+        Some(addr) => {
+            let live = start_live(addr)?;
+            println!("  waiting up to {:.0} s for a viewer to subscribe", args.live_wait);
+            let t0 = std::time::Instant::now();
+            wait_while(args.live_wait, || !live.scene.subscribed());
+            if live.scene.subscribed() {
+                println!("  a viewer subscribed after {:.1} s; the mission starts", t0.elapsed().as_secs_f64());
+            } else {
+                println!("  no viewer subscribed; the mission starts");
+            }
+            let pts = [sc.tether.root_anchor, sc.rover.start, sc.goal.position];
+            live.scene.terrain(&world.world.truth(), &pts, 0);
+            Some(live)
+        }
+        None => None,
+    };
     let file = std::fs::File::create(&log_path)
         .map_err(|e| format!("cannot create {}: {e}", log_path.display()))?;
     let writer = Writer::new(std::io::BufWriter::new(file), &header)?;
     let run = |link: &mut dyn FlightLink| -> Result<MissionReport, Box<dyn core::error::Error>> {
+        let mut shown;
+        let link: &mut dyn FlightLink = match live.as_mut() {
+            Some(l) => {
+                shown = SceneLink::new(link, &mut l.scene);
+                &mut shown
+            }
+            None => link,
+        };
         let rec = RecordingLink::new(link, writer);
         // The recorder inside the injector: the log holds what the flight software received, and the faults.
         let Some(profile) = &args.faults else {
@@ -275,13 +346,18 @@ fn one(args: &MissionArgs, sc: &Scenario) -> Result<(MissionReport, Vec<PathBuf>
             super::board::with_link(LinkKind::Qemu, crate::link::inproc::DEFAULT_STEP_US, run)?
         }
     };
+    if let Some(mut l) = live {
+        l.scene.truth(&rep, &world.world.truth());
+        println!("  mission over; serving until the viewers disconnect (at most {:.0} s)", args.live_wait);
+        wait_while(args.live_wait, || l.server.client_count() > 0);
+        l.server.stop().wait_blocking();
+    }
     let mut written = vec![log_path.clone()];
     let log = fieldlog::read_file(&log_path)?;
     let mcap_path = args.out.join(format!("{name}.mcap"));
     let f = std::fs::File::create(&mcap_path).map_err(|e| format!("cannot create {}: {e}", mcap_path.display()))?;
-    crate::mcap_export::export(&log, std::io::BufWriter::new(f))?;
+    crate::mcap_export::export_with(&log, Some((&rep, &world.world.truth())), std::io::BufWriter::new(f))?;
     written.push(mcap_path);
-    let world = crate::mission::run::truth_for(sc, &crate::mission::run::mission_configure(sc, &opts), &sc.mission)?;
     let svg_path = args.out.join(format!("{name}.svg"));
     std::fs::write(&svg_path, crate::mission::svg::render(&rep, &world.world.truth()))?;
     written.push(svg_path);
@@ -597,6 +673,9 @@ pub fn main(args: &MissionArgs) -> ExitCode {
         Err(e) => return super::fail(e),
     };
     let bad = |v: &Verdict| matches!(v, Verdict::Fell | Verdict::FalseArrival);
+    if args.live.is_some() && (args.seeds > 1 || args.shard.is_some()) {
+        return super::fail("--live shows one mission: drop --seeds / --shard");
+    }
     if args.fault_campaign {
         return match fault_campaign(args, &sc) {
             Ok(true) => ExitCode::SUCCESS,

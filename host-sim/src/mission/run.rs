@@ -97,6 +97,10 @@ pub struct TracePoint {
     pub payout_m: f64,
     /// Distance driven, m.
     pub driven_m: f64,
+    /// True body orientation (quaternion x, y, z, w): for the Foxglove export's `rover_true` frame, not in the
+    /// JSON summary.
+    #[serde(skip)]
+    pub orientation: [f64; 4],
 }
 
 /// A plan the flight software sent.
@@ -485,6 +489,7 @@ impl<L: FlightLink> Sim<'_, L> {
         self.rep.max_payout_m = self.rep.max_payout_m.max(self.rover.tether.length_m);
         if self.rep.trace.len() < MAX_TRACE {
             let e = from_vec3(&self.estimate.translation.vector);
+            let q = self.rover.state.settled.pose.rotation.quaternion().coords;
             let t_s = self.now_s();
             self.rep.trace.push(TracePoint {
                 t_s,
@@ -494,6 +499,7 @@ impl<L: FlightLink> Sim<'_, L> {
                 tension_n: st.tension_n,
                 payout_m: self.rover.tether.length_m,
                 driven_m: self.rover.driven_m,
+                orientation: [f64::from(q.x), f64::from(q.y), f64::from(q.z), f64::from(q.w)],
             });
         }
     }
@@ -686,7 +692,7 @@ pub fn run_mission(link: impl FlightLink, sc: &Scenario, opts: &MissionOptions) 
     sim.snapshot_tether();
     sim.trace();
     if sim.m.overview_scan {
-        let tiles: Vec<(RangeSensorParams, _)> = overview_sensor(sim.truth.root, sim.sc.goal.position, &sim.sc.sensor, &sim.m);
+        let tiles: Vec<(RangeSensorParams, _)> = overview_sensor(sim.truth.root, sim.sc.goal.position, sim.sc.rover.start, &sim.sc.sensor, &sim.m);
         for (params, pose) in tiles {
             let view = sim.truth.world.sensed();
             let scan = overview_scan(&view, &params, &pose, &mut sim.rng);
