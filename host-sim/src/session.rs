@@ -7,10 +7,12 @@
 //! lost or damaged on the way up is not lost to the mission. A `Nack` for damage (`Truncated`, `Oversize`,
 //! `BadCrc`) answers nothing (its sequence number was read from a damaged header); any other `Nack` is an answer.
 //! Periodic and idempotent messages (`TimeTick`, `TetherReading`, `TelemetryRequest`) are not retransmitted: the
-//! next one replaces them.
+//! next one replaces them. Scan chunks are retransmitted per scan, not per frame ([`HostSession::send_scan`]): one lost
+//! chunk would lose its scan; the flight software takes a scan's chunks in any order, so the chunks without an
+//! answer are sent again alone once the others are answered.
 
 use firmware::protocol::{
-    self, Deframer, Header, Message, NackReason, Telemetry, TelemetryRequest,
+    self, Deframer, Header, Message, NackReason, SensorChunk, Telemetry, TelemetryRequest,
 };
 
 use crate::link::{FlightLink, LinkError};
@@ -107,6 +109,8 @@ pub struct HostSession<L: FlightLink> {
     pub retransmitted: u64,
     /// Messages given up after `max_tries` sends.
     pub given_up: u64,
+    /// Scan chunks sent again ([`Self::send_scan`]).
+    pub chunks_resent: u64,
 }
 
 impl<L: FlightLink> HostSession<L> {
@@ -122,6 +126,7 @@ impl<L: FlightLink> HostSession<L> {
             pending: Vec::new(),
             retransmitted: 0,
             given_up: 0,
+            chunks_resent: 0,
         }
     }
 
@@ -161,9 +166,13 @@ impl<L: FlightLink> HostSession<L> {
         let seq = self.take_seq();
         let mut buf = vec![0u8; firmware::config::protocol::MAX_ENCODED_FRAME_LEN];
         let n = protocol::encode(seq, msg, &mut buf).map_err(SessionError::Encode)?;
+        // Scan chunks are resent per scan by `send_scan` (module docs).
         let periodic = matches!(
             msg,
-            Message::TimeTick(_) | Message::TetherReading(_) | Message::TelemetryRequest(_)
+            Message::TimeTick(_)
+                | Message::TetherReading(_)
+                | Message::TelemetryRequest(_)
+                | Message::SensorChunk(_)
         );
         if self.retransmit.is_some() && !periodic {
             self.pending.push(Pending {
@@ -260,6 +269,82 @@ impl<L: FlightLink> HostSession<L> {
         let out = self.absorb(&bytes)?;
         self.retransmit_due()?;
         Ok(out)
+    }
+
+    /// Sends one scan's chunks and collects the replies. With retransmission on, it waits until every chunk is
+    /// answered or the policy's time has passed, then sends again, alone, each chunk that had no answer (the flight
+    /// software takes a scan's chunks in any order), at most `max_tries` rounds; then the scan is given up (counted
+    /// in `given_up`). A chunk refused for good (`Nack` other than `DuplicateChunk`, which means it arrived before)
+    /// ends the scan at once. Returns the replies and whether every chunk arrived.
+    pub fn send_scan(
+        &mut self,
+        chunks: &[SensorChunk],
+    ) -> Result<(Vec<Message>, bool), SessionError> {
+        let mut replies = Vec::new();
+        let rounds = self.retransmit.map_or(1, |p| p.max_tries.max(1));
+        let mut todo: Vec<&SensorChunk> = chunks.iter().collect();
+        for round in 0..rounds {
+            if round > 0 {
+                self.chunks_resent += todo.len() as u64;
+                log::info!(
+                    "scan {}: {} chunk(s) sent again (no answer)",
+                    todo[0].scan_id,
+                    todo.len()
+                );
+            }
+            let mut seqs = Vec::with_capacity(todo.len());
+            for c in &todo {
+                seqs.push(self.send(&Message::SensorChunk((*c).clone()))?);
+            }
+            let sent_us = self.link.now_us();
+            // Per chunk: no answer yet, arrived, refused for good.
+            let mut answer: Vec<Option<bool>> = vec![None; seqs.len()];
+            loop {
+                let got = self.recv()?;
+                for m in &got {
+                    let (seq, arrived) = match m {
+                        Message::Ack(a) => (a.seq, true),
+                        Message::Nack(n) if n.reason == NackReason::DuplicateChunk => (n.seq, true),
+                        Message::Nack(n)
+                            if !matches!(
+                                n.reason,
+                                NackReason::Truncated | NackReason::Oversize | NackReason::BadCrc
+                            ) =>
+                        {
+                            (n.seq, false)
+                        }
+                        _ => continue,
+                    };
+                    if let Some(i) = seqs.iter().position(|&s| s == seq) {
+                        answer[i] = Some(arrived);
+                    }
+                }
+                replies.extend(got);
+                let waited = self.link.now_us().saturating_sub(sent_us);
+                match self.retransmit {
+                    Some(p) if answer.contains(&None) && waited < p.after_us => continue,
+                    _ => break,
+                }
+            }
+            if answer.contains(&Some(false)) {
+                return Ok((replies, false));
+            }
+            todo = todo
+                .into_iter()
+                .zip(&answer)
+                .filter(|(_, a)| a.is_none())
+                .map(|(c, _)| c)
+                .collect();
+            if todo.is_empty() {
+                return Ok((replies, true));
+            }
+            if self.retransmit.is_none() {
+                return Ok((replies, false));
+            }
+        }
+        self.given_up += 1;
+        log::warn!("scan {} given up after {rounds} rounds: {} chunk(s) unanswered", chunks[0].scan_id, todo.len());
+        Ok((replies, false))
     }
 
     /// Sends `msg` and collects the replies.

@@ -136,7 +136,7 @@ fn one_of_every_kind() -> Vec<Message> {
             scans_completed: 8,
             scans_abandoned: 9,
             scan_in_progress: 10,
-            scan_next_chunk: 11,
+            scan_chunks_received: 11,
             tether_readings: 12,
             goals_received: 13,
             motion_reports: 33,

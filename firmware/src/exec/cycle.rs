@@ -96,7 +96,7 @@ where
     /// The current telemetry snapshot (what a `Telemetry` frame sent now would carry).
     pub fn telemetry(&self) -> Telemetry {
         let c = &self.counters;
-        let (scan_in_progress, scan_next_chunk) = self
+        let (scan_in_progress, scan_chunks_received) = self
             .assembler
             .progress()
             .map_or((0, 0), |(id, next, _)| (id, next));
@@ -118,7 +118,7 @@ where
             scans_completed: c.scans_completed,
             scans_abandoned: c.scans_abandoned,
             scan_in_progress,
-            scan_next_chunk,
+            scan_chunks_received,
             tether_readings: c.tether_readings,
             goals_received: c.goals_received,
             motion_reports: c.motion_reports,

@@ -857,8 +857,8 @@ pub struct Telemetry {
     pub scans_abandoned: u32,
     /// Scan being reassembled (0 if none).
     pub scan_in_progress: u32,
-    /// Next expected chunk of that scan.
-    pub scan_next_chunk: u16,
+    /// Chunks of that scan received so far (they may arrive in any order).
+    pub scan_chunks_received: u16,
     /// Tether readings accepted.
     pub tether_readings: u32,
     /// Goal requests accepted.

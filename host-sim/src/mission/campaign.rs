@@ -237,8 +237,9 @@ pub fn table(name: &str, reports: &[MissionReport]) -> String {
     );
     let _ = writeln!(
         s,
-        "  retransmitted frames         {} ({} given up)",
+        "  retransmitted frames         {}, scan chunks sent again {} ({} given up)",
         reports.iter().map(|r| r.retransmits).sum::<u64>(),
+        reports.iter().map(|r| r.chunks_resent).sum::<u64>(),
         reports.iter().map(|r| r.given_up).sum::<u64>()
     );
     s

@@ -113,6 +113,8 @@ pub struct CellSummary {
     pub acked_damaged: u64,
     /// Frames retransmitted by the host.
     pub retransmits: u64,
+    /// Scan chunks the host sent again.
+    pub chunks_resent: u64,
     /// Longest executive step, microseconds.
     pub max_step_us: u32,
     /// Executive steps over budget.
@@ -142,6 +144,7 @@ pub fn summarise(cell: &FaultCell) -> CellSummary {
         }
         s.acked_damaged += acc.acked_damaged;
         s.retransmits += rep.retransmits;
+        s.chunks_resent += rep.chunks_resent;
         s.max_step_us = s.max_step_us.max(rep.max_step_us);
         s.slips += u64::from(rep.step_slips);
     }
@@ -169,7 +172,7 @@ pub fn table(name: &str, seeds: &[u64], cells: &[FaultCell]) -> String {
     let _ = writeln!(out);
     let _ = writeln!(
         out,
-        "| rate/byte | kind | arrived | safe (reason) | fell | other | injected | detected | harmless | balanced | acked damaged | retransmits | max step s | slips |"
+        "| rate/byte | kind | arrived | safe (reason) | fell | other | injected | detected | harmless | balanced | acked damaged | retransmits (frames / chunks) | max step s | slips |"
     );
     let _ = writeln!(
         out,
@@ -186,7 +189,7 @@ pub fn table(name: &str, seeds: &[u64], cells: &[FaultCell]) -> String {
         errors += s.errors;
         let _ = writeln!(
             out,
-            "| {:e} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.3} | {} |",
+            "| {:e} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} / {} | {:.3} | {} |",
             c.rate,
             c.kind.name(),
             s.arrived,
@@ -203,6 +206,7 @@ pub fn table(name: &str, seeds: &[u64], cells: &[FaultCell]) -> String {
             },
             s.acked_damaged,
             s.retransmits,
+            s.chunks_resent,
             f64::from(s.max_step_us) * 1e-6,
             s.slips
         );

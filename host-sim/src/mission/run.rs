@@ -176,6 +176,8 @@ pub struct MissionReport {
     pub retransmits: u64,
     /// Messages the host gave up after the policy's sends.
     pub given_up: u64,
+    /// Scan chunks the host sent again for want of an answer (`HostSession::send_scan`).
+    pub chunks_resent: u64,
     /// Host wall time, s.
     pub host_s: f64,
     /// The executed path.
@@ -460,10 +462,10 @@ impl<L: FlightLink> Sim<'_, L> {
     fn send_scan(&mut self, scan: &Scan) -> Result<(), MissionError> {
         self.scan_id += 1;
         let chunks = scan.to_chunks(self.scan_id, CHUNK_POINTS).map_err(|e| MissionError::Setup(format!("{e:?}")))?;
-        for c in chunks {
-            self.s.send(&Message::SensorChunk(c))?;
-        }
-        self.recv()
+        let t0 = Instant::now();
+        let (got, _) = self.s.send_scan(&chunks)?;
+        self.absorb(got, t0.elapsed().as_secs_f64());
+        Ok(())
     }
 
     fn scan_here(&mut self) -> Result<(), MissionError> {
@@ -637,6 +639,7 @@ pub fn run_mission(link: impl FlightLink, sc: &Scenario, opts: &MissionOptions) 
         step_slips: 0,
         retransmits: 0,
         given_up: 0,
+        chunks_resent: 0,
         host_s: 0.0,
         trace: vec![],
         tethers: vec![],
@@ -747,6 +750,7 @@ pub fn run_mission(link: impl FlightLink, sc: &Scenario, opts: &MissionOptions) 
     }
     sim.rep.retransmits = sim.s.retransmitted;
     sim.rep.given_up = sim.s.given_up;
+    sim.rep.chunks_resent = sim.s.chunks_resent;
     sim.snapshot_tether();
     let mut rep = sim.rep;
     rep.verdict = sim.done.unwrap_or(Verdict::TimeLimit);
