@@ -17,7 +17,7 @@
 //! | [`PLAN_FRAMES_PER_STEP`] | 1 | `Plan` / `DriveCommand` frames emitted per `step` |
 //! | [`MOTION_REPORT_TIMEOUT_US`] | 120_000_000 | flight time to wait for a drive command's `MotionReport` before stopping and giving it up |
 //! | [`STEP_BUDGET_US`] | 100_000 | a step longer than this is a cycle slip (counted in `Telemetry.cycle`): the fastest telemetry period a `Configure` may ask for (`MIN_TELEMETRY_PERIOD_MS`), a twentieth of the board's 2 s watchdog |
-//! | [`SEQ_WINDOW`] | 1024 | host sequence numbers within this distance of the expected one count as lost (ahead) or late (behind); a larger jump is a new host session |
+//! | [`SEQ_WINDOW`] | 1024 | host sequence numbers within this distance of the expected one count as lost (ahead) or late (behind); further behind is a new host session (`exec` module docs) |
 //! | [`SEQ_HISTORY_LEN`] | 16 | accepted frames (sequence number, CRC) remembered to refuse a duplicate |
 
 use super::protocol::MAX_ENCODED_FRAME_LEN;

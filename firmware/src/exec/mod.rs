@@ -33,7 +33,9 @@
 //! twice. Otherwise its sequence number is compared with the expected one (0 at boot, then the highest so far plus
 //! one): ahead by `d <= SEQ_WINDOW` counts `d` frames lost or damaged on the way up (`Telemetry.seq_gaps`); behind by at most
 //! `SEQ_WINDOW` counts a late frame (`seq_late`: reordered or delayed; still dispatched, so a retransmission or a
-//! late report is handled by the message's own checks); a larger jump is a new host session (`seq_resyncs`). These
+//! late report is handled by the message's own checks); further ahead (less than half the number range) after an
+//! intact frame was seen is a loss burst (`seq_gaps` again); any other jump (further behind: a host restarted from
+//! 0; or the first frame after boot beyond the window) is a new host session (`seq_resyncs`). These
 //! counters are the flight side's detection of link faults (`host-sim/doc/faults.md`).
 //!
 //! ## Cycle accounting (v4)
@@ -183,6 +185,8 @@ pub struct Executive<L, C, W, A, S> {
     log_refill_at: Instant,
     now: Instant,
     seq_next: u32,
+    /// An intact host frame has arrived since boot (before that, a jump ahead is a session, not a loss burst).
+    seq_seen: bool,
     seq_history: Deque<(u32, u32), SEQ_HISTORY_LEN>,
 }
 
@@ -226,6 +230,7 @@ where
             log_refill_at: Instant::from_micros(0),
             now: Instant::from_micros(0),
             seq_next: 0,
+            seq_seen: false,
             seq_history: Deque::new(),
         }
     }
@@ -328,10 +333,15 @@ where
             self.seq_next = seq.wrapping_add(1);
         } else if behind <= SEQ_WINDOW {
             c.seq_late = c.seq_late.saturating_add(1);
+        } else if self.seq_seen && ahead < 1 << 31 {
+            // A loss burst longer than the window: a restarted host counts from 0, so it shows behind, not ahead.
+            c.seq_gaps = c.seq_gaps.saturating_add(ahead);
+            self.seq_next = seq.wrapping_add(1);
         } else {
             c.seq_resyncs = c.seq_resyncs.saturating_add(1);
             self.seq_next = seq.wrapping_add(1);
         }
+        self.seq_seen = true;
         Ok(())
     }
 

@@ -679,10 +679,15 @@ fn duplicates_are_refused_and_sequence_gaps_and_late_frames_counted() {
     exchange_from(&mut e, 303, &[Message::TimeTick(TimeTick { host_time_us: 2 })]);
     let t2 = e.telemetry();
     assert_eq!((t2.seq_gaps - t.seq_gaps, t2.seq_late - t.seq_late, t2.seq_resyncs), (4, 1, 0));
-    // a jump of more than SEQ_WINDOW is a new host session
-    exchange_from(&mut e, 305 + 2 * crate::config::exec::SEQ_WINDOW, &[Message::TimeTick(TimeTick { host_time_us: 3 })]);
+    // a jump ahead of more than SEQ_WINDOW is a loss burst: every frame in between is counted lost
+    let w = crate::config::exec::SEQ_WINDOW;
+    exchange_from(&mut e, 305 + 2 * w, &[Message::TimeTick(TimeTick { host_time_us: 3 })]);
     let t3 = e.telemetry();
-    assert_eq!((t3.seq_gaps, t3.seq_late, t3.seq_resyncs), (t2.seq_gaps, t2.seq_late, 1));
+    assert_eq!((t3.seq_gaps - t2.seq_gaps, t3.seq_late, t3.seq_resyncs), (2 * w - 1, t2.seq_late, 0));
+    // a host restarted from 0 is far behind: a new host session, nothing counted lost or late
+    exchange_from(&mut e, 0, &[Message::TimeTick(TimeTick { host_time_us: 4 })]);
+    let t4 = e.telemetry();
+    assert_eq!((t4.seq_gaps, t4.seq_late, t4.seq_resyncs), (t3.seq_gaps, t3.seq_late, 1));
 }
 
 /// Cycle accounting: a clock that moves during a step gives the step's duration, the maximum and the slips over
