@@ -305,6 +305,8 @@ impl<L: FlightLink> HostSession<L> {
                     let (seq, arrived) = match m {
                         Message::Ack(a) => (a.seq, true),
                         Message::Nack(n) if n.reason == NackReason::DuplicateChunk => (n.seq, true),
+                        // A copy made by the link: the frame itself was answered on its own.
+                        Message::Nack(n) if n.reason == NackReason::DuplicateFrame => continue,
                         Message::Nack(n)
                             if !matches!(
                                 n.reason,
@@ -315,8 +317,8 @@ impl<L: FlightLink> HostSession<L> {
                         }
                         _ => continue,
                     };
-                    if let Some(i) = seqs.iter().position(|&s| s == seq) {
-                        answer[i] = Some(arrived);
+                    if let Some(a) = seqs.iter().position(|&s| s == seq).and_then(|i| answer.get_mut(i)) {
+                        *a = Some(arrived || *a == Some(true));
                     }
                 }
                 replies.extend(got);

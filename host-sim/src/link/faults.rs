@@ -25,7 +25,8 @@
 //! `fieldlog` format 3), which `inspect` lists.
 //!
 //! **Accounting** ([`FaultAccount`]): the injector knows what it did (injected; harmless = the frame reached the
-//! flight software intact and in order: a delay nothing overtook, a stall, a reorder with no frame to swap with).
+//! flight software intact and in order: a delay no intact frame overtook, a stall, a reorder with no frame to swap
+//! with or whose partner was lost or damaged).
 //! The detection side is the flight software's own `Telemetry` (protocol v4), read from the downlink: a lost or
 //! damaged frame is a gap in the host's sequence numbers (`seq_gaps` less `seq_late`, since a late frame first
 //! shows as a gap), a duplicate is a `Nack(DuplicateFrame)`, a reordered or delayed frame is `seq_late`. Per group,
@@ -424,6 +425,8 @@ pub struct FaultLink<L: FlightLink> {
     late: BTreeSet<u64>,
     /// Sequence numbers of frames damaged or lost (never delivered intact).
     damaged_seqs: BTreeSet<u32>,
+    /// Frame indices delivered damaged: the flight software never reads them, so they make nothing late.
+    damaged_frames: BTreeSet<u64>,
     events: Vec<FaultEvent>,
     downlink: Deframer,
     acked_damaged: u64,
@@ -448,6 +451,7 @@ impl<L: FlightLink> FaultLink<L> {
             delivered_max: None,
             late: BTreeSet::new(),
             damaged_seqs: BTreeSet::new(),
+            damaged_frames: BTreeSet::new(),
             events: Vec::new(),
             downlink: Deframer::new(),
             acked_damaged: 0,
@@ -521,6 +525,9 @@ impl<L: FlightLink> FaultLink<L> {
     }
 
     fn deliver(&mut self, frame: u64, bytes: &[u8]) -> Result<(), LinkError> {
+        if self.damaged_frames.contains(&frame) {
+            return self.inner.send(bytes);
+        }
         match self.delivered_max {
             Some(m) if frame < m => {
                 self.late.insert(frame);
@@ -641,6 +648,7 @@ impl<L: FlightLink> FaultLink<L> {
                 }
                 event.detail = at * 8 + bit;
                 self.damaged_seqs.insert(seq);
+                self.damaged_frames.insert(frame);
             }
             FaultKind::Truncate => {
                 let keep = 1 + self.below(n - 2);
@@ -648,6 +656,7 @@ impl<L: FlightLink> FaultLink<L> {
                 out.push(0);
                 event.detail = keep;
                 self.damaged_seqs.insert(seq);
+                self.damaged_frames.insert(frame);
             }
             FaultKind::Drop => {
                 self.damaged_seqs.insert(seq);
