@@ -227,6 +227,11 @@ fn mission_args(out: &Path, seeds: u32, shard: Option<Shard>) -> MissionArgs {
         quiet: true,
         live: None,
         live_wait: 0.0,
+        faults: None,
+        fault_campaign: false,
+        fault_rates: Vec::new(),
+        fault_kinds: Vec::new(),
+        charge_host_time: false,
     }
 }
 

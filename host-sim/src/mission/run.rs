@@ -25,21 +25,23 @@ use firmware::config::rover::RoverParams;
 use firmware::geom::p3::{dist, from_vec3, P3};
 use firmware::geom::Real;
 use firmware::protocol::{
-    Configure, GoalRequest, MapSettings, Message, MissionConfig, MissionState, MissionStatus, Motion, MotionOutcome,
-    MotionReport, PlanState, PlannerChoice, Point3, StopReason, Tracking,
+    Configure, GoalRequest, MapSettings, Message, MissionConfig, MissionState, MissionStatus,
+    Motion, MotionOutcome, MotionReport, PlanState, PlannerChoice, Point3, StopReason, Tracking,
 };
 use rand_core::Rng;
 use serde::Serialize;
 
 use super::executor::{Blocked, Execution, MissionTruth, Progress, TrueOutcome, TrueRover};
 use super::params::MissionSection;
-use super::sensing::{gaussian, overview_scan, overview_sensor, rover_scan, tether_reading, Localiser};
+use super::sensing::{
+    gaussian, overview_scan, overview_sensor, rover_scan, tether_reading, Localiser,
+};
 use super::truth::Body;
 use super::world::MissionWorld;
 use crate::link::FlightLink;
 use crate::scenario::{Scenario, WorldSpec};
 use crate::sensor::{to_wire_pose, RangeSensorParams, Scan};
-use crate::session::{HostSession, SessionError};
+use crate::session::{HostSession, RetransmitPolicy, SessionError};
 
 /// Points per scan chunk sent.
 const CHUNK_POINTS: usize = 256;
@@ -165,6 +167,17 @@ pub struct MissionReport {
     pub nacks: u32,
     /// Link time at the end, s.
     pub link_s: f64,
+    /// Longest executive step the flight software measured (`Telemetry.cycle.max_step_us`), microseconds: zero
+    /// on the simulated clock, host time with `InProcLink::charge_host_time`, emulated time free-running.
+    pub max_step_us: u32,
+    /// Executive steps over the step budget (`Telemetry.cycle.slips`).
+    pub step_slips: u32,
+    /// Frames the host sent again for want of an answer (`session::RetransmitPolicy`; 0 on a clean link).
+    pub retransmits: u64,
+    /// Messages the host gave up after the policy's sends.
+    pub given_up: u64,
+    /// Scan chunks the host sent again for want of an answer (`HostSession::send_scan`).
+    pub chunks_resent: u64,
     /// Host wall time, s.
     pub host_s: f64,
     /// The executed path.
@@ -392,6 +405,8 @@ impl<L: FlightLink> Sim<'_, L> {
                 Message::Telemetry(t) => {
                     self.rep.map_blocks = self.rep.map_blocks.max(t.map.blocks_used);
                     self.rep.map_blocks_capacity = t.map.blocks_capacity;
+                    self.rep.max_step_us = self.rep.max_step_us.max(t.cycle.max_step_us);
+                    self.rep.step_slips = self.rep.step_slips.max(t.cycle.slips);
                 }
                 Message::Nack(_) => self.rep.nacks += 1,
                 _ => {}
@@ -447,10 +462,10 @@ impl<L: FlightLink> Sim<'_, L> {
     fn send_scan(&mut self, scan: &Scan) -> Result<(), MissionError> {
         self.scan_id += 1;
         let chunks = scan.to_chunks(self.scan_id, CHUNK_POINTS).map_err(|e| MissionError::Setup(format!("{e:?}")))?;
-        for c in chunks {
-            self.s.send(&Message::SensorChunk(c))?;
-        }
-        self.recv()
+        let t0 = Instant::now();
+        let (got, _) = self.s.send_scan(&chunks)?;
+        self.absorb(got, t0.elapsed().as_secs_f64());
+        Ok(())
     }
 
     fn scan_here(&mut self) -> Result<(), MissionError> {
@@ -620,10 +635,19 @@ pub fn run_mission(link: impl FlightLink, sc: &Scenario, opts: &MissionOptions) 
         map_blocks_capacity: 0,
         nacks: 0,
         link_s: 0.0,
+        max_step_us: 0,
+        step_slips: 0,
+        retransmits: 0,
+        given_up: 0,
+        chunks_resent: 0,
         host_s: 0.0,
         trace: vec![],
         tethers: vec![],
-        rocks: truth.world.rocks().map(|(r, _)| (r.centre, r.radius_m, r.visible)).collect(),
+        rocks: truth
+            .world
+            .rocks()
+            .map(|(r, _)| (r.centre, r.radius_m, r.visible))
+            .collect(),
         root: sc.tether.root_anchor,
         start: rover.axle(),
         goal: sc.goal.position,
@@ -631,7 +655,12 @@ pub fn run_mission(link: impl FlightLink, sc: &Scenario, opts: &MissionOptions) 
     };
     let estimate = rover.state.settled.pose;
     let mut sim = Sim {
-        s: HostSession::new(link),
+        s: {
+            // Every frame that changes the flight state is sent again when unanswered (lost on a faulty link).
+            let mut s = HostSession::new(link);
+            s.retransmit = Some(RetransmitPolicy::default());
+            s
+        },
         sc,
         reading_period_us: (1e6 / m.tether_rate_hz).round().max(1.0) as u64,
         m,
@@ -710,12 +739,18 @@ pub fn run_mission(link: impl FlightLink, sc: &Scenario, opts: &MissionOptions) 
     if sim.live {
         eprintln!();
     }
-    // a last look: the flight software's final status and telemetry
+    // a last look, on a clean link: the flight software's final status and telemetry
+    sim.s.link_mut().end_faults().map_err(SessionError::Link)?;
     sim.recv()?;
     if let Ok(t) = sim.s.telemetry() {
         sim.rep.map_blocks = sim.rep.map_blocks.max(t.map.blocks_used);
         sim.rep.map_blocks_capacity = t.map.blocks_capacity;
+        sim.rep.max_step_us = sim.rep.max_step_us.max(t.cycle.max_step_us);
+        sim.rep.step_slips = sim.rep.step_slips.max(t.cycle.slips);
     }
+    sim.rep.retransmits = sim.s.retransmitted;
+    sim.rep.given_up = sim.s.given_up;
+    sim.rep.chunks_resent = sim.s.chunks_resent;
     sim.snapshot_tether();
     let mut rep = sim.rep;
     rep.verdict = sim.done.unwrap_or(Verdict::TimeLimit);
