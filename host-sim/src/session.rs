@@ -111,6 +111,8 @@ pub struct HostSession<L: FlightLink> {
     pub given_up: u64,
     /// Scan chunks sent again ([`Self::send_scan`]).
     pub chunks_resent: u64,
+    /// Kinds of the messages given up, in order.
+    pub given_up_kinds: Vec<protocol::MessageKind>,
 }
 
 impl<L: FlightLink> HostSession<L> {
@@ -127,6 +129,7 @@ impl<L: FlightLink> HostSession<L> {
             retransmitted: 0,
             given_up: 0,
             chunks_resent: 0,
+            given_up_kinds: Vec::new(),
         }
     }
 
@@ -199,6 +202,7 @@ impl<L: FlightLink> HostSession<L> {
         for p in due {
             if p.tries >= policy.max_tries {
                 self.given_up += 1;
+                self.given_up_kinds.push(p.msg.kind());
                 log::warn!(
                     "message given up after {} sends: {:?}",
                     p.tries,

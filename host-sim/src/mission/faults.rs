@@ -134,6 +134,8 @@ pub fn summarise(cell: &FaultCell) -> CellSummary {
             Verdict::Arrived => s.arrived += 1,
             Verdict::SafeStop(r) => *s.safe.entry(format!("{r:?}")).or_default() += 1,
             Verdict::Fell => s.fell += 1,
+            // The link is down and the rover never commanded: safe, the reason given by the ground.
+            Verdict::Undelivered => *s.safe.entry("Undelivered(ground)".into()).or_default() += 1,
             v => *s.other.entry(v.name()).or_default() += 1,
         }
         s.injected += acc.injected(cell.kind);

@@ -25,7 +25,7 @@ use firmware::config::rover::RoverParams;
 use firmware::geom::p3::{dist, from_vec3, P3};
 use firmware::geom::Real;
 use firmware::protocol::{
-    Configure, GoalRequest, MapSettings, Message, MissionConfig, MissionState, MissionStatus,
+    Configure, GoalRequest, MapSettings, Message, MessageKind, MissionConfig, MissionState, MissionStatus,
     Motion, MotionOutcome, MotionReport, PlanState, PlannerChoice, Point3, StopReason, Tracking,
 };
 use rand_core::Rng;
@@ -68,6 +68,10 @@ pub enum Verdict {
     /// The flight software sent nothing that moves the mission on (no drive command, no mission-state change)
     /// for [`QUIET_LIMIT_S`] of link time while not `Arrived` or `Safe`.
     FlightQuiet,
+    /// The ground gave up a message the mission needs (`Configure` or the goal request: no answer after the
+    /// retransmission policy's sends, `session::RetransmitPolicy`), so the flight software never got the goal; the
+    /// rover was never commanded and stands where it started. The link is down, not the rover.
+    Undelivered,
 }
 
 impl Verdict {
@@ -721,6 +725,11 @@ pub fn run_mission(link: impl FlightLink, sc: &Scenario, opts: &MissionOptions) 
     while sim.done.is_none() {
         let now = sim.s.link().now_us();
         if now >= limit_us {
+            break;
+        }
+        if let Some(k) = sim.s.given_up_kinds.iter().find(|k| matches!(k, MessageKind::Configure | MessageKind::GoalRequest)) {
+            log::warn!("mission: the ground gave up sending {k:?}; the flight software cannot have the goal");
+            sim.done = Some(Verdict::Undelivered);
             break;
         }
         if sim.pending.is_empty() && now > sim.last_news_us + quiet_us {
