@@ -578,6 +578,16 @@ pub fn polyline_distance_xy(pts: &[P3], p: P3) -> f64 {
 
 /// Runs the mission of `sc` over `link`.
 pub fn run_mission(link: impl FlightLink, sc: &Scenario, opts: &MissionOptions) -> Result<MissionReport, MissionError> {
+    run_mission_from(link, sc, opts, 0)
+}
+
+/// [`run_mission`] with the host's frames numbered from `first_seq` (wrapping; the soak, `crate::soak`).
+pub fn run_mission_from(
+    link: impl FlightLink,
+    sc: &Scenario,
+    opts: &MissionOptions,
+    first_seq: u32,
+) -> Result<MissionReport, MissionError> {
     let host_t0 = Instant::now();
     let m = if opts.noiseless { sc.mission.noiseless() } else { sc.mission.clone() };
     let cfg = mission_configure(sc, opts);
@@ -625,7 +635,7 @@ pub fn run_mission(link: impl FlightLink, sc: &Scenario, opts: &MissionOptions) 
     };
     let estimate = rover.state.settled.pose;
     let mut sim = Sim {
-        s: HostSession::new(link),
+        s: HostSession::starting_at(link, first_seq),
         sc,
         reading_period_us: (1e6 / m.tether_rate_hz).round().max(1.0) as u64,
         m,
