@@ -28,7 +28,8 @@ flags="-Cpasses=sancov-module -Cllvm-args=-sanitizer-coverage-level=4 \
 -Cdebug-assertions -Ccodegen-units=1"
 target_dir="${FUZZ_TARGET_DIR:-$here/target}"
 t0=$SECONDS
-RUSTFLAGS="$flags" cargo build -q --manifest-path "$here/Cargo.toml" --target "$triple" --release \
+# FUZZ_SKIP_BUILD=1: run the binaries an earlier build left (e.g. `cargo fuzz build --sanitizer none`)
+[ "${FUZZ_SKIP_BUILD:-0}" = 1 ] || RUSTFLAGS="$flags" cargo build -q --manifest-path "$here/Cargo.toml" --target "$triple" --release \
     --config 'profile.release.debug="line-tables-only"' --target-dir "$target_dir" --bins
 build_s=$((SECONDS - t0))
 "$here/gen_corpus.sh" > /dev/null

@@ -75,18 +75,30 @@ pub fn counters(t: &Telemetry) -> Vec<(&'static str, u64)> {
         ("time_us", t.time_us),
         ("steps", u64::from(t.steps)),
         ("frames_accepted", u64::from(t.frames_accepted)),
-        ("frames_rejected", t.frames_rejected.iter().map(|&n| u64::from(n)).sum()),
+        (
+            "frames_rejected",
+            t.frames_rejected.iter().map(|&n| u64::from(n)).sum(),
+        ),
         ("frames_sent", u64::from(t.frames_sent)),
         ("bytes_received", u64::from(t.bytes_received)),
         ("bytes_sent", u64::from(t.bytes_sent)),
-        ("steps_rx_budget_exhausted", u64::from(t.steps_rx_budget_exhausted)),
-        ("steps_frame_budget_exhausted", u64::from(t.steps_frame_budget_exhausted)),
+        (
+            "steps_rx_budget_exhausted",
+            u64::from(t.steps_rx_budget_exhausted),
+        ),
+        (
+            "steps_frame_budget_exhausted",
+            u64::from(t.steps_frame_budget_exhausted),
+        ),
         ("scans_completed", u64::from(t.scans_completed)),
         ("scans_abandoned", u64::from(t.scans_abandoned)),
         ("tether_readings", u64::from(t.tether_readings)),
         ("goals_received", u64::from(t.goals_received)),
         ("motion_reports", u64::from(t.motion_reports)),
-        ("motion_report_timeouts", u64::from(t.motion_report_timeouts)),
+        (
+            "motion_report_timeouts",
+            u64::from(t.motion_report_timeouts),
+        ),
         ("log_dropped", u64::from(t.log_dropped)),
         ("tx_dropped", u64::from(t.tx_dropped)),
         ("device_errors", u64::from(t.device_errors)),
@@ -109,7 +121,10 @@ fn frames(log: &FieldLog, dir: Direction) -> (Vec<(u32, Message)>, u64) {
         while !rest.is_empty() {
             let (n, ev) = d.push(rest);
             rest = rest.get(n.max(1)..).unwrap_or(&[]);
-            match ev.map(|f| f.map_err(|_| ()).and_then(|f| decode_frame(f).map_err(|_| ()))) {
+            match ev.map(|f| {
+                f.map_err(|_| ())
+                    .and_then(|f| decode_frame(f).map_err(|_| ()))
+            }) {
                 Some(Ok((h, m))) => out.push((h.seq, m)),
                 Some(Err(())) => bad += 1,
                 None => {}
@@ -130,15 +145,27 @@ pub fn analyse(log: &FieldLog) -> SoakReport {
         match m {
             Message::Ack(a) => *acks.entry(a.seq).or_default() += 1,
             Message::Nack(_) => nacks += 1,
-            Message::Telemetry(t) => samples.push(Sample { seq: *seq, telemetry: *t }),
+            Message::Telemetry(t) => samples.push(Sample {
+                seq: *seq,
+                telemetry: *t,
+            }),
             _ => {}
         }
     }
-    let host_seq_gaps = host.windows(2).filter(|w| w[1].0 != w[0].0.wrapping_add(1)).count() as u64;
+    let host_seq_gaps = host
+        .windows(2)
+        .filter(|w| w[1].0 != w[0].0.wrapping_add(1))
+        .count() as u64;
     let host_seq_wrapped = host.windows(2).any(|w| w[1].0 < w[0].0);
     let acked = host.iter().filter(|(s, _)| acks.contains_key(s)).count() as u64;
-    let acked_twice = host.iter().filter(|(s, _)| acks.get(s).is_some_and(|&n| n > 1)).count() as u64;
-    let flight_lost = flight.windows(2).map(|w| u64::from(w[1].0.wrapping_sub(w[0].0).wrapping_sub(1))).sum();
+    let acked_twice = host
+        .iter()
+        .filter(|(s, _)| acks.get(s).is_some_and(|&n| n > 1))
+        .count() as u64;
+    let flight_lost = flight
+        .windows(2)
+        .map(|w| u64::from(w[1].0.wrapping_sub(w[0].0).wrapping_sub(1)))
+        .sum();
     SoakReport {
         host_frames: host.len() as u64,
         host_seq: host.first().zip(host.last()).map(|(a, b)| (a.0, b.0)),
@@ -159,7 +186,11 @@ impl SoakReport {
     /// The telemetry at the start, the middle and the end of the run.
     pub fn start_middle_end(&self) -> Option<[&Sample; 3]> {
         let n = self.samples.len();
-        Some([self.samples.first()?, self.samples.get(n / 2)?, self.samples.last()?])
+        Some([
+            self.samples.first()?,
+            self.samples.get(n / 2)?,
+            self.samples.last()?,
+        ])
     }
 
     /// Counters that went down from one telemetry frame to the next (as a wrapped or reset one would):
@@ -167,7 +198,10 @@ impl SoakReport {
     pub fn decreased(&self) -> Vec<(&'static str, u64, u64)> {
         let mut out = Vec::new();
         for w in self.samples.windows(2) {
-            for ((name, a), (_, b)) in counters(&w[0].telemetry).into_iter().zip(counters(&w[1].telemetry)) {
+            for ((name, a), (_, b)) in counters(&w[0].telemetry)
+                .into_iter()
+                .zip(counters(&w[1].telemetry))
+            {
                 if b < a {
                     out.push((name, a, b));
                 }
@@ -178,7 +212,9 @@ impl SoakReport {
 
     /// High-water marks that grew from the middle of the run to its end: (name, middle, end).
     pub fn grew_in_second_half(&self) -> Vec<(&'static str, u32, u32)> {
-        let Some([_, mid, end]) = self.start_middle_end() else { return vec![] };
+        let Some([_, mid, end]) = self.start_middle_end() else {
+            return vec![];
+        };
         high_water(&mid.telemetry.high_water)
             .into_iter()
             .zip(high_water(&end.telemetry.high_water))
@@ -196,31 +232,76 @@ impl SoakReport {
                 p.push(what);
             }
         };
-        check(want_wrap && !self.host_seq_wrapped, "the host's sequence numbers did not cross 2^32".into());
-        check(self.host_seq_gaps > 0, format!("{} gaps in the host's numbering", self.host_seq_gaps));
-        check(self.unacked > 0, format!("{} host frames never acknowledged (lost or refused)", self.unacked));
-        check(self.acked_twice > 0, format!("{} host frames acknowledged twice", self.acked_twice));
+        check(
+            want_wrap && !self.host_seq_wrapped,
+            "the host's sequence numbers did not cross 2^32".into(),
+        );
+        check(
+            self.host_seq_gaps > 0,
+            format!("{} gaps in the host's numbering", self.host_seq_gaps),
+        );
+        check(
+            self.unacked > 0,
+            format!(
+                "{} host frames never acknowledged (lost or refused)",
+                self.unacked
+            ),
+        );
+        check(
+            self.acked_twice > 0,
+            format!("{} host frames acknowledged twice", self.acked_twice),
+        );
         check(self.nacks > 0, format!("{} Nacks", self.nacks));
-        check(self.flight_lost > 0, format!("{} flight frames lost (gaps in their numbering)", self.flight_lost));
-        check(self.flight_undecodable > 0, format!("{} flight frames undecodable", self.flight_undecodable));
-        check(self.samples.len() < 3, format!("{} telemetry frames, at least 3 needed", self.samples.len()));
+        check(
+            self.flight_lost > 0,
+            format!(
+                "{} flight frames lost (gaps in their numbering)",
+                self.flight_lost
+            ),
+        );
+        check(
+            self.flight_undecodable > 0,
+            format!("{} flight frames undecodable", self.flight_undecodable),
+        );
+        check(
+            self.samples.len() < 3,
+            format!("{} telemetry frames, at least 3 needed", self.samples.len()),
+        );
         for (name, a, b) in self.decreased() {
-            check(true, format!("counter {name} went down from {a} to {b} (wrapped or reset)"));
+            check(
+                true,
+                format!("counter {name} went down from {a} to {b} (wrapped or reset)"),
+            );
         }
         for s in &self.samples {
             // `frames_sent` excludes the telemetry frame itself, so it equals that frame's number (from 0)
             check(
                 s.telemetry.frames_sent != s.seq,
-                format!("telemetry frame {} counts {} frames sent before it", s.seq, s.telemetry.frames_sent),
+                format!(
+                    "telemetry frame {} counts {} frames sent before it",
+                    s.seq, s.telemetry.frames_sent
+                ),
             );
         }
         if let Some(end) = self.samples.last() {
             let t = &end.telemetry;
-            check(t.tx_dropped > 0, format!("{} flight frames dropped on a full transmit queue", t.tx_dropped));
-            check(t.log_dropped > 0, format!("{} flight log lines dropped", t.log_dropped));
+            check(
+                t.tx_dropped > 0,
+                format!(
+                    "{} flight frames dropped on a full transmit queue",
+                    t.tx_dropped
+                ),
+            );
+            check(
+                t.log_dropped > 0,
+                format!("{} flight log lines dropped", t.log_dropped),
+            );
         }
         for (name, m, e) in self.grew_in_second_half() {
-            check(true, format!("high-water mark {name} grew in the second half: {m} -> {e}"));
+            check(
+                true,
+                format!("high-water mark {name} grew in the second half: {m} -> {e}"),
+            );
         }
         p
     }
@@ -243,15 +324,30 @@ impl core::fmt::Display for SoakReport {
             self.samples.len()
         )?;
         if let Some(sme) = self.start_middle_end() {
-            writeln!(f, "{:<30} {:>14} {:>14} {:>14}", "telemetry", "start", "middle", "end")?;
+            writeln!(
+                f,
+                "{:<30} {:>14} {:>14} {:>14}",
+                "telemetry", "start", "middle", "end"
+            )?;
             let names = high_water(&sme[0].telemetry.high_water).map(|(n, _)| n);
             for (k, name) in names.iter().enumerate() {
                 let v = sme.map(|s| high_water(&s.telemetry.high_water)[k].1);
-                writeln!(f, "{:<30} {:>14} {:>14} {:>14}", format!("high water {name}"), v[0], v[1], v[2])?;
+                writeln!(
+                    f,
+                    "{:<30} {:>14} {:>14} {:>14}",
+                    format!("high water {name}"),
+                    v[0],
+                    v[1],
+                    v[2]
+                )?;
             }
             let c = sme.map(|s| counters(&s.telemetry));
             for k in 0..c[0].len() {
-                writeln!(f, "{:<30} {:>14} {:>14} {:>14}", c[0][k].0, c[0][k].1, c[1][k].1, c[2][k].1)?;
+                writeln!(
+                    f,
+                    "{:<30} {:>14} {:>14} {:>14}",
+                    c[0][k].0, c[0][k].1, c[1][k].1, c[2][k].1
+                )?;
             }
         }
         Ok(())

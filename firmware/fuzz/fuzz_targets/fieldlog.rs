@@ -8,22 +8,33 @@
 //! before the flip kept).
 #![no_main]
 
-use host_sim::fieldlog::{parse, record_bytes, RECORD_OVERHEAD, Completeness, Direction, FieldLog, Header, Writer};
+use host_sim::fieldlog::{
+    parse, record_bytes, Completeness, Direction, FieldLog, Header, Writer, RECORD_OVERHEAD,
+};
 use libfuzzer_sys::fuzz_target;
 
 fn check_records_are_the_bytes(log: &FieldLog, b: &[u8]) {
     let mut last = None;
     for r in &log.records {
-        assert!(last.is_none_or(|l| r.offset > l), "record offsets do not increase");
+        assert!(
+            last.is_none_or(|l| r.offset > l),
+            "record offsets do not increase"
+        );
         last = Some(r.offset);
         let enc = record_bytes(r.direction, r.t_us, &r.bytes);
         let at = usize::try_from(r.offset).expect("offset fits");
-        assert_eq!(b.get(at..at + enc.len()), Some(&enc[..]), "record at {at} is not the bytes there");
+        assert_eq!(
+            b.get(at..at + enc.len()),
+            Some(&enc[..]),
+            "record at {at} is not the bytes there"
+        );
     }
 }
 
 fuzz_target!(|data: &[u8]| {
-    let Some(([mode, damage, cut_or_flip, c0, c1], rest)) = firmware_fuzz::split::<5>(data) else { return };
+    let Some(([mode, damage, cut_or_flip, c0, c1], rest)) = firmware_fuzz::split::<5>(data) else {
+        return;
+    };
     if mode % 2 == 0 {
         if let Ok(log) = parse(rest) {
             check_records_are_the_bytes(&log, rest);
@@ -41,7 +52,11 @@ fuzz_target!(|data: &[u8]| {
     let mut written = Vec::new();
     let (mut t, mut p) = (0u64, &rest[rest.len().min(usize::from(c0 % 16))..]);
     while let [dir, dt, len, tail @ ..] = p {
-        let direction = if dir % 2 == 0 { Direction::HostToFlight } else { Direction::FlightToHost };
+        let direction = if dir % 2 == 0 {
+            Direction::HostToFlight
+        } else {
+            Direction::FlightToHost
+        };
         t += u64::from(*dt);
         let (payload, next) = tail.split_at(tail.len().min(usize::from(*len)));
         w.append(direction, t, payload).expect("in memory");
@@ -51,20 +66,37 @@ fuzz_target!(|data: &[u8]| {
         p = next;
     }
     let finished = c1 % 2 == 0;
-    let b = if finished { w.finish().expect("in memory") } else { w.into_inner() };
-    let read = |log: &FieldLog| log.records.iter().map(|r| (r.direction, r.t_us, r.bytes.clone())).collect::<Vec<_>>();
+    let b = if finished {
+        w.finish().expect("in memory")
+    } else {
+        w.into_inner()
+    };
+    let read = |log: &FieldLog| {
+        log.records
+            .iter()
+            .map(|r| (r.direction, r.t_us, r.bytes.clone()))
+            .collect::<Vec<_>>()
+    };
     match damage % 3 {
         0 => {
             let log = parse(&b).expect("a written log reads");
             assert_eq!(read(&log), written);
-            let want = if finished { Completeness::Complete } else { Completeness::NoEndRecord };
+            let want = if finished {
+                Completeness::Complete
+            } else {
+                Completeness::NoEndRecord
+            };
             assert_eq!(log.completeness(), want);
         }
         1 => {
             let cut = (usize::from(cut_or_flip) | usize::from(c1) << 8) % b.len();
             if let Ok(log) = parse(&b[..cut]) {
                 check_records_are_the_bytes(&log, &b[..cut]);
-                assert_ne!(log.completeness(), Completeness::Complete, "a log cut at byte {cut} reads as complete");
+                assert_ne!(
+                    log.completeness(),
+                    Completeness::Complete,
+                    "a log cut at byte {cut} reads as complete"
+                );
             }
         }
         _ => {
@@ -73,7 +105,11 @@ fuzz_target!(|data: &[u8]| {
             d[bit / 8] ^= 1 << (bit % 8);
             if let Ok(log) = parse(&d) {
                 check_records_are_the_bytes(&log, &d);
-                assert_ne!(log.completeness(), Completeness::Complete, "a flipped bit at {bit} went unnoticed");
+                assert_ne!(
+                    log.completeness(),
+                    Completeness::Complete,
+                    "a flipped bit at {bit} went unnoticed"
+                );
                 // the written records that end before the flipped byte
                 let mut end = 36 + header.config.len();
                 let intact = written
@@ -83,7 +119,11 @@ fuzz_target!(|data: &[u8]| {
                         end <= bit / 8
                     })
                     .count();
-                assert_eq!(read(&log).get(..intact), Some(&written[..intact]), "a record before the flip was lost");
+                assert_eq!(
+                    read(&log).get(..intact),
+                    Some(&written[..intact]),
+                    "a record before the flip was lost"
+                );
             }
         }
     }

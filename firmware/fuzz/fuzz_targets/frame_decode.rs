@@ -9,14 +9,25 @@ use firmware::protocol::{build_raw, decode_frame, encode, Deframer, Header, Nack
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    let Some(([version, kind, s0, s1, s2, s3], body)) = firmware_fuzz::split::<6>(data) else { return };
-    let header = Header { version, kind, seq: u32::from_le_bytes([s0, s1, s2, s3]) };
+    let Some(([version, kind, s0, s1, s2, s3], body)) = firmware_fuzz::split::<6>(data) else {
+        return;
+    };
+    let header = Header {
+        version,
+        kind,
+        seq: u32::from_le_bytes([s0, s1, s2, s3]),
+    };
     let mut frame = [0u8; MAX_FRAME_LEN];
     // a body too long for a frame is refused by the builder; the deframer's own limit is fuzzed elsewhere
-    let Ok(n) = build_raw(header, body, &mut frame) else { return };
+    let Ok(n) = build_raw(header, body, &mut frame) else {
+        return;
+    };
     match decode_frame(&frame[..n]) {
         Ok((h, m)) => {
-            assert_eq!(h.version, PROTOCOL_VERSION, "a frame of another version decoded");
+            assert_eq!(
+                h.version, PROTOCOL_VERSION,
+                "a frame of another version decoded"
+            );
             assert_eq!(h.kind, m.kind() as u8);
             let mut wire = [0u8; MAX_ENCODED_FRAME_LEN];
             let len = encode(h.seq, &m, &mut wire).expect("a decoded message re-encodes");

@@ -6,7 +6,9 @@ use host_sim::terrain::geotiff::{read_geotiff, GeoTiffOptions};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    let Some(([s, sp, nd], tiff)) = firmware_fuzz::split::<3>(data) else { return };
+    let Some(([s, sp, nd], tiff)) = firmware_fuzz::split::<3>(data) else {
+        return;
+    };
     let opts = GeoTiffOptions {
         height_scale: firmware_fuzz::scale(s),
         // even selectors leave the spacing to ModelPixelScaleTag and the no-data value to GDAL_NODATA

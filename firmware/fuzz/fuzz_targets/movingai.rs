@@ -15,12 +15,22 @@ fuzz_target!(|data: &[u8]| {
         Some(i) => (&data[..i], &data[i + 1..]),
         None => (data, &[][..]),
     };
-    let map = core::str::from_utf8(map).ok().and_then(|t| parse_map(t).ok());
+    let map = core::str::from_utf8(map)
+        .ok()
+        .and_then(|t| parse_map(t).ok());
     if let Some(m) = &map {
-        assert_eq!(m.passable.len(), m.width * m.height, "cells do not fill the map");
+        assert_eq!(
+            m.passable.len(),
+            m.width * m.height,
+            "cells do not fill the map"
+        );
     }
-    let Ok(scen) = core::str::from_utf8(scen) else { return };
-    let Ok(problems) = parse_scen(scen) else { return };
+    let Ok(scen) = core::str::from_utf8(scen) else {
+        return;
+    };
+    let Ok(problems) = parse_scen(scen) else {
+        return;
+    };
     assert!(!problems.is_empty(), "an empty scenario list accepted");
     if let Some(m) = map.filter(|m| m.width * m.height <= RUN_CELLS) {
         let _ = run_scenarios(&m, &problems, |i, _| i < RUN_PROBLEMS);

@@ -21,9 +21,22 @@ pub fn split<const N: usize>(data: &[u8]) -> Option<([u8; N], &[u8])> {
 /// What an accepted DEM guarantees: a non-empty grid whose heights fill it, a finite positive spacing, and
 /// finite heights (missing posts are `None`, never an infinity or NaN).
 pub fn check_heightmap(h: &Heightmap) {
-    assert!(h.width > 0 && h.height > 0, "empty grid accepted: {}x{}", h.width, h.height);
-    assert_eq!(h.heights_m.len(), h.width * h.height, "heights do not fill the grid");
-    assert!(h.spacing_m.is_finite() && h.spacing_m > 0.0, "spacing {}", h.spacing_m);
+    assert!(
+        h.width > 0 && h.height > 0,
+        "empty grid accepted: {}x{}",
+        h.width,
+        h.height
+    );
+    assert_eq!(
+        h.heights_m.len(),
+        h.width * h.height,
+        "heights do not fill the grid"
+    );
+    assert!(
+        h.spacing_m.is_finite() && h.spacing_m > 0.0,
+        "spacing {}",
+        h.spacing_m
+    );
     for (i, z) in h.heights_m.iter().enumerate() {
         if let Some(z) = z {
             assert!(z.is_finite(), "post {i} has height {z}");

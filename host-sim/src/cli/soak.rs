@@ -48,23 +48,35 @@ fn soak(args: &SoakArgs) -> Result<bool, Box<dyn core::error::Error>> {
     let mut sc = super::mission::load_scenario(args.scenario.as_deref())?;
     if let Some(s) = args.link_time_s {
         if !(s.is_finite() && s > 0.0) {
-            return Err(format!("--link-time-s must be a positive number of seconds, got {s}").into());
+            return Err(
+                format!("--link-time-s must be a positive number of seconds, got {s}").into(),
+            );
         }
         sc.mission.time_limit_s = s;
     }
-    let opts = MissionOptions { seed: args.seed, tracking: firmware::protocol::Tracking::ClosedLoop, noiseless: false, live: false };
+    let opts = MissionOptions {
+        seed: args.seed,
+        tracking: firmware::protocol::Tracking::ClosedLoop,
+        noiseless: false,
+        live: false,
+    };
     let link_name = match args.link {
         LinkKind::Inproc => "inproc",
         LinkKind::Qemu => "qemu",
     };
-    let config = RunConfig { scenario: sc.name.clone(), link: link_name.into(), step_us: crate::link::inproc::DEFAULT_STEP_US };
+    let config = RunConfig {
+        scenario: sc.name.clone(),
+        link: link_name.into(),
+        step_us: crate::link::inproc::DEFAULT_STEP_US,
+    };
     let header = fieldlog::Header {
         protocol_version: firmware::config::protocol::PROTOCOL_VERSION,
         created_at_unix_ms: 0,
         seed: args.seed,
         config: serde_json::to_string(&config)?,
     };
-    let file = std::fs::File::create(&args.log).map_err(|e| format!("cannot create {}: {e}", args.log.display()))?;
+    let file = std::fs::File::create(&args.log)
+        .map_err(|e| format!("cannot create {}: {e}", args.log.display()))?;
     let writer = Writer::new(std::io::BufWriter::new(file), &header)?;
     let t0 = std::time::Instant::now();
     let run = |link: &mut dyn FlightLink| -> Result<_, Box<dyn core::error::Error>> {
@@ -75,18 +87,31 @@ fn soak(args: &SoakArgs) -> Result<bool, Box<dyn core::error::Error>> {
     };
     let rep = match args.link {
         LinkKind::Inproc => run(&mut crate::mission::link::mission_link(&sc)?)?,
-        LinkKind::Qemu => super::board::with_link(LinkKind::Qemu, crate::link::inproc::DEFAULT_STEP_US, run)?,
+        LinkKind::Qemu => {
+            super::board::with_link(LinkKind::Qemu, crate::link::inproc::DEFAULT_STEP_US, run)?
+        }
     };
     let wall = t0.elapsed();
     print!("{}", super::mission::summary(&rep));
     let log = fieldlog::read_file(&args.log)?;
     let report = analyse(&log);
-    println!("soak on {link_name}: wall time {:.1} s; first host seq {}", wall.as_secs_f64(), args.first_seq);
+    println!(
+        "soak on {link_name}: wall time {:.1} s; first host seq {}",
+        wall.as_secs_f64(),
+        args.first_seq
+    );
     print!("{report}");
     let problems = report.problems(args.first_seq > u32::MAX - 1_000_000);
     for p in &problems {
         println!("problem: {p}");
     }
-    println!("soak: {}", if problems.is_empty() { "passed" } else { "FAILED" });
+    println!(
+        "soak: {}",
+        if problems.is_empty() {
+            "passed"
+        } else {
+            "FAILED"
+        }
+    );
     Ok(problems.is_empty())
 }
