@@ -341,13 +341,9 @@ impl core::fmt::Display for SoakReport {
                     v[2]
                 )?;
             }
-            let c = sme.map(|s| counters(&s.telemetry));
-            for k in 0..c[0].len() {
-                writeln!(
-                    f,
-                    "{:<30} {:>14} {:>14} {:>14}",
-                    c[0][k].0, c[0][k].1, c[1][k].1, c[2][k].1
-                )?;
+            let [a, b, c] = sme.map(|s| counters(&s.telemetry));
+            for (((name, x), (_, y)), (_, z)) in a.into_iter().zip(b).zip(c) {
+                writeln!(f, "{:<30} {:>14} {:>14} {:>14}", name, x, y, z)?;
             }
         }
         Ok(())

@@ -265,7 +265,7 @@ fn every_reader_accepts_its_seeds() {
             }
             "fieldlog" => {}
             "scenario" => {
-                let sc = host_sim::scenario::parse(std::str::from_utf8(&b).unwrap(), Path::new("x.toml"));
+                let sc = host_sim::scenario::parse(core::str::from_utf8(&b).unwrap(), Path::new("x.toml"));
                 sc.expect(&what).world_spec().expect(&what);
             }
             "geotiff" => {
@@ -274,7 +274,7 @@ fn every_reader_accepts_its_seeds() {
                 assert_eq!((h.width, h.height, h.spacing_m, h.heights_m.iter().flatten().count()), (3, 2, 2.5, 5), "{what}");
             }
             "asc" => {
-                let h = asc::parse_asc(std::str::from_utf8(&b[1..]).unwrap(), 1.0).expect(&what);
+                let h = asc::parse_asc(core::str::from_utf8(&b[1..]).unwrap(), 1.0).expect(&what);
                 assert_eq!((h.width, h.height, h.heights_m.iter().flatten().count()), (3, 2, 5), "{what}");
             }
             "npy" => {
@@ -284,13 +284,13 @@ fn every_reader_accepts_its_seeds() {
                 assert!(h.width * h.height >= 4, "{what}");
             }
             "obj" => {
-                let m = obj::parse_obj(std::str::from_utf8(&b[1..]).unwrap(), &obj::ObjOptions::METRES).expect(&what);
+                let m = obj::parse_obj(core::str::from_utf8(&b[1..]).unwrap(), &obj::ObjOptions::METRES).expect(&what);
                 assert!(!m.triangles.is_empty(), "{what}");
             }
             "movingai" => {
                 let i = b.iter().position(|&c| c == 0xFF).unwrap();
-                let m = host_sim::movingai::parse_map(std::str::from_utf8(&b[..i]).unwrap()).expect(&what);
-                let s = host_sim::movingai::parse_scen(std::str::from_utf8(&b[i + 1..]).unwrap()).expect(&what);
+                let m = host_sim::movingai::parse_map(core::str::from_utf8(&b[..i]).unwrap()).expect(&what);
+                let s = host_sim::movingai::parse_scen(core::str::from_utf8(&b[i + 1..]).unwrap()).expect(&what);
                 let summary = host_sim::movingai::run_scenarios(&m, &s, |_, _| true).expect(&what);
                 assert_eq!((summary.run, summary.mismatches.len()), (2, 0), "{what}: {summary:?}");
             }
