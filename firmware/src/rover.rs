@@ -272,8 +272,12 @@ pub fn settle(map: &impl DistanceField, p_m: &Vec3, theta_m: Real, params: &Rove
     let mut settled = false;
     while iterations < SETTLE_MAX_ITERATIONS {
         iterations += 1;
-        // drop along n by sphere tracing
+        // drop along n by sphere tracing, bracketed: on a map's distance field (trilinear, not exactly Euclidean
+        // near the surface) a step can overshoot into the terrain and the next one back out, round and round;
+        // once the contact is bracketed (wheels clear at one offset along n, buried at another), a step that
+        // leaves the bracket bisects it instead. On an exact distance field no step overshoots, so nothing changes.
         let mut touched = false;
+        let (mut clear_at, mut buried_at) = (Real::INFINITY, Real::NEG_INFINITY);
         for _ in 0..SETTLE_MAX_DROP_STEPS {
             let Some(g) = wheel_gaps(map, &pts, &origin, &rot) else {
                 if first_query {
@@ -291,7 +295,17 @@ pub fn settle(map: &impl DistanceField, p_m: &Vec3, theta_m: Real, params: &Rove
                 touched = true;
                 break;
             }
-            origin -= n * (dmin - 0.5 * thr);
+            let at = (origin - p_m).dot(&n);
+            if dmin > 0.0 {
+                clear_at = clear_at.min(at);
+            } else {
+                buried_at = buried_at.max(at);
+            }
+            let mut next = at - (dmin - 0.5 * thr);
+            if clear_at.is_finite() && buried_at.is_finite() && !(next > buried_at && next < clear_at) {
+                next = 0.5 * (clear_at + buried_at);
+            }
+            origin += n * (next - at);
             if (origin - p_m).dot(&n) < -params.max_drop_m {
                 return SettleOutcome::NoGround;
             }
@@ -624,6 +638,27 @@ mod tests {
                     assert!(w.normal.dot(&plane.n) > 0.9995, "normal {:?}", w.normal);
                 }
             }
+        }
+    }
+
+    /// Level ground whose distance field says twice the true distance (a map's field is not exactly Euclidean near
+    /// the surface): plain sphere tracing steps from `+d` to `-d` and back forever and the settle ran out of drop
+    /// steps (`BudgetExhausted`); the bracketed drop bisects and settles one wheel radius up.
+    struct Overshooting;
+    impl DistanceField for Overshooting {
+        fn query(&self, p: &Vec3) -> DistanceQuery {
+            DistanceQuery::Known { distance: 2.0 * p.z, gradient: Vec3::z() }
+        }
+    }
+
+    #[test]
+    fn a_drop_that_overshoots_is_bracketed_and_settles() {
+        let params = RoverParams::AXEL;
+        for yaw in [0.0f32, 1.0] {
+            let out = settle(&Overshooting, &Vec3::new(0.3, 0.2, 0.0), yaw, &params);
+            let SettleOutcome::Settled(s) = out else { panic!("yaw {yaw}: {out:?}") };
+            let h = s.pose.translation.vector.z;
+            assert!((h - params.wheel_radius_m).abs() < params.contact_threshold_m, "axle height {h}");
         }
     }
 

@@ -2,16 +2,20 @@
 //!
 //! Format (all integers little-endian; `host-sim/doc/fieldlog.md` has the same table):
 //!
-//! Header: `magic "TBOTFLOG"` (8) | `format_version u16` (= 2; 1 is still read) | `protocol_version u8` |
+//! Header: `magic "TBOTFLOG"` (8) | `format_version u16` (= 3; 1 and 2 are still read) | `protocol_version u8` |
 //! `reserved u8` (0) | `created_at_unix_ms u64` (passed in by the caller) | `seed u64` | `config_len u32` |
 //! `config` (UTF-8 JSON, at most 1 MiB) | `header_crc u32` (CRC-32/ISO-HDLC of all header bytes before it).
 //!
-//! Record: `direction u8` (1 host -> flight, 2 flight -> host, 3 end) | `t_us u64` (link time) | `len u32` (at
+//! Record: `direction u8` (1 host -> flight, 2 flight -> host, 3 end, 4 fault) | `t_us u64` (link time) | `len u32` (at
 //! most 16 MiB) | `bytes` | `crc u32` (CRC-32 of direction, t_us, len and bytes).
 //!
 //! End record (format 2): direction 3, the last record's time, 8 bytes: the number of data records before it
 //! (`u64`). [`Writer::finish`] writes it; a log without one was cut short (possibly exactly at a record boundary,
 //! where nothing else would show it) or is a format-1 log, and [`FieldLog::end`] is `None`.
+//!
+//! Fault record (format 3): direction 4, the link time of an injected link fault, its description
+//! (`link::faults::FaultEvent::to_bytes`). Fault records are kept apart from the data records ([`FieldLog::faults`]),
+//! so replay and export see only the bytes that crossed the link; the end record counts both.
 //!
 //! The reader keeps every valid record. At damage (a bad checksum, direction or length, or a truncated record)
 //! it reports where (byte offset) and why, then resynchronises: it looks for the next byte offset where a whole
@@ -23,12 +27,16 @@ use std::io::Write;
 
 /// Magic bytes at the start of a field log.
 pub const MAGIC: &[u8; 8] = b"TBOTFLOG";
-/// Format version this build writes (it also reads [`FORMAT_VERSION_1`]).
-pub const FORMAT_VERSION: u16 = 2;
+/// Format version this build writes (it also reads [`FORMAT_VERSION_1`] and [`FORMAT_VERSION_2`]).
+pub const FORMAT_VERSION: u16 = 3;
+/// The second format: an end record, no fault records.
+pub const FORMAT_VERSION_2: u16 = 2;
 /// The first format: the same records, no end record.
 pub const FORMAT_VERSION_1: u16 = 1;
 /// Direction byte of the end record (format 2).
 const END_DIRECTION: u8 = 3;
+/// Direction byte of a fault record (format 3).
+const FAULT_DIRECTION: u8 = 4;
 /// Largest configuration text.
 pub const MAX_CONFIG_LEN: usize = 1 << 20;
 /// Largest record payload.
@@ -89,6 +97,17 @@ pub struct Record {
     pub offset: u64,
 }
 
+/// A fault record: an injected link fault (its payload is `link::faults::FaultEvent::to_bytes`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FaultRecord {
+    /// Link time, microseconds.
+    pub t_us: u64,
+    /// The fault's description.
+    pub bytes: Vec<u8>,
+    /// Byte offset of the record in the file.
+    pub offset: u64,
+}
+
 /// Why bytes of the log could not be read as records.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DamageReason {
@@ -100,7 +119,7 @@ pub enum DamageReason {
     BadEndRecord,
     /// A record's checksum does not match.
     BadChecksum,
-    /// A record's direction byte is not 1 or 2.
+    /// A record's direction byte is not one of its format's (1, 2; 3 from format 2; 4 from format 3).
     BadDirection,
     /// A record's length is above `MAX_RECORD_LEN`.
     LengthTooLarge,
@@ -147,7 +166,7 @@ impl core::fmt::Display for HeaderError {
             HeaderError::BadMagic => write!(f, "not a tetherbot field log (bad magic)"),
             HeaderError::UnsupportedVersion(v) => write!(
                 f,
-                "field log format version {v} is not supported (this build reads {FORMAT_VERSION})"
+                "field log format version {v} is not supported (this build reads 1 to {FORMAT_VERSION})"
             ),
             HeaderError::Truncated => write!(f, "field log header is truncated"),
             HeaderError::BadChecksum => write!(f, "field log header checksum mismatch"),
@@ -169,6 +188,8 @@ pub struct FieldLog {
     pub format_version: u16,
     /// Every valid data record, in file order (damaged spans skipped).
     pub records: Vec<Record>,
+    /// Every valid fault record (format 3), in file order.
+    pub faults: Vec<FaultRecord>,
     /// The first damage, if any (the same as `damaged[0]`).
     pub damage: Option<Damage>,
     /// Every damaged span, in file order.
@@ -203,12 +224,18 @@ pub enum Completeness {
 impl FieldLog {
     /// Whether the log is complete, and if not, why.
     pub fn completeness(&self) -> Completeness {
-        let read = self.records.len() as u64;
+        let read = (self.records.len() + self.faults.len()) as u64;
         match (self.damaged.len(), self.end) {
             (0, Some(e)) if e.records == read => Completeness::Complete,
-            (0, Some(e)) => Completeness::CountMismatch { expected: e.records, read },
+            (0, Some(e)) => Completeness::CountMismatch {
+                expected: e.records,
+                read,
+            },
             (0, None) => Completeness::NoEndRecord,
-            (spans, end) => Completeness::Damaged { spans, lost: end.map(|e| e.records.saturating_sub(read)) },
+            (spans, end) => Completeness::Damaged {
+                spans,
+                lost: end.map(|e| e.records.saturating_sub(read)),
+            },
         }
     }
 }
@@ -304,10 +331,20 @@ impl<W: Write> Writer<W> {
         Ok(())
     }
 
+    /// Appends a fault record (format 3; [`FieldLog::faults`]).
+    pub fn append_fault(&mut self, t_us: u64, bytes: &[u8]) -> std::io::Result<()> {
+        self.out
+            .write_all(&raw_record(FAULT_DIRECTION, t_us, bytes))?;
+        self.records += 1;
+        self.last_t_us = self.last_t_us.max(t_us);
+        Ok(())
+    }
+
     /// Writes the end record (the count of records appended), flushes and gives the writer back. A log closed
     /// without it reads as "no end record: truncated?".
     pub fn finish(mut self) -> std::io::Result<W> {
-        self.out.write_all(&end_record_bytes(self.last_t_us, self.records))?;
+        self.out
+            .write_all(&end_record_bytes(self.last_t_us, self.records))?;
         self.out.flush()?;
         Ok(self.out)
     }
@@ -347,7 +384,7 @@ pub fn parse(b: &[u8]) -> Result<FieldLog, HeaderError> {
         return Err(HeaderError::BadMagic);
     }
     let version = u16_at(b, 8).ok_or(HeaderError::Truncated)?;
-    if version != FORMAT_VERSION && version != FORMAT_VERSION_1 {
+    if !(FORMAT_VERSION_1..=FORMAT_VERSION).contains(&version) {
         return Err(HeaderError::UnsupportedVersion(version));
     }
     let protocol_version = *b.get(10).ok_or(HeaderError::Truncated)?;
@@ -374,22 +411,25 @@ pub fn parse(b: &[u8]) -> Result<FieldLog, HeaderError> {
         header,
         format_version: version,
         records: Vec::new(),
+        faults: Vec::new(),
         damage: None,
         damaged: Vec::new(),
         end: None,
     };
-    let ends = version >= 2;
     let mut at = end + 4;
     let mut last_t = 0u64;
     // Each pass reads one record or one damaged span; every pass advances `at`, so at most `b.len()` passes.
     while at < b.len() {
-        match record_at(b, at, ends) {
+        match record_at(b, at, version) {
             Ok(r) => {
                 let next = at + RECORD_OVERHEAD + r.bytes.len();
                 if r.dir == END_DIRECTION {
                     match <[u8; 8]>::try_from(r.bytes) {
                         Ok(n) => {
-                            log.end = Some(EndRecord { offset: at as u64, records: u64::from_le_bytes(n) });
+                            log.end = Some(EndRecord {
+                                offset: at as u64,
+                                records: u64::from_le_bytes(n),
+                            });
                             if next < b.len() {
                                 push_damage(&mut log, next, DamageReason::AfterEnd, b.len() - next);
                             }
@@ -402,13 +442,31 @@ pub fn parse(b: &[u8]) -> Result<FieldLog, HeaderError> {
                         }
                     }
                 }
-                let Some(direction) = Direction::from_u8(r.dir) else { break };
+                if r.dir == FAULT_DIRECTION {
+                    last_t = last_t.max(r.t_us);
+                    log.faults.push(FaultRecord {
+                        t_us: r.t_us,
+                        bytes: r.bytes.to_vec(),
+                        offset: at as u64,
+                    });
+                    at = next;
+                    continue;
+                }
+                let Some(direction) = Direction::from_u8(r.dir) else {
+                    break;
+                };
                 last_t = last_t.max(r.t_us);
-                log.records.push(Record { direction, t_us: r.t_us, bytes: r.bytes.to_vec(), offset: at as u64 });
+                log.records.push(Record {
+                    direction,
+                    t_us: r.t_us,
+                    bytes: r.bytes.to_vec(),
+                    offset: at as u64,
+                });
                 at = next;
             }
             Err(reason) => {
-                let resume = (at + 1..b.len()).find(|&p| record_at(b, p, ends).is_ok_and(|r| r.t_us >= last_t));
+                let resume = (at + 1..b.len())
+                    .find(|&p| record_at(b, p, version).is_ok_and(|r| r.t_us >= last_t));
                 let stop = resume.unwrap_or(b.len());
                 push_damage(&mut log, at, reason, stop - at);
                 at = stop;
@@ -419,20 +477,25 @@ pub fn parse(b: &[u8]) -> Result<FieldLog, HeaderError> {
 }
 
 fn push_damage(log: &mut FieldLog, at: usize, reason: DamageReason, skipped: usize) {
-    let d = Damage { offset: at as u64, reason, unread_bytes: skipped as u64 };
+    let d = Damage {
+        offset: at as u64,
+        reason,
+        unread_bytes: skipped as u64,
+    };
     log.damage.get_or_insert(d);
     log.damaged.push(d);
 }
 
-/// A whole record's fields, checked (the checksum matches; the direction is 1, 2, or 3 when `ends`).
+/// A whole record's fields, checked (the checksum matches; the direction is one of the format's).
 struct RawRecord<'a> {
     dir: u8,
     t_us: u64,
     bytes: &'a [u8],
 }
 
-fn record_at(b: &[u8], at: usize, ends: bool) -> Result<RawRecord<'_>, DamageReason> {
-    let (Some(&dir), Some(t_us), Some(len)) = (b.get(at), u64_at(b, at + 1), u32_at(b, at + 9)) else {
+fn record_at(b: &[u8], at: usize, version: u16) -> Result<RawRecord<'_>, DamageReason> {
+    let (Some(&dir), Some(t_us), Some(len)) = (b.get(at), u64_at(b, at + 1), u32_at(b, at + 9))
+    else {
         return Err(DamageReason::Truncated);
     };
     let len = len as usize;
@@ -446,10 +509,17 @@ fn record_at(b: &[u8], at: usize, ends: bool) -> Result<RawRecord<'_>, DamageRea
     if CRC.checksum(body) != stored {
         return Err(DamageReason::BadChecksum);
     }
-    if Direction::from_u8(dir).is_none() && !(ends && dir == END_DIRECTION) {
+    let known = Direction::from_u8(dir).is_some()
+        || (version >= FORMAT_VERSION_2 && dir == END_DIRECTION)
+        || (version >= FORMAT_VERSION && dir == FAULT_DIRECTION);
+    if !known {
         return Err(DamageReason::BadDirection);
     }
-    Ok(RawRecord { dir, t_us, bytes: body.get(13..).unwrap_or_default() })
+    Ok(RawRecord {
+        dir,
+        t_us,
+        bytes: body.get(13..).unwrap_or_default(),
+    })
 }
 
 /// Reads and parses a log file.
@@ -576,7 +646,84 @@ mod tests {
         let log = parse(&two).unwrap();
         assert_eq!(log.records.len(), 4);
         assert_eq!(log.damaged.len(), 2);
-        assert_eq!(log.completeness(), Completeness::Damaged { spans: 2, lost: Some(2) });
+        assert_eq!(
+            log.completeness(),
+            Completeness::Damaged {
+                spans: 2,
+                lost: Some(2)
+            }
+        );
+    }
+
+    /// Format 3: fault records are kept apart from the data records and counted by the end record; a format-2
+    /// log (every log before issue 24 item 1) still reads, and a fault record is not a format-2 record.
+    #[test]
+    fn fault_records_in_format_3_and_format_2_logs_still_read() {
+        let h = Header {
+            protocol_version: 4,
+            created_at_unix_ms: 5,
+            seed: 42,
+            config: "{}".into(),
+        };
+        let mut w = Writer::new(Vec::new(), &h).unwrap();
+        w.append(Direction::HostToFlight, 10, &[1, 2]).unwrap();
+        w.append_fault(12, &[7; 25]).unwrap();
+        w.append(Direction::FlightToHost, 20, &[3]).unwrap();
+        let b = w.finish().unwrap();
+        let log = parse(&b).unwrap();
+        assert_eq!(log.format_version, 3);
+        assert_eq!(log.records.len(), 2);
+        assert_eq!(log.faults.len(), 1);
+        assert_eq!(
+            (log.faults[0].t_us, log.faults[0].bytes.as_slice()),
+            (12, &[7u8; 25][..])
+        );
+        assert_eq!(log.end.map(|e| e.records), Some(3));
+        assert_eq!(log.completeness(), Completeness::Complete);
+        // a lost fault record is a lost record
+        let mut cut = b.clone();
+        cut[log.faults[0].offset as usize + 14] ^= 1;
+        assert_eq!(
+            parse(&cut).unwrap().completeness(),
+            Completeness::Damaged {
+                spans: 1,
+                lost: Some(1)
+            }
+        );
+        // the same bytes as format 2: the data records and the end record read; the fault record is damage
+        let mut v2 = b.clone();
+        v2[8..10].copy_from_slice(&FORMAT_VERSION_2.to_le_bytes());
+        let hdr_end = 32 + 2;
+        let crc = CRC.checksum(&v2[..hdr_end]);
+        v2[hdr_end..hdr_end + 4].copy_from_slice(&crc.to_le_bytes());
+        let old = parse(&v2).unwrap();
+        assert_eq!(
+            (old.format_version, old.records.len(), old.faults.len()),
+            (2, 2, 0)
+        );
+        assert_eq!(
+            old.damage.map(|d| d.reason),
+            Some(DamageReason::BadDirection)
+        );
+        // a format-2 log as the previous build wrote it (no fault record) is complete
+        let mut w2 = Writer::new(Vec::new(), &h).unwrap();
+        w2.append(Direction::HostToFlight, 10, &[1, 2]).unwrap();
+        let mut b2 = w2.finish().unwrap();
+        b2[8..10].copy_from_slice(&FORMAT_VERSION_2.to_le_bytes());
+        let crc = CRC.checksum(&b2[..hdr_end]);
+        b2[hdr_end..hdr_end + 4].copy_from_slice(&crc.to_le_bytes());
+        assert_eq!(parse(&b2).unwrap().completeness(), Completeness::Complete);
+        assert_eq!(
+            parse(
+                &b2[..8]
+                    .iter()
+                    .chain(&4u16.to_le_bytes())
+                    .copied()
+                    .collect::<Vec<u8>>()
+            )
+            .map(|_| ()),
+            Err(HeaderError::UnsupportedVersion(4))
+        );
     }
 
     /// A format-1 log (no end record) still reads, with the verdict "no end record".

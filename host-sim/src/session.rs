@@ -1,14 +1,52 @@
 //! The host side of a conversation with the flight software: numbers and encodes outgoing messages, deframes and
 //! decodes replies. Works over any [`FlightLink`].
+//!
+//! **Retransmission** ([`RetransmitPolicy`], on with [`HostSession::retransmit`]): every host frame gets exactly one
+//! `Ack` or `Nack` (`firmware/PROTOCOL.md` section 5). A frame that changes the flight state and has no answer
+//! after `after_us` of link time is sent again with a new sequence number (at most `max_tries` times), so a frame
+//! lost or damaged on the way up is not lost to the mission. A `Nack` for damage (`Truncated`, `Oversize`,
+//! `BadCrc`) answers nothing (its sequence number was read from a damaged header); any other `Nack` is an answer.
+//! Periodic and idempotent messages (`TimeTick`, `TetherReading`, `TelemetryRequest`) are not retransmitted: the
+//! next one replaces them. Scan chunks are retransmitted per scan, not per frame ([`HostSession::send_scan`]): one lost
+//! chunk would lose its scan; the flight software takes a scan's chunks in any order, so the chunks without an
+//! answer are sent again alone once the others are answered.
 
 use firmware::protocol::{
-    self, Deframer, Header, Message, NackReason, Telemetry, TelemetryRequest,
+    self, Deframer, Header, Message, NackReason, SensorChunk, Telemetry, TelemetryRequest,
 };
 
 use crate::link::{FlightLink, LinkError};
 
 /// Link time a session waits for replies, microseconds.
 pub const DEFAULT_REPLY_WAIT_US: u64 = 200_000;
+
+/// When a session sends a frame again.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RetransmitPolicy {
+    /// Link time without an answer after which a frame is sent again, microseconds (default 1 s: far above a
+    /// clean link's answer time of a few executive steps, and above the fault injector's delays and stalls).
+    pub after_us: u64,
+    /// Sends of one message at most (default 8), after which it is given up (counted).
+    pub max_tries: u32,
+}
+
+impl Default for RetransmitPolicy {
+    fn default() -> Self {
+        Self {
+            after_us: 1_000_000,
+            max_tries: 8,
+        }
+    }
+}
+
+/// A sent frame waiting for its answer.
+#[derive(Debug, Clone)]
+struct Pending {
+    seq: u32,
+    msg: Message,
+    sent_us: u64,
+    tries: u32,
+}
 
 /// A frame received from the flight software.
 #[derive(Debug, Clone, PartialEq)]
@@ -64,6 +102,15 @@ pub struct HostSession<L: FlightLink> {
     pub log: Vec<Received>,
     /// Wait for replies, microseconds of link time.
     pub reply_wait_us: u64,
+    /// Retransmission of unanswered frames (`None`: off).
+    pub retransmit: Option<RetransmitPolicy>,
+    pending: Vec<Pending>,
+    /// Frames sent again.
+    pub retransmitted: u64,
+    /// Messages given up after `max_tries` sends.
+    pub given_up: u64,
+    /// Scan chunks sent again ([`Self::send_scan`]).
+    pub chunks_resent: u64,
 }
 
 impl<L: FlightLink> HostSession<L> {
@@ -80,6 +127,11 @@ impl<L: FlightLink> HostSession<L> {
             deframer: Deframer::new(),
             log: Vec::new(),
             reply_wait_us: DEFAULT_REPLY_WAIT_US,
+            retransmit: None,
+            pending: Vec::new(),
+            retransmitted: 0,
+            given_up: 0,
+            chunks_resent: 0,
         }
     }
 
@@ -112,11 +164,62 @@ impl<L: FlightLink> HostSession<L> {
 
     /// Encodes and sends `msg`; returns its sequence number.
     pub fn send(&mut self, msg: &Message) -> Result<u32, SessionError> {
+        self.send_try(msg, 1)
+    }
+
+    fn send_try(&mut self, msg: &Message, tries: u32) -> Result<u32, SessionError> {
         let seq = self.take_seq();
         let mut buf = vec![0u8; firmware::config::protocol::MAX_ENCODED_FRAME_LEN];
         let n = protocol::encode(seq, msg, &mut buf).map_err(SessionError::Encode)?;
+        // Scan chunks are resent per scan by `send_scan` (module docs).
+        let periodic = matches!(
+            msg,
+            Message::TimeTick(_)
+                | Message::TetherReading(_)
+                | Message::TelemetryRequest(_)
+                | Message::SensorChunk(_)
+        );
+        if self.retransmit.is_some() && !periodic {
+            self.pending.push(Pending {
+                seq,
+                msg: msg.clone(),
+                sent_us: self.link.now_us(),
+                tries,
+            });
+        }
         self.link.send(&buf[..n])?;
         Ok(seq)
+    }
+
+    /// Sends again every frame unanswered for the policy's time (module docs).
+    fn retransmit_due(&mut self) -> Result<(), SessionError> {
+        let Some(policy) = self.retransmit else {
+            return Ok(());
+        };
+        let now = self.link.now_us();
+        let (due, rest): (Vec<Pending>, Vec<Pending>) = core::mem::take(&mut self.pending)
+            .into_iter()
+            .partition(|p| now.saturating_sub(p.sent_us) >= policy.after_us);
+        self.pending = rest;
+        for p in due {
+            if p.tries >= policy.max_tries {
+                self.given_up += 1;
+                log::warn!(
+                    "message given up after {} sends: {:?}",
+                    p.tries,
+                    p.msg.kind()
+                );
+                continue;
+            }
+            self.retransmitted += 1;
+            self.send_try(&p.msg, p.tries + 1)?;
+        }
+        Ok(())
+    }
+
+    /// Frames sent and not answered yet (retransmission on).
+    pub fn unanswered(&self) -> usize {
+        self.pending.len()
     }
 
     /// Sends raw wire bytes (for bad-input tests).
@@ -135,6 +238,18 @@ impl<L: FlightLink> HostSession<L> {
             let frame = ev.map_err(|e| SessionError::BadReply(e.into()))?;
             let (header, message) =
                 protocol::decode_frame(frame).map_err(SessionError::BadReply)?;
+            match &message {
+                Message::Ack(a) => self.pending.retain(|p| p.seq != a.seq),
+                Message::Nack(n)
+                    if !matches!(
+                        n.reason,
+                        NackReason::Truncated | NackReason::Oversize | NackReason::BadCrc
+                    ) =>
+                {
+                    self.pending.retain(|p| p.seq != n.seq)
+                }
+                _ => {}
+            }
             self.log.push(Received {
                 t_us,
                 header,
@@ -148,13 +263,95 @@ impl<L: FlightLink> HostSession<L> {
     /// Collects replies until the flight software is quiet.
     pub fn recv(&mut self) -> Result<Vec<Message>, SessionError> {
         let bytes = self.link.recv_until_quiet(self.reply_wait_us)?;
-        self.absorb(&bytes)
+        let out = self.absorb(&bytes)?;
+        self.retransmit_due()?;
+        Ok(out)
     }
 
     /// Lets link time run to `t_us`, collecting what arrives.
     pub fn advance_to(&mut self, t_us: u64) -> Result<Vec<Message>, SessionError> {
         let bytes = self.link.advance_to(t_us)?;
-        self.absorb(&bytes)
+        let out = self.absorb(&bytes)?;
+        self.retransmit_due()?;
+        Ok(out)
+    }
+
+    /// Sends one scan's chunks and collects the replies. With retransmission on, it waits until every chunk is
+    /// answered or the policy's time has passed, then sends again, alone, each chunk that had no answer (the flight
+    /// software takes a scan's chunks in any order), at most `max_tries` rounds; then the scan is given up (counted
+    /// in `given_up`). A chunk refused for good (`Nack` other than `DuplicateChunk`, which means it arrived before)
+    /// ends the scan at once. Returns the replies and whether every chunk arrived.
+    pub fn send_scan(
+        &mut self,
+        chunks: &[SensorChunk],
+    ) -> Result<(Vec<Message>, bool), SessionError> {
+        let mut replies = Vec::new();
+        let rounds = self.retransmit.map_or(1, |p| p.max_tries.max(1));
+        let mut todo: Vec<&SensorChunk> = chunks.iter().collect();
+        for round in 0..rounds {
+            if round > 0 {
+                self.chunks_resent += todo.len() as u64;
+                log::info!(
+                    "scan {}: {} chunk(s) sent again (no answer)",
+                    todo[0].scan_id,
+                    todo.len()
+                );
+            }
+            let mut seqs = Vec::with_capacity(todo.len());
+            for c in &todo {
+                seqs.push(self.send(&Message::SensorChunk((*c).clone()))?);
+            }
+            let sent_us = self.link.now_us();
+            // Per chunk: no answer yet, arrived, refused for good.
+            let mut answer: Vec<Option<bool>> = vec![None; seqs.len()];
+            loop {
+                let got = self.recv()?;
+                for m in &got {
+                    let (seq, arrived) = match m {
+                        Message::Ack(a) => (a.seq, true),
+                        Message::Nack(n) if n.reason == NackReason::DuplicateChunk => (n.seq, true),
+                        // A copy made by the link: the frame itself was answered on its own.
+                        Message::Nack(n) if n.reason == NackReason::DuplicateFrame => continue,
+                        Message::Nack(n)
+                            if !matches!(
+                                n.reason,
+                                NackReason::Truncated | NackReason::Oversize | NackReason::BadCrc
+                            ) =>
+                        {
+                            (n.seq, false)
+                        }
+                        _ => continue,
+                    };
+                    if let Some(a) = seqs.iter().position(|&s| s == seq).and_then(|i| answer.get_mut(i)) {
+                        *a = Some(arrived || *a == Some(true));
+                    }
+                }
+                replies.extend(got);
+                let waited = self.link.now_us().saturating_sub(sent_us);
+                match self.retransmit {
+                    Some(p) if answer.contains(&None) && waited < p.after_us => continue,
+                    _ => break,
+                }
+            }
+            if answer.contains(&Some(false)) {
+                return Ok((replies, false));
+            }
+            todo = todo
+                .into_iter()
+                .zip(&answer)
+                .filter(|(_, a)| a.is_none())
+                .map(|(c, _)| c)
+                .collect();
+            if todo.is_empty() {
+                return Ok((replies, true));
+            }
+            if self.retransmit.is_none() {
+                return Ok((replies, false));
+            }
+        }
+        self.given_up += 1;
+        log::warn!("scan {} given up after {rounds} rounds: {} chunk(s) unanswered", chunks[0].scan_id, todo.len());
+        Ok((replies, false))
     }
 
     /// Sends `msg` and collects the replies.

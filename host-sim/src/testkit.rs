@@ -104,7 +104,7 @@ fn state_of(t: &Telemetry) -> impl PartialEq + core::fmt::Debug {
         t.scans_completed,
         t.scans_abandoned,
         t.scan_in_progress,
-        t.scan_next_chunk,
+        t.scan_chunks_received,
         t.tether_readings,
         t.goals_received,
         t.plan_state,
@@ -229,14 +229,16 @@ fn cases(seq: u32) -> Vec<(&'static str, NackReason, Vec<u8>)> {
         NackReason::DuplicateChunk,
         chunk(scan_chunk(0)),
     ));
+    let mut older = scan_chunk(2);
+    older.scan_id = SCAN - 1;
     v.push((
-        "out-of-order chunk",
+        "chunk of an older scan",
         NackReason::OutOfOrderChunk,
-        chunk(scan_chunk(2)),
+        chunk(older),
     ));
     let mut other = scan_chunk(1);
-    other.scan_id = SCAN + 1;
-    v.push(("chunk of another scan", NackReason::MixedScan, chunk(other)));
+    other.chunk_count = SCAN_CHUNKS + 1;
+    v.push(("another chunk count in the scan", NackReason::MixedScan, chunk(other)));
     let mut too_many = scan_chunk(1);
     too_many.chunk_count = MAX_CHUNKS_PER_SCAN + 1;
     v.push((

@@ -225,6 +225,13 @@ fn mission_args(out: &Path, seeds: u32, shard: Option<Shard>) -> MissionArgs {
         threads: Some(2),
         created_at_ms: Some(0),
         quiet: true,
+        live: None,
+        live_wait: 0.0,
+        faults: None,
+        fault_campaign: false,
+        fault_rates: Vec::new(),
+        fault_kinds: Vec::new(),
+        charge_host_time: false,
     }
 }
 

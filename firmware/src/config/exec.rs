@@ -16,6 +16,9 @@
 //! | [`PLANNER_ITERATIONS_PER_STEP`] | 8 | planner iterations granted per `step` in planning mode |
 //! | [`PLAN_FRAMES_PER_STEP`] | 1 | `Plan` / `DriveCommand` frames emitted per `step` |
 //! | [`MOTION_REPORT_TIMEOUT_US`] | 120_000_000 | flight time to wait for a drive command's `MotionReport` before stopping and giving it up |
+//! | [`STEP_BUDGET_US`] | 100_000 | a step longer than this is a cycle slip (counted in `Telemetry.cycle`): the fastest telemetry period a `Configure` may ask for (`MIN_TELEMETRY_PERIOD_MS`), a twentieth of the board's 2 s watchdog |
+//! | [`SEQ_WINDOW`] | 1024 | host sequence numbers within this distance of the expected one count as lost (ahead) or late (behind); further behind is a new host session (`exec` module docs) |
+//! | [`SEQ_HISTORY_LEN`] | 16 | accepted frames (sequence number, CRC) remembered to refuse a duplicate |
 
 use super::protocol::MAX_ENCODED_FRAME_LEN;
 
@@ -54,3 +57,13 @@ const _: () = assert!(RX_STAGING_LEN <= RX_BYTES_PER_STEP);
 /// the command (a late report is `Nack(UnknownCommand)`), counts it and tells the autonomy
 /// (`Autonomy::motion_timeout`).
 pub const MOTION_REPORT_TIMEOUT_US: u64 = 120_000_000;
+
+/// Step budget, microseconds: a step that takes longer on the flight clock is a cycle slip (F Prime's rate groups
+/// count the same). Default 100 ms: the shortest telemetry period (`MIN_TELEMETRY_PERIOD_MS`), so a step within
+/// budget never makes periodic telemetry late, and a twentieth of the board's 2 s watchdog.
+pub const STEP_BUDGET_US: u64 = 100_000;
+/// Distance from the expected host sequence number within which a frame counts as after lost frames (ahead) or
+/// late (behind); a larger jump either way is a new host session (counted, followed).
+pub const SEQ_WINDOW: u32 = 1024;
+/// Accepted host frames remembered (sequence number and CRC) to refuse a duplicate.
+pub const SEQ_HISTORY_LEN: usize = 16;

@@ -21,7 +21,9 @@
 //! Parameters (`config::exec`): `RX_BYTES_PER_STEP` 1024, `FRAMES_PER_STEP` 4, `RX_STAGING_LEN` 256,
 //! `TX_QUEUE_LEN` 8192, `TX_RESERVE` 4116, `TX_BYTES_PER_STEP` 4096, `LOG_QUEUE_LEN` 8, `LOG_FRAMES_PER_SECOND`
 //! 10, `LOG_BURST` 4, `DEFAULT_TELEMETRY_PERIOD_US` 1 s, `PLAN_WAYPOINTS_CAPACITY` 256,
-//! `PLANNER_ITERATIONS_PER_STEP` 8, `PLAN_FRAMES_PER_STEP` 1, `MOTION_REPORT_TIMEOUT_US` 120 s.
+//! `PLANNER_ITERATIONS_PER_STEP` 8, `PLAN_FRAMES_PER_STEP` 1, `MOTION_REPORT_TIMEOUT_US` 120 s, `STEP_BUDGET_US`
+//! 100 ms (cycle accounting: the step's duration is the clock read at its end minus the one at its start; module
+//! docs of `exec`).
 
 use core::borrow::BorrowMut;
 use core::fmt::Write as _;
@@ -33,7 +35,7 @@ use super::{Autonomy, ExecStorage, Executive};
 use crate::config::exec::*;
 use crate::config::protocol::{MAX_ENCODED_FRAME_LEN, MAX_LOG_TEXT};
 use crate::protocol::{
-    self, HighWater, Log, LogLevel, Message, Mode, PlanState, Telemetry, NACK_REASON_COUNT,
+    self, CycleStats, HighWater, Log, LogLevel, Message, Mode, PlanState, Telemetry, NACK_REASON_COUNT,
 };
 
 /// What one [`Executive::step`] did.
@@ -75,6 +77,12 @@ pub(super) struct Counters {
     pub(super) device_errors: u32,
     pub(super) illegal_transitions: u32,
     pub(super) high_water: HighWater,
+    pub(super) seq_gaps: u32,
+    pub(super) seq_late: u32,
+    pub(super) seq_resyncs: u32,
+    pub(super) cycle: CycleStats,
+    /// A slip was logged since the last `Telemetry` frame (the throttle).
+    pub(super) slip_noted: bool,
 }
 
 impl<L, C, W, A, S> Executive<L, C, W, A, S>
@@ -88,7 +96,7 @@ where
     /// The current telemetry snapshot (what a `Telemetry` frame sent now would carry).
     pub fn telemetry(&self) -> Telemetry {
         let c = &self.counters;
-        let (scan_in_progress, scan_next_chunk) = self
+        let (scan_in_progress, scan_chunks_received) = self
             .assembler
             .progress()
             .map_or((0, 0), |(id, next, _)| (id, next));
@@ -110,7 +118,7 @@ where
             scans_completed: c.scans_completed,
             scans_abandoned: c.scans_abandoned,
             scan_in_progress,
-            scan_next_chunk,
+            scan_chunks_received,
             tether_readings: c.tether_readings,
             goals_received: c.goals_received,
             motion_reports: c.motion_reports,
@@ -123,6 +131,13 @@ where
             illegal_transitions: c.illegal_transitions,
             high_water: hw,
             map: self.autonomy.map_status(),
+            seq_gaps: c.seq_gaps,
+            seq_late: c.seq_late,
+            seq_resyncs: c.seq_resyncs,
+            cycle: CycleStats {
+                budget_us: u32::try_from(STEP_BUDGET_US).unwrap_or(u32::MAX),
+                ..c.cycle
+            },
         }
     }
 
@@ -176,6 +191,8 @@ where
             self.send_telemetry(now);
         }
         report.tx_bytes += self.flush();
+        let end = self.clock.now();
+        self.account_cycle(end.micros_since(now));
         report.busy = self.rx_start < self.rx_end
             || self.deframer.pending() > 0 && self.link.read_ready().unwrap_or(false)
             || self.link.read_ready().unwrap_or(false)
@@ -185,6 +202,24 @@ where
             || self.mode == Mode::Driving && self.awaiting.is_none()
             || !self.log_queue.is_empty();
         report
+    }
+
+    /// Cycle accounting of one step of `took_us` on the flight clock; logs the first slip after each telemetry frame.
+    fn account_cycle(&mut self, took_us: u64) {
+        let took = u32::try_from(took_us).unwrap_or(u32::MAX);
+        let c = &mut self.counters.cycle;
+        c.max_step_us = c.max_step_us.max(took);
+        c.period_max_step_us = c.period_max_step_us.max(took);
+        if took_us > STEP_BUDGET_US {
+            c.slips = c.slips.saturating_add(1);
+            if !self.counters.slip_noted {
+                self.counters.slip_noted = true;
+                self.note(
+                    LogLevel::Warn,
+                    format_args!("cycle slip: step took {took_us} us, budget {STEP_BUDGET_US} us"),
+                );
+            }
+        }
     }
 
     /// Reads at most `RX_BYTES_PER_STEP` bytes and dispatches at most `FRAMES_PER_STEP` frames, only while
@@ -290,6 +325,9 @@ where
     pub(super) fn send_telemetry(&mut self, now: Instant) {
         self.last_telemetry = Some(now);
         let t = self.telemetry();
+        // The period's longest step and the slip-log throttle restart with each frame.
+        self.counters.cycle.period_max_step_us = 0;
+        self.counters.slip_noted = false;
         self.send(&Message::Telemetry(t));
         self.send_mission_status();
     }

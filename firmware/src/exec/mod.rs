@@ -27,9 +27,27 @@
 //! reason changed, after every accepted motion report, and after every `Telemetry` frame; a change to `Safe` or
 //! `Arrived` while a report is awaited also sends `Stop`.
 //!
+//! ## Sequence numbers and duplicates (v4)
+//! Every host frame that arrives intact (CRC good) is checked against the last `SEQ_HISTORY_LEN` intact frames: the
+//! same sequence number and CRC again is a duplicate on the link, refused `Nack(DuplicateFrame)` so nothing acts on it
+//! twice. Otherwise its sequence number is compared with the expected one (0 at boot, then the highest so far plus
+//! one): ahead by `d <= SEQ_WINDOW` counts `d` frames lost or damaged on the way up (`Telemetry.seq_gaps`); behind by at most
+//! `SEQ_WINDOW` counts a late frame (`seq_late`: reordered or delayed; still dispatched, so a retransmission or a
+//! late report is handled by the message's own checks); further ahead (less than half the number range) after an
+//! intact frame was seen is a loss burst (`seq_gaps` again); any other jump (further behind: a host restarted from
+//! 0; or the first frame after boot beyond the window) is a new host session (`seq_resyncs`). These
+//! counters are the flight side's detection of link faults (`host-sim/doc/faults.md`).
+//!
+//! ## Cycle accounting (v4)
+//! Each step reads the clock again at its end; the step's duration, the longest since boot and since the last
+//! `Telemetry` frame, and the slips (steps longer than `STEP_BUDGET_US`) are reported in `Telemetry.cycle`, as F Prime's
+//! rate groups account their cycles. A slip is also logged (`Warn`), throttled to the first slip after each
+//! `Telemetry` frame (the frame carries the count). In-process the clock is the simulated one (a step takes no
+//! simulated time unless the link charges host time, `host-sim` `SimClock`); free-running on the board it is SysTick.
+//!
 //! ## Determinism
 //! Output bytes depend only on the input bytes and the clock readings: no randomness, no hash iteration; the time
-//! is read once per step and passed on.
+//! is read once at the start of a step and passed on (the read at its end only measures the step).
 //!
 //! ## Layout
 //! - `mod.rs`: the executive's state, the mode machine, the dispatch of each host message, planning and the
@@ -166,6 +184,10 @@ pub struct Executive<L, C, W, A, S> {
     log_tokens: u32,
     log_refill_at: Instant,
     now: Instant,
+    seq_next: u32,
+    /// An intact host frame has arrived since boot (before that, a jump ahead is a session, not a loss burst).
+    seq_seen: bool,
+    seq_history: Deque<(u32, u32), SEQ_HISTORY_LEN>,
 }
 
 impl<L, C, W, A, S> Executive<L, C, W, A, S>
@@ -207,6 +229,9 @@ where
             log_tokens: LOG_BURST,
             log_refill_at: Instant::from_micros(0),
             now: Instant::from_micros(0),
+            seq_next: 0,
+            seq_seen: false,
+            seq_history: Deque::new(),
         }
     }
 
@@ -260,6 +285,9 @@ where
         if let Err(e) = f.check() {
             return self.reject(seq, e.into());
         }
+        if let Err(reason) = self.track_seq(seq, f.crc()) {
+            return self.reject(seq, reason);
+        }
         let msg = match protocol::decode(&f) {
             Ok((_, m)) => m,
             Err(e) => return self.reject(seq, e.into()),
@@ -285,6 +313,36 @@ where
             }
             Err(reason) => self.reject(seq, reason),
         }
+    }
+
+    /// Refuses a duplicate and counts lost, late and resynchronised host sequence numbers (module docs).
+    fn track_seq(&mut self, seq: u32, crc: u32) -> Result<(), NackReason> {
+        if self.seq_history.iter().any(|&h| h == (seq, crc)) {
+            return Err(NackReason::DuplicateFrame);
+        }
+        if self.seq_history.is_full() {
+            self.seq_history.pop_front();
+        }
+        // Room was made above.
+        let _ = self.seq_history.push_back((seq, crc));
+        let c = &mut self.counters;
+        // The host counts its frames from 0 (PROTOCOL.md section 1), so a lost first frame is a gap too.
+        let (ahead, behind) = (seq.wrapping_sub(self.seq_next), self.seq_next.wrapping_sub(seq));
+        if ahead <= SEQ_WINDOW {
+            c.seq_gaps = c.seq_gaps.saturating_add(ahead);
+            self.seq_next = seq.wrapping_add(1);
+        } else if behind <= SEQ_WINDOW {
+            c.seq_late = c.seq_late.saturating_add(1);
+        } else if self.seq_seen && ahead < 1 << 31 {
+            // A loss burst longer than the window: a restarted host counts from 0, so it shows behind, not ahead.
+            c.seq_gaps = c.seq_gaps.saturating_add(ahead);
+            self.seq_next = seq.wrapping_add(1);
+        } else {
+            c.seq_resyncs = c.seq_resyncs.saturating_add(1);
+            self.seq_next = seq.wrapping_add(1);
+        }
+        self.seq_seen = true;
+        Ok(())
     }
 
     fn reject(&mut self, seq: u32, reason: NackReason) {

@@ -31,10 +31,13 @@ impl ByteLink for QueueLink {
     }
 }
 
-struct Clock(u64);
+/// Time, and how far each read moves it on (0: it stands still between the test's own advances).
+struct Clock(u64, u64);
 impl MonotonicClock for Clock {
     fn now(&mut self) -> Instant {
-        Instant::from_micros(self.0)
+        let t = self.0;
+        self.0 += self.1;
+        Instant::from_micros(t)
     }
 }
 struct Dog;
@@ -50,7 +53,7 @@ type Exec<A> = Executive<QueueLink, Clock, Dog, A, Box<ExecStorage>>;
 fn exec<A: Autonomy>(a: A) -> Exec<A> {
     Executive::new(
         QueueLink::default(),
-        Clock(0),
+        Clock(0, 0),
         Dog,
         a,
         Box::new(ExecStorage::new()),
@@ -100,9 +103,15 @@ fn goal() -> GoalRequest {
 
 /// Sends `msgs` (seq 100, 101, ...), steps until quiet, returns the decoded replies.
 fn exchange<A: Autonomy>(e: &mut Exec<A>, msgs: &[Message]) -> StdVec<Message> {
+    exchange_from(e, 100, msgs)
+}
+
+/// As [`exchange`] from sequence number `first` (a message sent again is a new frame with its own seq: the same
+/// seq and CRC again is a duplicate, protocol v4).
+fn exchange_from<A: Autonomy>(e: &mut Exec<A>, first: u32, msgs: &[Message]) -> StdVec<Message> {
     for (i, m) in msgs.iter().enumerate() {
         let mut buf = [0u8; 2100];
-        let n = encode(100 + i as u32, m, &mut buf).unwrap();
+        let n = encode(first + i as u32, m, &mut buf).unwrap();
         e.link_mut().to_flight.extend(&buf[..n]);
     }
     for _ in 0..100 {
@@ -372,12 +381,12 @@ fn reports_for_unknown_or_reported_commands_are_refused_and_counted() {
     assert_eq!(e.autonomy().reports, [(id, Motion::Turn { yaw_rad: 0.5 })]);
     let next = drive_ids(&r);
     assert_eq!(next, [id + 1]);
-    // the same report again: already reported
-    let r = exchange(&mut e, &[report(id)]);
+    // the same report again (a new frame): already reported
+    let r = exchange_from(&mut e, 200, &[report(id)]);
     assert_eq!(
         r[0],
         Message::Nack(Nack {
-            seq: 100,
+            seq: 200,
             reason: NackReason::UnknownCommand
         })
     );
@@ -465,12 +474,12 @@ fn a_cancel_stops_and_returns_to_mapping() {
     assert_eq!(e.mode(), Mode::Mapping);
     assert_eq!(e.autonomy().cancels, [9]);
     assert_eq!(e.telemetry().goal_cancels, 1);
-    // nothing more to cancel
-    let r = exchange(&mut e, &[Message::GoalCancel(GoalCancel { goal_id: 9 })]);
+    // nothing more to cancel (the same cancel again, a new frame)
+    let r = exchange_from(&mut e, 200, &[Message::GoalCancel(GoalCancel { goal_id: 9 })]);
     assert_eq!(
         r[0],
         Message::Nack(Nack {
-            seq: 100,
+            seq: 200,
             reason: NackReason::UnknownGoal
         })
     );
@@ -642,4 +651,71 @@ fn a_safe_stop_between_reports_stops_the_motion_in_flight() {
     // the interrupted motion's report is still accepted
     let r = exchange(&mut e, &[report(id)]);
     assert_eq!(r[0], Message::Ack(Ack { seq: 100 }));
+}
+
+/// Protocol v4: the same frame twice (seq and CRC) is refused `DuplicateFrame` and not acted on; lost, late and
+/// far-off sequence numbers are counted.
+#[test]
+fn duplicates_are_refused_and_sequence_gaps_and_late_frames_counted() {
+    let (mut e, id) = mission_exec();
+    let before = e.telemetry();
+    let mut buf = [0u8; 2100];
+    let n = encode(300, &report(id), &mut buf).unwrap();
+    e.link_mut().to_flight.extend(&buf[..n]);
+    e.link_mut().to_flight.extend(&buf[..n]);
+    let r = exchange(&mut e, &[]);
+    assert_eq!(r[0], Message::Ack(Ack { seq: 300 }));
+    assert!(r.contains(&Message::Nack(Nack { seq: 300, reason: NackReason::DuplicateFrame })));
+    // acted on once: one report, no UnknownCommand for the copy
+    assert_eq!(e.autonomy().reports.len(), 1);
+    let t = e.telemetry();
+    assert_eq!(t.frames_rejected[NackReason::DuplicateFrame.index()], 1);
+    assert_eq!(t.frames_rejected[NackReason::UnknownCommand.index()], 0);
+    // mission_exec's frames were 100, 101, ...: 300 skipped the ones in between
+    let gaps = t.seq_gaps - before.seq_gaps;
+    assert!(gaps > 0, "{gaps}");
+    // 305 after 300: four lost; then 303 arrives late
+    exchange_from(&mut e, 305, &[Message::TimeTick(TimeTick { host_time_us: 1 })]);
+    exchange_from(&mut e, 303, &[Message::TimeTick(TimeTick { host_time_us: 2 })]);
+    let t2 = e.telemetry();
+    assert_eq!((t2.seq_gaps - t.seq_gaps, t2.seq_late - t.seq_late, t2.seq_resyncs), (4, 1, 0));
+    // a jump ahead of more than SEQ_WINDOW is a loss burst: every frame in between is counted lost
+    let w = crate::config::exec::SEQ_WINDOW;
+    exchange_from(&mut e, 305 + 2 * w, &[Message::TimeTick(TimeTick { host_time_us: 3 })]);
+    let t3 = e.telemetry();
+    assert_eq!((t3.seq_gaps - t2.seq_gaps, t3.seq_late, t3.seq_resyncs), (2 * w - 1, t2.seq_late, 0));
+    // a host restarted from 0 is far behind: a new host session, nothing counted lost or late
+    exchange_from(&mut e, 0, &[Message::TimeTick(TimeTick { host_time_us: 4 })]);
+    let t4 = e.telemetry();
+    assert_eq!((t4.seq_gaps, t4.seq_late, t4.seq_resyncs), (t3.seq_gaps, t3.seq_late, 1));
+}
+
+/// Cycle accounting: a clock that moves during a step gives the step's duration, the maximum and the slips over
+/// `STEP_BUDGET_US`; the period maximum restarts with each `Telemetry` frame; the first slip is logged once.
+#[test]
+fn cycle_accounting_measures_steps_on_the_clock_and_counts_slips() {
+    use crate::config::exec::STEP_BUDGET_US;
+    let mut e = exec(NoAutonomy);
+    exchange(&mut e, &[Message::Configure(configure())]);
+    assert_eq!(e.telemetry().cycle.max_step_us, 0, "a clock that stands still gives zero-length steps");
+    // every read of this clock moves it on: a step lasts `d`
+    for d in [STEP_BUDGET_US / 2, STEP_BUDGET_US + 7, 3 * STEP_BUDGET_US, STEP_BUDGET_US] {
+        e.clock_mut().1 = d;
+        e.step();
+        e.clock_mut().1 = 0;
+    }
+    let t = e.telemetry();
+    assert_eq!(t.cycle.budget_us as u64, STEP_BUDGET_US);
+    assert_eq!(t.cycle.max_step_us as u64, 3 * STEP_BUDGET_US);
+    assert_eq!(t.cycle.period_max_step_us as u64, 3 * STEP_BUDGET_US);
+    assert_eq!(t.cycle.slips, 2, "two steps over budget; one exactly at it is not a slip");
+    // a telemetry request: the frame carries the period maximum, then it restarts
+    let r = exchange_from(&mut e, 101, &[Message::TelemetryRequest(TelemetryRequest)]);
+    let sent = r.iter().find_map(|m| if let Message::Telemetry(t) = m { Some(*t) } else { None }).unwrap();
+    assert_eq!(sent.cycle.period_max_step_us as u64, 3 * STEP_BUDGET_US);
+    assert_eq!(e.telemetry().cycle.period_max_step_us, 0);
+    // the throttle: one `Warn` record for the two slips of the period
+    let slip_logs = r.iter().filter(|m| matches!(m, Message::Log(l) if l.text.contains("cycle slip"))).count();
+    assert_eq!(slip_logs, 1);
+    assert_eq!(e.telemetry().cycle.max_step_us as u64, 3 * STEP_BUDGET_US);
 }

@@ -295,10 +295,13 @@ pub(crate) fn set_up(
         log::warn!("nav: the start does not settle at ({}, {}): {:?}", p.x, p.y, e);
         GoalRefusal::StartNotSettled
     })?;
-    space.goal_state(g, 0.0).map_err(|e| {
+    let goal_state = space.goal_or_unobserved(g, 0.0).map_err(|e| {
         log::warn!("nav: the goal does not settle at ({}, {}): {:?}", g.x, g.y, e);
         GoalRefusal::GoalNotSettled
     })?;
+    if goal_state.off_map && bounds.contains_xy(g.x, g.y) {
+        log::info!("nav: the goal's column at ({}, {}) is not observed yet: planning towards it", g.x, g.y);
+    }
     let mut abit = AbitParams::ompl_defaults();
     abit.samples_per_batch = setup.samples_per_batch;
     abit.draws_per_step = cfg::DRAWS_PER_STEP;
@@ -411,7 +414,7 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
         problem.finished = Some(PlanState::InvalidInput);
         return finished(problem, PlanState::InvalidInput);
     };
-    let goal_state = match space.goal_state(problem.goal, 0.0) {
+    let goal_state = match space.goal_or_unobserved(problem.goal, 0.0) {
         Ok(g) => g,
         Err(_) => {
             // The map changed under the goal since it was accepted.

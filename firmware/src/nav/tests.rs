@@ -300,6 +300,28 @@ mod planning {
         }
     }
 
+    /// A goal inside the map whose column nobody has observed (a floor not yet seen over a lip) is planned towards:
+    /// the plan is the approximate one that ends on observed ground nearest to it, and the rover looks again from
+    /// there. Before, the goal was refused (`GoalNotSettled`) and the mission stopped at its start.
+    #[test]
+    fn a_goal_over_unobserved_ground_is_planned_towards() {
+        let now = Instant::from_micros(0);
+        let gap = |x: f32, _: f32| (!(1.2..=2.4).contains(&x)).then_some(Z0);
+        let mut n = nav();
+        n.configure(&configure(4)).unwrap();
+        map_world(&mut n, -1.0, 5.0, 0.0, &gap);
+        assert_eq!(n.goal(&goal(1.8, 0.0, 300), now), PlanState::Accepted, "{:?}", n.plan_stats().refusals);
+        let (p, plan, _) = run(&mut n, 8, 400);
+        let PlanProgress::Finished { state, best_cost, .. } = p else { unreachable!() };
+        assert_eq!(state, PlanState::ApproximateSolution, "{:?}", n.plan_stats());
+        assert!(best_cost.is_none(), "no exact solution to an unobserved goal");
+        let (first, last) = (plan.first().unwrap().pose.position, plan.last().unwrap().pose.position);
+        assert!(plan.iter().all(|w| w.pose.position.x < 1.2), "the plan enters the unobserved gap: {plan:?}");
+        let d = |p: Point3| libm::hypotf(p.x - 1.8, p.y);
+        assert!(d(last) < d(first) - 0.5, "the plan ends at {last:?}, not nearer the goal than its start {first:?}");
+        assert!(!motions(&mut n).is_empty());
+    }
+
     /// A start whose body is within the map's extra voxel of clearance from a rock under it (not within the rover's
     /// own clearance: the rock appeared beside a rover that stands there) is planned from; a rock that touches the
     /// rover's own clearance is refused.
@@ -347,9 +369,9 @@ mod planning {
         let gap = |x: f32, _: f32| (!(1.2..=2.4).contains(&x)).then_some(Z0);
         map_world(&mut n, -1.0, 5.0, 1.8, &gap);
         assert_eq!(n.goal(&goal(3.5, 0.0, 10), now), PlanState::InvalidInput);
-        // start fine, goal inside the map over the gap
+        // start fine again (the goal over the gap is planned towards: `a_goal_over_unobserved_ground_is_planned_towards`;
+        // a goal on observed ground that does not settle: `an_unobserved_goal_is_approached_and_an_unsettled_one_refused`)
         scan_down(&mut n, 50, 0.0, 0.5, 2.0, &gap);
-        assert_eq!(n.goal(&goal(1.8, 0.0, 10), now), PlanState::InvalidInput);
         // another planner
         let mut g = goal(3.5, 0.0, 10);
         g.planner = PlannerChoice::Homotopy;
@@ -361,7 +383,6 @@ mod planning {
             GoalRefusal::MapEmpty,
             GoalRefusal::NoSurface,
             GoalRefusal::StartNotSettled,
-            GoalRefusal::GoalNotSettled,
         ] {
             assert_eq!(r[why as usize], 1, "{why:?}: {r:?}");
             assert!(!why.reason().is_empty());
@@ -579,4 +600,60 @@ fn the_planning_window_is_the_start_goal_box_within_the_map() {
     // start and goal far inside a small map: the map's own extent
     let small = PlanBounds { min: [-2.0, -2.0, 0.0], max: [2.0, 2.0, 1.0] };
     assert_eq!(super::planning::planning_window(small, &Vec3::zeros(), &Vec3::new(1.0, 1.0, 0.0)), small);
+}
+
+/// `TetherSpace::goal_or_unobserved` on an analytic field: level ground, a solid pillar (0.3 m square, 1 m tall)
+/// at x = 3 m, and a band x in [5, 6] m that nobody observed. The goal on the pillar is refused with the settler's
+/// reason; the goal in the band is an unobserved goal that no motion reaches, while an off-map goal (outside the
+/// bounds) still connects from a state near the bounds' edge.
+#[test]
+fn an_unobserved_goal_is_approached_and_an_unsettled_one_refused() {
+    use crate::map::{DistanceField, DistanceQuery};
+    use crate::plan::space::{MotionCheck, MotionValidator};
+    use crate::plan::tethered::{PlanBounds, RoverState, SettleFailure, TetherMotionValidator, TetherSpace, TetherSpaceParams};
+    use crate::tether::{Anchor, AnchorHistory};
+    /// Signed distance of the pillar, a box [2.85, 3.15] x [-0.15, 0.15] x [0, 1].
+    fn pillar(v: &Vec3) -> f32 {
+        let q = Vec3::new((v.x - 3.0).abs() - 0.15, v.y.abs() - 0.15, (v.z - 0.5).abs() - 0.5);
+        Vec3::new(q.x.max(0.0), q.y.max(0.0), q.z.max(0.0)).norm() + q.x.max(q.y).max(q.z).min(0.0)
+    }
+    struct World;
+    impl DistanceField for World {
+        fn query(&self, p: &Vec3) -> DistanceQuery {
+            if (5.0..=6.0).contains(&p.x) {
+                return DistanceQuery::Unknown;
+            }
+            let d = pillar(p);
+            if d >= p.z {
+                return DistanceQuery::Known { distance: p.z, gradient: Vec3::z() };
+            }
+            let e = 1e-3;
+            let g = Vec3::new(
+                pillar(&(p + Vec3::x() * e)) - pillar(&(p - Vec3::x() * e)),
+                pillar(&(p + Vec3::y() * e)) - pillar(&(p - Vec3::y() * e)),
+                pillar(&(p + Vec3::z() * e)) - pillar(&(p - Vec3::z() * e)),
+            );
+            DistanceQuery::Known { distance: d, gradient: g.normalize() }
+        }
+    }
+    let bounds = PlanBounds { min: [-2.0, -3.0, -1.0], max: [8.0, 3.0, 3.0] };
+    let rover = crate::config::rover::RoverParams::AXEL;
+    let space = TetherSpace::new(&World, bounds, rover, TetherSpaceParams::ONBOARD).unwrap();
+    let refused = space.goal_or_unobserved(Vec3::new(3.0, 0.0, 0.0), 0.0);
+    assert!(
+        matches!(refused, Err(e) if e != SettleFailure::NoSurface && e != SettleFailure::UnknownSpace),
+        "the goal on the pillar: {refused:?}"
+    );
+    let unobserved = space.goal_or_unobserved(Vec3::new(5.5, 0.0, 0.0), 0.0).unwrap();
+    assert!(unobserved.off_map);
+    let h = AnchorHistory::new(Anchor::root(Vec3::new(-2.0, 0.0, 1.0)));
+    let near = space.settle_state(4.0, 0.0, 0.0).unwrap();
+    let edge = space.settle_state(7.5, 0.0, 0.0).unwrap();
+    let check = |from: &RoverState, to: &RoverState| TetherMotionValidator.check_motion(&space, from, &h, to);
+    assert!(matches!(check(&near, &unobserved), MotionCheck::Invalid), "a motion reached the unobserved goal");
+    assert!(matches!(check(&edge, &unobserved), MotionCheck::Invalid), "a motion reached the unobserved goal");
+    // the off-map goal beyond the bounds' +x edge connects from the state 0.5 m inside it
+    let off = space.goal_or_unobserved(Vec3::new(9.0, 0.0, 0.0), 0.0).unwrap();
+    assert!(off.off_map);
+    assert!(matches!(check(&edge, &off), MotionCheck::Valid { .. }), "the off-map goal no longer connects");
 }

@@ -498,10 +498,13 @@ pub enum NackReason {
     UnknownCommand,
     /// A `GoalCancel` for a goal that is not the one being planned or driven (v2).
     UnknownGoal,
+    /// The same frame (sequence number and CRC) as one of the last `SEQ_HISTORY_LEN` accepted: a duplicate on the
+    /// link, not acted on twice (v4).
+    DuplicateFrame,
 }
 
 /// Number of [`NackReason`] values (the length of the rejection counters).
-pub const NACK_REASON_COUNT: usize = 25;
+pub const NACK_REASON_COUNT: usize = 26;
 
 impl NackReason {
     /// Every reason, in wire order.
@@ -531,6 +534,7 @@ impl NackReason {
         Self::Refused,
         Self::UnknownCommand,
         Self::UnknownGoal,
+        Self::DuplicateFrame,
     ];
 
     /// Index into rejection counters (equals the wire value).
@@ -853,8 +857,8 @@ pub struct Telemetry {
     pub scans_abandoned: u32,
     /// Scan being reassembled (0 if none).
     pub scan_in_progress: u32,
-    /// Next expected chunk of that scan.
-    pub scan_next_chunk: u16,
+    /// Chunks of that scan received so far (they may arrive in any order).
+    pub scan_chunks_received: u16,
     /// Tether readings accepted.
     pub tether_readings: u32,
     /// Goal requests accepted.
@@ -879,6 +883,28 @@ pub struct Telemetry {
     pub high_water: HighWater,
     /// The onboard map.
     pub map: MapStatus,
+    /// Host sequence numbers skipped: frames lost or damaged on the way up (v4; `exec` module docs).
+    pub seq_gaps: u32,
+    /// Host frames that arrived behind a later one (reordered or delayed on the way up), still accepted (v4).
+    pub seq_late: u32,
+    /// Jumps of the host sequence number by more than `SEQ_WINDOW` either way (a restarted host session) (v4).
+    pub seq_resyncs: u32,
+    /// Cycle accounting of the executive's steps (v4).
+    pub cycle: CycleStats,
+}
+
+/// Cycle accounting of [`Telemetry`] (v4): each executive step's duration on the flight clock against the step
+/// budget (`config::exec::STEP_BUDGET_US`), as F Prime's rate groups account their cycles.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct CycleStats {
+    /// The step budget, microseconds.
+    pub budget_us: u32,
+    /// Longest step since boot, microseconds (saturating).
+    pub max_step_us: u32,
+    /// Longest step since the previous `Telemetry` frame, microseconds (saturating).
+    pub period_max_step_us: u32,
+    /// Steps longer than the budget since boot (saturating).
+    pub slips: u32,
 }
 
 /// Flight -> host: a forwarded log record (bounded text).

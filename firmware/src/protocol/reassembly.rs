@@ -1,13 +1,17 @@
 //! Bounded reassembly of chunked sensor scans.
 //!
-//! Chunks of one scan must arrive in order `0..chunk_count` (the link is ordered; a gap means a lost frame). Points
-//! are appended to a buffer lent by the caller (capacity `SCAN_POINTS_CAPACITY` points in the executive). Every
-//! check happens before any state changes, so a rejected chunk leaves the reassembly exactly as it was and the
-//! sender may resend the right chunk. A chunk 0 of a new scan while another is incomplete abandons the old scan
-//! (counted as [`ChunkAccepted::abandoned`]).
+//! Chunks of one scan may arrive in any order, each at most once (selective repeat: a lost chunk is sent again on
+//! its own, and the chunks after it are not wasted). Which chunks arrived is one bit each (`MAX_CHUNKS_PER_SCAN`
+//! is at most 64); points are appended in arrival order to a buffer lent by the caller (capacity
+//! `SCAN_POINTS_CAPACITY` points in the executive), since a scan's points are a set. Every check happens before
+//! any state changes, so a rejected chunk leaves the reassembly exactly as it was. Scan ids increase: a chunk of a
+//! newer scan while another is incomplete abandons the old scan (counted as [`ChunkAccepted::abandoned`]); a chunk
+//! of an older scan (a late retransmission) is refused, so it can never abandon the scan in progress.
 
 use super::message::{Point3, Pose, SensorChunk};
 use crate::config::protocol::MAX_CHUNKS_PER_SCAN;
+
+const _: () = assert!(MAX_CHUNKS_PER_SCAN as u32 <= u64::BITS);
 
 /// Why a chunk was rejected.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -18,13 +22,13 @@ pub enum ChunkError {
     TooManyChunks,
     /// Already received (this scan, or the last completed scan).
     Duplicate,
-    /// Ahead of the next expected chunk, or not chunk 0 with no scan in progress.
+    /// A chunk of a scan older than the one in progress or the last completed one.
     OutOfOrder,
-    /// Another scan id or chunk count while a scan is in progress.
+    /// Another chunk count for the scan in progress.
     MixedScan,
     /// The points do not fit the buffer.
     Overflow,
-    /// The sensor pose differs from chunk 0's.
+    /// The sensor pose differs from the first chunk's.
     PoseMismatch,
 }
 
@@ -46,7 +50,7 @@ impl From<ChunkError> for super::NackReason {
 /// A chunk was taken.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ChunkAccepted {
-    /// The scan id of an incomplete scan dropped because this chunk started a new one.
+    /// The scan id of an incomplete scan dropped because this chunk started a newer one.
     pub abandoned: Option<u32>,
     /// `Some` when this chunk completed its scan: the points are `buffer[..points]`.
     pub complete: Option<CompleteScan>,
@@ -67,9 +71,15 @@ pub struct CompleteScan {
 struct InProgress {
     scan_id: u32,
     chunk_count: u16,
-    next_index: u16,
+    /// Bit `i` set: chunk `i` arrived.
+    received: u64,
     pose: Pose,
     points: usize,
+}
+
+/// `id` is older than `than` (scan ids wrap: the half-range behind `than` is older).
+fn older(id: u32, than: u32) -> bool {
+    (id.wrapping_sub(than) as i32) < 0
 }
 
 /// Reassembly state (small; the point buffer is lent on each call).
@@ -90,10 +100,10 @@ impl ScanAssembler {
         }
     }
 
-    /// `(scan_id, next_chunk, chunk_count)` of the scan in progress.
+    /// `(scan_id, chunks received, chunk_count)` of the scan in progress.
     pub fn progress(&self) -> Option<(u32, u16, u16)> {
         self.current
-            .map(|c| (c.scan_id, c.next_index, c.chunk_count))
+            .map(|c| (c.scan_id, c.received.count_ones() as u16, c.chunk_count))
     }
 
     /// Most points held at once.
@@ -114,50 +124,40 @@ impl ScanAssembler {
         if chunk.chunk_index >= chunk.chunk_count {
             return Err(ChunkError::IndexOutOfRange);
         }
-        let n = chunk.points.len();
-        let (start, abandoned) = match self.current {
+        let bit = 1u64.wrapping_shl(u32::from(chunk.chunk_index));
+        if self.last_completed == Some(chunk.scan_id) {
+            return Err(ChunkError::Duplicate);
+        }
+        if self.last_completed.is_some_and(|l| older(chunk.scan_id, l)) {
+            return Err(ChunkError::OutOfOrder);
+        }
+        let (start, received, abandoned) = match self.current {
             Some(c) if c.scan_id == chunk.scan_id => {
                 if c.chunk_count != chunk.chunk_count {
                     return Err(ChunkError::MixedScan);
                 }
-                if chunk.chunk_index < c.next_index {
+                if c.received & bit != 0 {
                     return Err(ChunkError::Duplicate);
-                }
-                if chunk.chunk_index > c.next_index {
-                    return Err(ChunkError::OutOfOrder);
                 }
                 if chunk.sensor_pose != c.pose {
                     return Err(ChunkError::PoseMismatch);
                 }
-                (c.points, None)
+                (c.points, c.received, None)
             }
-            Some(c) => {
-                if chunk.chunk_index != 0 {
-                    return Err(ChunkError::MixedScan);
-                }
-                if self.last_completed == Some(chunk.scan_id) {
-                    return Err(ChunkError::Duplicate);
-                }
-                (0, Some(c.scan_id))
-            }
-            None => {
-                if self.last_completed == Some(chunk.scan_id) {
-                    return Err(ChunkError::Duplicate);
-                }
-                if chunk.chunk_index != 0 {
-                    return Err(ChunkError::OutOfOrder);
-                }
-                (0, None)
-            }
+            Some(c) if older(chunk.scan_id, c.scan_id) => return Err(ChunkError::OutOfOrder),
+            Some(c) => (0, 0, Some(c.scan_id)),
+            None => (0, 0, None),
         };
+        let n = chunk.points.len();
         let dst = buffer
             .get_mut(start..start + n)
             .ok_or(ChunkError::Overflow)?;
         dst.copy_from_slice(&chunk.points);
         let points = start + n;
         self.high_water = self.high_water.max(points);
-        let next_index = chunk.chunk_index + 1;
-        if next_index == chunk.chunk_count {
+        let received = received | bit;
+        let all = u64::MAX.wrapping_shr(u64::BITS - u32::from(chunk.chunk_count));
+        if received == all {
             self.current = None;
             self.last_completed = Some(chunk.scan_id);
             Ok(ChunkAccepted {
@@ -172,7 +172,7 @@ impl ScanAssembler {
             self.current = Some(InProgress {
                 scan_id: chunk.scan_id,
                 chunk_count: chunk.chunk_count,
-                next_index,
+                received,
                 pose: chunk.sensor_pose,
                 points,
             });
@@ -233,8 +233,7 @@ mod tests {
         let before = a;
         let cases = [
             (chunk(1, 0, 3, 2), ChunkError::Duplicate),
-            (chunk(1, 2, 3, 2), ChunkError::OutOfOrder),
-            (chunk(2, 1, 3, 2), ChunkError::MixedScan),
+            (chunk(0, 1, 3, 2), ChunkError::OutOfOrder),
             (chunk(1, 1, 4, 2), ChunkError::MixedScan),
             (chunk(1, 3, 3, 2), ChunkError::IndexOutOfRange),
             (chunk(1, 1, 0, 2), ChunkError::TooManyChunks),
@@ -252,8 +251,64 @@ mod tests {
         moved.sensor_pose.position.x = 1.0;
         assert_eq!(a.accept(&moved, &mut buf), Err(ChunkError::PoseMismatch));
         assert_eq!(a, before);
-        // a new scan at chunk 0 abandons the old one
-        let r = a.accept(&chunk(2, 0, 2, 1), &mut buf).unwrap();
+        // any chunk of a newer scan abandons the old one
+        let r = a.accept(&chunk(2, 1, 2, 1), &mut buf).unwrap();
         assert_eq!(r.abandoned, Some(1));
+    }
+
+    #[test]
+    fn chunks_in_any_order_complete_the_scan_once() {
+        let mut a = ScanAssembler::new();
+        let mut buf = [Point3::default(); 32];
+        // chunk 1 was lost and comes again after 2 and 3
+        for idx in [0, 2, 3] {
+            assert_eq!(a.accept(&chunk(9, idx, 4, 3), &mut buf).unwrap().complete, None);
+        }
+        assert_eq!(a.progress(), Some((9, 3, 4)));
+        assert_eq!(a.accept(&chunk(9, 2, 4, 3), &mut buf), Err(ChunkError::Duplicate));
+        let done = a.accept(&chunk(9, 1, 4, 3), &mut buf).unwrap().complete.unwrap();
+        assert_eq!((done.scan_id, done.points), (9, 12));
+        // every chunk's points are there, each once
+        let mut per_chunk = [0usize; 4];
+        for p in &buf[..12] {
+            per_chunk[p.x as usize] += 1;
+        }
+        assert_eq!(per_chunk, [3; 4]);
+        assert_eq!(a.accept(&chunk(9, 1, 4, 3), &mut buf), Err(ChunkError::Duplicate));
+    }
+
+    #[test]
+    fn a_late_chunk_of_an_older_scan_never_abandons_the_newer_one() {
+        let mut a = ScanAssembler::new();
+        let mut buf = [Point3::default(); 32];
+        a.accept(&chunk(4, 0, 3, 2), &mut buf).unwrap();
+        // scan 5 starts without its chunk 0: scan 4 is abandoned
+        assert_eq!(a.accept(&chunk(5, 2, 3, 2), &mut buf).unwrap().abandoned, Some(4));
+        let before = a;
+        assert_eq!(a.accept(&chunk(4, 1, 3, 2), &mut buf), Err(ChunkError::OutOfOrder));
+        assert_eq!(a, before);
+        a.accept(&chunk(5, 0, 3, 2), &mut buf).unwrap();
+        assert!(a.accept(&chunk(5, 1, 3, 2), &mut buf).unwrap().complete.is_some());
+        // after completion, an older scan is still refused
+        assert_eq!(a.accept(&chunk(3, 0, 3, 2), &mut buf), Err(ChunkError::OutOfOrder));
+    }
+
+    #[test]
+    fn scan_ids_wrap() {
+        let mut a = ScanAssembler::new();
+        let mut buf = [Point3::default(); 8];
+        assert!(a.accept(&chunk(u32::MAX, 0, 1, 2), &mut buf).unwrap().complete.is_some());
+        assert!(a.accept(&chunk(0, 0, 1, 2), &mut buf).unwrap().complete.is_some());
+        assert_eq!(a.accept(&chunk(u32::MAX, 0, 1, 2), &mut buf), Err(ChunkError::OutOfOrder));
+    }
+
+    #[test]
+    fn a_full_scan_of_the_largest_chunk_count_completes() {
+        let mut a = ScanAssembler::new();
+        let mut buf = [Point3::default(); MAX_CHUNKS_PER_SCAN as usize];
+        for idx in (0..MAX_CHUNKS_PER_SCAN).rev() {
+            let r = a.accept(&chunk(1, idx, MAX_CHUNKS_PER_SCAN, 1), &mut buf).unwrap();
+            assert_eq!(r.complete.is_some(), idx == 0);
+        }
     }
 }

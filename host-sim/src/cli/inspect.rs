@@ -75,6 +75,26 @@ pub fn main(args: &InspectArgs) -> ExitCode {
     for ((dir, kind), n) in &kinds {
         println!("  {dir} {kind}: {n}");
     }
+    if !log.faults.is_empty() {
+        let mut by_kind: BTreeMap<&str, u32> = BTreeMap::new();
+        for f in &log.faults {
+            match crate::link::faults::FaultEvent::from_bytes(f.t_us, &f.bytes) {
+                Some(e) => {
+                    if args.frames {
+                        println!("  fault: {e}");
+                    }
+                    *by_kind.entry(e.kind.name()).or_default() += 1;
+                }
+                None => *by_kind.entry("unreadable").or_default() += 1,
+            }
+        }
+        let text: Vec<String> = by_kind.iter().map(|(k, n)| format!("{k} {n}")).collect();
+        println!(
+            "  injected link faults (fault records): {} ({})",
+            log.faults.len(),
+            text.join(", ")
+        );
+    }
     for d in &log.damaged {
         println!(
             "  DAMAGED at byte {} ({:?}); {} bytes skipped to the next valid record",

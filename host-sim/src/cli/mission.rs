@@ -14,6 +14,13 @@
 //! Without a scenario: the embedded default, `host-sim/scenarios/mission_crater_rocks.toml` (a crater wall with
 //! rocks hidden until seen). The real-terrain Mars Yard descent (`mission_marsyard.toml`) is refused by today's
 //! onboard map (`host-sim/doc/mission.md`, "What the onboard map must observe"), so it is not the default.
+//!
+//! Link faults (issue 24, `host-sim/doc/faults.md`): `--faults PROFILE` faults the uplink of the mission (or of
+//! each mission of a campaign, seeded `seed ^ mission seed`) and prints the fault accounting; the field log then
+//! holds the fault records and replays byte for byte. `--fault-campaign` runs the scenario at each of
+//! `--fault-rates` for each of `--fault-kinds`, `--seeds` missions each, and prints the fault campaign table.
+//! `--charge-host-time` lets the in-process executive measure its steps in host time (cycle accounting; such a
+//! run's log does not replay byte for byte).
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -21,11 +28,15 @@ use std::process::ExitCode;
 use firmware::protocol::Tracking;
 
 use crate::fieldlog::{self, Writer};
+use crate::link::faults::{FaultKind, FaultLink, FaultProfile};
 use crate::link::recording::RecordingLink;
 use crate::link::{FlightLink, LinkKind};
+use crate::mission::campaign::{
+    CampaignFile, CampaignIdentity, CampaignTiming, MissionRow, MissionTiming,
+};
+use crate::mcap_export::SceneLink;
 use crate::mission::run::{run_mission, MissionOptions, MissionReport, Verdict};
 use crate::replay::RunConfig;
-use crate::mission::campaign::{CampaignFile, CampaignIdentity, CampaignTiming, MissionRow, MissionTiming};
 use crate::scenario::{self, Scenario};
 use crate::shard::{self, RunTiming, Shard, ShardFile};
 
@@ -121,6 +132,79 @@ pub struct MissionArgs {
     /// No live progress line.
     #[arg(long)]
     pub quiet: bool,
+    /// Fault the uplink with this profile: `KIND=RATE,...` per byte (kinds bitflip, drop, duplicate, reorder,
+    /// truncate, delay, stall; `all=RATE`), `delay_us=`, `stall_us=`, `reorder_hold_us=`, `seed=`.
+    #[arg(long, value_name = "PROFILE", value_parser = FaultProfile::parse)]
+    pub faults: Option<FaultProfile>,
+    /// Run the fault campaign: each of --fault-rates for each of --fault-kinds, --seeds missions each (in-process);
+    /// --faults, if given, sets the delays and the seed.
+    #[arg(long)]
+    pub fault_campaign: bool,
+    /// Rates per byte of the fault campaign.
+    #[arg(long, value_delimiter = ',', default_values_t = crate::mission::faults::DEFAULT_RATES)]
+    pub fault_rates: Vec<f64>,
+    /// Kinds of the fault campaign (default: all).
+    #[arg(long, value_delimiter = ',', value_parser = parse_kind)]
+    pub fault_kinds: Vec<FaultKind>,
+    /// In-process: the executive measures its steps in host time (cycle accounting in telemetry); the log of such
+    /// a run does not replay byte for byte.
+    #[arg(long)]
+    pub charge_host_time: bool,
+    /// Serve the running mission to the Foxglove app over the Foxglove SDK's WebSocket server at HOST:PORT
+    /// (default 127.0.0.1:8765; port 0 picks a free one); one seed only. The line `live view: ws://HOST:PORT`
+    /// on stdout names the address.
+    #[arg(long, value_name = "HOST:PORT", num_args = 0..=1, default_missing_value = "127.0.0.1:8765")]
+    pub live: Option<String>,
+    /// With `--live`: seconds to wait for a viewer to subscribe before the mission starts, and for the viewers
+    /// to disconnect after it ends (the server then stops).
+    #[arg(long, default_value_t = 120.0, value_name = "SECONDS")]
+    pub live_wait: f64,
+}
+
+fn parse_kind(s: &str) -> Result<FaultKind, String> {
+    FaultKind::ALL
+        .iter()
+        .copied()
+        .find(|k| k.name() == s)
+        .ok_or_else(|| {
+            let names: Vec<&str> = FaultKind::ALL.iter().map(|k| k.name()).collect();
+            format!("unknown fault kind `{s}` (kinds: {})", names.join(", "))
+        })
+}
+
+/// The live view of one mission: the scene's channels in a context whose sink is the WebSocket server.
+struct Live {
+    server: foxglove::WebSocketServerHandle,
+    scene: crate::mcap_export::Scene,
+    /// Keeps the channels' context alive while the server runs.
+    _ctx: std::sync::Arc<foxglove::Context>,
+}
+
+/// Starts the WebSocket server at `addr` (HOST:PORT) and prints its address.
+fn start_live(addr: &str) -> Result<Live, String> {
+    let (host, port) = addr
+        .rsplit_once(':')
+        .and_then(|(h, p)| Some((h.trim_matches(['[', ']']), p.parse::<u16>().ok()?)))
+        .ok_or_else(|| format!("--live {addr}: expected HOST:PORT, such as 127.0.0.1:8765"))?;
+    let ctx = foxglove::Context::new();
+    let scene = crate::mcap_export::Scene::new(&ctx).map_err(|e| format!("live view: {e}"))?;
+    let server = ctx
+        .websocket_server()
+        .name("tetherbot mission")
+        .bind(host, port)
+        .start_blocking()
+        .map_err(|e| format!("live view: cannot serve on {addr}: {e}"))?;
+    println!("live view: ws://{host}:{} (Foxglove: Open connection, Foxglove WebSocket)", server.port());
+    let _ = std::io::Write::flush(&mut std::io::stdout());
+    Ok(Live { server, scene, _ctx: ctx })
+}
+
+/// Waits up to `secs` of wall time while `busy` holds, looking every 50 ms.
+fn wait_while(secs: f64, busy: impl Fn() -> bool) {
+    let t0 = std::time::Instant::now();
+    while busy() && t0.elapsed().as_secs_f64() < secs {
+        std::thread::sleep(core::time::Duration::from_millis(50));
+    }
 }
 
 /// Loads the scenario of `args` (the embedded default when none is given).
@@ -128,7 +212,9 @@ pub fn load_scenario(path: Option<&Path>) -> Result<Scenario, scenario::Scenario
     match path {
         Some(p) => scenario::load(p),
         None => {
-            let file = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenarios").join(DEFAULT_SCENARIO_FILE);
+            let file = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                .join("scenarios")
+                .join(DEFAULT_SCENARIO_FILE);
             let sc = scenario::parse(DEFAULT_SCENARIO, &file)?;
             let world = sc.build_world()?;
             sc.check(world.as_ref())?;
@@ -193,17 +279,55 @@ fn one(args: &MissionArgs, sc: &Scenario) -> Result<(MissionReport, Vec<PathBuf>
         seed: args.seed,
         config: serde_json::to_string(&config)?,
     };
-    let file = std::fs::File::create(&log_path).map_err(|e| format!("cannot create {}: {e}", log_path.display()))?;
+    let world = crate::mission::run::truth_for(sc, &crate::mission::run::mission_configure(sc, &opts), &sc.mission)?;
+    let mut live = match &args.live {
+        Some(addr) => {
+            let live = start_live(addr)?;
+            println!("  waiting up to {:.0} s for a viewer to subscribe", args.live_wait);
+            let t0 = std::time::Instant::now();
+            wait_while(args.live_wait, || !live.scene.subscribed());
+            if live.scene.subscribed() {
+                println!("  a viewer subscribed after {:.1} s; the mission starts", t0.elapsed().as_secs_f64());
+            } else {
+                println!("  no viewer subscribed; the mission starts");
+            }
+            let pts = [sc.tether.root_anchor, sc.rover.start, sc.goal.position];
+            live.scene.terrain(&world.world.truth(), &pts, 0);
+            Some(live)
+        }
+        None => None,
+    };
+    let file = std::fs::File::create(&log_path)
+        .map_err(|e| format!("cannot create {}: {e}", log_path.display()))?;
     let writer = Writer::new(std::io::BufWriter::new(file), &header)?;
     let run = |link: &mut dyn FlightLink| -> Result<MissionReport, Box<dyn core::error::Error>> {
-        let mut rec = RecordingLink::new(link, writer);
-        let rep = run_mission(&mut rec, sc, &opts)?;
-        rec.finish()?;
+        let mut shown;
+        let link: &mut dyn FlightLink = match live.as_mut() {
+            Some(l) => {
+                shown = SceneLink::new(link, &mut l.scene);
+                &mut shown
+            }
+            None => link,
+        };
+        let rec = RecordingLink::new(link, writer);
+        // The recorder inside the injector: the log holds what the flight software received, and the faults.
+        let Some(profile) = &args.faults else {
+            let mut rec = rec;
+            let rep = run_mission(&mut rec, sc, &opts)?;
+            rec.finish()?;
+            return Ok(rep);
+        };
+        let mut faulty = FaultLink::new(rec, profile.clone());
+        let rep = run_mission(&mut faulty, sc, &opts)?;
+        let acc = faulty.account();
+        print!("{}", fault_summary(&acc));
+        faulty.into_inner().finish()?;
         Ok(rep)
     };
     let rep = match args.link {
         LinkKind::Inproc => {
             let mut link = crate::mission::link::mission_link(sc)?;
+            link.charge_host_time(args.charge_host_time);
             let rep = run(&mut link)?;
             if let (Some(l), false) = (link.longest_step(), args.quiet) {
                 println!(
@@ -222,13 +346,18 @@ fn one(args: &MissionArgs, sc: &Scenario) -> Result<(MissionReport, Vec<PathBuf>
             super::board::with_link(LinkKind::Qemu, crate::link::inproc::DEFAULT_STEP_US, run)?
         }
     };
+    if let Some(mut l) = live {
+        l.scene.truth(&rep, &world.world.truth());
+        println!("  mission over; serving until the viewers disconnect (at most {:.0} s)", args.live_wait);
+        wait_while(args.live_wait, || l.server.client_count() > 0);
+        l.server.stop().wait_blocking();
+    }
     let mut written = vec![log_path.clone()];
     let log = fieldlog::read_file(&log_path)?;
     let mcap_path = args.out.join(format!("{name}.mcap"));
     let f = std::fs::File::create(&mcap_path).map_err(|e| format!("cannot create {}: {e}", mcap_path.display()))?;
-    crate::mcap_export::export(&log, std::io::BufWriter::new(f))?;
+    crate::mcap_export::export_with(&log, Some((&rep, &world.world.truth())), std::io::BufWriter::new(f))?;
     written.push(mcap_path);
-    let world = crate::mission::run::truth_for(sc, &crate::mission::run::mission_configure(sc, &opts), &sc.mission)?;
     let svg_path = args.out.join(format!("{name}.svg"));
     std::fs::write(&svg_path, crate::mission::svg::render(&rep, &world.world.truth()))?;
     written.push(svg_path);
@@ -241,8 +370,14 @@ fn one(args: &MissionArgs, sc: &Scenario) -> Result<(MissionReport, Vec<PathBuf>
 /// The identity of the campaign `args` asks for on `sc`.
 fn identity(args: &MissionArgs, sc: &Scenario) -> Result<CampaignIdentity, String> {
     let (scenario, text) = match &args.scenario {
-        Some(p) => (p.display().to_string(), std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()))?),
-        None => ("(default)".to_string(), DEFAULT_SCENARIO.as_bytes().to_vec()),
+        Some(p) => (
+            p.display().to_string(),
+            std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()))?,
+        ),
+        None => (
+            "(default)".to_string(),
+            DEFAULT_SCENARIO.as_bytes().to_vec(),
+        ),
     };
     Ok(CampaignIdentity {
         scenario,
@@ -298,45 +433,164 @@ fn write_campaign(json: &Path, timing_path: &Path, file: &CampaignFile, timing: 
 /// could not run.
 fn campaign(args: &MissionArgs, sc: &Scenario) -> Result<bool, String> {
     if args.link != LinkKind::Inproc {
-        return Err("a campaign (--seeds > 1) runs in-process; run one seed at a time on the board".into());
+        return Err(
+            "a campaign (--seeds > 1) runs in-process; run one seed at a time on the board".into(),
+        );
     }
     let shard = args.shard.unwrap_or(Shard::WHOLE);
     let seeds = crate::mission::campaign::shard_seeds(args.seed, args.seeds, shard)?;
     let identity = identity(args, sc)?;
-    std::fs::create_dir_all(&args.out).map_err(|e| format!("cannot create {}: {e}", args.out.display()))?;
-    let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    std::fs::create_dir_all(&args.out)
+        .map_err(|e| format!("cannot create {}: {e}", args.out.display()))?;
+    let threads = args
+        .threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let t0 = std::time::Instant::now();
     let bar = indicatif::ProgressBar::new(seeds.len() as u64);
     let tick = |_: &MissionReport| bar.inc(1);
-    let results = crate::mission::campaign::run_seeds(sc, &seeds, args.tracking.into(), threads, &tick);
+    let results = crate::mission::campaign::run_seeds(
+        sc,
+        &seeds,
+        args.tracking.into(),
+        threads,
+        args.faults.as_ref(),
+        args.charge_host_time,
+        &tick,
+    );
     bar.finish_and_clear();
     let mut reports = Vec::new();
     let mut failed = Vec::new();
     for (seed, r) in seeds.iter().zip(results) {
         match r {
-            Ok(rep) => reports.push(rep),
+            Ok((rep, acc)) => {
+                if let Some(acc) = acc {
+                    print!("seed {seed}: {}", fault_summary(&acc));
+                }
+                reports.push(rep)
+            }
             Err(e) => {
                 eprintln!("seed {seed}: could not run: {e}");
-                failed.push(crate::mission::campaign::FailedMission { seed: *seed, error: e });
+                failed.push(crate::mission::campaign::FailedMission {
+                    seed: *seed,
+                    error: e,
+                });
             }
         }
     }
     let shard = (!shard.is_whole()).then_some(shard);
-    let file = CampaignFile { campaign: identity, shard, missions: reports.iter().map(MissionRow::of).collect(), failed };
+    let file = CampaignFile {
+        campaign: identity,
+        shard,
+        missions: reports.iter().map(MissionRow::of).collect(),
+        failed,
+    };
     let timing = CampaignTiming {
-        runs: vec![RunTiming { shard, threads, wall_s: t0.elapsed().as_secs_f64(), map_build_s: None }],
-        missions: reports.iter().map(|r| MissionTiming { seed: r.seed, host_s: r.host_s }).collect(),
+        runs: vec![RunTiming {
+            shard,
+            threads,
+            wall_s: t0.elapsed().as_secs_f64(),
+            map_build_s: None,
+        }],
+        missions: reports
+            .iter()
+            .map(|r| MissionTiming {
+                seed: r.seed,
+                host_s: r.host_s,
+            })
+            .collect(),
     };
     for r in &file.missions {
         println!("{}", row_line(r));
     }
     if let Some(s) = shard {
-        println!("shard {s} of the campaign: missions i (seed {} + i) with i mod {} == {}", args.seed, s.count, s.index);
+        println!(
+            "shard {s} of the campaign: missions i (seed {} + i) with i mod {} == {}",
+            args.seed, s.count, s.index
+        );
     }
     print!("{}", crate::mission::campaign::table(&sc.name, &reports));
     let (json, timing_path) = campaign_paths(&args.out, &sc.name, shard);
     write_campaign(&json, &timing_path, &file, &timing)?;
     Ok(!campaign_failed(&file) && reports.len() == seeds.len())
+}
+
+/// The fault accounting of one mission, one line per kind injected.
+fn fault_summary(acc: &crate::link::faults::FaultAccount) -> String {
+    let mut s = String::new();
+    for k in FaultKind::ALL {
+        if acc.injected(k) > 0 {
+            s.push_str(&format!(
+                "  faults {:<9} injected {}, harmless {}\n",
+                k.name(),
+                acc.injected(k),
+                acc.harmless(k)
+            ));
+        }
+    }
+    for g in crate::link::faults::DetectionGroup::ALL {
+        let (inj, harmless) = acc.group_totals(g);
+        if let Some(d) = acc.detected(g) {
+            s.push_str(&format!("  detected by telemetry ({g:?}): {d} (injected {inj} = detected {d} + harmless {harmless}?)\n"));
+        }
+    }
+    s.push_str(&match acc.check() {
+        Ok(()) => format!(
+            "  fault accounting balanced; {} damaged frames acknowledged\n",
+            acc.acked_damaged
+        ),
+        Err(e) => format!("  FAULT ACCOUNTING UNBALANCED: {e}\n"),
+    });
+    s
+}
+
+/// `--fault-campaign`: the table (`mission::faults`); `Ok(true)` when every mission ended arrived or safe with
+/// balanced accounting and no damaged frame acknowledged.
+fn fault_campaign(args: &MissionArgs, sc: &Scenario) -> Result<bool, String> {
+    if args.link != LinkKind::Inproc {
+        return Err(
+            "a fault campaign runs in-process; use --faults with one seed on the board".into(),
+        );
+    }
+    let seeds = crate::mission::campaign::shard_seeds(args.seed, args.seeds, Shard::WHOLE)?;
+    let kinds = if args.fault_kinds.is_empty() {
+        FaultKind::ALL.to_vec()
+    } else {
+        args.fault_kinds.clone()
+    };
+    if let Some(r) = args.fault_rates.iter().find(|r| !(0.0..=1.0).contains(*r)) {
+        return Err(format!(
+            "--fault-rates: {r} is not a rate per byte in [0, 1]"
+        ));
+    }
+    let base = args.faults.clone().unwrap_or_default();
+    let threads = args
+        .threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let t0 = std::time::Instant::now();
+    let bar =
+        indicatif::ProgressBar::new((seeds.len() * kinds.len() * args.fault_rates.len()) as u64);
+    let tick = || bar.inc(1);
+    let cells = crate::mission::faults::run(
+        sc,
+        &seeds,
+        &args.fault_rates,
+        &kinds,
+        &base,
+        args.tracking.into(),
+        threads,
+        args.charge_host_time,
+        &tick,
+    );
+    bar.finish_and_clear();
+    print!(
+        "{}",
+        crate::mission::faults::table(&sc.name, &seeds, &cells)
+    );
+    println!(
+        "host time {:.0} s on {threads} threads",
+        t0.elapsed().as_secs_f64()
+    );
+    Ok(crate::mission::faults::passed(&cells))
 }
 
 /// `mission merge`: checks that the files are the N shards of one mission campaign ([`shard::check_set`]), joins
@@ -345,14 +599,22 @@ fn campaign(args: &MissionArgs, sc: &Scenario) -> Result<bool, String> {
 pub fn merge(m: &MissionMergeArgs) -> Result<CampaignFile, String> {
     let mut files = Vec::new();
     for path in &m.shards {
-        let f: CampaignFile = shard::read_json(path, "a mission campaign shard's <name>-campaign-shard-K-of-N.json")?;
+        let f: CampaignFile = shard::read_json(
+            path,
+            "a mission campaign shard's <name>-campaign-shard-K-of-N.json",
+        )?;
         let Some(sh) = f.shard else {
             return Err(format!(
                 "{}: the file of a whole campaign (no \"shard\" field), not a shard's: merge the files of --shard K/N runs",
                 path.display()
             ));
         };
-        files.push(ShardFile { path: path.clone(), identity: f.campaign.clone(), shard: sh, body: f });
+        files.push(ShardFile {
+            path: path.clone(),
+            identity: f.campaign.clone(),
+            shard: sh,
+            body: f,
+        });
     }
     let files = shard::check_set(files)?;
     let count = files.len();
@@ -411,6 +673,16 @@ pub fn main(args: &MissionArgs) -> ExitCode {
         Err(e) => return super::fail(e),
     };
     let bad = |v: &Verdict| matches!(v, Verdict::Fell | Verdict::FalseArrival);
+    if args.live.is_some() && (args.seeds > 1 || args.shard.is_some()) {
+        return super::fail("--live shows one mission: drop --seeds / --shard");
+    }
+    if args.fault_campaign {
+        return match fault_campaign(args, &sc) {
+            Ok(true) => ExitCode::SUCCESS,
+            Ok(false) => ExitCode::from(super::EXIT_FAILED),
+            Err(e) => super::fail(e),
+        };
+    }
     if args.seeds <= 1 && args.shard.is_none() {
         match one(args, &sc) {
             Ok((rep, written)) => {

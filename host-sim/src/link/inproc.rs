@@ -50,15 +50,32 @@ impl ByteLink for QueueByteLink {
 }
 
 /// A clock that reads whatever the simulation set.
+///
+/// The executive reads it at the start and at the end of each step (cycle accounting, `firmware::exec`). By
+/// default both reads give the step's simulated time, so every step takes no time and the run is deterministic.
+/// With `step_start` set (host time charged, [`InProcLink::charge_host_time`]) every read after a step's first adds
+/// the host time since the step began: the executive then measures its steps in host time; the schedule stays
+/// simulated, but the telemetry's cycle figures are host measurements, so such a run does not replay byte for byte.
 #[derive(Debug, Default, Clone, Copy)]
 pub struct SimClock {
     /// Current simulated time, microseconds.
     pub now_us: u64,
+    /// Host instant the current step began (host time charged), else `None`.
+    pub step_start: Option<std::time::Instant>,
+    /// Reads in the current step.
+    pub reads: u32,
 }
 
 impl MonotonicClock for SimClock {
     fn now(&mut self) -> Instant {
-        Instant::from_micros(self.now_us)
+        self.reads += 1;
+        let charged = match self.step_start {
+            Some(t0) if self.reads > 1 => {
+                u64::try_from(t0.elapsed().as_micros()).unwrap_or(u64::MAX)
+            }
+            _ => 0,
+        };
+        Instant::from_micros(self.now_us.saturating_add(charged))
     }
 }
 
@@ -88,7 +105,12 @@ pub type FlightAutonomy = Navigator<Vec<Block>, Vec<u32>, Box<NavPlanStorage>>;
 /// A fresh [`FlightAutonomy`] with the flight defaults ([`MapConfig::DEFAULT`]); the board builds the same.
 pub fn flight_autonomy() -> FlightAutonomy {
     let planning: Box<NavPlanStorage> = Box::default();
-    match Navigator::new(MapConfig::DEFAULT, vec![Block::EMPTY; FLIGHT_BLOCKS], vec![0u32; FLIGHT_INDEX], planning) {
+    match Navigator::new(
+        MapConfig::DEFAULT,
+        vec![Block::EMPTY; FLIGHT_BLOCKS],
+        vec![0u32; FLIGHT_INDEX],
+        planning,
+    ) {
         Ok(nav) => nav,
         // The defaults and the storage sizes are constants checked by the firmware's own tests.
         Err(e) => unreachable!("flight map defaults rejected: {e:?}"),
@@ -101,6 +123,7 @@ pub struct InProcLink<A: Autonomy = FlightAutonomy> {
     step_us: u64,
     last_step: StepReport,
     longest: Option<LongestStep>,
+    charge_host_time: bool,
 }
 
 /// The executive step that took the most host wall time (a measurement of this host, not part of the output).
@@ -137,6 +160,7 @@ impl<A: Autonomy> InProcLink<A> {
             step_us: step_us.max(1),
             last_step: StepReport::default(),
             longest: None,
+            charge_host_time: false,
         }
     }
 
@@ -166,13 +190,25 @@ impl<A: Autonomy> InProcLink<A> {
         self.longest
     }
 
+    /// Charges host time to the executive's steps ([`SimClock`]): its cycle accounting then reports host times.
+    pub fn charge_host_time(&mut self, on: bool) {
+        self.charge_host_time = on;
+    }
+
     /// Runs one executive step at the current time, then advances the clock by one period.
     pub fn step_once(&mut self) -> Vec<u8> {
         let (t0, mode) = (std::time::Instant::now(), self.exec.mode());
+        let clock = self.exec.clock_mut();
+        clock.reads = 0;
+        clock.step_start = self.charge_host_time.then_some(t0);
         self.last_step = self.exec.step();
         let wall = t0.elapsed();
         if self.longest.is_none_or(|l| wall > l.wall) {
-            self.longest = Some(LongestStep { wall, t_us: self.exec.clock_mut().now_us, mode });
+            self.longest = Some(LongestStep {
+                wall,
+                t_us: self.exec.clock_mut().now_us,
+                mode,
+            });
         }
         self.exec.clock_mut().now_us += self.step_us;
         core::mem::take(&mut self.exec.link_mut().to_host)

@@ -7,10 +7,12 @@
 //! - [`qemu::QemuLink`]: the cross-compiled board binary in QEMU (emulated UART over TCP), stepped in lockstep on
 //!   the same simulated clock, so it gives the same bytes as the in-process link (the board itself, its build and
 //!   its reports live in [`crate::qemu`]);
-//! - [`recording::RecordingLink`]: a wrapper around either that records every byte, both ways, into a field log.
+//! - [`recording::RecordingLink`]: a wrapper around either that records every byte, both ways, into a field log;
+//! - [`faults::FaultLink`]: a wrapper around any of them that injects seeded link faults (issue 24).
 //!
 //! [`LinkKind`] (in [`kind`]) is the CLI's choice between the in-process and the QEMU link.
 
+pub mod faults;
 pub mod inproc;
 pub mod kind;
 pub mod qemu;
@@ -57,6 +59,15 @@ pub trait FlightLink {
     fn recv_until_quiet(&mut self, max_wait_us: u64) -> Result<Vec<u8>, LinkError>;
     /// Lets link time run up to `t_us` (no-op if already there); returns the bytes sent meanwhile.
     fn advance_to(&mut self, t_us: u64) -> Result<Vec<u8>, LinkError>;
+    /// Notes a fault injected on the way to this link (a recorder writes it into the field log; others ignore it).
+    fn note_fault(&mut self, _event: &faults::FaultEvent) -> Result<(), LinkError> {
+        Ok(())
+    }
+    /// Stops injecting faults and delivers every frame a fault injector holds (a no-op without one); a mission
+    /// calls it before its closing telemetry so the flight software's counts are complete.
+    fn end_faults(&mut self) -> Result<(), LinkError> {
+        Ok(())
+    }
 }
 
 impl<T: FlightLink + ?Sized> FlightLink for &mut T {
@@ -74,5 +85,11 @@ impl<T: FlightLink + ?Sized> FlightLink for &mut T {
     }
     fn advance_to(&mut self, t_us: u64) -> Result<Vec<u8>, LinkError> {
         (**self).advance_to(t_us)
+    }
+    fn note_fault(&mut self, event: &faults::FaultEvent) -> Result<(), LinkError> {
+        (**self).note_fault(event)
+    }
+    fn end_faults(&mut self) -> Result<(), LinkError> {
+        (**self).end_faults()
     }
 }

@@ -1,4 +1,5 @@
-//! A [`FlightLink`] wrapper that records every byte, both ways, into a field log.
+//! A [`FlightLink`] wrapper that records every byte, both ways, into a field log, and the faults a
+//! [`super::faults::FaultLink`] outside it injected (fault records, field-log format 3).
 
 use std::io::Write;
 
@@ -64,5 +65,13 @@ impl<L: FlightLink, W: Write> FlightLink for RecordingLink<L, W> {
         let got = self.inner.advance_to(t_us)?;
         self.record_rx(&got)?;
         Ok(got)
+    }
+    fn note_fault(&mut self, event: &super::faults::FaultEvent) -> Result<(), LinkError> {
+        self.log
+            .append_fault(event.t_us, &event.to_bytes())
+            .map_err(LinkError::Record)
+    }
+    fn end_faults(&mut self) -> Result<(), LinkError> {
+        self.inner.end_faults()
     }
 }

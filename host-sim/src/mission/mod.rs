@@ -7,12 +7,13 @@
 //! - [`executor`]: each commanded motion executed on the true world in small increments;
 //! - [`sensing`]: scans with the localisation error, tether readings, the overview scan from the mast;
 //! - [`run`]: one mission over a link; [`link`]: the in-process flight software on the scenario's map;
-//! - [`campaign`]: N seeds in parallel and the table; [`svg`]: the picture.
+//! - [`campaign`]: N seeds in parallel and the table; [`faults`]: fault campaigns (issue 24); [`svg`]: the picture.
 //!
 //! `host-sim/doc/mission.md` describes the models and their gaps.
 
 pub mod campaign;
 pub mod executor;
+pub mod faults;
 pub mod link;
 pub mod params;
 pub mod run;

@@ -25,21 +25,23 @@ use firmware::config::rover::RoverParams;
 use firmware::geom::p3::{dist, from_vec3, P3};
 use firmware::geom::Real;
 use firmware::protocol::{
-    Configure, GoalRequest, MapSettings, Message, MissionConfig, MissionState, MissionStatus, Motion, MotionOutcome,
-    MotionReport, PlanState, PlannerChoice, Point3, StopReason, Tracking,
+    Configure, GoalRequest, MapSettings, Message, MissionConfig, MissionState, MissionStatus,
+    Motion, MotionOutcome, MotionReport, PlanState, PlannerChoice, Point3, StopReason, Tracking,
 };
 use rand_core::Rng;
 use serde::Serialize;
 
 use super::executor::{Blocked, Execution, MissionTruth, Progress, TrueOutcome, TrueRover};
 use super::params::MissionSection;
-use super::sensing::{gaussian, overview_scan, overview_sensor, rover_scan, tether_reading, Localiser};
+use super::sensing::{
+    gaussian, overview_scan, overview_sensor, rover_scan, tether_reading, Localiser,
+};
 use super::truth::Body;
 use super::world::MissionWorld;
 use crate::link::FlightLink;
 use crate::scenario::{Scenario, WorldSpec};
 use crate::sensor::{to_wire_pose, RangeSensorParams, Scan};
-use crate::session::{HostSession, SessionError};
+use crate::session::{HostSession, RetransmitPolicy, SessionError};
 
 /// Points per scan chunk sent.
 const CHUNK_POINTS: usize = 256;
@@ -95,6 +97,10 @@ pub struct TracePoint {
     pub payout_m: f64,
     /// Distance driven, m.
     pub driven_m: f64,
+    /// True body orientation (quaternion x, y, z, w): for the Foxglove export's `rover_true` frame, not in the
+    /// JSON summary.
+    #[serde(skip)]
+    pub orientation: [f64; 4],
 }
 
 /// A plan the flight software sent.
@@ -161,6 +167,17 @@ pub struct MissionReport {
     pub nacks: u32,
     /// Link time at the end, s.
     pub link_s: f64,
+    /// Longest executive step the flight software measured (`Telemetry.cycle.max_step_us`), microseconds: zero
+    /// on the simulated clock, host time with `InProcLink::charge_host_time`, emulated time free-running.
+    pub max_step_us: u32,
+    /// Executive steps over the step budget (`Telemetry.cycle.slips`).
+    pub step_slips: u32,
+    /// Frames the host sent again for want of an answer (`session::RetransmitPolicy`; 0 on a clean link).
+    pub retransmits: u64,
+    /// Messages the host gave up after the policy's sends.
+    pub given_up: u64,
+    /// Scan chunks the host sent again for want of an answer (`HostSession::send_scan`).
+    pub chunks_resent: u64,
     /// Host wall time, s.
     pub host_s: f64,
     /// The executed path.
@@ -388,6 +405,8 @@ impl<L: FlightLink> Sim<'_, L> {
                 Message::Telemetry(t) => {
                     self.rep.map_blocks = self.rep.map_blocks.max(t.map.blocks_used);
                     self.rep.map_blocks_capacity = t.map.blocks_capacity;
+                    self.rep.max_step_us = self.rep.max_step_us.max(t.cycle.max_step_us);
+                    self.rep.step_slips = self.rep.step_slips.max(t.cycle.slips);
                 }
                 Message::Nack(_) => self.rep.nacks += 1,
                 _ => {}
@@ -443,10 +462,10 @@ impl<L: FlightLink> Sim<'_, L> {
     fn send_scan(&mut self, scan: &Scan) -> Result<(), MissionError> {
         self.scan_id += 1;
         let chunks = scan.to_chunks(self.scan_id, CHUNK_POINTS).map_err(|e| MissionError::Setup(format!("{e:?}")))?;
-        for c in chunks {
-            self.s.send(&Message::SensorChunk(c))?;
-        }
-        self.recv()
+        let t0 = Instant::now();
+        let (got, _) = self.s.send_scan(&chunks)?;
+        self.absorb(got, t0.elapsed().as_secs_f64());
+        Ok(())
     }
 
     fn scan_here(&mut self) -> Result<(), MissionError> {
@@ -472,6 +491,7 @@ impl<L: FlightLink> Sim<'_, L> {
         self.rep.max_payout_m = self.rep.max_payout_m.max(self.rover.tether.length_m);
         if self.rep.trace.len() < MAX_TRACE {
             let e = from_vec3(&self.estimate.translation.vector);
+            let q = self.rover.state.settled.pose.rotation.quaternion().coords;
             let t_s = self.now_s();
             self.rep.trace.push(TracePoint {
                 t_s,
@@ -481,6 +501,7 @@ impl<L: FlightLink> Sim<'_, L> {
                 tension_n: st.tension_n,
                 payout_m: self.rover.tether.length_m,
                 driven_m: self.rover.driven_m,
+                orientation: [f64::from(q.x), f64::from(q.y), f64::from(q.z), f64::from(q.w)],
             });
         }
     }
@@ -624,10 +645,19 @@ pub fn run_mission_from(
         map_blocks_capacity: 0,
         nacks: 0,
         link_s: 0.0,
+        max_step_us: 0,
+        step_slips: 0,
+        retransmits: 0,
+        given_up: 0,
+        chunks_resent: 0,
         host_s: 0.0,
         trace: vec![],
         tethers: vec![],
-        rocks: truth.world.rocks().map(|(r, _)| (r.centre, r.radius_m, r.visible)).collect(),
+        rocks: truth
+            .world
+            .rocks()
+            .map(|(r, _)| (r.centre, r.radius_m, r.visible))
+            .collect(),
         root: sc.tether.root_anchor,
         start: rover.axle(),
         goal: sc.goal.position,
@@ -635,7 +665,12 @@ pub fn run_mission_from(
     };
     let estimate = rover.state.settled.pose;
     let mut sim = Sim {
-        s: HostSession::starting_at(link, first_seq),
+        s: {
+            // Every frame that changes the flight state is sent again when unanswered (lost on a faulty link).
+            let mut s = HostSession::starting_at(link, first_seq);
+            s.retransmit = Some(RetransmitPolicy::default());
+            s
+        },
         sc,
         reading_period_us: (1e6 / m.tether_rate_hz).round().max(1.0) as u64,
         m,
@@ -670,7 +705,7 @@ pub fn run_mission_from(
     sim.snapshot_tether();
     sim.trace();
     if sim.m.overview_scan {
-        let tiles: Vec<(RangeSensorParams, _)> = overview_sensor(sim.truth.root, sim.sc.goal.position, &sim.sc.sensor, &sim.m);
+        let tiles: Vec<(RangeSensorParams, _)> = overview_sensor(sim.truth.root, sim.sc.goal.position, sim.sc.rover.start, &sim.sc.sensor, &sim.m);
         for (params, pose) in tiles {
             let view = sim.truth.world.sensed();
             let scan = overview_scan(&view, &params, &pose, &mut sim.rng);
@@ -714,12 +749,18 @@ pub fn run_mission_from(
     if sim.live {
         eprintln!();
     }
-    // a last look: the flight software's final status and telemetry
+    // a last look, on a clean link: the flight software's final status and telemetry
+    sim.s.link_mut().end_faults().map_err(SessionError::Link)?;
     sim.recv()?;
     if let Ok(t) = sim.s.telemetry() {
         sim.rep.map_blocks = sim.rep.map_blocks.max(t.map.blocks_used);
         sim.rep.map_blocks_capacity = t.map.blocks_capacity;
+        sim.rep.max_step_us = sim.rep.max_step_us.max(t.cycle.max_step_us);
+        sim.rep.step_slips = sim.rep.step_slips.max(t.cycle.slips);
     }
+    sim.rep.retransmits = sim.s.retransmitted;
+    sim.rep.given_up = sim.s.given_up;
+    sim.rep.chunks_resent = sim.s.chunks_resent;
     sim.snapshot_tether();
     let mut rep = sim.rep;
     rep.verdict = sim.done.unwrap_or(Verdict::TimeLimit);

@@ -135,16 +135,43 @@ pub const OVERVIEW_H_FOV_DEG: f64 = 60.0;
 /// just behind the mast, where the rover starts).
 pub const OVERVIEW_MAX_DEPRESSION_DEG: f64 = 100.0;
 
-/// The overview sensor's tiles (module docs): at `[mission] overview_eye` (default: on the mast 0.3 m above `root`), facing the goal, from 25 degrees
-/// above the goal's direction down past the nadir ([`OVERVIEW_MAX_DEPRESSION_DEG`]), [`OVERVIEW_H_FOV_DEG`] wide,
-/// at `overview_resolution_deg`, split into tiles of at most [`OVERVIEW_TILE_POINTS`] rays (one scan each).
-pub fn overview_sensor(root: P3, goal: P3, rover_sensor: &RangeSensorParams, m: &MissionSection) -> Vec<(RangeSensorParams, Pose3)> {
+/// The overview sensor's tiles (module docs): at `[mission] overview_eye` (default: on the mast 0.3 m above `root`),
+/// facing the goal, from 25 degrees above the goal's direction down past the nadir ([`OVERVIEW_MAX_DEPRESSION_DEG`]),
+/// [`OVERVIEW_H_FOV_DEG`] wide, at `overview_resolution_deg`, split into tiles of at most [`OVERVIEW_TILE_POINTS`]
+/// rays (one scan each). When the rover's start lies outside that view (a mast ahead of the rover, facing a goal
+/// beyond it), the same sweep facing the start follows: the flight software cannot plan from ground it has not
+/// seen, and the rover's own sensor looks ahead of it, not under it.
+pub fn overview_sensor(root: P3, goal: P3, start: P3, rover_sensor: &RangeSensorParams, m: &MissionSection) -> Vec<(RangeSensorParams, Pose3)> {
     let eye = m.overview_eye.unwrap_or([root[0], root[1], root[2] + 0.3]);
-    let d = sub(goal, eye);
+    let mut tiles = overview_sweep(eye, goal, rover_sensor, m);
+    if !overview_sees(eye, goal, start) {
+        tiles.extend(overview_sweep(eye, start, rover_sensor, m));
+    }
+    tiles
+}
+
+/// Is `p` inside the sweep facing `target` from `eye`: within the horizontal field of view less a 5-degree margin
+/// and below the sweep's top, or within 10 degrees of the nadir (the sweep's rays past it)?
+fn overview_sees(eye: P3, target: P3, p: P3) -> bool {
+    let (d, t) = (sub(p, eye), sub(target, eye));
+    let h = (d[0] * d[0] + d[1] * d[1]).sqrt();
+    let depression = (-d[2]).atan2(h).to_degrees();
+    if depression > 80.0 {
+        return true;
+    }
+    let az = (d[1].atan2(d[0]) - t[1].atan2(t[0])).to_degrees();
+    let az = (az + 180.0).rem_euclid(360.0) - 180.0;
+    let top = ((-t[2]).atan2((t[0] * t[0] + t[1] * t[1]).sqrt()).to_degrees() - OVERVIEW_ABOVE_GOAL_DEG).max(-10.0);
+    az.abs() <= OVERVIEW_H_FOV_DEG / 2.0 - 5.0 && depression >= top
+}
+
+/// The sweep of tiles facing `target` from `eye` (see [`overview_sensor`]).
+fn overview_sweep(eye: P3, target: P3, rover_sensor: &RangeSensorParams, m: &MissionSection) -> Vec<(RangeSensorParams, Pose3)> {
+    let d = sub(target, eye);
     let yaw = d[1].atan2(d[0]);
-    let goal_depression = (-d[2]).atan2((d[0] * d[0] + d[1] * d[1]).sqrt()).to_degrees();
-    let top = (goal_depression - OVERVIEW_ABOVE_GOAL_DEG).max(-10.0);
-    let far = firmware::geom::p3::dist(eye, goal);
+    let target_depression = (-d[2]).atan2((d[0] * d[0] + d[1] * d[1]).sqrt()).to_degrees();
+    let top = (target_depression - OVERVIEW_ABOVE_GOAL_DEG).max(-10.0);
+    let far = firmware::geom::p3::dist(eye, target);
     let r = m.overview_resolution_deg;
     let nh = (OVERVIEW_H_FOV_DEG / r).floor() as usize + 1;
     let rows_per_tile = (OVERVIEW_TILE_POINTS / nh).max(2);
@@ -208,11 +235,38 @@ mod tests {
         assert!((b - 0.5).abs() < 0.2, "sigma after 100 m: {b}");
     }
 
+    /// Ledge test 3's mast stands ahead of the rover (eye at x = 4 m, the rover at -1.5 m, the goal beyond at 6 m):
+    /// the sweep facing the goal has no return near the start; the overview adds the sweep facing the start, which
+    /// has. A mast behind the rover (ledge test 1) sees the start in the goal's sweep and adds nothing.
+    #[test]
+    fn the_overview_also_faces_a_start_outside_the_goal_sweep() {
+        let w = LedgeWorld::new();
+        let m = MissionSection { overview_eye: Some([4.0, 0.0, 10.0]), ..Default::default() };
+        let (goal, start) = ([6.0, 0.0, 0.35], [-1.5, 0.0, 4.35]);
+        let returns_near_start = |tiles: &[(RangeSensorParams, Pose3)]| {
+            tiles.iter().any(|(params, pose)| {
+                let s = overview_scan(&w, params, pose, &mut rand_pcg::Pcg32::new(1, 1));
+                s.points.iter().any(|p| {
+                    let q = pose.transform_point(&(*p).into()).coords;
+                    (q.x + 1.5).abs() < 0.3 && q.y.abs() < 0.3 && (q.z - 4.0).abs() < 0.05
+                })
+            })
+        };
+        let goal_only = overview_sweep([4.0, 0.0, 10.0], goal, &RangeSensorParams::default(), &m);
+        assert!(!returns_near_start(&goal_only), "the goal's sweep already sees the start: the test shows nothing");
+        let tiles = overview_sensor([6.7, 0.0, 6.35], goal, start, &RangeSensorParams::default(), &m);
+        assert!(tiles.len() > goal_only.len());
+        assert!(returns_near_start(&tiles));
+        let behind = MissionSection { overview_eye: Some([-3.0, 0.0, 10.0]), ..Default::default() };
+        let ahead_of_mast = overview_sensor([-6.4, 0.0, 6.35], goal, start, &RangeSensorParams::default(), &behind);
+        assert_eq!(ahead_of_mast.len(), overview_sweep([-3.0, 0.0, 10.0], goal, &RangeSensorParams::default(), &behind).len());
+    }
+
     #[test]
     fn the_overview_scan_sees_the_descent_from_the_mast() {
         let w = LedgeWorld::new();
         let m = MissionSection::default();
-        let tiles = overview_sensor([-6.4, 0.0, 6.35], [6.0, 0.0, 0.35], &RangeSensorParams::default(), &m);
+        let tiles = overview_sensor([-6.4, 0.0, 6.35], [6.0, 0.0, 0.35], [-1.5, 0.0, 4.35], &RangeSensorParams::default(), &m);
         assert!(tiles.len() >= 2);
         let mut world_pts: Vec<Vec3> = Vec::new();
         for (params, pose) in &tiles {

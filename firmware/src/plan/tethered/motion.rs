@@ -49,7 +49,10 @@ impl<D: DistanceField> TetherSpace<'_, D> {
         }
         if to.off_map {
             let a = from.axle();
-            return if self.bounds.edge_distance_xy(a.x, a.y) <= self.params.off_map_edge_m {
+            // An off-map goal inside the bounds is an unobserved one (see `TetherSpace::goal_or_unobserved`): no
+            // motion reaches it; the plan is the approximate one that ends nearest to it.
+            let inside = self.bounds.contains_xy(to.ground.x, to.ground.y);
+            return if !inside && self.bounds.edge_distance_xy(a.x, a.y) <= self.params.off_map_edge_m {
                 Ok(history.clone())
             } else {
                 Err(MotionFailure::OffMap)

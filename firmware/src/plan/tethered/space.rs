@@ -299,6 +299,21 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
         }
     }
 
+    /// [`Self::goal_state`], or, when the goal's column is not observed yet ([`SettleFailure::NoSurface`],
+    /// [`SettleFailure::UnknownSpace`]: a floor below a lip that no ray has reached), an **unobserved goal**: an
+    /// off-map state at `point` inside the bounds, which no motion reaches. A planner tracking approximate solutions
+    /// then returns the path to the state nearest to it, and the rover observes the goal on the way (a receding
+    /// horizon). A goal on observed ground where the rover does not settle (collision, steep contact, no ground) is
+    /// still refused.
+    pub fn goal_or_unobserved(&self, point: Vec3, theta: Real) -> Result<RoverState, SettleFailure> {
+        match self.goal_state(point, theta) {
+            Err(SettleFailure::NoSurface | SettleFailure::UnknownSpace) if crate::geom::is_finite3(&point) => {
+                Ok(RoverState::off_map_goal(point))
+            }
+            r => r,
+        }
+    }
+
     pub(super) fn sample_at<R: Rng + ?Sized>(&mut self, rng: &mut R, x: Real, y: Real) -> Option<RoverState> {
         let p = self.params.sample_perturbation_m;
         let px = x + p * (2.0 * uniform01(rng) as Real - 1.0);

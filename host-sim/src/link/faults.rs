@@ -1,0 +1,775 @@
+//! Seeded link-fault injection (issue 24, item 1): a [`FlightLink`] wrapper that damages the host -> flight
+//! frames of any link (in-process or QEMU), after smoltcp's `phy::FaultInjector` (a wrapper around a device that
+//! drops and corrupts packets at configured rates from a seeded generator), here on a COBS byte stream.
+//!
+//! **Faults** ([`FaultKind`], each at its own rate per byte, [`FaultProfile`]): a frame of `n` encoded bytes meets
+//! kind `k` with probability `1 - (1 - rate_k)^n`; the kinds are drawn in table order and at most one fault hits a
+//! frame.
+//!
+//! | kind | what the frame suffers | parameter (default) |
+//! |---|---|---|
+//! | `bitflip` | one bit of one byte flipped (the delimiter excepted) | |
+//! | `drop` | lost | |
+//! | `duplicate` | delivered twice | |
+//! | `reorder` | swapped with the next frame (delivered in order if none follows within the hold) | `reorder_hold_us` (200 ms) |
+//! | `truncate` | cut after a random number of bytes, delimiter kept | |
+//! | `delay` | held, later frames overtake it | `delay_us` (200 ms) |
+//! | `stall` | the uplink stops: this frame and all after it are held, then delivered in order | `stall_us` (500 ms) |
+//!
+//! The delays stay below the host session's retransmission timeout (1 s, `session::RetransmitPolicy`), so a
+//! delayed frame is not also retransmitted.
+//!
+//! **Recording.** Put the field-log recorder *inside* the injector (`FaultLink<RecordingLink<L>>`): the log then
+//! holds the bytes the flight software really received, when it received them, so `replay` reproduces a faulty
+//! run byte for byte with no change, and every fault is written as a fault record ([`FlightLink::note_fault`],
+//! `fieldlog` format 3), which `inspect` lists.
+//!
+//! **Accounting** ([`FaultAccount`]): the injector knows what it did (injected; harmless = the frame reached the
+//! flight software intact and in order: a delay no intact frame overtook, a stall, a reorder with no frame to swap
+//! with or whose partner was lost or damaged).
+//! The detection side is the flight software's own `Telemetry` (protocol v4), read from the downlink: a lost or
+//! damaged frame is a gap in the host's sequence numbers (`seq_gaps` less `seq_late`, since a late frame first
+//! shows as a gap), a duplicate is a `Nack(DuplicateFrame)`, a reordered or delayed frame is `seq_late`. Per group,
+//! injected must equal detected plus harmless. The injector also reads every `Ack` on the downlink: an `Ack` for
+//! the sequence number of a damaged frame would mean the flight software acted on it (it must be 0).
+//!
+//! Only the uplink is faulted: downlink faults need the host to survive a lost `DriveCommand` or `Ack`, which is
+//! not done (`host-sim/doc/faults.md`).
+
+use std::collections::BTreeSet;
+
+use firmware::protocol::{self, Deframer, Frame, Message, NackReason, Telemetry};
+use rand_core::{Rng, SeedableRng};
+
+use super::{FlightLink, LinkError};
+
+/// A kind of link fault (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
+pub enum FaultKind {
+    /// One bit of one byte flipped.
+    BitFlip,
+    /// The frame lost.
+    Drop,
+    /// The frame delivered twice.
+    Duplicate,
+    /// The frame swapped with the next one.
+    Reorder,
+    /// The frame cut short.
+    Truncate,
+    /// The frame held while later ones pass.
+    Delay,
+    /// The uplink held, then delivered in order.
+    Stall,
+}
+
+impl FaultKind {
+    /// Every kind, in the order they are drawn.
+    pub const ALL: [FaultKind; 7] = [
+        FaultKind::BitFlip,
+        FaultKind::Drop,
+        FaultKind::Duplicate,
+        FaultKind::Reorder,
+        FaultKind::Truncate,
+        FaultKind::Delay,
+        FaultKind::Stall,
+    ];
+
+    /// The name used in profiles and tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            FaultKind::BitFlip => "bitflip",
+            FaultKind::Drop => "drop",
+            FaultKind::Duplicate => "duplicate",
+            FaultKind::Reorder => "reorder",
+            FaultKind::Truncate => "truncate",
+            FaultKind::Delay => "delay",
+            FaultKind::Stall => "stall",
+        }
+    }
+
+    fn index(self) -> usize {
+        self as usize
+    }
+
+    fn from_u8(b: u8) -> Option<Self> {
+        Self::ALL.get(usize::from(b)).copied()
+    }
+
+    /// How the flight software's telemetry shows this kind.
+    pub fn group(self) -> DetectionGroup {
+        match self {
+            FaultKind::BitFlip | FaultKind::Drop | FaultKind::Truncate => DetectionGroup::Lost,
+            FaultKind::Duplicate => DetectionGroup::Duplicate,
+            FaultKind::Reorder | FaultKind::Delay | FaultKind::Stall => DetectionGroup::Late,
+        }
+    }
+}
+
+/// The telemetry evidence of a fault (module docs, "Accounting").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
+pub enum DetectionGroup {
+    /// A sequence gap not filled by a late frame (`seq_gaps - seq_late`).
+    Lost,
+    /// `frames_rejected[DuplicateFrame]`.
+    Duplicate,
+    /// `seq_late`.
+    Late,
+}
+
+impl DetectionGroup {
+    /// Every group.
+    pub const ALL: [DetectionGroup; 3] = [
+        DetectionGroup::Lost,
+        DetectionGroup::Duplicate,
+        DetectionGroup::Late,
+    ];
+
+    /// What the flight software counted for this group in `t`.
+    pub fn detected(self, t: &Telemetry) -> u64 {
+        match self {
+            DetectionGroup::Lost => u64::from(t.seq_gaps).saturating_sub(u64::from(t.seq_late)),
+            DetectionGroup::Duplicate => u64::from(
+                t.frames_rejected
+                    .get(NackReason::DuplicateFrame.index())
+                    .copied()
+                    .unwrap_or(0),
+            ),
+            DetectionGroup::Late => u64::from(t.seq_late),
+        }
+    }
+}
+
+/// Rates (per byte) and parameters of the injected faults.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FaultProfile {
+    /// Rate per byte of each kind, in [`FaultKind::ALL`] order.
+    pub rates: [f64; 7],
+    /// Hold of a delayed frame, microseconds (default 200 ms).
+    pub delay_us: u64,
+    /// Length of a stall, microseconds (default 500 ms).
+    pub stall_us: u64,
+    /// Longest hold of a frame waiting for one to swap with, microseconds (default 200 ms).
+    pub reorder_hold_us: u64,
+    /// Seed of the injector's generator.
+    pub seed: u64,
+}
+
+impl Default for FaultProfile {
+    fn default() -> Self {
+        Self {
+            rates: [0.0; 7],
+            delay_us: 200_000,
+            stall_us: 500_000,
+            reorder_hold_us: 200_000,
+            seed: 0,
+        }
+    }
+}
+
+impl FaultProfile {
+    /// One kind at `rate` per byte.
+    pub fn single(kind: FaultKind, rate: f64, seed: u64) -> Self {
+        let mut p = Self {
+            seed,
+            ..Self::default()
+        };
+        if let Some(r) = p.rates.get_mut(kind.index()) {
+            *r = rate;
+        }
+        p
+    }
+
+    /// The rate of `kind`.
+    pub fn rate(&self, kind: FaultKind) -> f64 {
+        self.rates.get(kind.index()).copied().unwrap_or(0.0)
+    }
+
+    /// Parses `KIND=RATE,...` (`all=RATE` sets every kind), `delay_us=`, `stall_us=`, `reorder_hold_us=`, `seed=`;
+    /// `none` is no fault. Rates are per byte, in [0, 1].
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let mut p = Self::default();
+        for item in text
+            .split(',')
+            .map(str::trim)
+            .filter(|s| !s.is_empty() && *s != "none")
+        {
+            let (key, value) = item.split_once('=').ok_or_else(|| {
+                format!("fault profile item `{item}` is not KEY=VALUE (e.g. bitflip=1e-4)")
+            })?;
+            let key = key.trim();
+            let value = value.trim();
+            let int = || {
+                value
+                    .parse::<u64>()
+                    .map_err(|e| format!("fault profile `{key}={value}`: {e}"))
+            };
+            match key {
+                "delay_us" => p.delay_us = int()?,
+                "stall_us" => p.stall_us = int()?,
+                "reorder_hold_us" => p.reorder_hold_us = int()?,
+                "seed" => p.seed = int()?,
+                _ => {
+                    let rate: f64 = value
+                        .parse()
+                        .map_err(|e| format!("fault profile `{key}={value}`: {e}"))?;
+                    if !(0.0..=1.0).contains(&rate) {
+                        return Err(format!(
+                            "fault profile `{key}={value}`: a rate per byte must be in [0, 1]"
+                        ));
+                    }
+                    if key == "all" {
+                        p.rates = [rate; 7];
+                    } else {
+                        let kind = FaultKind::ALL.iter().find(|k| k.name() == key).ok_or_else(|| {
+                            let names: Vec<&str> = FaultKind::ALL.iter().map(|k| k.name()).collect();
+                            format!("fault profile: unknown key `{key}` (kinds: {}, all; delay_us, stall_us, reorder_hold_us, seed)", names.join(", "))
+                        })?;
+                        p.rates[kind.index()] = rate;
+                    }
+                }
+            }
+        }
+        Ok(p)
+    }
+
+    /// Whether any rate is non-zero.
+    pub fn any(&self) -> bool {
+        self.rates.iter().any(|&r| r > 0.0)
+    }
+}
+
+impl core::fmt::Display for FaultProfile {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        for k in FaultKind::ALL {
+            if self.rate(k) > 0.0 {
+                write!(f, "{}={:e},", k.name(), self.rate(k))?;
+            }
+        }
+        write!(
+            f,
+            "delay_us={},stall_us={},reorder_hold_us={},seed={}",
+            self.delay_us, self.stall_us, self.reorder_hold_us, self.seed
+        )
+    }
+}
+
+/// One injected fault, as the field log keeps it (a fault record's payload, [`FaultEvent::to_bytes`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct FaultEvent {
+    /// Link time of the injection, microseconds.
+    pub t_us: u64,
+    /// The kind.
+    pub kind: FaultKind,
+    /// Index of the uplink frame (0 = the first frame the host sent through the injector).
+    pub frame: u64,
+    /// The frame's host sequence number (0 if its header could not be read).
+    pub seq: u32,
+    /// The frame's encoded length, bytes.
+    pub frame_len: u32,
+    /// Bit flipped (byte * 8 + bit), bytes kept by a truncation, or the hold in microseconds; 0 otherwise.
+    pub detail: u64,
+}
+
+/// Bytes of an encoded [`FaultEvent`] (without its time, which is the record's).
+pub const FAULT_EVENT_LEN: usize = 1 + 8 + 4 + 4 + 8;
+
+impl FaultEvent {
+    /// The payload of a fault record: `kind u8 | frame u64 | seq u32 | frame_len u32 | detail u64`, little-endian.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut b = Vec::with_capacity(FAULT_EVENT_LEN);
+        b.push(self.kind as u8);
+        b.extend_from_slice(&self.frame.to_le_bytes());
+        b.extend_from_slice(&self.seq.to_le_bytes());
+        b.extend_from_slice(&self.frame_len.to_le_bytes());
+        b.extend_from_slice(&self.detail.to_le_bytes());
+        b
+    }
+
+    /// Reads a fault record's payload (`None` if it is not one).
+    pub fn from_bytes(t_us: u64, b: &[u8]) -> Option<Self> {
+        if b.len() != FAULT_EVENT_LEN {
+            return None;
+        }
+        let u64_at = |at: usize| {
+            b.get(at..at + 8)
+                .and_then(|s| s.try_into().ok())
+                .map(u64::from_le_bytes)
+        };
+        let u32_at = |at: usize| {
+            b.get(at..at + 4)
+                .and_then(|s| s.try_into().ok())
+                .map(u32::from_le_bytes)
+        };
+        Some(Self {
+            t_us,
+            kind: FaultKind::from_u8(*b.first()?)?,
+            frame: u64_at(1)?,
+            seq: u32_at(9)?,
+            frame_len: u32_at(13)?,
+            detail: u64_at(17)?,
+        })
+    }
+}
+
+impl core::fmt::Display for FaultEvent {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "t {:.6} s  {:<9} uplink frame #{} (seq {}, {} bytes), detail {}",
+            self.t_us as f64 / 1e6,
+            self.kind.name(),
+            self.frame,
+            self.seq,
+            self.frame_len,
+            self.detail
+        )
+    }
+}
+
+/// What the injector did and what the flight software saw (module docs, "Accounting").
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct FaultAccount {
+    /// Faults injected, per kind ([`FaultKind::ALL`] order).
+    pub injected: [u64; 7],
+    /// Faults that left their frame intact and in order, per kind.
+    pub harmless: [u64; 7],
+    /// `Ack`s the flight software sent for the sequence number of a frame the injector damaged (must be 0).
+    pub acked_damaged: u64,
+    /// The last `Telemetry` seen on the downlink.
+    #[serde(skip)]
+    pub telemetry: Option<Telemetry>,
+}
+
+impl FaultAccount {
+    /// Injected faults of a kind.
+    pub fn injected(&self, k: FaultKind) -> u64 {
+        self.injected.get(k.index()).copied().unwrap_or(0)
+    }
+
+    /// Harmless faults of a kind.
+    pub fn harmless(&self, k: FaultKind) -> u64 {
+        self.harmless.get(k.index()).copied().unwrap_or(0)
+    }
+
+    /// What the last telemetry counted for a group (`None` without telemetry).
+    pub fn detected(&self, g: DetectionGroup) -> Option<u64> {
+        self.telemetry.as_ref().map(|t| g.detected(t))
+    }
+
+    /// Injected and harmless faults of the kinds of a group.
+    pub fn group_totals(&self, g: DetectionGroup) -> (u64, u64) {
+        FaultKind::ALL
+            .iter()
+            .filter(|k| k.group() == g)
+            .fold((0, 0), |(i, h), &k| {
+                (i + self.injected(k), h + self.harmless(k))
+            })
+    }
+
+    /// Checks injected = detected + harmless for every group and no `Ack` for a damaged frame; the reason if not.
+    pub fn check(&self) -> Result<(), String> {
+        let Some(t) = &self.telemetry else {
+            return Err("no telemetry from the flight software".into());
+        };
+        let mut bad = Vec::new();
+        for g in DetectionGroup::ALL {
+            let (inj, harmless) = self.group_totals(g);
+            let det = g.detected(t);
+            if inj != det + harmless {
+                bad.push(format!(
+                    "{g:?}: injected {inj} != detected {det} + harmless {harmless}"
+                ));
+            }
+        }
+        if self.acked_damaged > 0 {
+            bad.push(format!(
+                "{} damaged frame(s) acknowledged",
+                self.acked_damaged
+            ));
+        }
+        if bad.is_empty() {
+            Ok(())
+        } else {
+            Err(bad.join("; "))
+        }
+    }
+}
+
+/// A frame waiting to be delivered.
+#[derive(Debug, Clone)]
+struct Held {
+    at_us: u64,
+    frame: u64,
+    bytes: Vec<u8>,
+}
+
+/// The fault-injecting wrapper (module docs).
+pub struct FaultLink<L: FlightLink> {
+    inner: L,
+    profile: FaultProfile,
+    rng: rand_pcg::Pcg64,
+    enabled: bool,
+    /// Host bytes of a frame not yet ended by its delimiter.
+    partial: Vec<u8>,
+    frames: u64,
+    /// Delayed frames, released at their times.
+    delayed: Vec<Held>,
+    /// A frame waiting for the next one to swap with.
+    reordered: Option<Held>,
+    /// Frames held by a stall, released in order at `stall_until_us`.
+    stalled: Vec<Held>,
+    stall_until_us: u64,
+    /// Highest frame index delivered so far; frames delivered behind it are late.
+    delivered_max: Option<u64>,
+    /// Frames delivered behind a later one.
+    late: BTreeSet<u64>,
+    /// Sequence numbers of frames damaged or lost (never delivered intact).
+    damaged_seqs: BTreeSet<u32>,
+    /// Frame indices delivered damaged: the flight software never reads them, so they make nothing late.
+    damaged_frames: BTreeSet<u64>,
+    events: Vec<FaultEvent>,
+    downlink: Deframer,
+    acked_damaged: u64,
+    telemetry: Option<Telemetry>,
+}
+
+impl<L: FlightLink> FaultLink<L> {
+    /// Wraps `inner` with `profile` (seeded by `profile.seed`).
+    pub fn new(inner: L, profile: FaultProfile) -> Self {
+        let rng = rand_pcg::Pcg64::seed_from_u64(profile.seed);
+        Self {
+            inner,
+            profile,
+            rng,
+            enabled: true,
+            partial: Vec::new(),
+            frames: 0,
+            delayed: Vec::new(),
+            reordered: None,
+            stalled: Vec::new(),
+            stall_until_us: 0,
+            delivered_max: None,
+            late: BTreeSet::new(),
+            damaged_seqs: BTreeSet::new(),
+            damaged_frames: BTreeSet::new(),
+            events: Vec::new(),
+            downlink: Deframer::new(),
+            acked_damaged: 0,
+            telemetry: None,
+        }
+    }
+
+    /// The wrapped link.
+    pub fn inner(&self) -> &L {
+        &self.inner
+    }
+
+    /// The wrapped link, mutably.
+    pub fn inner_mut(&mut self) -> &mut L {
+        &mut self.inner
+    }
+
+    /// Gives the wrapped link back (frames still held are lost; call [`FlightLink::end_faults`] first).
+    pub fn into_inner(self) -> L {
+        self.inner
+    }
+
+    /// The faults injected so far.
+    pub fn events(&self) -> &[FaultEvent] {
+        &self.events
+    }
+
+    /// The accounting so far (module docs).
+    pub fn account(&self) -> FaultAccount {
+        let mut a = FaultAccount {
+            acked_damaged: self.acked_damaged,
+            telemetry: self.telemetry,
+            ..FaultAccount::default()
+        };
+        for e in &self.events {
+            let k = e.kind.index();
+            a.injected[k] += 1;
+            let intact_in_order = match e.kind {
+                FaultKind::Delay | FaultKind::Stall | FaultKind::Reorder => {
+                    !self.late.contains(&e.frame)
+                }
+                _ => false,
+            };
+            if intact_in_order {
+                a.harmless[k] += 1;
+            }
+        }
+        a
+    }
+
+    fn uniform(&mut self) -> f64 {
+        (self.rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    fn below(&mut self, n: u64) -> u64 {
+        self.rng.next_u64() % n.max(1)
+    }
+
+    /// Hands `bytes` of frame `frame` to the flight side now (through a stall if one is on).
+    fn emit(&mut self, frame: u64, bytes: Vec<u8>) -> Result<(), LinkError> {
+        let now = self.inner.now_us();
+        if now < self.stall_until_us || !self.stalled.is_empty() {
+            self.stalled.push(Held {
+                at_us: self.stall_until_us,
+                frame,
+                bytes,
+            });
+            return Ok(());
+        }
+        self.deliver(frame, &bytes)
+    }
+
+    fn deliver(&mut self, frame: u64, bytes: &[u8]) -> Result<(), LinkError> {
+        if self.damaged_frames.contains(&frame) {
+            return self.inner.send(bytes);
+        }
+        match self.delivered_max {
+            Some(m) if frame < m => {
+                self.late.insert(frame);
+            }
+            _ => self.delivered_max = Some(frame),
+        }
+        self.inner.send(bytes)
+    }
+
+    /// Releases everything due at the current time: the stall's frames, delayed frames, an expired reorder hold.
+    fn release_due(&mut self) -> Result<(), LinkError> {
+        let now = self.inner.now_us();
+        if now >= self.stall_until_us && !self.stalled.is_empty() {
+            for h in core::mem::take(&mut self.stalled) {
+                self.deliver(h.frame, &h.bytes)?;
+            }
+        }
+        if self.reordered.as_ref().is_some_and(|h| h.at_us <= now) {
+            if let Some(h) = self.reordered.take() {
+                self.emit(h.frame, h.bytes)?;
+            }
+        }
+        let (due, rest): (Vec<Held>, Vec<Held>) = core::mem::take(&mut self.delayed)
+            .into_iter()
+            .partition(|h| h.at_us <= now);
+        self.delayed = rest;
+        for h in due {
+            self.emit(h.frame, h.bytes)?;
+        }
+        Ok(())
+    }
+
+    /// The next time something held falls due.
+    fn next_release(&self) -> Option<u64> {
+        let stall = (!self.stalled.is_empty()).then_some(self.stall_until_us);
+        let reorder = self.reordered.as_ref().map(|h| h.at_us);
+        let delayed = self.delayed.iter().map(|h| h.at_us).min();
+        [stall, reorder, delayed].into_iter().flatten().min()
+    }
+
+    /// Runs the inner link to `t_us`, releasing held frames at their times on the way.
+    fn run_to(&mut self, t_us: u64, out: &mut Vec<u8>) -> Result<(), LinkError> {
+        // Each pass releases at least one held frame (or the stall); at most as many passes as frames held.
+        while let Some(at) = self.next_release().filter(|&at| at <= t_us) {
+            let got = self.inner.advance_to(at)?;
+            self.watch(&got);
+            out.extend(got);
+            self.release_due()?;
+        }
+        let got = self.inner.advance_to(t_us)?;
+        self.watch(&got);
+        out.extend(got);
+        Ok(())
+    }
+
+    /// Reads the downlink: `Ack`s of damaged frames and the latest `Telemetry`.
+    fn watch(&mut self, bytes: &[u8]) {
+        let mut rest = bytes;
+        // Each pass consumes at least one byte.
+        while !rest.is_empty() {
+            let (used, ev) = self.downlink.push(rest);
+            rest = rest.get(used.max(1)..).unwrap_or(&[]);
+            let Some(Ok(frame)) = ev else { continue };
+            match protocol::decode_frame(frame) {
+                Ok((_, Message::Ack(a))) if self.damaged_seqs.contains(&a.seq) => {
+                    self.acked_damaged += 1
+                }
+                Ok((_, Message::Telemetry(t))) => self.telemetry = Some(t),
+                _ => {}
+            }
+        }
+    }
+
+    /// Draws the fault of one frame and applies it.
+    fn inject(&mut self, bytes: Vec<u8>) -> Result<(), LinkError> {
+        let frame = self.frames;
+        self.frames += 1;
+        let n = bytes.len() as u64;
+        let mut chosen = None;
+        if self.enabled && n >= 3 {
+            for k in FaultKind::ALL {
+                let rate = self.profile.rate(k);
+                if rate <= 0.0 {
+                    continue;
+                }
+                let p = 1.0 - (1.0 - rate).powf(n as f64);
+                if self.uniform() < p && chosen.is_none() {
+                    chosen = Some(k);
+                }
+            }
+        }
+        // A frame held for a swap goes out right after this one (or this one is the swap's first frame).
+        let swap = self.reordered.take();
+        let Some(kind) = chosen else {
+            self.emit(frame, bytes)?;
+            if let Some(h) = swap {
+                self.emit(h.frame, h.bytes)?;
+            }
+            return Ok(());
+        };
+        let now = self.inner.now_us();
+        let seq = frame_seq(&bytes);
+        let mut event = FaultEvent {
+            t_us: now,
+            kind,
+            frame,
+            seq,
+            frame_len: n as u32,
+            detail: 0,
+        };
+        let mut out = bytes;
+        match kind {
+            FaultKind::BitFlip => {
+                let at = self.below(n - 1);
+                let bit = self.below(8);
+                if let Some(b) = out.get_mut(at as usize) {
+                    *b ^= 1 << bit;
+                }
+                event.detail = at * 8 + bit;
+                self.damaged_seqs.insert(seq);
+                self.damaged_frames.insert(frame);
+            }
+            FaultKind::Truncate => {
+                let keep = 1 + self.below(n - 2);
+                out.truncate(keep as usize);
+                out.push(0);
+                event.detail = keep;
+                self.damaged_seqs.insert(seq);
+                self.damaged_frames.insert(frame);
+            }
+            FaultKind::Drop => {
+                self.damaged_seqs.insert(seq);
+            }
+            FaultKind::Delay => event.detail = self.profile.delay_us,
+            FaultKind::Stall => {
+                event.detail = self.profile.stall_us;
+                self.stall_until_us = self.stall_until_us.max(now + self.profile.stall_us);
+            }
+            FaultKind::Reorder => event.detail = self.profile.reorder_hold_us,
+            FaultKind::Duplicate => {}
+        }
+        self.inner.note_fault(&event)?;
+        self.events.push(event);
+        match kind {
+            FaultKind::Drop => {}
+            FaultKind::Duplicate => {
+                self.emit(frame, out.clone())?;
+                self.emit(frame, out)?;
+            }
+            FaultKind::Delay => self.delayed.push(Held {
+                at_us: now + self.profile.delay_us,
+                frame,
+                bytes: out,
+            }),
+            FaultKind::Reorder if swap.is_none() => {
+                self.reordered = Some(Held {
+                    at_us: now + self.profile.reorder_hold_us,
+                    frame,
+                    bytes: out,
+                });
+                return Ok(());
+            }
+            _ => self.emit(frame, out)?,
+        }
+        if let Some(h) = swap {
+            self.emit(h.frame, h.bytes)?;
+        }
+        Ok(())
+    }
+}
+
+/// The host sequence number in an encoded frame's header (0 if it does not deframe).
+fn frame_seq(wire: &[u8]) -> u32 {
+    let mut d = Deframer::new();
+    match d.push(wire) {
+        (_, Some(Ok(f))) if f.len() >= firmware::config::protocol::HEADER_LEN => {
+            Frame::new_unchecked(f).seq()
+        }
+        _ => 0,
+    }
+}
+
+impl<L: FlightLink> FlightLink for FaultLink<L> {
+    fn name(&self) -> &str {
+        self.inner.name()
+    }
+
+    fn now_us(&self) -> u64 {
+        self.inner.now_us()
+    }
+
+    fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+        self.release_due()?;
+        self.partial.extend_from_slice(bytes);
+        // Each pass takes one whole frame (up to and with its delimiter) out of `partial`.
+        while let Some(end) = self.partial.iter().position(|&b| b == 0) {
+            let rest = self.partial.split_off(end + 1);
+            let frame = core::mem::replace(&mut self.partial, rest);
+            self.inject(frame)?;
+        }
+        Ok(())
+    }
+
+    fn recv_until_quiet(&mut self, max_wait_us: u64) -> Result<Vec<u8>, LinkError> {
+        let mut out = Vec::new();
+        let start = self.inner.now_us();
+        let deadline = start.saturating_add(max_wait_us);
+        if let Some(at) = self.next_release().filter(|&at| at <= deadline) {
+            self.run_to(at, &mut out)?;
+        }
+        let left = deadline.saturating_sub(self.inner.now_us());
+        let got = self.inner.recv_until_quiet(left.max(1))?;
+        self.watch(&got);
+        out.extend(got);
+        self.release_due()?;
+        Ok(out)
+    }
+
+    fn advance_to(&mut self, t_us: u64) -> Result<Vec<u8>, LinkError> {
+        let mut out = Vec::new();
+        self.run_to(t_us, &mut out)?;
+        Ok(out)
+    }
+
+    fn note_fault(&mut self, event: &FaultEvent) -> Result<(), LinkError> {
+        self.inner.note_fault(event)
+    }
+
+    fn end_faults(&mut self) -> Result<(), LinkError> {
+        self.enabled = false;
+        self.stall_until_us = 0;
+        for h in core::mem::take(&mut self.stalled) {
+            self.deliver(h.frame, &h.bytes)?;
+        }
+        if let Some(h) = self.reordered.take() {
+            self.deliver(h.frame, &h.bytes)?;
+        }
+        let mut delayed = core::mem::take(&mut self.delayed);
+        delayed.sort_by_key(|h| (h.at_us, h.frame));
+        for h in delayed {
+            self.deliver(h.frame, &h.bytes)?;
+        }
+        self.inner.end_faults()
+    }
+}
