@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Writes the seed corpus (one valid frame of every message kind, plus a few damaged ones) into
-# firmware/fuzz/corpus/deframe_decode/ by running the ignored test that generates it.
+# Writes the seed corpora, one directory per fuzz target, into firmware/fuzz/corpus/<target>/ by running the
+# ignored test that generates them (tests/tests/fuzz_corpus.rs: protocol frames of every kind, hand-built and
+# recorded; small valid files of every reader's format).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-FUZZ_CORPUS_DIR="$PWD/firmware/fuzz/corpus/deframe_decode" cargo test -p tests --test fuzz_corpus -- --ignored --nocapture
+FUZZ_CORPUS_DIR="$PWD/firmware/fuzz/corpus" cargo test -q -p tests --test fuzz_corpus -- --ignored --nocapture

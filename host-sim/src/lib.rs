@@ -14,7 +14,7 @@
 //! tether), [`mapcheck`] (onboard map against ground truth).
 //!
 //! Campaigns: [`campaign`] (Paton et al.'s Table I), [`mission::campaign`], [`shard`] (a campaign split over a
-//! cluster and merged back, byte for byte).
+//! cluster and merged back, byte for byte), [`soak`] (a long mission across the sequence-number wrap).
 //!
 //! Planning: [`harness`] (every planner on every shared problem), [`homotopy`] (tether-demand planes, closed
 //! loop), [`team`] and [`movingai`] (tethered climbing teams, grid benchmarks).
@@ -37,6 +37,7 @@ pub mod scripted;
 pub mod sensor;
 pub mod session;
 pub mod shard;
+pub mod soak;
 pub mod team;
 pub mod terrain;
 pub mod testkit;

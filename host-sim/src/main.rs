@@ -19,6 +19,8 @@ struct Cli {
 enum Command {
     /// A closed-loop mission with the flight software in the loop (the main job; default: a crater-wall descent).
     Mission(cli::mission::MissionCli),
+    /// A long mission with the host's sequence numbers crossing 2^32, judged for lost frames, counters, high water.
+    Soak(cli::soak::SoakArgs),
     /// Run a scenario against the flight software on the in-process link (the main job).
     Run(cli::run::RunArgs),
     /// Run a scenario and record every byte into a field log (same as `run --log LOG`).
@@ -57,6 +59,7 @@ fn main() -> ExitCode {
     env_logger_lite();
     match Cli::parse().command {
         Command::Mission(a) => cli::mission::cli_main(&a),
+        Command::Soak(a) => cli::soak::main(&a),
         Command::Run(a) => cli::run::main(&a),
         Command::Record(a) => {
             if a.log.is_none() {

@@ -118,9 +118,14 @@ pub struct HostSession<L: FlightLink> {
 impl<L: FlightLink> HostSession<L> {
     /// A session starting at sequence number 0.
     pub fn new(link: L) -> Self {
+        Self::starting_at(link, 0)
+    }
+
+    /// A session whose first frame carries `first_seq` (the soak starts near 2^32 so the count wraps).
+    pub fn starting_at(link: L, first_seq: u32) -> Self {
         Self {
             link,
-            seq: 0,
+            seq: first_seq,
             deframer: Deframer::new(),
             log: Vec::new(),
             reply_wait_us: DEFAULT_REPLY_WAIT_US,

@@ -1,9 +1,18 @@
-//! Generates the fuzz seed corpus (`firmware/fuzz/gen_corpus.sh` runs this with `--ignored`): one wire frame of
-//! every message kind, and damaged variants. Also checks, in the normal run, that every seed deframes and decodes.
+//! Generates the fuzz seed corpora (`firmware/fuzz/gen_corpus.sh` runs this with `--ignored`), one directory per
+//! target: for the protocol, one wire frame of every message kind (hand-built, and every kind a recorded protocol
+//! run sends), and damaged variants; for the readers, small valid files of each format written here (a field
+//! log, the shipped scenario files, a GeoTIFF, an Esri ASCII grid, a `.npy`, an OBJ, a Moving AI map and
+//! scenario list). Also checks, in the normal run, that every protocol seed deframes and decodes and that every
+//! reader accepts its seeds (a seed the reader rejects would start the fuzzer off the valid path).
 
 use firmware::config::protocol::MAX_ENCODED_FRAME_LEN;
 use firmware::protocol::*;
-use host_sim::scripted::{default_configure, synthetic_scan};
+use host_sim::fieldlog::{self, Direction};
+use host_sim::link::inproc::{InProcLink, DEFAULT_STEP_US};
+use host_sim::link::recording::RecordingLink;
+use host_sim::scripted::{default_configure, run_protocol, synthetic_scan};
+use std::collections::BTreeMap;
+use std::path::Path;
 
 fn seeds() -> Vec<(String, Vec<u8>)> {
     let mut rng = rand_pcg::Pcg64Mcg::new(1);
@@ -54,6 +63,14 @@ fn seeds() -> Vec<(String, Vec<u8>)> {
             level: LogLevel::Info,
             text: heapless::String::try_from("hello").unwrap(),
         }),
+        Message::MotionReport(MotionReport {
+            command_id: 1,
+            outcome: MotionOutcome::Completed,
+            achieved_yaw_rad: 0.25,
+            achieved_distance_m: 0.5,
+            pose: Pose::IDENTITY,
+        }),
+        Message::GoalCancel(GoalCancel { goal_id: 1 }),
     ];
     let mut out = Vec::new();
     for (i, m) in msgs.iter().enumerate() {
@@ -82,13 +99,215 @@ fn every_valid_seed_decodes() {
     }
 }
 
+/// A protocol run (the `record protocol` scenario) over the in-process link, recorded in memory.
+fn recorded_protocol_run() -> Vec<u8> {
+    let header = fieldlog::Header {
+        protocol_version: firmware::config::protocol::PROTOCOL_VERSION,
+        created_at_unix_ms: 0,
+        seed: 1,
+        config: "{\"scenario\":\"protocol\"}".into(),
+    };
+    let writer = fieldlog::Writer::new(Vec::new(), &header).unwrap();
+    let mut rec = RecordingLink::new(InProcLink::new(DEFAULT_STEP_US), writer);
+    let report = run_protocol(&mut rec, 1).unwrap();
+    assert!(report.passed(), "{report}");
+    rec.finish().unwrap().1
+}
+
+/// The first decoded frame of every (direction, kind) in a recorded log: the frames the two sides really send.
+fn recorded_frames(log: &[u8]) -> BTreeMap<String, Vec<u8>> {
+    let log = fieldlog::parse(log).unwrap();
+    let mut out = BTreeMap::new();
+    for dir in [Direction::HostToFlight, Direction::FlightToHost] {
+        let mut d = Deframer::new();
+        for r in log.records.iter().filter(|r| r.direction == dir) {
+            let mut rest = &r.bytes[..];
+            while !rest.is_empty() {
+                let (n, ev) = d.push(rest);
+                // the protocol run sends damaged frames on purpose (its bad-input cases); those are not seeds here
+                if let Some(Ok((frame, Ok((_, m))))) = ev.map(|e| e.map(|f| (f, decode_frame(f)))) {
+                    out.entry(format!("recorded-{dir:?}-{:?}", m.kind())).or_insert_with(|| frame.to_vec());
+                }
+                rest = &rest[n..];
+            }
+        }
+    }
+    out
+}
+
+/// `frame_decode`'s input for a decoded frame: the frame without its CRC (the target adds a correct one).
+fn frame_decode_input(frame: &[u8]) -> Vec<u8> {
+    frame[..frame.len() - 4].to_vec()
+}
+
+/// Small valid inputs for the reader targets, by target; the option-selector bytes each target reads first are 0
+/// (scale 1, spacing from the file, no sentinel), and a few seeds set them otherwise.
+fn reader_seeds(protocol_log: &[u8]) -> Vec<(&'static str, String, Vec<u8>)> {
+    let mut out = Vec::new();
+    let with = |prefix: &[u8], body: &[u8]| [prefix, body].concat();
+    // field log: the recorded protocol run cut to its first records (short inputs fuzz faster), read as it is
+    // (first byte even) and a description of records that the target writes itself (first byte odd)
+    let log = fieldlog::parse(protocol_log).unwrap();
+    let mut w = fieldlog::Writer::new(Vec::new(), &log.header).unwrap();
+    for r in log.records.iter().take(12) {
+        w.append(r.direction, r.t_us, &r.bytes).unwrap();
+    }
+    let short = w.finish().unwrap();
+    out.push(("fieldlog", "recorded-12".into(), with(&[0, 0, 0, 0, 0], &short)));
+    out.push(("fieldlog", "described".into(), with(&[1, 0, 40, 4, 0], b"{}  \x00\x05\x04abcd\x01\x07\x02xy\x00\x00\x01z")));
+    out.push(("fieldlog", "described-cut".into(), with(&[1, 1, 40, 4, 0], b"{}  \x00\x05\x04abcd\x01\x07\x02xy")));
+    out.push(("fieldlog", "described-flip".into(), with(&[1, 2, 90, 4, 1], b"{}  \x00\x05\x04abcd\x01\x07\x02xy")));
+    // scenarios: the shipped files
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios");
+    let mut names: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).collect();
+    names.sort();
+    for p in names.iter().filter(|p| p.extension().is_some_and(|e| e == "toml")) {
+        let name = p.file_stem().unwrap().to_string_lossy().into_owned();
+        out.push(("scenario", name, std::fs::read(p).unwrap()));
+    }
+    // GeoTIFF: 3 x 2 int16 and float32 DEMs with the pixel-scale and GDAL_NODATA tags
+    out.push(("geotiff", "i16-tags".into(), with(&[0, 0, 0], &tiff_dem::<tiff::encoder::colortype::GrayI16>(&[1, 2, 3, 4, -9999, 6]))));
+    out.push(("geotiff", "f32-tags".into(), with(&[0, 0, 0], &tiff_dem::<tiff::encoder::colortype::Gray32Float>(&[1.5, 2.0, 3.0, 4.0, -9999.0, 6.0]))));
+    out.push(("geotiff", "f32-spacing-nodata".into(), with(&[1, 1, 1], &tiff_dem::<tiff::encoder::colortype::Gray32Float>(&[1.5, 2.0, 3.0, 4.0, -9999.0, 6.0]))));
+    // Esri ASCII grid
+    let asc = "ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 2.5\nNODATA_value -9999\n1 2 3\n4 -9999 6\n";
+    out.push(("asc", "3x2".into(), with(&[0], asc.as_bytes())));
+    out.push(("asc", "3x2-half".into(), with(&[1], asc.replace("xllcorner 0\nyllcorner 0\n", "").as_bytes())));
+    // NumPy: little-endian f4 (version 1) and big-endian i2 in Fortran order (version 2)
+    let f4: Vec<u8> = [1.0f32, 2.0, 3.0, 4.0, 5.0, 6.0].iter().flat_map(|v| v.to_le_bytes()).collect();
+    out.push(("npy", "f4".into(), with(&[0, 0, 0], &npy("<f4", "(2, 3)", false, &f4, 1))));
+    let i2: Vec<u8> = [1i16, 3, 2, -9999].iter().flat_map(|v| v.to_be_bytes()).collect();
+    out.push(("npy", "i2-fortran-nodata".into(), with(&[0, 0, 3], &npy(">i2", "(2, 2)", true, &i2, 2))));
+    // OBJ: a tetrahedron, plain and with texture/normal indices and a negative (relative) index
+    let obj = "# tetrahedron\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n";
+    out.push(("obj", "tetrahedron".into(), with(&[0], obj.as_bytes())));
+    let obj2 = "o t\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvt 0 0\nf 1/1/1 2/1/1 -1/1/1\n";
+    out.push(("obj", "slashes-relative".into(), with(&[1], obj2.as_bytes())));
+    // Moving AI: a small map and two problems on it, separated by 0xFF
+    let map = "type octile\nheight 4\nwidth 5\nmap\n.....\n.@@..\n..T..\n.....\n";
+    let scen = "version 1\n0\tsmall.map\t5\t4\t0\t0\t4\t3\t6.41421356\n0\tsmall.map\t5\t4\t0\t3\t4\t0\t6.41421356\n";
+    out.push(("movingai", "small".into(), [map.as_bytes(), &[0xFF], scen.as_bytes()].concat()));
+    out
+}
+
+/// A 3 x 2 GeoTIFF DEM written in memory with the pixel-scale (2.5 m) and GDAL_NODATA (-9999) tags.
+fn tiff_dem<C: tiff::encoder::colortype::ColorType>(v: &[C::Inner]) -> Vec<u8>
+where
+    [C::Inner]: tiff::encoder::TiffValue,
+{
+    let mut buf = std::io::Cursor::new(Vec::new());
+    let mut enc = tiff::encoder::TiffEncoder::new(&mut buf).unwrap();
+    let mut img = enc.new_image::<C>(3, 2).unwrap();
+    img.encoder().write_tag(tiff::tags::Tag::ModelPixelScaleTag, &[2.5f64, 2.5, 0.0][..]).unwrap();
+    img.encoder().write_tag(tiff::tags::Tag::GdalNodata, "-9999").unwrap();
+    img.write_data(v).unwrap();
+    buf.into_inner()
+}
+
+/// A `.npy` file: magic, version, header dictionary padded to 64 bytes, data.
+fn npy(descr: &str, shape: &str, fortran: bool, data: &[u8], version: u8) -> Vec<u8> {
+    let order = if fortran { "True" } else { "False" };
+    let mut header = format!("{{'descr': '{descr}', 'fortran_order': {order}, 'shape': {shape}, }}");
+    let pre = if version == 1 { 10 } else { 12 };
+    while (pre + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut out = b"\x93NUMPY".to_vec();
+    out.extend_from_slice(&[version, 0]);
+    if version == 1 {
+        out.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    } else {
+        out.extend_from_slice(&(header.len() as u32).to_le_bytes());
+    }
+    out.extend_from_slice(header.as_bytes());
+    out.extend_from_slice(data);
+    out
+}
+
+/// Every seed of every target: `(target, name, bytes)`.
+fn all_seeds() -> Vec<(&'static str, String, Vec<u8>)> {
+    let mut out: Vec<_> = seeds().into_iter().map(|(n, b)| ("deframe_decode", n, b)).collect();
+    let log = recorded_protocol_run();
+    for (name, frame) in recorded_frames(&log) {
+        out.push(("frame_decode", name.clone(), frame_decode_input(&frame)));
+        let mut wire = vec![0u8; MAX_ENCODED_FRAME_LEN];
+        let n = stuff(&frame, &mut wire).unwrap();
+        out.push(("deframe_decode", name, [&[7u8][..], &wire[..n]].concat()));
+    }
+    for (name, input) in seeds().into_iter().filter(|(n, _)| !n.ends_with("flipped")) {
+        let mut d = Deframer::new();
+        let (_, ev) = d.push(&input[1..]);
+        out.push(("frame_decode", name, frame_decode_input(ev.unwrap().unwrap())));
+    }
+    out.extend(reader_seeds(&log));
+    out
+}
+
+#[test]
+fn the_recorded_run_gives_seeds_of_the_telemetry_kinds() {
+    let frames = recorded_frames(&recorded_protocol_run());
+    for kind in ["Telemetry", "MissionStatus", "Ack", "Configure", "SensorChunk"] {
+        assert!(frames.keys().any(|k| k.ends_with(&format!("-{kind}"))), "no {kind} frame recorded: {:?}", frames.keys());
+    }
+}
+
+#[test]
+fn every_reader_accepts_its_seeds() {
+    use host_sim::terrain::{asc, geotiff, npy, obj};
+    let log = recorded_protocol_run();
+    for (target, name, b) in reader_seeds(&log) {
+        let what = format!("{target}/{name}");
+        match target {
+            "fieldlog" if b[0] == 0 => {
+                let l = fieldlog::parse(&b[5..]).expect(&what);
+                assert_eq!((l.records.len(), l.completeness()), (12, fieldlog::Completeness::Complete), "{what}");
+            }
+            "fieldlog" => {}
+            "scenario" => {
+                let sc = host_sim::scenario::parse(core::str::from_utf8(&b).unwrap(), Path::new("x.toml"));
+                sc.expect(&what).world_spec().expect(&what);
+            }
+            "geotiff" => {
+                let opts = geotiff::GeoTiffOptions::default();
+                let h = geotiff::read_geotiff(std::io::Cursor::new(&b[3..]), &opts).expect(&what);
+                assert_eq!((h.width, h.height, h.spacing_m, h.heights_m.iter().flatten().count()), (3, 2, 2.5, 5), "{what}");
+            }
+            "asc" => {
+                let h = asc::parse_asc(core::str::from_utf8(&b[1..]).unwrap(), 1.0).expect(&what);
+                assert_eq!((h.width, h.height, h.heights_m.iter().flatten().count()), (3, 2, 5), "{what}");
+            }
+            "npy" => {
+                let mut o = npy::NpyOptions::metres(1.0);
+                o.nodata = (b[2] == 3).then_some(-9999.0);
+                let h = npy::parse_npy(&b[3..], &o).expect(&what);
+                assert!(h.width * h.height >= 4, "{what}");
+            }
+            "obj" => {
+                let m = obj::parse_obj(core::str::from_utf8(&b[1..]).unwrap(), &obj::ObjOptions::METRES).expect(&what);
+                assert!(!m.triangles.is_empty(), "{what}");
+            }
+            "movingai" => {
+                let i = b.iter().position(|&c| c == 0xFF).unwrap();
+                let m = host_sim::movingai::parse_map(core::str::from_utf8(&b[..i]).unwrap()).expect(&what);
+                let s = host_sim::movingai::parse_scen(core::str::from_utf8(&b[i + 1..]).unwrap()).expect(&what);
+                let summary = host_sim::movingai::run_scenarios(&m, &s, |_, _| true).expect(&what);
+                assert_eq!((summary.run, summary.mismatches.len()), (2, 0), "{what}: {summary:?}");
+            }
+            other => panic!("seed for unknown target {other}"),
+        }
+    }
+}
+
 #[test]
 #[ignore = "writes files; run by firmware/fuzz/gen_corpus.sh"]
 fn write_fuzz_corpus() {
-    let dir = std::env::var("FUZZ_CORPUS_DIR").expect("FUZZ_CORPUS_DIR");
-    std::fs::create_dir_all(&dir).unwrap();
-    for (name, bytes) in seeds() {
-        std::fs::write(format!("{dir}/{name}"), bytes).unwrap();
+    let root = std::env::var("FUZZ_CORPUS_DIR").expect("FUZZ_CORPUS_DIR");
+    let seeds = all_seeds();
+    for (target, name, bytes) in &seeds {
+        let dir = Path::new(&root).join(target);
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join(name), bytes).unwrap();
     }
-    println!("wrote {} seeds to {dir}", seeds().len());
+    println!("wrote {} seeds to {root}", seeds.len());
 }

@@ -8,7 +8,9 @@ use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
     // first byte chooses the split size, so byte-wise and bulk feeding are both exercised
-    let Some((&split, bytes)) = data.split_first() else { return };
+    let Some((&split, bytes)) = data.split_first() else {
+        return;
+    };
     let step = usize::from(split % 64) + 1;
     let mut d = Deframer::new();
     let mut asm = ScanAssembler::new();
@@ -25,7 +27,8 @@ fuzz_target!(|data: &[u8]| {
                     let len = encode(h.seq, &m, &mut buf).expect("a decoded message re-encodes");
                     let mut d2 = Deframer::new();
                     let (_, ev2) = d2.push(&buf[..len]);
-                    let (_, m2) = decode_frame(ev2.expect("one frame").expect("valid")).expect("decodes");
+                    let (_, m2) =
+                        decode_frame(ev2.expect("one frame").expect("valid")).expect("decodes");
                     assert_eq!(m2, m);
                     if let Message::SensorChunk(c) = &m {
                         let _ = asm.accept(c, &mut points);

@@ -12,6 +12,7 @@ pub mod map;
 pub mod mission;
 pub mod replay;
 pub mod run;
+pub mod soak;
 pub mod team;
 pub mod stability_map;
 

@@ -603,6 +603,16 @@ pub fn polyline_distance_xy(pts: &[P3], p: P3) -> f64 {
 
 /// Runs the mission of `sc` over `link`.
 pub fn run_mission(link: impl FlightLink, sc: &Scenario, opts: &MissionOptions) -> Result<MissionReport, MissionError> {
+    run_mission_from(link, sc, opts, 0)
+}
+
+/// [`run_mission`] with the host's frames numbered from `first_seq` (wrapping; the soak, `crate::soak`).
+pub fn run_mission_from(
+    link: impl FlightLink,
+    sc: &Scenario,
+    opts: &MissionOptions,
+    first_seq: u32,
+) -> Result<MissionReport, MissionError> {
     let host_t0 = Instant::now();
     let m = if opts.noiseless { sc.mission.noiseless() } else { sc.mission.clone() };
     let cfg = mission_configure(sc, opts);
@@ -661,7 +671,7 @@ pub fn run_mission(link: impl FlightLink, sc: &Scenario, opts: &MissionOptions) 
     let mut sim = Sim {
         s: {
             // Every frame that changes the flight state is sent again when unanswered (lost on a faulty link).
-            let mut s = HostSession::new(link);
+            let mut s = HostSession::starting_at(link, first_seq);
             s.retransmit = Some(RetransmitPolicy::default());
             s
         },

@@ -69,6 +69,15 @@ pub enum NpyError {
     BadShape(Vec<usize>),
     /// `spacing_m` or `height_scale` is not a finite positive number.
     BadOptions(&'static str),
+    /// A stored value that is finite but not once multiplied by `height_scale` (an overflow to infinity).
+    HeightNotFinite {
+        /// File row (as stored).
+        row: usize,
+        /// Column.
+        col: usize,
+        /// The stored value.
+        value: f64,
+    },
 }
 
 impl fmt::Display for NpyError {
@@ -88,6 +97,10 @@ impl fmt::Display for NpyError {
             }
             NpyError::BadShape(s) => write!(f, ".npy array shape {s:?} is not a non-empty 2-D grid"),
             NpyError::BadOptions(s) => write!(f, "bad .npy load options: {s}"),
+            NpyError::HeightNotFinite { row, col, value } => write!(
+                f,
+                ".npy sample (file row {row}, column {col}) is {value}: times the height scale it is not a finite height; lower the height scale"
+            ),
         }
     }
 }
@@ -184,7 +197,11 @@ pub fn parse_npy(bytes: &[u8], opts: &NpyOptions) -> Result<Heightmap, NpyError>
                 FirstRow::North => rows - 1 - r,
                 FirstRow::South => r,
             };
-            heights[out_row * cols + c] = if valid { Some(v * opts.height_scale) } else { None };
+            let h = v * opts.height_scale;
+            if valid && !h.is_finite() {
+                return Err(NpyError::HeightNotFinite { row: r, col: c, value: v });
+            }
+            heights[out_row * cols + c] = if valid { Some(h) } else { None };
         }
     }
     Ok(Heightmap { width: cols, height: rows, spacing_m: opts.spacing_m, heights_m: heights })
@@ -332,6 +349,18 @@ mod tests {
         o.first_row = FirstRow::South;
         let h = parse_npy(&b, &o).unwrap();
         assert_eq!(h.heights_m, vec![Some(1.0), Some(2.0), Some(3.0), Some(4.0)]);
+    }
+
+    /// Regression (fuzz target `npy`): a finite stored value times a huge height scale gave a height of +inf.
+    #[test]
+    fn a_height_infinite_after_scaling_is_rejected() {
+        let data: Vec<u8> = [1i64, 2, 3, 4].iter().flat_map(|v| v.to_le_bytes()).collect();
+        let b = build("<i8", "(2, 2)", false, &data, 1);
+        assert!(parse_npy(&b, &NpyOptions::metres(1.0)).is_ok());
+        let o = NpyOptions { height_scale: 1e308, ..NpyOptions::metres(1.0) };
+        let e = parse_npy(&b, &o).unwrap_err();
+        assert!(matches!(e, NpyError::HeightNotFinite { row: 0, col: 1, .. }), "{e}");
+        assert!(e.to_string().contains("not a finite height"), "{e}");
     }
 
     #[test]

@@ -106,7 +106,7 @@ impl fmt::Display for ObjError {
         match self {
             ObjError::Io(e) => write!(f, "cannot read OBJ file: {e}"),
             ObjError::NotText => write!(f, "OBJ file is not UTF-8 text"),
-            ObjError::BadVertex { line } => write!(f, "OBJ line {line}: vertex needs three finite numbers"),
+            ObjError::BadVertex { line } => write!(f, "OBJ line {line}: vertex needs three numbers that stay finite times the scale"),
             ObjError::BadFaceIndex { line } => write!(f, "OBJ line {line}: face entry is not an integer index"),
             ObjError::IndexOutOfRange { line, index, vertices } => write!(
                 f,
@@ -158,9 +158,11 @@ pub fn parse_obj(text: &str, opts: &ObjOptions) -> Result<TriMesh, ObjError> {
                     let v: f64 = it
                         .next()
                         .and_then(|s| s.parse().ok())
-                        .filter(|v: &f64| v.is_finite())
+                        .map(|v: f64| v * opts.scale)
+                        // finite after scaling: a finite 1e300 times a scale of 1000 is +inf
+                        .filter(|v| v.is_finite())
                         .ok_or(ObjError::BadVertex { line })?;
-                    *slot = v * opts.scale;
+                    *slot = v;
                 }
                 mesh.vertices.push(p);
             }
@@ -245,6 +247,16 @@ mod tests {
         assert!(matches!(parse_obj("", &o), Err(ObjError::Empty)));
         assert!(matches!(parse_obj(three, &ObjOptions { scale: -1.0 }), Err(ObjError::BadScale)));
         assert!(format!("{}", ObjError::Empty).contains("no faces"));
+    }
+
+    /// Regression (fuzz target `obj`): a finite coordinate that overflows to infinity when scaled was accepted.
+    #[test]
+    fn a_coordinate_infinite_after_scaling_is_rejected() {
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 4e306\nf 1 2 3\n";
+        assert!(parse_obj(text, &ObjOptions::METRES).is_ok());
+        let e = parse_obj(text, &ObjOptions::KILOMETRES).unwrap_err();
+        assert!(matches!(e, ObjError::BadVertex { line: 3 }), "{e}");
+        assert!(e.to_string().contains("finite times the scale"), "{e}");
     }
 
     #[test]
