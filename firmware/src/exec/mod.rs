@@ -35,7 +35,8 @@
 //! `SEQ_WINDOW` counts a late frame (`seq_late`: reordered or delayed; still dispatched, so a retransmission or a
 //! late report is handled by the message's own checks); further ahead (less than half the number range) after an
 //! intact frame was seen is a loss burst (`seq_gaps` again); any other jump (further behind: a host restarted from
-//! 0; or the first frame after boot beyond the window) is a new host session (`seq_resyncs`). These
+//! 0; or a first frame after boot not within the window ahead of 0, such as the soak's host starting near 2^32) is a
+//! new host session (`seq_resyncs`). These
 //! counters are the flight side's detection of link faults (`host-sim/doc/faults.md`).
 //!
 //! ## Cycle accounting (v4)
@@ -331,7 +332,7 @@ where
         if ahead <= SEQ_WINDOW {
             c.seq_gaps = c.seq_gaps.saturating_add(ahead);
             self.seq_next = seq.wrapping_add(1);
-        } else if behind <= SEQ_WINDOW {
+        } else if self.seq_seen && behind <= SEQ_WINDOW {
             c.seq_late = c.seq_late.saturating_add(1);
         } else if self.seq_seen && ahead < 1 << 31 {
             // A loss burst longer than the window: a restarted host counts from 0, so it shows behind, not ahead.

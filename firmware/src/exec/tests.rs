@@ -690,6 +690,19 @@ fn duplicates_are_refused_and_sequence_gaps_and_late_frames_counted() {
     assert_eq!((t4.seq_gaps, t4.seq_late, t4.seq_resyncs), (t3.seq_gaps, t3.seq_late, 1));
 }
 
+/// A host whose numbering starts just below the wrap (the soak) is a new session at boot: its frames are neither
+/// late nor lost, across the wrap too.
+#[test]
+fn a_host_numbering_from_near_the_wrap_is_neither_late_nor_lost() {
+    let mut e = exec(Mission::default());
+    let first = u32::MAX - 2;
+    for k in 0..6u32 {
+        exchange_from(&mut e, first.wrapping_add(k), &[Message::TimeTick(TimeTick { host_time_us: u64::from(k) + 1 })]);
+    }
+    let t = e.telemetry();
+    assert_eq!((t.seq_gaps, t.seq_late, t.seq_resyncs), (0, 0, 1));
+}
+
 /// Cycle accounting: a clock that moves during a step gives the step's duration, the maximum and the slips over
 /// `STEP_BUDGET_US`; the period maximum restarts with each `Telemetry` frame; the first slip is logged once.
 #[test]
