@@ -102,7 +102,8 @@ impl MapConfig {
         let mut c = MapConfig::DEFAULT;
         c.voxel_size = voxel_size;
         c.truncation = 3.0 * voxel_size;
-        c.max_ray_voxels = (c.max_carve_length / voxel_size) as usize + 16;
+        // saturating: a tiny voxel size saturates the cast; validate() then refuses the config with a reason
+        c.max_ray_voxels = ((c.max_carve_length / voxel_size) as usize).saturating_add(16);
         c
     }
 
@@ -164,3 +165,18 @@ pub struct ConfigError {
 /// Points of a scan converted and integrated per batch by [`crate::nav::Navigator`] (its only stack buffer:
 /// 12 bytes a point). Default 256 (3 KiB of stack).
 pub const NAV_POINT_BATCH: usize = 256;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Found by the `scenario` fuzz target (`voxel_size_m = 0.0`): the ray budget's `+ 16` overflowed after the
+    /// cast saturated. Now such sizes give a configuration that `validate` refuses with its reason.
+    #[test]
+    fn a_zero_or_tiny_voxel_size_is_refused_not_overflowed() {
+        for v in [0.0, 1e-30, -0.0, Real::MIN_POSITIVE] {
+            assert!(MapConfig::with_voxel_size(v).validate().is_err(), "{v}");
+        }
+        assert_eq!(MapConfig::with_voxel_size(0.05).validate(), Ok(()));
+    }
+}
