@@ -4,4 +4,6 @@
 # recorded; small valid files of every reader's format).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-FUZZ_CORPUS_DIR="$PWD/firmware/fuzz/corpus" cargo test -q -p tests --test fuzz_corpus -- --ignored --nocapture
+# --workspace: the features the README's test command builds with, so CI reuses its build (-p tests alone rebuilt both
+# crates under it)
+FUZZ_CORPUS_DIR="$PWD/firmware/fuzz/corpus" cargo test -q --workspace --test fuzz_corpus -- --ignored --nocapture

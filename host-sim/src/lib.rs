@@ -19,14 +19,18 @@
 //! Planning: [`harness`] (every planner on every shared problem), [`homotopy`] (tether-demand planes, closed
 //! loop), [`team`] and [`movingai`] (tethered climbing teams, grid benchmarks).
 
+#[cfg(feature = "sim")]
 pub mod campaign;
+#[cfg(feature = "sim")]
 pub mod physics;
+#[cfg(feature = "sim")]
 pub mod cli;
 pub mod fieldlog;
 pub mod harness;
 pub mod homotopy;
 pub mod link;
 pub mod mapcheck;
+#[cfg(feature = "sim")]
 pub mod mcap_export;
 pub mod mission;
 pub mod movingai;
@@ -37,6 +41,7 @@ pub mod scripted;
 pub mod sensor;
 pub mod session;
 pub mod shard;
+#[cfg(feature = "sim")]
 pub mod soak;
 pub mod team;
 pub mod terrain;

@@ -75,7 +75,7 @@ fn the_slurm_array_task_and_merge_scripts_give_the_unsharded_campaign() {
 #[test]
 fn the_kubernetes_pod_commands_give_the_unsharded_mission_campaign() {
     let d = dir("k8s");
-    let sc = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/mission_ledge_test3.toml");
+    let sc = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/mission_smoke.toml");
     let sc = sc.to_str().unwrap();
     let whole = d.join("whole");
     tetherbot(&["mission", sc, "--seeds", "3", "--seed", "5", "--threads", "1", "--out", whole.to_str().unwrap()]);
@@ -86,8 +86,8 @@ fn the_kubernetes_pod_commands_give_the_unsharded_mission_campaign() {
         bash(&cluster().join("run-shard.sh"), &["mission", k, "3", out_s, sc, "--", "--seeds", "3", "--seed", "5"], &[("THREADS", "1")]);
     }
     let text = bash(&cluster().join("run-merge.sh"), &["mission", "3", out_s], &[]);
-    assert!(text.contains("merged 3 shards of mission campaign mission_ledge_test3: 3 missions"), "{text}");
-    same(&whole.join("mission_ledge_test3-campaign.json"), &out.join("merged/mission_ledge_test3-campaign.json"));
+    assert!(text.contains("merged 3 shards of mission campaign mission_smoke: 3 missions"), "{text}");
+    same(&whole.join("mission_smoke-campaign.json"), &out.join("merged/mission_smoke-campaign.json"));
     // a second merge refuses to overwrite the first, FORCE=1 replaces it
     let again = Command::new("bash").arg(cluster().join("run-merge.sh")).args(["mission", "3", out_s])
         .env("TETHERBOT", env!("CARGO_BIN_EXE_tetherbot")).output().unwrap();

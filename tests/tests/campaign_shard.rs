@@ -210,11 +210,11 @@ fn a_split_that_leaves_a_shard_empty_is_refused_before_any_work() {
     assert!(!d.join("out").exists(), "the refused run wrote {}", d.join("out").display());
 }
 
-/// The mission campaign of these tests: ledge test 3's descent, whose goal column the sensors cannot observe, so
-/// the flight software refuses the goal after its scans (`host-sim/doc/mission.md`): real missions, cheap ones.
+/// The mission campaign of these tests: `mission_smoke.toml`, a 1.2 m drive along a crater rim: real whole
+/// missions (scans, plans, the physics judge), cheap ones.
 fn mission_args(out: &Path, seeds: u32, shard: Option<Shard>) -> MissionArgs {
     MissionArgs {
-        scenario: Some(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios/mission_ledge_test3.toml")),
+        scenario: Some(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios/mission_smoke.toml")),
         link: LinkKind::Inproc,
         seeds,
         seed: 41,
@@ -240,20 +240,20 @@ fn mission_campaign_shards_merge_to_the_unsharded_file_byte_for_byte() {
     let d = tmp("mission");
     let seeds = 4;
     assert_eq!(host_sim::cli::mission::main(&mission_args(&d.join("whole"), seeds, None)), ExitCode::SUCCESS);
-    let whole = d.join("whole").join("mission_ledge_test3-campaign.json");
+    let whole = d.join("whole").join("mission_smoke-campaign.json");
     let shards_dir = d.join("shards");
     for k in 0..2 {
         let a = mission_args(&shards_dir, seeds, Some(Shard { index: k, count: 2 }));
         assert_eq!(host_sim::cli::mission::main(&a), ExitCode::SUCCESS, "shard {k}");
     }
-    let shard = |k: u32| shards_dir.join(format!("mission_ledge_test3-campaign-shard-{k}-of-2.json"));
+    let shard = |k: u32| shards_dir.join(format!("mission_smoke-campaign-shard-{k}-of-2.json"));
     let v = json(&shard(1));
     let seeds_of_1: Vec<u64> = v["missions"].as_array().expect("missions").iter().filter_map(|m| m["seed"].as_u64()).collect();
     assert_eq!(seeds_of_1, [42, 44], "mission i (seed 41 + i) goes to shard i mod 2");
     let out = d.join("merged");
     let merged = mission_merge(&MissionMergeArgs { out: out.clone(), shards: vec![shard(1), shard(0)], force: false }).expect("merge");
     assert_eq!(merged.missions.len(), seeds as usize);
-    let (a, b) = (read(&whole), read(&out.join("mission_ledge_test3-campaign.json")));
+    let (a, b) = (read(&whole), read(&out.join("mission_smoke-campaign.json")));
     assert!(a == b, "the merge differs from the unsharded run:\n{}\n---\n{}", String::from_utf8_lossy(&a), String::from_utf8_lossy(&b));
     assert!(!String::from_utf8_lossy(&a).contains("host_s"), "wall-clock time in the campaign file");
     // refusals: a missing shard, a shard twice, a corrupt file, a shard of another campaign
@@ -273,5 +273,5 @@ fn mission_campaign_shards_merge_to_the_unsharded_file_byte_for_byte() {
     std::fs::write(&p, serde_json::to_string_pretty(&other).expect("json")).expect("write");
     let e = merge(vec![shard(0), p]);
     assert!(e.contains("shards of different campaigns (seeds: 4 vs 6)"), "{e}");
-    assert!(!d.join("refused").join("mission_ledge_test3-campaign.json").exists());
+    assert!(!d.join("refused").join("mission_smoke-campaign.json").exists());
 }

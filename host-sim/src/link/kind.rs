@@ -1,7 +1,8 @@
 //! [`LinkKind`]: the choice of flight software a run talks to (`--link inproc|qemu` of `run`, `record`, `replay`).
 
 /// Which flight software a run talks to.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "sim", derive(clap::ValueEnum))]
 pub enum LinkKind {
     /// The executive linked into the host, stepped on a simulated clock (fast; the default).
     #[default]

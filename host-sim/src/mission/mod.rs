@@ -11,13 +11,20 @@
 //!
 //! `host-sim/doc/mission.md` describes the models and their gaps.
 
+#[cfg(feature = "sim")]
 pub mod campaign;
+#[cfg(feature = "sim")]
 pub mod executor;
+#[cfg(feature = "sim")]
 pub mod faults;
 pub mod link;
 pub mod params;
+#[cfg(feature = "sim")]
 pub mod run;
+#[cfg(feature = "sim")]
 pub mod sensing;
+#[cfg(feature = "sim")]
 pub mod svg;
+#[cfg(feature = "sim")]
 pub mod truth;
 pub mod world;

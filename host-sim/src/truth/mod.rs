@@ -4,5 +4,6 @@
 //! worlds (lip, pole), kept as the oracle of [`taut`], the general true tether on every world.
 
 pub mod solid;
+#[cfg(feature = "sim")]
 pub mod taut;
 pub mod tether;
