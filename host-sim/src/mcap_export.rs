@@ -923,4 +923,13 @@ impl<L: FlightLink> FlightLink for SceneLink<'_, L> {
             .bytes(Direction::FlightToHost, self.inner.now_us(), &got);
         Ok(got)
     }
+    fn note_fault(&mut self, event: &crate::link::faults::FaultEvent) -> Result<(), LinkError> {
+        self.inner.note_fault(event)
+    }
+    fn end_faults(&mut self) -> Result<(), LinkError> {
+        self.inner.end_faults()
+    }
+    fn reset_flight(&mut self) -> Result<(), LinkError> {
+        self.inner.reset_flight()
+    }
 }

@@ -160,7 +160,17 @@ pub fn replay(log: &FieldLog, link: &mut impl FlightLink) -> Result<ReplayOutcom
     let mut starts = Vec::new();
     let mut fed = 0;
     let mut end_t = 0;
+    // resets of the flight computer, in file order: each happens where its record lies between the data records
+    let mut resets = log
+        .faults
+        .iter()
+        .filter(|f| f.bytes == crate::link::recording::RESET_RECORD)
+        .peekable();
     for (i, r) in log.records.iter().enumerate() {
+        while let Some(reset) = resets.next_if(|f| f.offset < r.offset) {
+            got.extend(link.advance_to(reset.t_us)?);
+            link.reset_flight()?;
+        }
         end_t = end_t.max(r.t_us);
         match r.direction {
             Direction::HostToFlight => {
@@ -173,6 +183,10 @@ pub fn replay(log: &FieldLog, link: &mut impl FlightLink) -> Result<ReplayOutcom
                 expected.extend_from_slice(&r.bytes);
             }
         }
+    }
+    for reset in resets {
+        got.extend(link.advance_to(reset.t_us)?);
+        link.reset_flight()?;
     }
     got.extend(link.advance_to(end_t)?);
     let first_diff = expected

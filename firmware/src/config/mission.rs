@@ -84,3 +84,8 @@ pub const MIN_DRIFT_SAMPLE_M: f32 = 0.05;
 /// Alg. 1 predictions of a tether re-estimate per executive step (the re-estimate propagates from the root along
 /// up to `EXECUTED_CAPACITY - 1` executed moves; the rover waits until it is done). Default 4.
 pub const REESTIMATE_PER_STEP: usize = 4;
+
+/// A recovered tether checkpoint (`nav::retained`) applies to a `Configure` whose root anchor is within this of the
+/// checkpoint's, metres: the same deployment (the wire carries f32, so equal roots compare equal; the slack only
+/// absorbs a ground that recomputes the root). Default 0.01.
+pub const RECOVERY_ROOT_TOLERANCE_M: f32 = 0.01;

@@ -18,6 +18,8 @@ use crate::protocol::{
 };
 use crate::tether::{predict_anchors, Anchor, AnchorHistory};
 
+use super::retained::{Recovered, TetherCheckpoint};
+
 use super::planning::{self, GoalRefusal, NavPlanStorage};
 use super::Navigator;
 
@@ -96,7 +98,16 @@ pub struct Mission {
     /// Segments left to re-check, starting at `recheck_at` (0 = nothing to re-check).
     recheck_left: usize,
     recheck_at: usize,
-    tracked: AnchorHistory,
+    pub(crate) tracked: AnchorHistory,
+    /// The history at `executed[0]`, where a re-estimate starts: the root alone, or the history recovered after a
+    /// reset (positions before the reset are gone, so a re-estimate from the root would straighten the tether).
+    base: AnchorHistory,
+    /// A checkpoint found at boot (`nav::retained`), applied by the next `Configure` with the same root anchor.
+    recovered: Option<TetherCheckpoint>,
+    /// The boot found a checkpoint that does not read back: goals are refused (`TetherStateLost`).
+    state_lost: bool,
+    /// The body pose was recovered and no motion was reported since (scans are not checked against it).
+    unmoved_since_recovery: bool,
     /// Re-estimate in progress: the next executed position to propagate to (0 = none), and the history so far.
     reestimate_at: usize,
     reestimate_h: AnchorHistory,
@@ -116,6 +127,8 @@ pub struct Mission {
     scan_reject_run: u32,
     drift_num: f32,
     drift_den: f32,
+    /// The last checkpoint's generation (`nav::retained`).
+    pub(crate) generation: u32,
     /// Counters of rejected input.
     pub counters: MissionCounters,
 }
@@ -145,6 +158,10 @@ impl Mission {
             recheck_left: 0,
             recheck_at: 0,
             tracked: AnchorHistory::empty(),
+            base: AnchorHistory::empty(),
+            recovered: None,
+            state_lost: false,
+            unmoved_since_recovery: false,
             reestimate_at: 0,
             reestimate_h: AnchorHistory::empty(),
             executed: heapless::Vec::new(),
@@ -161,6 +178,7 @@ impl Mission {
             scan_reject_run: 0,
             drift_num: 0.0,
             drift_den: 0.0,
+            generation: 0,
             counters: MissionCounters { tether_rejected: 0, pose_jumps: 0, scans_rejected: 0, tether_reestimates: 0, rechecks: 0, recheck_failures: 0, propagation_failures: 0 },
         }
     }
@@ -213,10 +231,63 @@ impl Mission {
         let root = Vec3::new(r.x, r.y, r.z);
         self.root = Some(root);
         self.tracked = AnchorHistory::new(Anchor::root(root));
+        match self.recovered.take() {
+            Some(cp) if norm3(&(cp.root - root)) <= mcfg::RECOVERY_ROOT_TOLERANCE_M => {
+                log::info!("mission: continuing from the tether state recovered after the reset: {} anchors", cp.anchors.len());
+                self.tracked = cp.anchors;
+                // The rover has not moved since: its pose is the plan's start (a sensor pose on a slope is not
+                // the axle's). Until it moves, scans are not checked against it: the map went with the reset and
+                // the ground surveys again, from the lander's mast too (as before a mission's first motion).
+                if cp.body.is_some() {
+                    self.body = cp.body;
+                    self.unmoved_since_recovery = true;
+                }
+            }
+            Some(_) => log::warn!("mission: the recovered tether state has another root anchor: a new deployment"),
+            None => {}
+        }
+        self.base.clone_from(&self.tracked);
         self.executed.clear();
         if let Some(b) = self.body {
             let _ = self.executed.push(b.position);
         }
+    }
+
+    /// At boot: what the retained block held. A checkpoint makes the mission `Safe` (`Reset`) until the ground
+    /// configures the same root again; an unreadable one makes it `Safe` (`TetherStateLost`) and refuses goals.
+    pub(crate) fn recover(&mut self, found: Recovered) {
+        match found {
+            Recovered::Empty => {}
+            Recovered::Valid(cp) => {
+                log::warn!("mission: reset: tether state recovered ({} anchors, checkpoint {})", cp.anchors.len(), cp.generation);
+                self.tracked.clone_from(&cp.anchors);
+                self.generation = cp.generation;
+                self.recovered = Some(cp);
+                self.stop(StopReason::Reset);
+            }
+            Recovered::Corrupt => {
+                log::error!("mission: reset: the tether checkpoint does not read back; goals are refused");
+                self.state_lost = true;
+                self.stop(StopReason::TetherStateLost);
+            }
+        }
+    }
+
+    /// The boot found an unreadable checkpoint (see [`Self::recover`]).
+    pub fn tether_state_lost(&self) -> bool {
+        self.state_lost
+    }
+
+    /// What a reset must not lose, once configured (`None` before the first `Configure`).
+    pub(crate) fn checkpoint(&self) -> Option<TetherCheckpoint> {
+        Some(TetherCheckpoint {
+            generation: self.generation,
+            root: self.root?,
+            anchors: self.tracked.clone(),
+            body: self.body,
+            payout_m: self.payout.map_or(0.0, |(p, _, _)| p),
+            goal_id: self.goal.map_or(0, |g| g.goal_id),
+        })
     }
 
     fn predicted_payout(&self) -> f32 {
@@ -414,9 +485,9 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         }
         // Re-estimate (in bounded parts, see `reestimate_step`); the rover drives no further until it is done.
         if m.reestimate_at == 0 {
-            if let Some(root) = m.root {
+            if !m.base.is_empty() {
                 m.counters.tether_reestimates = m.counters.tether_reestimates.saturating_add(1);
-                m.reestimate_h = AnchorHistory::new(Anchor::root(root));
+                m.reestimate_h.clone_from(&m.base);
                 m.reestimate_at = 1;
                 log::info!("mission: payout {} m vs tracked {} m: re-estimating the anchors", r.payout_m, m.predicted_payout());
             }
@@ -457,7 +528,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
     /// A scan: `false` when its pose disagrees with the tracked body pose (not integrated, counted).
     pub(super) fn mission_scan_accepted(&mut self, sensor: &Pose) -> bool {
         let m = &mut self.mission;
-        let Some(b) = m.body else { return true };
+        let Some(b) = m.body.filter(|_| !m.unmoved_since_recovery) else { return true };
         // While a drive runs (scans every few cm of it), the sensor may be anywhere along it: the distance is to
         // the drive's segment from the pose it started at, not to that pose.
         let (origin, dir, reach) = match m.in_flight {
@@ -493,6 +564,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
 
     /// The report of the motion in flight (the executive checked the command id).
     pub(super) fn mission_report(&mut self, r: &MotionReport, motion: Motion) {
+        self.mission.unmoved_since_recovery = false;
         let flight = self.mission.in_flight.take();
         let reported = BodyPose::from_wire(&r.pose);
         let prev = flight.map(|f| f.from).or(self.mission.body);

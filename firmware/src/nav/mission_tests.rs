@@ -559,3 +559,65 @@ fn an_approximate_solution_is_driven_only_when_allowed_and_only_to_its_last_stat
         }
     }
 }
+
+/// A navigator over fresh storage, as after a reset, given `block` before anything else (the board's boot order).
+fn rebooted(block: &retained::RetainedBlock) -> TestNav {
+    let mut nav =
+        Navigator::new(MapConfig::with_voxel_size(VOXEL), vec![Block::EMPTY; 4096], vec![0u32; 8192], Box::default())
+            .unwrap();
+    nav.recover_retained(block);
+    nav
+}
+
+#[test]
+fn a_reset_recovers_the_wrapped_tether_and_never_plans_with_a_straight_one() {
+    use crate::tether::Anchor;
+    let mut nav = mapped(ROOT, MissionConfig::DEFAULT);
+    let mut block = [0u8; retained::RETAINED_BYTES];
+    nav.keep_retained(&mut block);
+    // a wrapped tether: root, then a contact on a pole the rover passed (written as the mission would track it)
+    let pole = Anchor { point: Vec3::new(1.0, 0.6, 0.4), gradient: Vec3::new(0.0, -1.0, 0.0) };
+    let mut wrapped = nav.mission.tracked().clone();
+    wrapped.push(pole).unwrap();
+    nav.mission.tracked = wrapped.clone();
+    nav.keep_retained(&mut block);
+    let written = nav.mission.generation;
+    nav.keep_retained(&mut block);
+    assert_eq!(nav.mission.generation, written, "nothing changed: nothing written");
+
+    let mut nav = rebooted(&block);
+    let st = nav.mission_status().unwrap();
+    assert_eq!((st.state, st.reason, st.anchors), (MissionState::Safe, StopReason::Reset, 2));
+    // the same root: the mission continues from the recovered history, and the plan starts from it
+    nav.configure(&configure(ROOT, MissionConfig::DEFAULT)).unwrap();
+    assert_eq!(nav.mission.tracked(), &wrapped);
+    scan_down(&mut nav, 1, 0.0);
+    assert_eq!(nav.goal(&goal(2, 3.0, 0.0), Instant::from_micros(0)), PlanState::Accepted);
+    assert_eq!(nav.storage.start_history, wrapped, "the plan must start from the wrapped tether");
+
+    // another root is another deployment: straight from that root
+    let mut nav = rebooted(&block);
+    let other = Point3 { x: -3.0, y: 0.0, z: 1.5 };
+    nav.configure(&configure(other, MissionConfig::DEFAULT)).unwrap();
+    assert_eq!(nav.mission.tracked().len(), 1);
+}
+
+#[test]
+fn an_unreadable_checkpoint_stops_safe_and_refuses_goals() {
+    let mut nav = mapped(ROOT, MissionConfig::DEFAULT);
+    let mut block = [0u8; retained::RETAINED_BYTES];
+    nav.keep_retained(&mut block);
+    // the slot written (generation 1: slot 1) damaged, as by a reset in the middle of the write on real memory
+    block[retained::SLOT_BYTES + 9] ^= 0x40;
+    let mut nav = rebooted(&block);
+    let st = nav.mission_status().unwrap();
+    assert_eq!((st.state, st.reason), (MissionState::Safe, StopReason::TetherStateLost));
+    nav.configure(&configure(ROOT, MissionConfig::DEFAULT)).unwrap();
+    scan_down(&mut nav, 1, 0.0);
+    assert_eq!(nav.goal(&goal(2, 3.0, 0.0), Instant::from_micros(0)), PlanState::InvalidInput);
+    let st = nav.mission_status().unwrap();
+    assert_eq!((st.state, st.reason), (MissionState::Safe, StopReason::TetherStateLost));
+    // a power-on (no checkpoint ever written) is a new deployment, not a lost state
+    let nav = rebooted(&[0u8; retained::RETAINED_BYTES]);
+    assert_ne!(nav.mission_status().map(|s| s.reason), Some(StopReason::TetherStateLost));
+}

@@ -196,6 +196,7 @@
 //!
 
 mod mission;
+pub mod retained;
 mod planning;
 #[cfg(test)]
 mod tests;
@@ -240,6 +241,8 @@ pub struct Navigator<B, I, P> {
     replan_pending: bool,
     /// The scan whose chunks are arriving, and whether its pose passed the mission's check.
     scan_in: Option<(u32, bool)>,
+    /// The last checkpoint written to the retained block (`retained`), to write only what changed.
+    retained_last: Option<retained::TetherCheckpoint>,
 }
 
 impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> Navigator<B, I, P> {
@@ -266,6 +269,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
             mission: Mission::new(),
             replan_pending: false,
             scan_in: None,
+            retained_last: None,
         })
     }
 
@@ -411,6 +415,11 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
     }
 
     fn goal(&mut self, goal: &GoalRequest, now: Instant) -> PlanState {
+        if self.mission.tether_state_lost() {
+            // the mission stays Safe (TetherStateLost): planning needs the anchor history the reset lost
+            log::error!("goal {} refused: the tether state was lost in a reset", goal.goal_id);
+            return PlanState::InvalidInput;
+        }
         self.problem = None;
         self.next_motion = 0;
         planning::clear_plan(&mut self.storage);
@@ -507,5 +516,23 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
 
     fn map_status(&self) -> MapStatus {
         self.status
+    }
+
+    fn recover_retained(&mut self, block: &retained::RetainedBlock) {
+        self.mission.recover(retained::read(block));
+    }
+
+    fn keep_retained(&mut self, block: &mut retained::RetainedBlock) {
+        let Some(mut cp) = self.mission.checkpoint() else { return };
+        if let Some(last) = &self.retained_last {
+            cp.generation = last.generation;
+            if *last == cp {
+                return;
+            }
+        }
+        cp.generation = self.mission.generation.wrapping_add(1);
+        self.mission.generation = cp.generation;
+        retained::write(block, &cp);
+        self.retained_last = Some(cp);
     }
 }

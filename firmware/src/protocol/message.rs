@@ -731,6 +731,12 @@ pub enum StopReason {
     MotionTimeout,
     /// Scans kept disagreeing with odometry (flight addition); check localisation.
     ScanInconsistent,
+    /// The flight computer was reset (watchdog or command) and recovered the tether state it had checkpointed
+    /// (`nav::retained`): send `Configure` (the same root anchor) and a goal to continue from it.
+    Reset,
+    /// The flight computer was reset and its tether checkpoint does not read back: the anchor history is unknown,
+    /// goals are refused (the rover must not plan with a straight tether it may not have); inspect the tether.
+    TetherStateLost,
 }
 
 /// Flight -> host: the mission's state (v2). Sent on every mission-state change, after every accepted motion

@@ -85,6 +85,12 @@ pub fn main(args: &InspectArgs) -> ExitCode {
                     }
                     *by_kind.entry(e.kind.name()).or_default() += 1;
                 }
+                None if f.bytes == crate::link::recording::RESET_RECORD => {
+                    if args.frames {
+                        println!("  reset of the flight computer at t {:.6} s", f.t_us as f64 / 1e6);
+                    }
+                    *by_kind.entry("flight reset").or_default() += 1;
+                }
                 None => *by_kind.entry("unreadable").or_default() += 1,
             }
         }

@@ -150,6 +150,10 @@ pub struct MissionArgs {
     /// a run does not replay byte for byte.
     #[arg(long)]
     pub charge_host_time: bool,
+    /// Reset the flight computer once, after this many motions (issue 24 item 2): it must come back safe, recover
+    /// its tether state from retained memory and continue when the ground configures it again. One mission only.
+    #[arg(long, value_name = "N")]
+    pub reset_after_motions: Option<u32>,
     /// Serve the running mission to the Foxglove app over the Foxglove SDK's WebSocket server at HOST:PORT
     /// (default 127.0.0.1:8765; port 0 picks a free one); one seed only. The line `live view: ws://HOST:PORT`
     /// on stdout names the address.
@@ -249,6 +253,12 @@ pub fn summary(rep: &MissionReport) -> String {
             p.waypoints.len()
         ));
     }
+    for r in &rep.resets {
+        s.push_str(&format!(
+            "  reset at t {:.1} s after {} motions: {} anchors tracked before, {} recovered ({}); true tether {} contacts\n",
+            r.t_s, r.after_motions, r.anchors_before, r.anchors_recovered, r.reason, r.true_contacts
+        ));
+    }
     s.push_str(&format!(
         "  map high-water {} of {} blocks; {} nacks; link time {:.1} s, host time {:.1} s\n",
         rep.map_blocks, rep.map_blocks_capacity, rep.nacks, rep.link_s, rep.host_s
@@ -260,7 +270,13 @@ fn one(args: &MissionArgs, sc: &Scenario) -> Result<(MissionReport, Vec<PathBuf>
     std::fs::create_dir_all(&args.out).map_err(|e| format!("cannot create {}: {e}", args.out.display()))?;
     let name = sc.file_safe_name();
     let log_path = args.log.clone().unwrap_or_else(|| args.out.join(format!("{name}.fieldlog")));
-    let opts = MissionOptions { seed: args.seed, tracking: args.tracking.into(), noiseless: false, live: !args.quiet };
+    let opts = MissionOptions {
+        seed: args.seed,
+        tracking: args.tracking.into(),
+        noiseless: false,
+        live: !args.quiet,
+        reset_after_motions: args.reset_after_motions,
+    };
     sc.map_config()?;
     let config = RunConfig {
         scenario: sc.name.clone(),
@@ -675,6 +691,9 @@ pub fn main(args: &MissionArgs) -> ExitCode {
     let bad = |v: &Verdict| matches!(v, Verdict::Fell | Verdict::FalseArrival);
     if args.live.is_some() && (args.seeds > 1 || args.shard.is_some()) {
         return super::fail("--live shows one mission: drop --seeds / --shard");
+    }
+    if args.reset_after_motions.is_some() && (args.seeds > 1 || args.shard.is_some() || args.fault_campaign) {
+        return super::fail("--reset-after-motions resets one mission: drop --seeds / --shard / --fault-campaign");
     }
     if args.fault_campaign {
         return match fault_campaign(args, &sc) {

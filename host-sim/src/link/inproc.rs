@@ -11,6 +11,7 @@ use std::collections::VecDeque;
 use firmware::config::map::{MapConfig, FLIGHT_BLOCKS, FLIGHT_INDEX};
 use firmware::exec::{Autonomy, ExecStorage, Executive, StepReport};
 use firmware::map::Block;
+use firmware::nav::retained::{RetainedBlock, RETAINED_BYTES};
 use firmware::nav::{NavPlanStorage, Navigator};
 use hal::{ByteLink, Instant, MonotonicClock, Watchdog};
 
@@ -120,6 +121,12 @@ pub fn flight_autonomy() -> FlightAutonomy {
 /// The firmware executive behind a [`FlightLink`].
 pub struct InProcLink<A: Autonomy = FlightAutonomy> {
     exec: InProcExecutive<A>,
+    /// The flight computer's memory that survives a reset (the board's `.uninit` SRAM): zero at power-on.
+    retained: Box<RetainedBlock>,
+    /// Builds the autonomy a reset boots with (`None`: this link cannot reset).
+    rebuild: Option<fn() -> A>,
+    /// Resets so far.
+    resets: u32,
     step_us: u64,
     last_step: StepReport,
     longest: Option<LongestStep>,
@@ -141,22 +148,21 @@ impl InProcLink<FlightAutonomy> {
     /// A freshly booted flight software (executive + [`FlightAutonomy`], as on the board), stepped every
     /// `step_us` microseconds.
     pub fn new(step_us: u64) -> Self {
-        Self::with_autonomy(flight_autonomy(), step_us)
+        let mut link = Self::with_autonomy(flight_autonomy(), step_us);
+        link.rebuild = Some(flight_autonomy);
+        link
     }
 }
 
 impl<A: Autonomy> InProcLink<A> {
     /// A freshly booted executive with the given planning hooks.
     pub fn with_autonomy(autonomy: A, step_us: u64) -> Self {
-        let exec = Executive::new(
-            QueueByteLink::default(),
-            SimClock::default(),
-            SimWatchdog::default(),
-            autonomy,
-            Box::new(ExecStorage::new()),
-        );
+        let retained = Box::new([0u8; RETAINED_BYTES]);
         Self {
-            exec,
+            exec: boot(autonomy, 0, &retained),
+            retained,
+            rebuild: None,
+            resets: 0,
             step_us: step_us.max(1),
             last_step: StepReport::default(),
             longest: None,
@@ -172,6 +178,16 @@ impl<A: Autonomy> InProcLink<A> {
     /// The executive, mutably.
     pub fn executive_mut(&mut self) -> &mut InProcExecutive<A> {
         &mut self.exec
+    }
+
+    /// Resets so far ([`FlightLink::reset_flight`]).
+    pub fn resets(&self) -> u32 {
+        self.resets
+    }
+
+    /// The retained block as the flight software last wrote it (tests corrupt it to check the boot's refusal).
+    pub fn retained_mut(&mut self) -> &mut RetainedBlock {
+        &mut self.retained
     }
 
     /// The executive period, microseconds.
@@ -202,6 +218,7 @@ impl<A: Autonomy> InProcLink<A> {
         clock.reads = 0;
         clock.step_start = self.charge_host_time.then_some(t0);
         self.last_step = self.exec.step();
+        self.exec.autonomy_mut().keep_retained(&mut self.retained);
         let wall = t0.elapsed();
         if self.longest.is_none_or(|l| wall > l.wall) {
             self.longest = Some(LongestStep {
@@ -248,6 +265,29 @@ impl<A: Autonomy> FlightLink for InProcLink<A> {
         }
         Ok(out)
     }
+
+    fn reset_flight(&mut self) -> Result<(), LinkError> {
+        let rebuild = self.rebuild.ok_or(LinkError::Unsupported("reset a flight software it was handed"))?;
+        // bytes on the way either side are lost with the executive's queues; the simulated time goes on
+        self.exec = boot(rebuild(), self.last_now(), &self.retained);
+        self.last_step = StepReport::default();
+        self.resets += 1;
+        Ok(())
+    }
+}
+
+/// A booted executive at simulated time `now_us`, its autonomy given the retained block first (as the board's
+/// reset handler does before the flight loop).
+fn boot<A: Autonomy>(autonomy: A, now_us: u64, retained: &RetainedBlock) -> InProcExecutive<A> {
+    let mut exec = Executive::new(
+        QueueByteLink::default(),
+        SimClock { now_us, ..SimClock::default() },
+        SimWatchdog::default(),
+        autonomy,
+        Box::new(ExecStorage::new()),
+    );
+    exec.autonomy_mut().recover_retained(retained);
+    exec
 }
 
 impl<A: Autonomy> InProcLink<A> {

@@ -29,6 +29,8 @@ pub enum LinkError {
     Io(std::io::Error),
     /// A field-log write failed while recording.
     Record(std::io::Error),
+    /// The link cannot do what was asked (e.g. reset a flight software it did not build).
+    Unsupported(&'static str),
 }
 
 impl core::fmt::Display for LinkError {
@@ -37,6 +39,7 @@ impl core::fmt::Display for LinkError {
             LinkError::Disconnected(why) => write!(f, "flight link disconnected: {why}"),
             LinkError::Io(e) => write!(f, "flight link I/O error: {e}"),
             LinkError::Record(e) => write!(f, "field log write failed: {e}"),
+            LinkError::Unsupported(what) => write!(f, "this flight link cannot {what}"),
         }
     }
 }
@@ -68,6 +71,13 @@ pub trait FlightLink {
     fn end_faults(&mut self) -> Result<(), LinkError> {
         Ok(())
     }
+    /// Resets the flight computer now, as its watchdog or a reset command would (issue 24 item 2): everything in
+    /// flight on the link is lost, the flight software boots again and recovers what its retained memory kept
+    /// (`firmware::nav::retained`); link time goes on. A recorder writes the reset into the field log, so the replay
+    /// resets at the same point. Default: unsupported.
+    fn reset_flight(&mut self) -> Result<(), LinkError> {
+        Err(LinkError::Unsupported("reset the flight computer"))
+    }
 }
 
 impl<T: FlightLink + ?Sized> FlightLink for &mut T {
@@ -91,5 +101,8 @@ impl<T: FlightLink + ?Sized> FlightLink for &mut T {
     }
     fn end_faults(&mut self) -> Result<(), LinkError> {
         (**self).end_faults()
+    }
+    fn reset_flight(&mut self) -> Result<(), LinkError> {
+        (**self).reset_flight()
     }
 }

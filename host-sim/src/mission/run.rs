@@ -124,6 +124,23 @@ pub struct PlanSeen {
     pub margins: Vec<f32>,
 }
 
+/// A reset of the flight computer during the mission and what the flight software recovered (issue 24 item 2).
+#[derive(Debug, Clone, Serialize)]
+pub struct ResetSeen {
+    /// Link time of the reset, seconds.
+    pub t_s: f64,
+    /// Motions executed before it.
+    pub after_motions: u32,
+    /// Anchors of the flight software's tracked tether in its last status before the reset (root included).
+    pub anchors_before: u8,
+    /// Anchors in the status it booted with: its recovered history (0: it reported no recovery).
+    pub anchors_recovered: u8,
+    /// The reason the rebooted flight software gave (`Reset`: recovered; `TetherStateLost`: not).
+    pub reason: String,
+    /// Contacts of the true tether (the simulator's own, `truth::taut`) at the reset: a wrapped tether has some.
+    pub true_contacts: usize,
+}
+
 /// What a mission did.
 #[derive(Debug, Clone, Serialize)]
 pub struct MissionReport {
@@ -182,6 +199,8 @@ pub struct MissionReport {
     pub given_up: u64,
     /// Scan chunks the host sent again for want of an answer (`HostSession::send_scan`).
     pub chunks_resent: u64,
+    /// Resets of the flight computer during the mission, and what it recovered each time.
+    pub resets: Vec<ResetSeen>,
     /// Host wall time, s.
     pub host_s: f64,
     /// The executed path.
@@ -222,6 +241,9 @@ pub struct MissionOptions {
     pub noiseless: bool,
     /// Print a live progress line on stderr.
     pub live: bool,
+    /// Reset the flight computer once, right after the motion report of this many executed motions has been
+    /// answered (`tetherbot mission --reset-after-motions N`; issue 24 item 2). `None`: no reset.
+    pub reset_after_motions: Option<u32>,
 }
 
 /// Why a mission could not run (as opposed to how it ended).
@@ -330,6 +352,12 @@ struct Sim<'a, L: FlightLink> {
     planning: bool,
     /// Host time spent in link calls while a plan was searched, seconds.
     plan_host_s: f64,
+    /// The configuration and goal sent, sent again after a reset.
+    cfg: Configure,
+    goal: Option<GoalRequest>,
+    reset_after_motions: Option<u32>,
+    /// The flight software booted `Safe` with reason `Reset`: the ground configures it and sends the goal again.
+    recovery_due: bool,
 }
 
 impl<L: FlightLink> Sim<'_, L> {
@@ -353,7 +381,15 @@ impl<L: FlightLink> Sim<'_, L> {
                     if self.status.is_none_or(|old| old.state != st.state) {
                         self.last_news_us = now;
                     }
-                    if matches!(st.state, MissionState::Arrived | MissionState::Safe) && self.done.is_none() {
+                    if st.state == MissionState::Safe && st.reason == StopReason::Reset {
+                        // the flight computer rebooted and recovered its tether state: the ground's procedure
+                        // (configure, scan, the goal again) runs from the main loop
+                        self.recovery_due = true;
+                        if let Some(r) = self.rep.resets.last_mut().filter(|r| r.anchors_recovered == 0) {
+                            r.anchors_recovered = st.anchors;
+                            r.reason = format!("{:?}", st.reason);
+                        }
+                    } else if matches!(st.state, MissionState::Arrived | MissionState::Safe) && self.done.is_none() {
                         self.done = Some(match st.state {
                             MissionState::Arrived => {
                                 let e = dist(self.rover.axle(), self.sc.goal.position);
@@ -472,6 +508,21 @@ impl<L: FlightLink> Sim<'_, L> {
         Ok(())
     }
 
+    /// The overview scans from the lander's mast (`MissionSection::overview_scan`), of the region from `from`
+    /// to the goal.
+    fn overview(&mut self, from: P3) -> Result<(), MissionError> {
+        if !self.m.overview_scan {
+            return Ok(());
+        }
+        let tiles: Vec<(RangeSensorParams, _)> = overview_sensor(self.truth.root, self.sc.goal.position, from, &self.sc.sensor, &self.m);
+        for (params, pose) in tiles {
+            let view = self.truth.world.sensed();
+            let scan = overview_scan(&view, &params, &pose, &mut self.rng);
+            self.send_scan(&scan)?;
+        }
+        Ok(())
+    }
+
     fn scan_here(&mut self) -> Result<(), MissionError> {
         let pose = self.rover.state.settled.pose;
         self.estimate = self.loc.estimate(&pose);
@@ -516,6 +567,51 @@ impl<L: FlightLink> Sim<'_, L> {
         pts.push(self.rover.axle());
         let t = self.now_s();
         self.rep.tethers.push((t, pts));
+    }
+
+    /// Resets the flight computer now (the link's reset: watchdog bite or reset command) and notes what the flight
+    /// software had tracked; its boot status (absorbed by the next receive) says what it recovered.
+    fn reset_flight(&mut self) -> Result<(), MissionError> {
+        let t_s = self.now_s();
+        self.rep.resets.push(ResetSeen {
+            t_s,
+            after_motions: self.rep.motions,
+            anchors_before: self.status.map_or(0, |s| s.anchors),
+            anchors_recovered: 0,
+            reason: String::new(),
+            true_contacts: self.rover.tether.contacts.len(),
+        });
+        log::warn!("mission: resetting the flight computer at t {t_s:.1} s");
+        self.s.link_mut().reset_flight().map_err(SessionError::Link)?;
+        // drive commands of the software that was reset are void
+        self.pending.clear();
+        self.recv()?;
+        if let Some(r) = self.rep.resets.last_mut().filter(|r| r.reason.is_empty()) {
+            r.reason = self.status.map_or_else(String::new, |s| format!("{:?}", s.reason));
+        }
+        Ok(())
+    }
+
+    /// The ground's procedure after the flight software booted `Safe` (`Reset`): the same `Configure` (so it
+    /// continues from the recovered tether), the survey and a scan where the rover stands (the map went with the
+    /// reset), and the goal again under a new id.
+    fn recover(&mut self) -> Result<(), MissionError> {
+        self.recovery_due = false;
+        self.pending.clear();
+        self.s.send(&Message::Configure(self.cfg))?;
+        self.recv()?;
+        // the map went with the reset: the lander's survey again (as at the start), then the rover's own scan
+        let here = self.rover.axle();
+        self.overview(here)?;
+        self.scan_here()?;
+        if let Some(mut goal) = self.goal {
+            goal.goal_id += 1;
+            self.goal = Some(goal);
+            self.s.send(&Message::GoalRequest(goal))?;
+            self.last_news_us = self.s.link().now_us();
+            self.recv()?;
+        }
+        Ok(())
     }
 
     /// Executes one drive command on the truth; returns false when the mission ended (fall).
@@ -580,6 +676,10 @@ impl<L: FlightLink> Sim<'_, L> {
         };
         self.s.send(&Message::MotionReport(report))?;
         self.recv()?;
+        if self.reset_after_motions == Some(self.rep.motions) {
+            self.reset_flight()?;
+            return Ok(true);
+        }
         // a scan after every motion, from where the rover stands (with the same pose estimate)
         let view = self.truth.world.sensed();
         let scan = rover_scan(&view, &self.sc.sensor, &pose, &self.estimate, &mut self.rng);
@@ -654,6 +754,7 @@ pub fn run_mission_from(
         retransmits: 0,
         given_up: 0,
         chunks_resent: 0,
+        resets: vec![],
         host_s: 0.0,
         trace: vec![],
         tethers: vec![],
@@ -699,6 +800,10 @@ pub fn run_mission_from(
         last_news_us: 0,
         planning: false,
         plan_host_s: 0.0,
+        cfg,
+        goal: None,
+        reset_after_motions: opts.reset_after_motions,
+        recovery_due: false,
     };
     sim.recv()?;
     sim.s.send(&Message::Configure(cfg))?;
@@ -708,14 +813,7 @@ pub fn run_mission_from(
     sim.run_to(t)?;
     sim.snapshot_tether();
     sim.trace();
-    if sim.m.overview_scan {
-        let tiles: Vec<(RangeSensorParams, _)> = overview_sensor(sim.truth.root, sim.sc.goal.position, sim.sc.rover.start, &sim.sc.sensor, &sim.m);
-        for (params, pose) in tiles {
-            let view = sim.truth.world.sensed();
-            let scan = overview_scan(&view, &params, &pose, &mut sim.rng);
-            sim.send_scan(&scan)?;
-        }
-    }
+    sim.overview(sim.sc.rover.start)?;
     sim.scan_here()?;
     let g = sc.goal.position;
     let goal = GoalRequest {
@@ -727,6 +825,7 @@ pub fn run_mission_from(
         time_budget_ms: 0,
         allow_approximate: sim.m.allow_approximate,
     };
+    sim.goal = Some(goal);
     sim.s.send(&Message::GoalRequest(goal))?;
     sim.last_news_us = sim.s.link().now_us();
     sim.recv()?;
@@ -741,6 +840,10 @@ pub fn run_mission_from(
             log::warn!("mission: the ground gave up sending {k:?}; the flight software cannot have the goal");
             sim.done = Some(Verdict::Undelivered);
             break;
+        }
+        if sim.recovery_due {
+            sim.recover()?;
+            continue;
         }
         if sim.pending.is_empty() && now > sim.last_news_us + quiet_us {
             sim.done = Some(Verdict::FlightQuiet);
