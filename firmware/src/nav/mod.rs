@@ -114,7 +114,14 @@
 //!   `MAX_POSE_JUMPS` 3, `SCAN_POSE_TOLERANCE_M` 2.0, `MAX_SCAN_REJECTS` 3, `MAX_PAYOUT_RATE_M_PER_S` 1.0,
 //!   `PAYOUT_JUMP_SLACK_M` 0.3, `RECHECK_AFTER_MOTION` 2, `EXECUTED_CAPACITY` 64, `REESTIMATE_PER_STEP` 4,
 //!   `DRIFT_GAIN_LIMIT` 1.0,
-//!   `MIN_DRIFT_SAMPLE_M` 0.05, `STANDARD_GRAVITY` 9.81; `MissionConfig::DEFAULT`: ClosedLoop, 0.3 m, 0.5 m, 0 N.
+//!   `MIN_DRIFT_SAMPLE_M` 0.05, `STANDARD_GRAVITY` 9.81, `RECOVERY_ROOT_TOLERANCE_M` 0.01;
+//!   `MissionConfig::DEFAULT`: ClosedLoop, 0.3 m, 0.5 m, 0 N.
+//! - Resets (issue 24 item 2, [`retained`]): after each step the navigator checkpoints the tether state (root,
+//!   tracked anchors, body pose, payout) into retained memory when it changed; at boot it reads it back. A
+//!   checkpoint makes the mission `Safe` (`Reset`) and the next `Configure` with the same root continues from the
+//!   recovered anchors (a re-estimate then starts from them, not from the root); an unreadable one makes it `Safe`
+//!   (`TetherStateLost`) and refuses goals. The recovered pose is the plan's start; scans are not checked against
+//!   it until the first motion report (the ground surveys again, from the lander's mast too).
 //! - Bounds: each report does one Alg. 1 prediction; each `Verifying` step one settle, one stability check and one
 //!   motion check; each re-estimate step `REESTIMATE_PER_STEP` predictions; each closed-loop step one pass over
 //!   the path's segments (`PATH_CAPACITY`).

@@ -209,6 +209,22 @@ impl QemuLink {
         Ok((ran, busy))
     }
 
+    /// Resets the board between runs (its reboot command) and waits for its hello; link time goes on. Refused
+    /// with bytes sent and not yet announced (they would sit in the emulated UART and reach the rebooted
+    /// software, where in-process they are lost with the executive's queue).
+    pub fn reset_board(&mut self) -> io::Result<()> {
+        if self.unannounced > 0 {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                "reset with bytes sent but not yet delivered; step first",
+            ));
+        }
+        let timeout = self.reply_timeout;
+        self.board()?.reboot(timeout)?;
+        self.last_busy = false;
+        Ok(())
+    }
+
     /// Shuts the board down with a quit command; returns its exit status and resource report.
     pub fn quit(mut self, timeout: Duration) -> Result<QemuExit, QemuError> {
         match self.board.take() {
@@ -253,5 +269,8 @@ impl FlightLink for QemuLink {
     }
     fn advance_to(&mut self, t_us: u64) -> Result<Vec<u8>, LinkError> {
         QemuLink::advance_to(self, t_us).map_err(|e| link_error(self, e))
+    }
+    fn reset_flight(&mut self) -> Result<(), LinkError> {
+        QemuLink::reset_board(self).map_err(|e| link_error(self, e))
     }
 }

@@ -475,6 +475,22 @@ impl QemuBoard {
         }
     }
 
+    /// Resets the board with the control port's reboot command (`B`: a system reset, as a watchdog bite) and waits
+    /// up to `timeout` for the rebooted firmware's hello. QEMU keeps running; RAM outside the ELF's sections (the
+    /// board's `.uninit`, where the tether checkpoint lives) keeps its content.
+    pub fn reboot(&mut self, timeout: Duration) -> io::Result<()> {
+        self.control_send(b"B")?;
+        let mut hello = [0u8; 1];
+        self.control_recv_exact(&mut hello, timeout)?;
+        if hello != *b"H" {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidData,
+                format!("unexpected hello byte 0x{:02x} from the rebooted board", hello[0]),
+            ));
+        }
+        Ok(())
+    }
+
     /// Sends `bytes` on the control port.
     pub fn control_send(&mut self, bytes: &[u8]) -> io::Result<()> {
         self.control.write_all(bytes)

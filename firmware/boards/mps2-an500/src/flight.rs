@@ -20,6 +20,9 @@
 //!   bytes written to UART0 during the run, which the host then reads).
 //! - host -> board `Q` (quit, 1 byte, both clocks): the board prints its resource report over semihosting
 //!   (`board: stack_high_water_bytes=... ...`) and exits QEMU with status 0.
+//! - host -> board `B` (reboot, 1 byte, both clocks; between runs): the board requests a system reset
+//!   (SYSRESETREQ), as a watchdog bite does; it boots again and says `H`. The tether checkpoint in `.uninit`
+//!   (`storage::take_retained`, `firmware::nav::retained`) survives: the rebooted flight software recovers it.
 //!
 //! In lockstep the executive's link behaves like the in-process byte queue: `read` returns exactly the announced
 //! bytes not yet consumed (waiting for them to cross the emulated UART, they are already sent) and `write` takes
@@ -34,7 +37,9 @@ use firmware::nav::{NavPlanStorage, Navigator};
 use hal::{ByteLink, Instant};
 
 use crate::clock::{BoardClock, SysTickClock};
-use crate::storage::{Lent, EXEC_STORAGE};
+use crate::storage::{take_retained, Lent, EXEC_STORAGE};
+use firmware::exec::Autonomy;
+use firmware::nav::retained::RetainedBlock;
 use crate::uart::{Uart, UART0_BASE, UART1_BASE, UART_IRQS};
 use crate::watchdog::{CmsdkWatchdog, LOCKSTEP_TIMEOUT_TICKS, TIMEOUT_TICKS};
 
@@ -257,7 +262,11 @@ pub fn run(systick: SysTickClock, lockstep: bool) -> ! {
         host_eprintln!("board: planning storage lent twice");
         crate::fault::fail()
     };
-    let autonomy = match Navigator::new(MapConfig::DEFAULT, &mut blocks[..], &mut index[..], planning) {
+    let Some(retained) = take_retained() else {
+        host_eprintln!("board: retained memory lent twice");
+        crate::fault::fail()
+    };
+    let mut autonomy = match Navigator::new(MapConfig::DEFAULT, &mut blocks[..], &mut index[..], planning) {
         Ok(nav) => nav,
         Err(e) => {
             let why = match e {
@@ -270,19 +279,25 @@ pub fn run(systick: SysTickClock, lockstep: bool) -> ! {
             crate::fault::fail()
         }
     };
+    // before the first step: what a reset left (the flight software comes back Safe with its tether state)
+    autonomy.recover_retained(retained);
     let mut exec: BoardExecutive = Executive::new(link, clock, wdog, autonomy, storage);
     // The harness handshake; in free-running mode the executive's first step also sends the boot Telemetry.
     write_control(&mut ctl, b"H");
     if lockstep {
-        run_lockstep(&mut exec, &mut ctl)
+        run_lockstep(&mut exec, &mut ctl, retained)
     }
     loop {
         let report = exec.step();
+        exec.autonomy_mut().keep_retained(retained);
         if ctl.read_ready().unwrap_or(false) {
             let mut tag = [0u8; 1];
             let _ = ctl.read(&mut tag);
             if tag == *b"Q" {
                 quit(&exec);
+            }
+            if tag == *b"B" {
+                cortex_m::peripheral::SCB::sys_reset();
             }
             host_eprintln!(
                 "board: bad control byte 0x{:02x} in free-running mode",
@@ -301,12 +316,13 @@ pub fn run(systick: SysTickClock, lockstep: bool) -> ! {
     }
 }
 
-fn run_lockstep(exec: &mut BoardExecutive, ctl: &mut Uart) -> ! {
+fn run_lockstep(exec: &mut BoardExecutive, ctl: &mut Uart, retained: &mut RetainedBlock) -> ! {
     loop {
         let mut tag = [0u8; 1];
         read_control(ctl, &mut tag);
         match &tag {
             b"Q" => quit(exec),
+            b"B" => cortex_m::peripheral::SCB::sys_reset(),
             b"R" => {}
             _ => {
                 host_eprintln!("board: bad control byte 0x{:02x} in lockstep mode", tag[0]);
@@ -331,6 +347,7 @@ fn run_lockstep(exec: &mut BoardExecutive, ctl: &mut Uart) -> ! {
         for _ in 0..max_steps {
             exec.clock_mut().lockstep_now = Some(Instant::from_micros(t));
             let report = exec.step();
+            exec.autonomy_mut().keep_retained(retained);
             steps += 1;
             busy = report.busy;
             t += step_us;

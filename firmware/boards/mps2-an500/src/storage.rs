@@ -5,15 +5,41 @@
 //! creates a mutable reference to a static, and the `taken` flag makes a second one impossible.
 
 use core::cell::UnsafeCell;
-#[cfg(feature = "bench")]
 use core::mem::MaybeUninit;
 use core::sync::atomic::{AtomicBool, Ordering};
 
 use firmware::exec::ExecStorage;
+use firmware::nav::retained::{RetainedBlock, RETAINED_BYTES};
 
 /// The executive's large buffers (scan reassembly, plan), lent once: to the flight loop, or in bench mode to the
 /// executive benchmark. ~130 KiB of `.bss` in SRAM.
 pub static EXEC_STORAGE: Lent<ExecStorage> = Lent::new(ExecStorage::new());
+
+/// The tether checkpoint's block (`firmware::nav::retained`, ~1.6 KiB) in SRAM's `.uninit`: neither loaded nor
+/// zeroed at boot, and not reloaded by QEMU's system reset (the watchdog-reset probe's mark shows it survives), so
+/// what the flight software wrote before a reset is there after it. Power-on content is whatever the RAM holds
+/// (zeros on the emulator); the checkpoint's magic and CRC tell it from a checkpoint.
+#[link_section = ".uninit.tether_retained"]
+static mut RETAINED: MaybeUninit<RetainedBlock> = MaybeUninit::uninit();
+static RETAINED_TAKEN: AtomicBool = AtomicBool::new(false);
+
+/// The retained block, lent once (`None` the second time).
+pub fn take_retained() -> Option<&'static mut RetainedBlock> {
+    if RETAINED_TAKEN.swap(true, Ordering::AcqRel) {
+        return None;
+    }
+    let p = core::ptr::addr_of_mut!(RETAINED).cast::<u8>();
+    // SAFETY: the flag makes this the only reference ever made to the static, which lives for the program. Each
+    // byte is read and written back (volatile, so neither is elided) before the reference exists: the memory then
+    // holds defined bytes (the last boot's checkpoint or power-on content), which any `[u8; N]` may.
+    unsafe {
+        for i in 0..RETAINED_BYTES {
+            let b = core::ptr::read_volatile(p.add(i));
+            core::ptr::write_volatile(p.add(i), b);
+        }
+        Some(&mut *core::ptr::addr_of_mut!(RETAINED).cast::<RetainedBlock>())
+    }
+}
 
 /// A static value that can be borrowed mutably once, for the rest of the program.
 pub struct Lent<T> {
