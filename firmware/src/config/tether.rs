@@ -24,3 +24,9 @@ pub const PIVOT_EXCLUSION_M: f32 = 0.1;
 pub const NEAR_PIVOT_SAMPLES: u32 = 16;
 /// Range from the pivot covered by the near-pivot samples, metres. Default 1.0 m.
 pub const NEAR_PIVOT_RANGE_M: f32 = 1.0;
+
+/// Bytes of one slot of the retained tether checkpoint (`nav::retained`): a 46-byte head (magic, generation, root,
+/// body pose, payout, goal id, anchor count), the largest anchor history at 24 bytes an anchor, and a CRC-32.
+pub const RETAINED_SLOT_BYTES: usize = 46 + ANCHOR_HISTORY_CAPACITY * 24 + 4;
+/// Bytes of the retained block a board lends for it (two slots, written alternately): 1636 with 32 anchors.
+pub const RETAINED_BYTES: usize = 2 * RETAINED_SLOT_BYTES;

@@ -25,7 +25,7 @@
 use hal::Instant;
 
 use crate::config::exec::PLAN_WAYPOINTS_CAPACITY;
-use crate::nav::retained::RetainedBlock;
+use crate::config::tether::RETAINED_BYTES;
 use crate::protocol::{
     Configure, GoalRequest, MapStatus, MissionStatus, Motion, MotionReport, PlanState, Point3, Pose,
     TetherReading, Waypoint,
@@ -148,12 +148,12 @@ pub trait Autonomy {
     fn map_status(&self) -> MapStatus {
         MapStatus::default()
     }
-    /// At boot, before the first step: the block of memory that survived the reset (`nav::retained`). Default:
-    /// nothing to recover.
-    fn recover_retained(&mut self, _block: &RetainedBlock) {}
+    /// At boot, before the first step: the block of memory that survived the reset (the navigator's layout:
+    /// `nav::retained`). Default: nothing to recover.
+    fn recover_retained(&mut self, _block: &[u8; RETAINED_BYTES]) {}
     /// After each step: write what a reset must not lose into the retained block, if it changed since the last
     /// write. Default: nothing kept.
-    fn keep_retained(&mut self, _block: &mut RetainedBlock) {}
+    fn keep_retained(&mut self, _block: &mut [u8; RETAINED_BYTES]) {}
 }
 
 /// No map, no planner: scans are reassembled and dropped, goals get `PlannerUnavailable`.

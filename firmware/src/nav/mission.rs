@@ -484,13 +484,11 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
             return;
         }
         // Re-estimate (in bounded parts, see `reestimate_step`); the rover drives no further until it is done.
-        if m.reestimate_at == 0 {
-            if !m.base.is_empty() {
-                m.counters.tether_reestimates = m.counters.tether_reestimates.saturating_add(1);
-                m.reestimate_h.clone_from(&m.base);
-                m.reestimate_at = 1;
-                log::info!("mission: payout {} m vs tracked {} m: re-estimating the anchors", r.payout_m, m.predicted_payout());
-            }
+        if m.reestimate_at == 0 && !m.base.is_empty() {
+            m.counters.tether_reestimates = m.counters.tether_reestimates.saturating_add(1);
+            m.reestimate_h.clone_from(&m.base);
+            m.reestimate_at = 1;
+            log::info!("mission: payout {} m vs tracked {} m: re-estimating the anchors", r.payout_m, m.predicted_payout());
         }
     }
 

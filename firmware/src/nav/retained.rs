@@ -16,7 +16,7 @@
 //! goal id u32 | anchors n u8 | n x (point 3 x f32, gradient 3 x f32) | crc32`, little-endian, the CRC (the
 //! protocol's CRC-32/ISO-HDLC) over everything before it. Reading takes the valid slot with the higher generation.
 
-use crate::config::tether::ANCHOR_HISTORY_CAPACITY;
+use crate::config::tether::{ANCHOR_HISTORY_CAPACITY, RETAINED_SLOT_BYTES};
 use crate::geom::{Real, Vec3};
 use crate::protocol::frame::CRC;
 use crate::tether::{Anchor, AnchorHistory};
@@ -29,10 +29,10 @@ const MAGIC: u32 = 0x314B_4354;
 const HEAD_BYTES: usize = 4 + 4 + 12 + 1 + 12 + 4 + 4 + 4 + 1;
 /// Bytes of one anchor: point and gradient.
 const ANCHOR_BYTES: usize = 24;
-/// Bytes of one slot (the largest history and the CRC).
-pub const SLOT_BYTES: usize = HEAD_BYTES + ANCHOR_HISTORY_CAPACITY * ANCHOR_BYTES + 4;
-/// Bytes of the retained block the board lends: two slots.
-pub const RETAINED_BYTES: usize = 2 * SLOT_BYTES;
+/// Bytes of one slot (the largest history and the CRC; `config::tether::RETAINED_SLOT_BYTES`).
+pub const SLOT_BYTES: usize = RETAINED_SLOT_BYTES;
+const _: () = assert!(SLOT_BYTES == HEAD_BYTES + ANCHOR_HISTORY_CAPACITY * ANCHOR_BYTES + 4);
+pub use crate::config::tether::RETAINED_BYTES;
 
 /// The retained block, as the board and the in-process link hold it.
 pub type RetainedBlock = [u8; RETAINED_BYTES];
@@ -55,6 +55,8 @@ pub struct TetherCheckpoint {
 }
 
 /// What a boot finds in the retained block.
+// Returned once per boot, by value: there is no heap to box the checkpoint into.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq)]
 pub enum Recovered {
     /// No slot was ever written (power-on, or a fresh emulator): a new deployment.
