@@ -187,7 +187,26 @@ fn reader_seeds(protocol_log: &[u8]) -> Vec<(&'static str, String, Vec<u8>)> {
     let map = "type octile\nheight 4\nwidth 5\nmap\n.....\n.@@..\n..T..\n.....\n";
     let scen = "version 1\n0\tsmall.map\t5\t4\t0\t0\t4\t3\t6.41421356\n0\tsmall.map\t5\t4\t0\t3\t4\t0\t6.41421356\n";
     out.push(("movingai", "small".into(), [map.as_bytes(), &[0xFF], scen.as_bytes()].concat()));
+    // retained tether checkpoint: a block with a wrapped tether written twice (both slots), and one slot only
+    out.push(("retained", "two-slots".into(), retained_block(2).to_vec()));
+    out.push(("retained", "one-slot".into(), retained_block(1).to_vec()));
     out
+}
+
+/// A retained block after `writes` checkpoints of a tether wrapped once (root and one contact).
+fn retained_block(writes: u32) -> firmware::nav::retained::RetainedBlock {
+    use firmware::geom::Vec3;
+    use firmware::nav::retained::{write, TetherCheckpoint, RETAINED_BYTES};
+    use firmware::tether::{Anchor, AnchorHistory};
+    let mut block = [0u8; RETAINED_BYTES];
+    let root = Vec3::new(6.7, 0.0, 6.35);
+    let mut anchors = AnchorHistory::new(Anchor::root(root));
+    anchors.push(Anchor { point: Vec3::new(-2.5, 0.1, 4.6), gradient: Vec3::new(0.0, 1.0, 0.0) }).unwrap();
+    for generation in 1..=writes {
+        let cp = TetherCheckpoint { generation, root, anchors: anchors.clone(), body: None, payout_m: 9.5, goal_id: 1 };
+        write(&mut block, &cp);
+    }
+    block
 }
 
 /// A 3 x 2 GeoTIFF DEM written in memory with the pixel-scale (2.5 m) and GDAL_NODATA (-9999) tags.
@@ -293,6 +312,11 @@ fn every_reader_accepts_its_seeds() {
                 let s = host_sim::movingai::parse_scen(core::str::from_utf8(&b[i + 1..]).unwrap()).expect(&what);
                 let summary = host_sim::movingai::run_scenarios(&m, &s, |_, _| true).expect(&what);
                 assert_eq!((summary.run, summary.mismatches.len()), (2, 0), "{what}: {summary:?}");
+            }
+            "retained" => {
+                let block: firmware::nav::retained::RetainedBlock = b.as_slice().try_into().expect(&what);
+                let got = firmware::nav::retained::read(&block);
+                assert!(matches!(&got, firmware::nav::retained::Recovered::Valid(cp) if cp.anchors.len() == 2), "{what}: {got:?}");
             }
             other => panic!("seed for unknown target {other}"),
         }
