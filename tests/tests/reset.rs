@@ -17,8 +17,8 @@ use host_sim::replay::{replay, ReplayOutcome};
 
 const RESET_AFTER: u32 = 25;
 
-#[test]
-fn a_reset_mid_descent_recovers_the_wrapped_tether_continues_and_replays() {
+/// `mission_snag.toml`, seed 1, reset after `RESET_AFTER` motions.
+fn snag_with_reset() -> (host_sim::scenario::Scenario, MissionOptions) {
     let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios/mission_snag.toml");
     let sc = host_sim::scenario::load(&p).unwrap_or_else(|e| panic!("{e}"));
     let opts = MissionOptions {
@@ -28,13 +28,22 @@ fn a_reset_mid_descent_recovers_the_wrapped_tether_continues_and_replays() {
         live: false,
         reset_after_motions: Some(RESET_AFTER),
     };
-    let header = fieldlog::Header {
+    (sc, opts)
+}
+
+fn header(scenario: &str, link: &str) -> fieldlog::Header {
+    fieldlog::Header {
         protocol_version: firmware::config::protocol::PROTOCOL_VERSION,
         created_at_unix_ms: 0,
         seed: 1,
-        config: format!("{{\"scenario\":\"{}\",\"link\":\"inproc\",\"step_us\":{DEFAULT_STEP_US}}}", sc.name),
-    };
-    let writer = fieldlog::Writer::new(Vec::new(), &header).unwrap();
+        config: format!("{{\"scenario\":\"{scenario}\",\"link\":\"{link}\",\"step_us\":{DEFAULT_STEP_US}}}"),
+    }
+}
+
+#[test]
+fn a_reset_mid_descent_recovers_the_wrapped_tether_continues_and_replays() {
+    let (sc, opts) = snag_with_reset();
+    let writer = fieldlog::Writer::new(Vec::new(), &header(&sc.name, "inproc")).unwrap();
     let mut link = RecordingLink::new(host_sim::mission::link::mission_link(&sc).unwrap(), writer);
     let rep = run_mission(&mut link, &sc, &opts).unwrap();
     let (flight, bytes) = link.finish().unwrap();
@@ -75,12 +84,7 @@ fn a_reset_mid_descent_recovers_the_wrapped_tether_continues_and_replays() {
 fn reboot_session<L: FlightLink>(link: L) -> (Vec<u8>, Vec<firmware::protocol::MissionStatus>, u32) {
     use firmware::protocol::{Message, TetherReading};
     use host_sim::session::HostSession;
-    let header = fieldlog::Header {
-        protocol_version: firmware::config::protocol::PROTOCOL_VERSION,
-        created_at_unix_ms: 0,
-        seed: 5,
-        config: format!("{{\"scenario\":\"reboot\",\"link\":\"{}\",\"step_us\":{DEFAULT_STEP_US}}}", link.name()),
-    };
+    let header = header("reboot", link.name());
     let mut s = HostSession::new(RecordingLink::new(link, fieldlog::Writer::new(Vec::new(), &header).unwrap()));
     s.recv().unwrap();
     s.send(&Message::Configure(host_sim::scripted::default_configure(5))).unwrap();
@@ -137,23 +141,9 @@ fn a_reset_mid_descent_on_the_board_recovers_the_wrapped_tether_and_replays_in_p
     let Some(elf) = host_sim::qemu::board_for_tests("reset mission on the board").unwrap_or_else(|e| panic!("{e}")) else {
         return;
     };
-    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios/mission_snag.toml");
-    let sc = host_sim::scenario::load(&p).unwrap_or_else(|e| panic!("{e}"));
-    let opts = MissionOptions {
-        seed: 1,
-        tracking: firmware::protocol::Tracking::ClosedLoop,
-        noiseless: false,
-        live: false,
-        reset_after_motions: Some(RESET_AFTER),
-    };
-    let header = fieldlog::Header {
-        protocol_version: firmware::config::protocol::PROTOCOL_VERSION,
-        created_at_unix_ms: 0,
-        seed: 1,
-        config: format!("{{\"scenario\":\"{}\",\"link\":\"qemu\",\"step_us\":{DEFAULT_STEP_US}}}", sc.name),
-    };
+    let (sc, opts) = snag_with_reset();
     let link = host_sim::link::qemu::QemuLink::start(&elf, DEFAULT_STEP_US).unwrap_or_else(|e| panic!("{e}"));
-    let mut rec = RecordingLink::new(link, fieldlog::Writer::new(Vec::new(), &header).unwrap());
+    let mut rec = RecordingLink::new(link, fieldlog::Writer::new(Vec::new(), &header(&sc.name, "qemu")).unwrap());
     let rep = run_mission(&mut rec, &sc, &opts).unwrap();
     let (_, bytes) = rec.finish().unwrap();
     let [r] = rep.resets.as_slice() else { panic!("one reset expected: {:?}", rep.resets) };
