@@ -18,7 +18,7 @@ use crate::protocol::{
 };
 use crate::tether::{predict_anchors, Anchor, AnchorHistory};
 
-use super::retained::{Recovered, TetherCheckpoint};
+use super::retained::{Recovered, RetainedPose, TetherCheckpoint};
 
 use super::planning::{self, GoalRefusal, NavPlanStorage};
 use super::Navigator;
@@ -238,8 +238,8 @@ impl Mission {
                 // The rover has not moved since: its pose is the plan's start (a sensor pose on a slope is not
                 // the axle's). Until it moves, scans are not checked against it: the map went with the reset and
                 // the ground surveys again, from the lander's mast too (as before a mission's first motion).
-                if cp.body.is_some() {
-                    self.body = cp.body;
+                if let Some(p) = cp.body {
+                    self.body = Some(BodyPose { position: p.position, yaw: p.yaw });
                     self.unmoved_since_recovery = true;
                 }
             }
@@ -284,7 +284,7 @@ impl Mission {
             generation: self.generation,
             root: self.root?,
             anchors: self.tracked.clone(),
-            body: self.body,
+            body: self.body.map(|b| RetainedPose { position: b.position, yaw: b.yaw }),
             payout_m: self.payout.map_or(0.0, |(p, _, _)| p),
             goal_id: self.goal.map_or(0, |g| g.goal_id),
         })

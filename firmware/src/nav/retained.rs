@@ -21,7 +21,14 @@ use crate::geom::{Real, Vec3};
 use crate::protocol::frame::CRC;
 use crate::tether::{Anchor, AnchorHistory};
 
-use super::mission::BodyPose;
+/// The body pose in a checkpoint: axle centre (world frame, metres) and heading (radians), as the mission tracks it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RetainedPose {
+    /// Axle centre.
+    pub position: Vec3,
+    /// Heading of the body x axis.
+    pub yaw: Real,
+}
 
 /// Marks a written slot ("TCK1"). Power-on RAM holding exactly this by chance is 1 in 2^32, and then its CRC too.
 const MAGIC: u32 = 0x314B_4354;
@@ -47,7 +54,7 @@ pub struct TetherCheckpoint {
     /// The tracked anchor history, root first.
     pub anchors: AnchorHistory,
     /// The last tracked body pose, if one was known.
-    pub body: Option<BodyPose>,
+    pub body: Option<RetainedPose>,
     /// The last accepted encoder payout, metres (0 before the first reading).
     pub payout_m: f32,
     /// The goal being pursued (0: none).
@@ -75,7 +82,7 @@ pub fn write(block: &mut RetainedBlock, cp: &TetherCheckpoint) {
     w.u32(MAGIC);
     w.u32(cp.generation);
     w.vec3(&cp.root);
-    let body = cp.body.unwrap_or(BodyPose { position: Vec3::zeros(), yaw: 0.0 });
+    let body = cp.body.unwrap_or(RetainedPose { position: Vec3::zeros(), yaw: 0.0 });
     w.u8(u8::from(cp.body.is_some()));
     w.vec3(&body.position);
     w.f32(body.yaw);
@@ -147,7 +154,7 @@ fn read_slot(slot: &[u8]) -> Option<TetherCheckpoint> {
     if !finite || !anchors_finite {
         return None;
     }
-    let body = (has_body == 1).then_some(BodyPose { position, yaw });
+    let body = (has_body == 1).then_some(RetainedPose { position, yaw });
     Some(TetherCheckpoint { generation, root, anchors, body, payout_m, goal_id })
 }
 
@@ -217,7 +224,7 @@ mod tests {
             generation,
             root: Vec3::new(6.7, 0.0, 6.35),
             anchors: h,
-            body: Some(BodyPose { position: Vec3::new(1.0, 2.0, 3.0), yaw: 0.25 }),
+            body: Some(RetainedPose { position: Vec3::new(1.0, 2.0, 3.0), yaw: 0.25 }),
             payout_m: 7.5,
             goal_id: 2,
         }
