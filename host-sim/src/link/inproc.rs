@@ -185,11 +185,6 @@ impl<A: Autonomy> InProcLink<A> {
         self.resets
     }
 
-    /// The retained block as the flight software last wrote it (tests corrupt it to check the boot's refusal).
-    pub fn retained_mut(&mut self) -> &mut RetainedBlock {
-        &mut self.retained
-    }
-
     /// The executive period, microseconds.
     pub fn step_us(&self) -> u64 {
         self.step_us
