@@ -43,6 +43,8 @@ pub const CATCH_PAIR_ATTEMPTS: u32 = 512;
 /// Default 75 degrees (1.309 rad): the 55-degree slope and the edge contacts of its lip pass; a wheel climbing the
 /// side of the test-3 pole (the settler tilts the rover 30 degrees against it) does not, and near such poses the
 /// settler's answer changes from pose to failure within millimetres, so the map and the true terrain disagree.
+/// A contact is steep when both its contact normal and the distance field's gradient at the contact point are
+/// steeper than this (`plan::tethered::space::rests_on_steep_surface`: a map's bumps tilt the contact normal alone).
 pub const MAX_WHEEL_CONTACT_INCLINE_RAD: f32 = 1.309;
 
 /// Default parameters of the tether-aware space ([`crate::plan::tethered::TetherSpaceParams::DEFAULT`]).

@@ -209,6 +209,8 @@ pub(crate) struct Problem {
     pub max_payout_m: f32,
     /// Waypoints cut from the end of the last plan (margin below the minimum or more tether than the spool).
     pub cut: u32,
+    /// The space's work and motion-failure counters summed over this goal's steps (logged when the search ends).
+    pub work: MotionStats,
 }
 
 /// The planning bounds of the map: the extent of its **surface blocks** (blocks whose centre is known to lie
@@ -327,6 +329,7 @@ pub(crate) fn set_up(
         weight_n: setup.weight_n,
         max_payout_m: setup.max_payout_m,
         cut: 0,
+        work: MotionStats::default(),
     })
 }
 
@@ -516,10 +519,28 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
     }
     stats.last_step = space.stats();
     stats.totals.add(&stats.last_step);
+    problem.work.add(&stats.last_step);
     stats.settles_run = stats.settles_run.saturating_add(u64::from(stats.last_step.settles));
     stats.stability_checks_run = stats.stability_checks_run.saturating_add(u64::from(stats.last_step.stability_checks));
     if done {
         problem.finished = Some(state);
+        let w = &problem.work;
+        log::info!(
+            "nav: search ended {state:?} after {} iterations ({:?}): samples {} drawn / {} settled; motions {} checked / {} valid; invalid by reason: settle {} ({} collisions, {} steep contacts), unknown space {}, tether {}, unstable {}, too long {}",
+            problem.done,
+            report.termination,
+            w.samples_drawn,
+            w.samples_settled,
+            w.motions,
+            w.motions_valid,
+            w.fail_settle,
+            w.settle_collision,
+            w.settle_steep,
+            w.fail_unknown,
+            w.fail_tether,
+            w.fail_unstable,
+            w.fail_too_long
+        );
         finished(problem, state)
     } else {
         PlanProgress::Searching { iterations: problem.done, best_cost: problem.best_cost }

@@ -34,7 +34,14 @@ impl<D: DistanceField> TetherSpace<'_, D> {
             Err(MotionFailure::Settle(SettleFailure::UnknownSpace)) | Err(MotionFailure::Unknown) => {
                 s.fail_unknown += 1
             }
-            Err(MotionFailure::Settle(_)) => s.fail_settle += 1,
+            Err(MotionFailure::Settle(f)) => {
+                s.fail_settle += 1;
+                match f {
+                    SettleFailure::Collision => s.settle_collision += 1,
+                    SettleFailure::SteepContact => s.settle_steep += 1,
+                    _ => {}
+                }
+            }
             Err(MotionFailure::Tether(TetherError::UnknownSpace)) => s.fail_unknown += 1,
             Err(MotionFailure::Tether(_)) | Err(MotionFailure::TetherBend) => s.fail_tether += 1,
             Err(MotionFailure::Unstable) => s.fail_unstable += 1,

@@ -142,9 +142,7 @@ pub fn settle_at(
     }
     let ground = surface_point(map, x, y, bounds.max[2], bounds.min[2]).ok_or(SettleFailure::NoSurface)?;
     match settle(map, &ground, theta, rover) {
-        SettleOutcome::Settled(settled)
-            if settled.wheels.iter().any(|w| w.normal.z < libm::cosf(MAX_WHEEL_CONTACT_INCLINE_RAD)) =>
-        {
+        SettleOutcome::Settled(settled) if settled.wheels.iter().any(|w| rests_on_steep_surface(map, w)) => {
             Err(SettleFailure::SteepContact)
         }
         SettleOutcome::Settled(settled) => Ok(RoverState { ground, theta, settled, off_map: false }),
@@ -153,6 +151,27 @@ pub fn settle_at(
         SettleOutcome::UnknownSpace => Err(SettleFailure::UnknownSpace),
         SettleOutcome::BudgetExhausted { .. } => Err(SettleFailure::Budget),
         SettleOutcome::InvalidInput => Err(SettleFailure::InvalidInput),
+    }
+}
+
+/// Does the wheel rest on a surface steeper than `MAX_WHEEL_CONTACT_INCLINE_RAD`? Both its contact normal and the
+/// distance field's gradient at the contact point must say so. The contact normal alone is not enough on a map: on
+/// smooth ground its in-plane part points from the rim point nearest the surface to the wheel centre, and a bump of
+/// 2 cm (a fifth of a 10 cm voxel) moves that rim point 20 degrees round a 0.35 m wheel, so a 55-degree face reads
+/// as 75 degrees here and there. A wheel against a pole's side or a wall meets a steep gradient as well; one resting
+/// on an edge meets the gradient of a face of that edge and is left to the stability check (its contact normal).
+/// Unobserved contact points count as steep.
+pub(super) fn rests_on_steep_surface(map: &impl DistanceField, wheel: &crate::rover::WheelContact) -> bool {
+    let limit = libm::cosf(MAX_WHEEL_CONTACT_INCLINE_RAD);
+    if wheel.normal.z >= limit {
+        return false;
+    }
+    match map.query(&wheel.point) {
+        DistanceQuery::Known { gradient, .. } => match crate::geom::normalize3(&gradient, 1e-6) {
+            Some(u) => u.z < limit || u.z.is_nan(),
+            None => true,
+        },
+        DistanceQuery::Unknown => true,
     }
 }
 
@@ -175,6 +194,10 @@ pub struct MotionStats {
     pub motions_valid: u32,
     /// Invalid: an interpolated state did not settle (no ground, collision, budget).
     pub fail_settle: u32,
+    /// Of `fail_settle`: the body collided with the terrain.
+    pub settle_collision: u32,
+    /// Of `fail_settle`: a wheel rested on a surface steeper than `MAX_WHEEL_CONTACT_INCLINE_RAD`.
+    pub settle_steep: u32,
     /// Invalid: unknown space met (settling, tether sweep or stability).
     pub fail_unknown: u32,
     /// Invalid: anchor prediction failed (history full, budget) or the tether bends too much.
@@ -192,7 +215,7 @@ pub struct MotionStats {
 impl MotionStats {
     /// Adds `other`'s counts to these (saturating): a sum over several steps or searches.
     pub fn add(&mut self, other: &MotionStats) {
-        let pairs: [(&mut u32, u32); 14] = [
+        let pairs: [(&mut u32, u32); 16] = [
             (&mut self.samples_drawn, other.samples_drawn),
             (&mut self.samples_settled, other.samples_settled),
             (&mut self.settles, other.settles),
@@ -201,6 +224,8 @@ impl MotionStats {
             (&mut self.motions, other.motions),
             (&mut self.motions_valid, other.motions_valid),
             (&mut self.fail_settle, other.fail_settle),
+            (&mut self.settle_collision, other.settle_collision),
+            (&mut self.settle_steep, other.settle_steep),
             (&mut self.fail_unknown, other.fail_unknown),
             (&mut self.fail_tether, other.fail_tether),
             (&mut self.fail_unstable, other.fail_unstable),

@@ -141,3 +141,33 @@ fn bad_parameters_and_bounds_are_named() {
     b.max[2] = b.min[2];
     assert_eq!(TetherSpace::new(&Ground, b, RoverParams::AXEL, TetherSpaceParams::DEFAULT).err().map(|e| e.0), Some("bounds"));
 }
+
+/// A plane through the origin with unit normal `n` (exact signed distance).
+struct Plane(Vec3);
+impl DistanceField for Plane {
+    fn query(&self, p: &Vec3) -> DistanceQuery {
+        DistanceQuery::Known { distance: p.dot(&self.0), gradient: self.0 }
+    }
+}
+
+/// A wheel's contact normal that reads steeper than the limit (a map bump moved its rim point) on a 55-degree face is
+/// not a steep contact: the face's own gradient is not steep. Against a wall both are steep; an unobserved contact
+/// point counts as steep; a contact normal within the limit is never steep, whatever the field says there.
+#[test]
+fn a_steep_contact_needs_a_steep_surface_too() {
+    use crate::rover::WheelContact;
+    let incline = |deg: Real| {
+        let r = deg.to_radians();
+        Vec3::new(libm::sinf(r), 0.0, libm::cosf(r))
+    };
+    let wheel = |normal: Vec3| WheelContact { point: Vec3::zeros(), normal, gap_m: 0.0 };
+    let limit_deg = crate::config::tethered::MAX_WHEEL_CONTACT_INCLINE_RAD.to_degrees();
+    let tilted = wheel(incline(limit_deg + 10.0));
+    assert!(!space::rests_on_steep_surface(&Plane(incline(55.0)), &tilted));
+    assert!(space::rests_on_steep_surface(&Plane(incline(90.0)), &tilted));
+    assert!(space::rests_on_steep_surface(&Plane(incline(limit_deg + 2.0)), &tilted));
+    assert!(space::rests_on_steep_surface(&Nothing, &tilted));
+    let level = wheel(incline(limit_deg - 5.0));
+    assert!(!space::rests_on_steep_surface(&Plane(incline(90.0)), &level));
+    assert!(!space::rests_on_steep_surface(&Nothing, &level));
+}
