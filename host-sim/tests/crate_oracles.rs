@@ -86,7 +86,7 @@ fn check_cobs_agreement(data: &[u8]) {
     let run = trailing_run(data);
     if data.is_empty() {
         assert_eq!((o.as_slice(), c.as_slice()), (&[0x01u8][..], &[][..]));
-    } else if run > 0 && run % 254 == 0 {
+    } else if run > 0 && run.is_multiple_of(254) {
         assert_eq!(o.len(), c.len() + 1, "len {}", data.len());
         assert_eq!((&o[..c.len()], o[c.len()]), (c.as_slice(), 0x01));
     } else {
@@ -261,8 +261,8 @@ fn check_obj_agreement(rel: &str) {
     let mut used = vec![false; ours.vertices.len()];
     let mut max_ulps = 0u64;
     for (t, tri) in ours.triangles.iter().enumerate() {
-        for k in 0..3 {
-            let (o, c) = (tri[k] as usize, m.indices[3 * t + k]);
+        for (k, &o) in tri.iter().enumerate() {
+            let (o, c) = (o as usize, m.indices[3 * t + k]);
             if renumber[o] == u32::MAX {
                 assert!(
                     !used[c as usize],
@@ -522,7 +522,7 @@ fn mesh_signed_distance_and_rays_agree_with_parry_on_itokawa() {
     let pad: Vec<f64> = (0..3).map(|k| 0.15 * (hi[k] - lo[k])).collect();
     let mut rng = SplitMix(2026);
     let mut queries: Vec<[f64; 3]> = (0..2000)
-        .map(|_| std::array::from_fn(|k| rng.uniform(lo[k] - pad[k], hi[k] + pad[k])))
+        .map(|_| core::array::from_fn(|k| rng.uniform(lo[k] - pad[k], hi[k] + pad[k])))
         .collect();
     // Near the surface, where sign errors live: a random point of a random triangle, pushed up to 2 m off it.
     for _ in 0..2000 {
@@ -533,8 +533,8 @@ fn mesh_signed_distance_and_rays_agree_with_parry_on_itokawa() {
         if u + v > 1.0 {
             (u, v) = (1.0 - u, 1.0 - v);
         }
-        let off: [f64; 3] = std::array::from_fn(|_| rng.uniform(-2.0, 2.0));
-        queries.push(std::array::from_fn(|k| {
+        let off: [f64; 3] = core::array::from_fn(|_| rng.uniform(-2.0, 2.0));
+        queries.push(core::array::from_fn(|k| {
             a[k] + u * (b[k] - a[k]) + v * (c[k] - a[k]) + off[k]
         }));
     }
@@ -569,14 +569,14 @@ fn mesh_signed_distance_and_rays_agree_with_parry_on_itokawa() {
     // Rays: random origins and directions in the padded box, and rays from outside aimed at a random surface point.
     let mut rays: Vec<([f64; 3], [f64; 3])> = Vec::new();
     for i in 0..2000 {
-        let o: [f64; 3] = std::array::from_fn(|k| rng.uniform(lo[k] - pad[k], hi[k] + pad[k]));
+        let o: [f64; 3] = core::array::from_fn(|k| rng.uniform(lo[k] - pad[k], hi[k] + pad[k]));
         let d: [f64; 3] = if i % 2 == 0 {
-            std::array::from_fn(|_| rng.uniform(-1.0, 1.0))
+            core::array::from_fn(|_| rng.uniform(-1.0, 1.0))
         } else {
             let [a, b, c] = mesh
                 .triangle(rng.below(mesh.triangles.len()))
                 .expect("triangle");
-            std::array::from_fn(|k| (a[k] + b[k] + c[k]) / 3.0 - o[k])
+            core::array::from_fn(|k| (a[k] + b[k] + c[k]) / 3.0 - o[k])
         };
         let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
         rays.push((o, d.map(|x| x / n)));
