@@ -22,7 +22,6 @@ use host_sim::world::mesh::MeshWorld;
 use parry3d_f64::query::{PointQuery, Ray, RayCast};
 use rand_core::{Rng, SeedableRng};
 
-#[allow(dead_code)] // not every helper is used by both users of the module
 #[path = "../tests/oracles/mod.rs"]
 mod oracles;
 use oracles::{parry_mesh, pv, shared_bytes, tobj_parse, Entry, HIRISE};

@@ -23,7 +23,6 @@ use npyz::WriterBuilder;
 use parry3d_f64::query::{PointQuery, Ray, RayCast};
 use proptest::prelude::*;
 
-#[allow(dead_code)] // not every helper is used by both users of the module
 mod oracles;
 use oracles::{parry_mesh, pv, shared_bytes, tobj_parse, Entry, HIRISE};
 
