@@ -39,6 +39,11 @@ pub const BELOW_SURFACE_FILL_VOXELS: i32 = 8;
 /// overflow.
 pub const MAX_VOXEL_COORD: Real = 4_194_304.0;
 
+/// Smallest cosine between a ray and the surface normal by which TSDF integration scales the ray's projective
+/// distances (`map::tsdf`, `incidence_cosine`). Default 0.1: a ray within 6 degrees of the surface is scaled as if
+/// at 6 degrees, so a normal estimated from a few voxels cannot turn a whole ray's free space into near-surface.
+pub const MIN_INCIDENCE_COSINE: Real = 0.1;
+
 /// Largest [`MapConfig::max_ray_voxels`] accepted: 1024 voxels per ray (51 m at 5 cm). A map configuration can
 /// come over the link (`Configure.map`); this keeps the work per point, and so per executive step, bounded.
 pub const MAX_RAY_VOXELS_LIMIT: usize = 1024;

@@ -7,7 +7,7 @@
 
 use super::esdf::band_site;
 use super::{quantize_weight, NO_SITE, split, local_index, Map, MapError, FLAG_TSDF_DIRTY, WEIGHT_SCALE};
-use crate::config::map::MAX_VOXEL_COORD;
+use crate::config::map::{MAX_VOXEL_COORD, MIN_INCIDENCE_COSINE};
 use crate::geom::{norm3, Pose3, Real, Vec3};
 
 /// What one call of [`Map::integrate_points`] did.
@@ -97,13 +97,15 @@ impl Map<'_> {
         let mut t_max = [ax.1, ay.1, az.1];
         let t_delta = [ax.2, ay.2, az.2];
         let mut cache: Option<([i32; 3], Result<usize, MapError>)> = None;
+        let incidence = self.incidence_cosine(&(o + d * depth), d);
         for _ in 0..budget {
             let c = self.voxel_center(g);
-            let sdf = depth - (c - o).dot(d);
-            if sdf >= -trunc {
+            let projective = depth - (c - o).dot(d);
+            let sdf = projective * incidence;
+            if projective >= -trunc {
                 let mut w = 1.0;
-                if sdf < -vs {
-                    w = (trunc + sdf) / (trunc - vs);
+                if projective < -vs {
+                    w = (trunc + projective) / (trunc - vs);
                 }
                 if w > 0.0 {
                     let (bx, lx) = split(g[0]);
@@ -152,6 +154,34 @@ impl Map<'_> {
             let Some(next) = ga.checked_add(*st) else { break };
             *ga = next;
             *tm += *td;
+        }
+    }
+
+    /// The cosine of the angle between the ray and the surface it hits (`|d . n|`, at least
+    /// [`MIN_INCIDENCE_COSINE`]), `n` the TSDF's gradient (central differences) at the voxel of the hit `h`; 1 where
+    /// the map does not know the surface there yet. The projective distance along a ray is the true distance divided
+    /// by this cosine: a ray that grazes a face at 7 degrees tells a voxel 1 cm above the face that it is 8 cm away
+    /// (and free space up to the truncation), and averaged with steeper rays that bends the surface: a 55-degree
+    /// face seen from above its lip came out as an overhang. Scaling by the cosine gives the distance to the hit's
+    /// tangent plane (KinectFusion-style maps do the same with the normal of the depth image).
+    fn incidence_cosine(&self, h: &Vec3, d: &Vec3) -> Real {
+        let vs = self.cfg.voxel_size;
+        let g = [libm::floorf(h.x / vs) as i32, libm::floorf(h.y / vs) as i32, libm::floorf(h.z / vs) as i32];
+        let mut grad = [0.0 as Real; 3];
+        for (axis, slot) in grad.iter_mut().enumerate() {
+            let mut lo = g;
+            let mut hi = g;
+            let (Some(l), Some(u)) = (lo.get_mut(axis), hi.get_mut(axis)) else { return 1.0 };
+            let (Some(a), Some(b)) = (l.checked_sub(1), u.checked_add(1)) else { return 1.0 };
+            *l = a;
+            *u = b;
+            let (Some((t_lo, _)), Some((t_hi, _))) = (self.tsdf_voxel(lo), self.tsdf_voxel(hi)) else { return 1.0 };
+            *slot = t_hi - t_lo;
+        }
+        let n = Vec3::new(grad[0], grad[1], grad[2]);
+        match crate::geom::normalize3(&n, 1e-6) {
+            Some(u) => crate::geom::clamp(libm::fabsf(u.dot(d)), MIN_INCIDENCE_COSINE, 1.0),
+            None => 1.0,
         }
     }
 
