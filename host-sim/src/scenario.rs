@@ -225,6 +225,77 @@ impl Default for MapSection {
     }
 }
 
+/// `[faults]`: a fault profile for the mission's uplink (`host-sim/doc/faults.md`), the same keys as
+/// `--faults`: a rate per byte in [0, 1] for each kind (`bitflip`, `drop`, `duplicate`, `reorder`, `truncate`,
+/// `delay`, `stall`; `all` sets every kind first, the named ones then override it), `delay_us` (default 200 ms),
+/// `stall_us` (500 ms), `reorder_hold_us` (200 ms) and the injector's `seed` (0; a campaign's mission `s` uses
+/// `seed ^ s`).
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FaultsSection {
+    /// Every kind's rate per byte (before the named kinds).
+    pub all: Option<f64>,
+    /// Bit flips per byte.
+    pub bitflip: Option<f64>,
+    /// Lost frames per byte.
+    pub drop: Option<f64>,
+    /// Duplicated frames per byte.
+    pub duplicate: Option<f64>,
+    /// Reordered frames per byte.
+    pub reorder: Option<f64>,
+    /// Truncated frames per byte.
+    pub truncate: Option<f64>,
+    /// Delayed frames per byte.
+    pub delay: Option<f64>,
+    /// Stalls per byte.
+    pub stall: Option<f64>,
+    /// Hold of a delayed frame, microseconds.
+    pub delay_us: Option<u64>,
+    /// Length of a stall, microseconds.
+    pub stall_us: Option<u64>,
+    /// Longest hold of a frame waiting for one to swap with, microseconds.
+    pub reorder_hold_us: Option<u64>,
+    /// Seed of the injector.
+    pub seed: Option<u64>,
+}
+
+impl FaultsSection {
+    /// The injector's profile; errors name the field (`faults.KIND`) and the reason.
+    pub fn profile(&self) -> Result<crate::link::faults::FaultProfile, (String, String)> {
+        use crate::link::faults::{FaultKind, FaultProfile};
+        let mut p = FaultProfile::default();
+        let rate = |key: &str, r: f64| {
+            if (0.0..=1.0).contains(&r) {
+                Ok(r)
+            } else {
+                Err((format!("faults.{key}"), format!("a rate per byte must be in [0, 1], got {r}")))
+            }
+        };
+        if let Some(r) = self.all {
+            p.rates = [rate("all", r)?; 7];
+        }
+        for (i, kind) in FaultKind::ALL.iter().enumerate() {
+            let given = match kind {
+                FaultKind::BitFlip => self.bitflip,
+                FaultKind::Drop => self.drop,
+                FaultKind::Duplicate => self.duplicate,
+                FaultKind::Reorder => self.reorder,
+                FaultKind::Truncate => self.truncate,
+                FaultKind::Delay => self.delay,
+                FaultKind::Stall => self.stall,
+            };
+            if let (Some(r), Some(slot)) = (given, p.rates.get_mut(i)) {
+                *slot = rate(kind.name(), r)?;
+            }
+        }
+        p.delay_us = self.delay_us.unwrap_or(p.delay_us);
+        p.stall_us = self.stall_us.unwrap_or(p.stall_us);
+        p.reorder_hold_us = self.reorder_hold_us.unwrap_or(p.reorder_hold_us);
+        p.seed = self.seed.unwrap_or(p.seed);
+        Ok(p)
+    }
+}
+
 /// A parsed scenario file.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -261,6 +332,10 @@ pub struct Scenario {
     /// [`crate::mission::params::MissionSection`]).
     #[serde(default)]
     pub mission: crate::mission::params::MissionSection,
+    /// Link faults injected on the mission's uplink (`tetherbot mission`; `--faults` on the command line replaces
+    /// the whole section). Absent: a clean link.
+    #[serde(default)]
+    pub faults: Option<FaultsSection>,
     /// The file it came from (set by [`load`]).
     #[serde(skip)]
     pub file: PathBuf,
@@ -606,6 +681,9 @@ pub fn parse(text: &str, file: &Path) -> Result<Scenario, ScenarioError> {
     };
     let mut sc: Scenario = toml::from_str(text).map_err(syntax)?;
     sc.file = file.to_path_buf();
+    if let Some(Err((field, reason))) = sc.faults.as_ref().map(FaultsSection::profile) {
+        return Err(sc.err(&field, reason));
+    }
     let table: toml::Table = toml::from_str(text).map_err(syntax)?;
     for section in ["tether", "goal", "sensor", "map"] {
         if let Some(toml::Value::Table(t)) = table.get(section) {
@@ -680,6 +758,10 @@ position = [7.0, 0.0, 0.4]
             (CRATER.replace("root_anchor = [-5.0, 0.0, 8.0]", "root_anchor = [-5.0, 0.0, 3.0]"), "tether.root_anchor", "inside the terrain"),
             (format!("{CRATER}[sensor]\ndropout_probability = 1.5\n"), "sensor.dropout_probability", "[0, 1]"),
             (format!("{CRATER}[map]\nvoxel_size_m = 0.001\n"), "map.esdf_max_distance_m", "127 voxels"),
+            (format!("{CRATER}[faults]\ndrop = 1.5\n"), "faults.drop", "[0, 1]"),
+            (format!("{CRATER}[faults]\nall = nan\n"), "faults.all", "[0, 1]"),
+            (format!("{CRATER}[faults]\ndrops = 1e-4\n"), "(syntax)", "unknown field"),
+            (format!("{CRATER}[faults]\nseed = -1\n"), "(syntax)", "expected u64"),
             (
                 CRATER.replace("kind = \"crater_wall\"", "kind = \"terrain\"\n[world.terrain]\nfile = \"no/such.tif\""),
                 "world.terrain.file",
@@ -692,6 +774,18 @@ position = [7.0, 0.0, 0.4]
             assert!(e.reason.contains(reason), "{e}");
             assert!(e.to_string().contains("inline.toml"), "{e}");
         }
+    }
+
+    /// `[faults]` gives the same profile as `--faults` with the same keys: `all` first, named kinds over it.
+    #[test]
+    fn a_faults_section_is_the_command_lines_profile() {
+        use crate::link::faults::FaultProfile;
+        let text = format!("{CRATER}[faults]\nall = 1e-5\ndrop = 1e-3\nstall_us = 1000\nseed = 7\n");
+        let sc = check_text(&text).unwrap();
+        let p = sc.faults.as_ref().unwrap().profile().unwrap();
+        assert_eq!(p, FaultProfile::parse("all=1e-5,drop=1e-3,stall_us=1000,seed=7").unwrap());
+        assert!(p.any());
+        assert_eq!(check_text(CRATER).unwrap().faults, None);
     }
 
     const HIRISE: &str = r#"

@@ -92,3 +92,31 @@ fn record_replay_inspect_export_and_mismatch_exit_codes() {
     assert_eq!(code, 2, "{out}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A scenario's `[faults]` section faults the mission's uplink as `--faults` does (the faults are in the field log
+/// and accounted for); `--faults none` replaces it with a clean link.
+#[test]
+fn a_scenarios_faults_section_faults_the_mission_and_the_command_line_replaces_it() {
+    let dir = std::env::temp_dir().join(format!("tetherbot-cli-faults-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let base = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/mission_faults.toml");
+    let text = std::fs::read_to_string(&base).unwrap();
+    // a built-in world: the copy needs no terrain file beside it
+    let scen = dir.join("faulty.toml");
+    std::fs::write(&scen, format!("{text}\n[faults]\ndrop = 1e-4\nduplicate = 1e-4\nseed = 3\n")).unwrap();
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let (code, out) = tetherbot(&["mission", &s(&scen), "--quiet", "--out", &s(&dir.join("a")), "--created-at-ms", "0"]);
+    assert_eq!(code, 0, "{out}");
+    assert!(out.contains("faults drop") && out.contains("faults duplicate"), "{out}");
+    assert!(out.contains("fault accounting balanced"), "{out}");
+    let log = fieldlog::parse(&std::fs::read(dir.join("a/mission_faults.fieldlog")).unwrap()).unwrap();
+    assert!(!log.faults.is_empty(), "no fault records in the log");
+
+    let (code, out) =
+        tetherbot(&["mission", &s(&scen), "--quiet", "--faults", "none", "--out", &s(&dir.join("b")), "--created-at-ms", "0"]);
+    assert_eq!(code, 0, "{out}");
+    assert!(!out.contains("injected") && !out.contains("fault accounting"), "{out}");
+    let log = fieldlog::parse(&std::fs::read(dir.join("b/mission_faults.fieldlog")).unwrap()).unwrap();
+    assert!(log.faults.is_empty(), "{} fault records with --faults none", log.faults.len());
+    std::fs::remove_dir_all(&dir).ok();
+}

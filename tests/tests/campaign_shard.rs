@@ -233,6 +233,7 @@ fn mission_args(out: &Path, seeds: u32, shard: Option<Shard>) -> MissionArgs {
         fault_kinds: Vec::new(),
         charge_host_time: false,
         reset_after_motions: None,
+        reset_when_wrapped: false,
     }
 }
 

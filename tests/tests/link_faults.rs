@@ -207,7 +207,7 @@ fn a_mission_through_every_fault_kind_arrives_and_accounts_for_each_fault() {
     use host_sim::mission::run::{run_mission, MissionOptions, Verdict};
     let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios/mission_faults.toml");
     let sc = host_sim::scenario::load(&p).unwrap_or_else(|e| panic!("{e}"));
-    let opts = MissionOptions { seed: 11, tracking: firmware::protocol::Tracking::ClosedLoop, noiseless: false, live: false, reset_after_motions: None };
+    let opts = MissionOptions { seed: 11, tracking: firmware::protocol::Tracking::ClosedLoop, noiseless: false, live: false, reset: None };
     let profile = FaultProfile::parse("all=1e-4,seed=12").unwrap();
     let mut link = FaultLink::new(host_sim::mission::link::mission_link(&sc).unwrap(), profile);
     let rep = run_mission(&mut link, &sc, &opts).unwrap();

@@ -37,7 +37,7 @@ fn check_truth(rep: &MissionReport) {
 #[test]
 fn crater_wall_mission_arrives_and_the_truth_agrees_with_its_end() {
     let sc = load("mission_crater_rocks.toml");
-    let opts = MissionOptions { seed: 7, tracking: Tracking::ClosedLoop, noiseless: false, live: false, reset_after_motions: None };
+    let opts = MissionOptions { seed: 7, tracking: Tracking::ClosedLoop, noiseless: false, live: false, reset: None };
     let rep = run_mission(mission_link(&sc).expect("link"), &sc, &opts).expect("mission runs");
     println!("{:?} after {:.2} m, {} motions, {} plans", rep.verdict, rep.distance_m, rep.motions, rep.plans.len());
     check_truth(&rep);
@@ -54,7 +54,7 @@ fn crater_wall_mission_arrives_and_the_truth_agrees_with_its_end() {
 #[test]
 fn a_mission_log_replays_byte_for_byte() {
     let sc = load("mission_corridor_rock.toml");
-    let opts = MissionOptions { seed: 11, tracking: Tracking::ClosedLoop, noiseless: false, live: false, reset_after_motions: None };
+    let opts = MissionOptions { seed: 11, tracking: Tracking::ClosedLoop, noiseless: false, live: false, reset: None };
     // the CLI writes this as JSON; `replay` itself only needs the records (the scenario's map configuration
     // travels in the mission's `Configure`)
     let config = RunConfig { scenario: sc.name.clone(), link: "inproc".into(), step_us: 1000 };
@@ -85,7 +85,7 @@ fn a_motion_report_for_an_unknown_command_is_refused_and_counted() {
     let sc = load("mission_crater_rocks.toml");
     let mut s = HostSession::new(mission_link(&sc).expect("link"));
     s.recv().expect("boot");
-    let opts = MissionOptions { seed: 1, tracking: Tracking::ClosedLoop, noiseless: true, live: false, reset_after_motions: None };
+    let opts = MissionOptions { seed: 1, tracking: Tracking::ClosedLoop, noiseless: true, live: false, reset: None };
     s.exchange(&Message::Configure(host_sim::mission::run::mission_configure(&sc, &opts))).expect("configure");
     let before = s.telemetry().expect("telemetry");
     let report = MotionReport {

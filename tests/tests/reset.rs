@@ -2,22 +2,20 @@
 //! `Reset`, recovers the anchor history from its retained memory (`firmware::nav::retained`), and continues when the
 //! ground configures it again; the reset is in the field log and the replay resets at the same point.
 //!
-//! The scenario is `mission_snag.toml` (a hidden rock beside the descent line snags the tether): after 25 motions
-//! the true tether touches the terrain and the flight software tracks two anchors, so a flight software that came
-//! back with a straight tether would be wrong in a way the checks below see. The precondition is asserted, not
-//! assumed.
+//! The scenario is `mission_snag.toml` (a hidden rock beside the descent line snags the tether); the reset comes
+//! after the first motion that leaves the tether wrapped (the true tether touches the terrain and the flight
+//! software tracks an anchor besides the root), so a flight software that came back with a straight tether would be
+//! wrong in a way the checks below see. The precondition is asserted, not assumed.
 
 use firmware::protocol::StopReason;
 use host_sim::fieldlog;
 use host_sim::link::inproc::{InProcLink, DEFAULT_STEP_US};
 use host_sim::link::recording::{RecordingLink, RESET_RECORD};
 use host_sim::link::FlightLink;
-use host_sim::mission::run::{run_mission, MissionOptions, Verdict};
+use host_sim::mission::run::{run_mission, MissionOptions, ResetAt, Verdict};
 use host_sim::replay::{replay, ReplayOutcome};
 
-const RESET_AFTER: u32 = 25;
-
-/// `mission_snag.toml`, seed 1, reset after `RESET_AFTER` motions.
+/// `mission_snag.toml`, seed 1, reset once the tether is wrapped.
 fn snag_with_reset() -> (host_sim::scenario::Scenario, MissionOptions) {
     let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios/mission_snag.toml");
     let sc = host_sim::scenario::load(&p).unwrap_or_else(|e| panic!("{e}"));
@@ -26,7 +24,7 @@ fn snag_with_reset() -> (host_sim::scenario::Scenario, MissionOptions) {
         tracking: firmware::protocol::Tracking::ClosedLoop,
         noiseless: false,
         live: false,
-        reset_after_motions: Some(RESET_AFTER),
+        reset: Some(ResetAt::Wrapped),
     };
     (sc, opts)
 }
@@ -50,13 +48,12 @@ fn a_reset_mid_descent_recovers_the_wrapped_tether_continues_and_replays() {
     assert_eq!(flight.resets(), 1);
 
     let [r] = rep.resets.as_slice() else { panic!("one reset expected: {:?}", rep.resets) };
-    assert_eq!(r.after_motions, RESET_AFTER);
     // the precondition: the tether was wrapped, by the simulator's own tether and by the flight software's
     assert!(r.true_contacts >= 1 && r.anchors_before >= 2, "not a wrapped tether at the reset: {r:?}");
     assert_eq!(r.reason, "Reset");
     assert_eq!(r.anchors_recovered, r.anchors_before, "the anchor history did not come back: {r:?}");
     // it continued: more motions after the reset, and an end that is an arrival or a safe stop with a reason
-    assert!(rep.motions > RESET_AFTER, "nothing driven after the reset: {} motions", rep.motions);
+    assert!(rep.motions > r.after_motions, "nothing driven after the reset: {} motions", rep.motions);
     match rep.verdict {
         Verdict::Arrived => {}
         Verdict::SafeStop(reason) => assert!(

@@ -39,7 +39,7 @@ fn short_soak(link: impl FlightLink, sc: &Scenario) -> Vec<u8> {
         tracking: firmware::protocol::Tracking::ClosedLoop,
         noiseless: false,
         live: false,
-        reset_after_motions: None,
+        reset: None,
     };
     run_mission_from(&mut rec, sc, &opts, FIRST_SEQ).unwrap_or_else(|e| panic!("{e}"));
     rec.finish().expect("finish").1
@@ -174,7 +174,7 @@ fn soak_the_default_mission_on_the_board() {
         tracking: firmware::protocol::Tracking::ClosedLoop,
         noiseless: false,
         live: false,
-        reset_after_motions: None,
+        reset: None,
     };
     let rep = run_mission_from(&mut rec, &sc, &opts, host_sim::soak::DEFAULT_FIRST_SEQ)
         .unwrap_or_else(|e| panic!("{e}"));

@@ -196,6 +196,9 @@ pub fn unused_scenario_fields(sc: &crate::scenario::Scenario) -> Vec<String> {
             out.push(format!("{f} does not apply to campaign: the planning map holds exact distances (truncation 3 voxels, ESDF cap 1.5 m) (map-check uses it)"));
         }
     }
+    if sc.faults.is_some() {
+        out.push("[faults] does not apply to campaign: it plans on the world with no link (tetherbot mission uses it)".to_string());
+    }
     if sc.gives("goal.tolerance_m") {
         out.push(format!(
             "goal.tolerance_m ({}) does not apply to campaign: ABIT* plans to the goal state itself (OMPL's GoalState sample), so the radius does not change the search",

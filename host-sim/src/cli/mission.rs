@@ -35,7 +35,7 @@ use crate::mission::campaign::{
     CampaignFile, CampaignIdentity, CampaignTiming, MissionRow, MissionTiming,
 };
 use crate::mcap_export::SceneLink;
-use crate::mission::run::{run_mission, MissionOptions, MissionReport, Verdict};
+use crate::mission::run::{run_mission, MissionOptions, MissionReport, ResetAt, Verdict};
 use crate::replay::RunConfig;
 use crate::scenario::{self, Scenario};
 use crate::shard::{self, RunTiming, Shard, ShardFile};
@@ -133,7 +133,8 @@ pub struct MissionArgs {
     #[arg(long)]
     pub quiet: bool,
     /// Fault the uplink with this profile: `KIND=RATE,...` per byte (kinds bitflip, drop, duplicate, reorder,
-    /// truncate, delay, stall; `all=RATE`), `delay_us=`, `stall_us=`, `reorder_hold_us=`, `seed=`.
+    /// truncate, delay, stall; `all=RATE`), `delay_us=`, `stall_us=`, `reorder_hold_us=`, `seed=`. Replaces the
+    /// scenario's `[faults]` section (`--faults none`: a clean link whatever the scenario says).
     #[arg(long, value_name = "PROFILE", value_parser = FaultProfile::parse)]
     pub faults: Option<FaultProfile>,
     /// Run the fault campaign: each of --fault-rates for each of --fault-kinds, --seeds missions each (in-process);
@@ -152,8 +153,13 @@ pub struct MissionArgs {
     pub charge_host_time: bool,
     /// Reset the flight computer once, after this many motions (issue 24 item 2): it must come back safe, recover
     /// its tether state from retained memory and continue when the ground configures it again. One mission only.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", conflicts_with = "reset_when_wrapped")]
     pub reset_after_motions: Option<u32>,
+    /// Reset the flight computer once, after the first motion that leaves the tether wrapped (the simulator's true
+    /// tether touches the terrain and the flight software tracks an anchor besides the root); no reset if it never
+    /// wraps. One mission only.
+    #[arg(long)]
+    pub reset_when_wrapped: bool,
     /// Serve the running mission to the Foxglove app over the Foxglove SDK's WebSocket server at HOST:PORT
     /// (default 127.0.0.1:8765; port 0 picks a free one); one seed only. The line `live view: ws://HOST:PORT`
     /// on stdout names the address.
@@ -275,7 +281,11 @@ fn one(args: &MissionArgs, sc: &Scenario) -> Result<(MissionReport, Vec<PathBuf>
         tracking: args.tracking.into(),
         noiseless: false,
         live: !args.quiet,
-        reset_after_motions: args.reset_after_motions,
+        reset: match (args.reset_after_motions, args.reset_when_wrapped) {
+            (Some(n), _) => Some(ResetAt::Motions(n)),
+            (None, true) => Some(ResetAt::Wrapped),
+            (None, false) => None,
+        },
     };
     sc.map_config()?;
     let config = RunConfig {
@@ -327,7 +337,7 @@ fn one(args: &MissionArgs, sc: &Scenario) -> Result<(MissionReport, Vec<PathBuf>
         };
         let rec = RecordingLink::new(link, writer);
         // The recorder inside the injector: the log holds what the flight software received, and the faults.
-        let Some(profile) = &args.faults else {
+        let Some(profile) = args.faults.as_ref().filter(|p| p.any()) else {
             let mut rec = rec;
             let rep = run_mission(&mut rec, sc, &opts)?;
             rec.finish()?;
@@ -469,7 +479,7 @@ fn campaign(args: &MissionArgs, sc: &Scenario) -> Result<bool, String> {
         &seeds,
         args.tracking.into(),
         threads,
-        args.faults.as_ref(),
+        args.faults.as_ref().filter(|p| p.any()),
         args.charge_host_time,
         &tick,
     );
@@ -688,12 +698,19 @@ pub fn main(args: &MissionArgs) -> ExitCode {
         Ok(s) => s,
         Err(e) => return super::fail(e),
     };
+    // the scenario's `[faults]` unless --faults replaces it (checked when the scenario was parsed)
+    let mut args = args.clone();
+    if args.faults.is_none() {
+        args.faults = sc.faults.as_ref().and_then(|f| f.profile().ok());
+    }
+    let args = &args;
     let bad = |v: &Verdict| matches!(v, Verdict::Fell | Verdict::FalseArrival);
     if args.live.is_some() && (args.seeds > 1 || args.shard.is_some()) {
         return super::fail("--live shows one mission: drop --seeds / --shard");
     }
-    if args.reset_after_motions.is_some() && (args.seeds > 1 || args.shard.is_some() || args.fault_campaign) {
-        return super::fail("--reset-after-motions resets one mission: drop --seeds / --shard / --fault-campaign");
+    let resets = args.reset_after_motions.is_some() || args.reset_when_wrapped;
+    if resets && (args.seeds > 1 || args.shard.is_some() || args.fault_campaign) {
+        return super::fail("a reset (--reset-after-motions / --reset-when-wrapped) is for one mission: drop --seeds / --shard / --fault-campaign");
     }
     if args.fault_campaign {
         return match fault_campaign(args, &sc) {

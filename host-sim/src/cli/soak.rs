@@ -59,7 +59,7 @@ fn soak(args: &SoakArgs) -> Result<bool, Box<dyn core::error::Error>> {
         tracking: firmware::protocol::Tracking::ClosedLoop,
         noiseless: false,
         live: false,
-        reset_after_motions: None,
+        reset: None,
     };
     let link_name = match args.link {
         LinkKind::Inproc => "inproc",

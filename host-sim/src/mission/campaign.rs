@@ -64,7 +64,7 @@ pub fn run_one(
         tracking,
         noiseless: false,
         live: false,
-        reset_after_motions: None,
+        reset: None,
     };
     let mut link = super::link::mission_link(sc)?;
     link.charge_host_time(charge_host_time);

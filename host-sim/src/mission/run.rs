@@ -241,9 +241,20 @@ pub struct MissionOptions {
     pub noiseless: bool,
     /// Print a live progress line on stderr.
     pub live: bool,
-    /// Reset the flight computer once, right after the motion report of this many executed motions has been
-    /// answered (`tetherbot mission --reset-after-motions N`; issue 24 item 2). `None`: no reset.
-    pub reset_after_motions: Option<u32>,
+    /// Reset the flight computer once during the mission (issue 24 item 2). `None`: no reset.
+    pub reset: Option<ResetAt>,
+}
+
+/// When a mission resets the flight computer (`tetherbot mission --reset-after-motions N | --reset-when-wrapped`).
+/// The reset comes right after a motion report has been answered.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ResetAt {
+    /// After this many executed motions.
+    Motions(u32),
+    /// After the first motion that leaves the tether wrapped: the simulator's true tether touches the terrain and
+    /// the flight software's last status tracks an anchor besides the root. A mission whose tether never wraps is
+    /// not reset.
+    Wrapped,
 }
 
 /// Why a mission could not run (as opposed to how it ended).
@@ -355,7 +366,7 @@ struct Sim<'a, L: FlightLink> {
     /// The configuration and goal sent, sent again after a reset.
     cfg: Configure,
     goal: Option<GoalRequest>,
-    reset_after_motions: Option<u32>,
+    reset: Option<ResetAt>,
     /// The flight software booted `Safe` with reason `Reset`: the ground configures it and sends the goal again.
     recovery_due: bool,
 }
@@ -676,7 +687,15 @@ impl<L: FlightLink> Sim<'_, L> {
         };
         self.s.send(&Message::MotionReport(report))?;
         self.recv()?;
-        if self.reset_after_motions == Some(self.rep.motions) {
+        let reset_due = match self.reset {
+            Some(ResetAt::Motions(n)) => n == self.rep.motions,
+            Some(ResetAt::Wrapped) => {
+                !self.rover.tether.contacts.is_empty() && self.status.is_some_and(|s| s.anchors >= 2)
+            }
+            None => false,
+        };
+        if reset_due {
+            self.reset = None;
             self.reset_flight()?;
             return Ok(true);
         }
@@ -802,7 +821,7 @@ pub fn run_mission_from(
         plan_host_s: 0.0,
         cfg,
         goal: None,
-        reset_after_motions: opts.reset_after_motions,
+        reset: opts.reset,
         recovery_due: false,
     };
     sim.recv()?;
