@@ -929,7 +929,7 @@ impl<L: FlightLink> FlightLink for SceneLink<'_, L> {
     fn end_faults(&mut self) -> Result<(), LinkError> {
         self.inner.end_faults()
     }
-    fn reset_flight(&mut self) -> Result<(), LinkError> {
-        self.inner.reset_flight()
+    fn reset_flight(&mut self, cause: crate::link::ResetCause) -> Result<(), LinkError> {
+        self.inner.reset_flight(cause)
     }
 }

@@ -164,12 +164,12 @@ pub fn replay(log: &FieldLog, link: &mut impl FlightLink) -> Result<ReplayOutcom
     let mut resets = log
         .faults
         .iter()
-        .filter(|f| f.bytes == crate::link::recording::RESET_RECORD)
+        .filter_map(|f| crate::link::ResetCause::from_record(&f.bytes).map(|c| (f, c)))
         .peekable();
     for (i, r) in log.records.iter().enumerate() {
-        while let Some(reset) = resets.next_if(|f| f.offset < r.offset) {
+        while let Some((reset, cause)) = resets.next_if(|(f, _)| f.offset < r.offset) {
             got.extend(link.advance_to(reset.t_us)?);
-            link.reset_flight()?;
+            link.reset_flight(cause)?;
         }
         end_t = end_t.max(r.t_us);
         match r.direction {
@@ -184,9 +184,9 @@ pub fn replay(log: &FieldLog, link: &mut impl FlightLink) -> Result<ReplayOutcom
             }
         }
     }
-    for reset in resets {
+    for (reset, cause) in resets {
         got.extend(link.advance_to(reset.t_us)?);
-        link.reset_flight()?;
+        link.reset_flight(cause)?;
     }
     got.extend(link.advance_to(end_t)?);
     let first_diff = expected

@@ -234,6 +234,7 @@ fn mission_args(out: &Path, seeds: u32, shard: Option<Shard>) -> MissionArgs {
         charge_host_time: false,
         reset_after_motions: None,
         reset_when_wrapped: false,
+        watchdog_bite_in_motion: None,
     }
 }
 

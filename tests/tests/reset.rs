@@ -11,7 +11,7 @@ use firmware::protocol::StopReason;
 use host_sim::fieldlog;
 use host_sim::link::inproc::{InProcLink, DEFAULT_STEP_US};
 use host_sim::link::recording::{RecordingLink, RESET_RECORD};
-use host_sim::link::FlightLink;
+use host_sim::link::{FlightLink, ResetCause};
 use host_sim::mission::run::{run_mission, MissionOptions, ResetAt, Verdict};
 use host_sim::replay::{replay, ReplayOutcome};
 
@@ -75,10 +75,42 @@ fn a_reset_mid_descent_recovers_the_wrapped_tether_continues_and_replays() {
     assert!(matches!(out, ReplayOutcome::Differs { .. }), "{out:?}");
 }
 
+/// The watchdog bites in the middle of a motion (`ResetAt::BiteInMotion`): the rover stops where it is, the
+/// motion's report is lost, and the rebooted software recovers the checkpoint from before the motion; the ground's
+/// scan gives it the pose the rover really has, and the mission goes on to an arrival or a safe stop with a reason.
+/// The log names the watchdog, and its replay bites at the same point.
+#[test]
+fn a_watchdog_bite_mid_motion_recovers_the_tether_continues_and_replays() {
+    let (sc, mut opts) = snag_with_reset();
+    opts.reset = Some(ResetAt::BiteInMotion(6));
+    let writer = fieldlog::Writer::new(Vec::new(), &header(&sc.name, "inproc")).unwrap();
+    let mut link = RecordingLink::new(host_sim::mission::link::mission_link(&sc).unwrap(), writer);
+    let rep = run_mission(&mut link, &sc, &opts).unwrap();
+    let (flight, bytes) = link.finish().unwrap();
+    assert_eq!(flight.resets(), 1);
+    let [r] = rep.resets.as_slice() else { panic!("one reset expected: {:?}", rep.resets) };
+    assert_eq!(r.after_motions, 7, "the bite ends the seventh motion: {r:?}");
+    assert_eq!(r.reason, "Reset");
+    assert_eq!(r.anchors_recovered, r.anchors_before, "the anchor history did not come back: {r:?}");
+    assert!(rep.motions > r.after_motions, "nothing driven after the bite: {} motions", rep.motions);
+    match rep.verdict {
+        Verdict::Arrived => {}
+        Verdict::SafeStop(reason) => assert!(
+            !matches!(reason, StopReason::Reset | StopReason::TetherStateLost | StopReason::None),
+            "{reason:?}"
+        ),
+        v => panic!("after the bite the mission ended {v:?}"),
+    }
+    let log = fieldlog::parse(&bytes).unwrap();
+    assert_eq!(log.faults.iter().filter(|f| f.bytes == ResetCause::Watchdog.record()).count(), 1);
+    let out = replay(&log, &mut InProcLink::new(DEFAULT_STEP_US)).unwrap();
+    assert!(matches!(out, ReplayOutcome::Identical { .. }), "{out:?}");
+}
+
 /// The reboot path on a link: boot, `Configure`, a tether reading (the flight software checkpoints root and payout),
-/// a reset, the boot status, `Configure` again and a telemetry request. Returns the flight -> host bytes and the
-/// mission statuses seen after the reset.
-fn reboot_session<L: FlightLink>(link: L) -> (Vec<u8>, Vec<firmware::protocol::MissionStatus>, u32) {
+/// a reset by `cause`, the boot status, `Configure` again and a telemetry request. Returns the link, the flight ->
+/// host bytes and the mission statuses seen after the reset.
+fn reboot_session<L: FlightLink>(link: L, cause: ResetCause) -> (L, Vec<u8>, Vec<firmware::protocol::MissionStatus>, u32) {
     use firmware::protocol::{Message, TetherReading};
     use host_sim::session::HostSession;
     let header = header("reboot", link.name());
@@ -89,7 +121,7 @@ fn reboot_session<L: FlightLink>(link: L) -> (Vec<u8>, Vec<firmware::protocol::M
     let reading = TetherReading { time_us: s.link().now_us(), payout_m: 3.5, tension_n: 20.0, boom_angle_rad: 0.0 };
     s.send(&Message::TetherReading(reading)).unwrap();
     s.recv().unwrap();
-    s.link_mut().reset_flight().unwrap();
+    s.link_mut().reset_flight(cause).unwrap();
     let mut after = Vec::new();
     let mut keep = |msgs: Vec<Message>| {
         after.extend(msgs.into_iter().filter_map(|m| if let Message::MissionStatus(st) = m { Some(st) } else { None }))
@@ -99,34 +131,44 @@ fn reboot_session<L: FlightLink>(link: L) -> (Vec<u8>, Vec<firmware::protocol::M
     keep(s.recv().unwrap());
     let t = s.telemetry().unwrap();
     let resyncs = t.seq_gaps + t.seq_resyncs;
-    let (_, bytes) = s.into_link().finish().unwrap();
+    let (link, bytes) = s.into_link().finish().unwrap();
     let log = fieldlog::parse(&bytes).unwrap();
+    assert_eq!(log.faults.iter().filter(|f| f.bytes == cause.record()).count(), 1, "the reset's record");
     let out = log
         .records
         .iter()
         .filter(|r| r.direction == fieldlog::Direction::FlightToHost)
         .flat_map(|r| r.bytes.iter().copied())
         .collect();
-    (out, after, resyncs)
+    (link, out, after, resyncs)
 }
 
-/// On the emulated board: the reboot command resets the Cortex-M7 (SYSRESETREQ), the checkpoint in `.uninit`
-/// survives it, the rebooted firmware reports `Safe` (`Reset`) and its output equals the in-process flight
-/// software's byte for byte. (The whole mission with a wrapped tether on the board is the ignored test below.)
+/// On the emulated board, by both causes: the reboot command resets the Cortex-M7 (SYSRESETREQ); a watchdog bite
+/// (the flight loop stops kicking) lets the CMSDK watchdog's interrupt and then its reset output reboot it. Either
+/// way the checkpoint in `.uninit` survives, the rebooted firmware reports `Safe` (`Reset`) and its output equals
+/// the in-process flight software's byte for byte. (The whole mission with a wrapped tether on the board is the
+/// ignored test below.)
 #[test]
-fn the_board_reboots_keeps_its_tether_checkpoint_and_answers_as_in_process() {
+fn the_board_reboots_by_command_and_by_watchdog_keeps_its_tether_checkpoint_and_answers_as_in_process() {
     let Some(elf) = host_sim::qemu::board_for_tests("reset on the board").unwrap_or_else(|e| panic!("{e}")) else {
         return;
     };
-    let (inproc, inproc_after, inproc_resyncs) = reboot_session(InProcLink::new(DEFAULT_STEP_US));
-    let board_link = host_sim::link::qemu::QemuLink::start(&elf, DEFAULT_STEP_US).unwrap_or_else(|e| panic!("{e}"));
-    let (board, board_after, board_resyncs) = reboot_session(board_link);
-    let first = inproc_after.first().expect("a mission status after the reset");
-    assert_eq!((first.state, first.reason, first.anchors), (firmware::protocol::MissionState::Safe, StopReason::Reset, 1));
-    // the host's numbering went on across the reset: the rebooted software saw the frames before as a gap
-    assert!(inproc_resyncs > 0, "the rebooted software did not see the host's numbering jump");
-    assert_eq!((board_after, board_resyncs), (inproc_after, inproc_resyncs));
-    assert!(board == inproc, "the board's output differs from the in-process flight software's ({} vs {} bytes)", board.len(), inproc.len());
+    for cause in [ResetCause::Command, ResetCause::Watchdog] {
+        let (_, inproc, inproc_after, inproc_resyncs) = reboot_session(InProcLink::new(DEFAULT_STEP_US), cause);
+        let board_link = host_sim::link::qemu::QemuLink::start(&elf, DEFAULT_STEP_US).unwrap_or_else(|e| panic!("{e}"));
+        let (board_link, board, board_after, board_resyncs) = reboot_session(board_link, cause);
+        let first = inproc_after.first().expect("a mission status after the reset");
+        assert_eq!((first.state, first.reason, first.anchors), (firmware::protocol::MissionState::Safe, StopReason::Reset, 1));
+        // the host's numbering went on across the reset: the rebooted software saw the frames before as a gap
+        assert!(inproc_resyncs > 0, "the rebooted software did not see the host's numbering jump");
+        assert_eq!((board_after, board_resyncs), (inproc_after, inproc_resyncs), "{cause:?}");
+        assert!(board == inproc, "{cause:?}: the board's output differs from the in-process flight software's ({} vs {} bytes)", board.len(), inproc.len());
+        let exit = board_link.quit(core::time::Duration::from_secs(20)).unwrap_or_else(|e| panic!("{e}"));
+        let text = exit.output.both();
+        let bit = text.contains("board: WATCHDOG expired: probe lets the reset output act")
+            && text.contains("board: REBOOTED by the watchdog's reset output");
+        assert_eq!(bit, cause == ResetCause::Watchdog, "{cause:?}, board output: {text}");
+    }
 }
 
 /// The whole reset-mid-descent mission on the emulated board (about 13 minutes of host time on a loaded 2-core

@@ -85,9 +85,10 @@ pub fn main(args: &InspectArgs) -> ExitCode {
                     }
                     *by_kind.entry(e.kind.name()).or_default() += 1;
                 }
-                None if f.bytes == crate::link::recording::RESET_RECORD => {
+                None if crate::link::ResetCause::from_record(&f.bytes).is_some() => {
                     if args.frames {
-                        println!("  reset of the flight computer at t {:.6} s", f.t_us as f64 / 1e6);
+                        let how = String::from_utf8_lossy(&f.bytes);
+                        println!("  {how} at t {:.6} s", f.t_us as f64 / 1e6);
                     }
                     *by_kind.entry("flight reset").or_default() += 1;
                 }

@@ -158,8 +158,13 @@ pub struct MissionArgs {
     /// Reset the flight computer once, after the first motion that leaves the tether wrapped (the simulator's true
     /// tether touches the terrain and the flight software tracks an anchor besides the root); no reset if it never
     /// wraps. One mission only.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "watchdog_bite_in_motion")]
     pub reset_when_wrapped: bool,
+    /// The flight computer's watchdog bites once, during the motion after N executed motions (the rover stops
+    /// where it is, the motion's report is lost): on the emulated board the CMSDK watchdog reboots it; in-process
+    /// the flight software is reset. One mission only.
+    #[arg(long, value_name = "N", conflicts_with = "reset_after_motions")]
+    pub watchdog_bite_in_motion: Option<u32>,
     /// Serve the running mission to the Foxglove app over the Foxglove SDK's WebSocket server at HOST:PORT
     /// (default 127.0.0.1:8765; port 0 picks a free one); one seed only. The line `live view: ws://HOST:PORT`
     /// on stdout names the address.
@@ -261,8 +266,8 @@ pub fn summary(rep: &MissionReport) -> String {
     }
     for r in &rep.resets {
         s.push_str(&format!(
-            "  reset at t {:.1} s after {} motions: {} anchors tracked before, {} recovered ({}); true tether {} contacts\n",
-            r.t_s, r.after_motions, r.anchors_before, r.anchors_recovered, r.reason, r.true_contacts
+            "  reset ({}) at t {:.1} s after {} motions: {} anchors tracked before, {} recovered ({}); true tether {} contacts\n",
+            r.cause, r.t_s, r.after_motions, r.anchors_before, r.anchors_recovered, r.reason, r.true_contacts
         ));
     }
     s.push_str(&format!(
@@ -281,10 +286,11 @@ fn one(args: &MissionArgs, sc: &Scenario) -> Result<(MissionReport, Vec<PathBuf>
         tracking: args.tracking.into(),
         noiseless: false,
         live: !args.quiet,
-        reset: match (args.reset_after_motions, args.reset_when_wrapped) {
-            (Some(n), _) => Some(ResetAt::Motions(n)),
-            (None, true) => Some(ResetAt::Wrapped),
-            (None, false) => None,
+        reset: match (args.reset_after_motions, args.reset_when_wrapped, args.watchdog_bite_in_motion) {
+            (Some(n), _, _) => Some(ResetAt::Motions(n)),
+            (None, true, _) => Some(ResetAt::Wrapped),
+            (None, false, Some(n)) => Some(ResetAt::BiteInMotion(n)),
+            (None, false, None) => None,
         },
     };
     sc.map_config()?;
@@ -708,9 +714,9 @@ pub fn main(args: &MissionArgs) -> ExitCode {
     if args.live.is_some() && (args.seeds > 1 || args.shard.is_some()) {
         return super::fail("--live shows one mission: drop --seeds / --shard");
     }
-    let resets = args.reset_after_motions.is_some() || args.reset_when_wrapped;
+    let resets = args.reset_after_motions.is_some() || args.reset_when_wrapped || args.watchdog_bite_in_motion.is_some();
     if resets && (args.seeds > 1 || args.shard.is_some() || args.fault_campaign) {
-        return super::fail("a reset (--reset-after-motions / --reset-when-wrapped) is for one mission: drop --seeds / --shard / --fault-campaign");
+        return super::fail("a reset (--reset-after-motions / --reset-when-wrapped / --watchdog-bite-in-motion) is for one mission: drop --seeds / --shard / --fault-campaign");
     }
     if args.fault_campaign {
         return match fault_campaign(args, &sc) {

@@ -773,9 +773,9 @@ impl<L: FlightLink> FlightLink for FaultLink<L> {
         self.inner.end_faults()
     }
 
-    fn reset_flight(&mut self) -> Result<(), LinkError> {
+    fn reset_flight(&mut self, cause: super::ResetCause) -> Result<(), LinkError> {
         // frames held on the way (delayed, stalled, reordered) are in the radio path, not the flight computer:
         // they still arrive, at the rebooted software
-        self.inner.reset_flight()
+        self.inner.reset_flight(cause)
     }
 }

@@ -261,7 +261,8 @@ impl<A: Autonomy> FlightLink for InProcLink<A> {
         Ok(out)
     }
 
-    fn reset_flight(&mut self) -> Result<(), LinkError> {
+    /// Both causes reboot the executive the same way: the in-process flight software has no watchdog to bite.
+    fn reset_flight(&mut self, _cause: super::ResetCause) -> Result<(), LinkError> {
         let rebuild = self.rebuild.ok_or(LinkError::Unsupported("reset a flight software it was handed"))?;
         // bytes on the way either side are lost with the executive's queues; the simulated time goes on
         self.exec = boot(rebuild(), self.last_now(), &self.retained);

@@ -46,6 +46,32 @@ impl core::fmt::Display for LinkError {
 
 impl core::error::Error for LinkError {}
 
+/// How the flight computer is reset ([`FlightLink::reset_flight`]; issue 24 item 2). Either way it loses RAM and
+/// keeps its retained block; the field log records which (`recording::RESET_RECORD`, `WATCHDOG_RESET_RECORD`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ResetCause {
+    /// A reset command (on the board: the control port's reboot, SYSRESETREQ), between executive steps.
+    Command,
+    /// The watchdog bites: the flight loop stops kicking it. On the board the CMSDK watchdog's interrupt, then its
+    /// reset output, reboot the Cortex-M7; in-process there is no watchdog and the effect is a reset.
+    Watchdog,
+}
+
+impl ResetCause {
+    /// The payload of its fault record in a field log.
+    pub fn record(self) -> &'static [u8] {
+        match self {
+            ResetCause::Command => recording::RESET_RECORD,
+            ResetCause::Watchdog => recording::WATCHDOG_RESET_RECORD,
+        }
+    }
+
+    /// The cause a fault record's payload names, if it is a reset record.
+    pub fn from_record(bytes: &[u8]) -> Option<Self> {
+        [ResetCause::Command, ResetCause::Watchdog].into_iter().find(|c| c.record() == bytes)
+    }
+}
+
 /// A byte link to a running flight software, with the link's own notion of time.
 ///
 /// Time: every link has a clock in microseconds (`now_us`). In-process it is simulated and advances only inside
@@ -73,9 +99,9 @@ pub trait FlightLink {
     }
     /// Resets the flight computer now, as its watchdog or a reset command would (issue 24 item 2): everything in
     /// flight on the link is lost, the flight software boots again and recovers what its retained memory kept
-    /// (`firmware::nav::retained`); link time goes on. A recorder writes the reset into the field log, so the replay
-    /// resets at the same point. Default: unsupported.
-    fn reset_flight(&mut self) -> Result<(), LinkError> {
+    /// (`firmware::nav::retained`); link time goes on. A recorder writes the reset and its cause into the field
+    /// log, so the replay resets at the same point. Default: unsupported.
+    fn reset_flight(&mut self, _cause: ResetCause) -> Result<(), LinkError> {
         Err(LinkError::Unsupported("reset the flight computer"))
     }
 }
@@ -102,7 +128,7 @@ impl<T: FlightLink + ?Sized> FlightLink for &mut T {
     fn end_faults(&mut self) -> Result<(), LinkError> {
         (**self).end_faults()
     }
-    fn reset_flight(&mut self) -> Result<(), LinkError> {
-        (**self).reset_flight()
+    fn reset_flight(&mut self, cause: ResetCause) -> Result<(), LinkError> {
+        (**self).reset_flight(cause)
     }
 }

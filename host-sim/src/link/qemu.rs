@@ -209,10 +209,11 @@ impl QemuLink {
         Ok((ran, busy))
     }
 
-    /// Resets the board between runs (its reboot command) and waits for its hello; link time goes on. Refused
+    /// Resets the board between runs (its reboot command, or a watchdog bite: `QemuBoard::bite_watchdog`) and
+    /// waits for its hello; link time goes on. Refused
     /// with bytes sent and not yet announced (they would sit in the emulated UART and reach the rebooted
     /// software, where in-process they are lost with the executive's queue).
-    pub fn reset_board(&mut self) -> io::Result<()> {
+    pub fn reset_board(&mut self, cause: super::ResetCause) -> io::Result<()> {
         if self.unannounced > 0 {
             return Err(io::Error::new(
                 io::ErrorKind::InvalidInput,
@@ -220,7 +221,10 @@ impl QemuLink {
             ));
         }
         let timeout = self.reply_timeout;
-        self.board()?.reboot(timeout)?;
+        match cause {
+            super::ResetCause::Command => self.board()?.reboot(timeout)?,
+            super::ResetCause::Watchdog => self.board()?.bite_watchdog(timeout)?,
+        }
         self.last_busy = false;
         Ok(())
     }
@@ -270,7 +274,7 @@ impl FlightLink for QemuLink {
     fn advance_to(&mut self, t_us: u64) -> Result<Vec<u8>, LinkError> {
         QemuLink::advance_to(self, t_us).map_err(|e| link_error(self, e))
     }
-    fn reset_flight(&mut self) -> Result<(), LinkError> {
-        QemuLink::reset_board(self).map_err(|e| link_error(self, e))
+    fn reset_flight(&mut self, cause: super::ResetCause) -> Result<(), LinkError> {
+        QemuLink::reset_board(self, cause).map_err(|e| link_error(self, e))
     }
 }

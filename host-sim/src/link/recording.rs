@@ -9,6 +9,8 @@ use crate::fieldlog::{Direction, Writer};
 /// The payload of the fault record a reset of the flight computer leaves ([`FlightLink::reset_flight`]); a replay
 /// resets its flight software where the record lies between the data records (`crate::replay`).
 pub const RESET_RECORD: &[u8] = b"flight computer reset";
+/// The payload of the fault record a watchdog bite leaves ([`super::ResetCause::Watchdog`]).
+pub const WATCHDOG_RESET_RECORD: &[u8] = b"flight computer reset: watchdog";
 
 /// Records everything passing through `inner` into `log`, stamped with the link's time.
 pub struct RecordingLink<L: FlightLink, W: Write> {
@@ -78,9 +80,9 @@ impl<L: FlightLink, W: Write> FlightLink for RecordingLink<L, W> {
     fn end_faults(&mut self) -> Result<(), LinkError> {
         self.inner.end_faults()
     }
-    fn reset_flight(&mut self) -> Result<(), LinkError> {
+    fn reset_flight(&mut self, cause: super::ResetCause) -> Result<(), LinkError> {
         let t = self.inner.now_us();
-        self.inner.reset_flight()?;
-        self.log.append_fault(t, RESET_RECORD).map_err(LinkError::Record)
+        self.inner.reset_flight(cause)?;
+        self.log.append_fault(t, cause.record()).map_err(LinkError::Record)
     }
 }

@@ -38,7 +38,7 @@ use super::sensing::{
 };
 use super::truth::Body;
 use super::world::MissionWorld;
-use crate::link::FlightLink;
+use crate::link::{FlightLink, ResetCause};
 use crate::scenario::{Scenario, WorldSpec};
 use crate::sensor::{to_wire_pose, RangeSensorParams, Scan};
 use crate::session::{HostSession, RetransmitPolicy, SessionError};
@@ -139,6 +139,8 @@ pub struct ResetSeen {
     pub reason: String,
     /// Contacts of the true tether (the simulator's own, `truth::taut`) at the reset: a wrapped tether has some.
     pub true_contacts: usize,
+    /// How: `command` (between motions) or `watchdog` (a bite during a motion).
+    pub cause: &'static str,
 }
 
 /// What a mission did.
@@ -245,8 +247,9 @@ pub struct MissionOptions {
     pub reset: Option<ResetAt>,
 }
 
-/// When a mission resets the flight computer (`tetherbot mission --reset-after-motions N | --reset-when-wrapped`).
-/// The reset comes right after a motion report has been answered.
+/// When a mission resets the flight computer (`tetherbot mission --reset-after-motions N | --reset-when-wrapped |
+/// --watchdog-bite-in-motion N`). The commanded resets come right after a motion report has been answered; the
+/// bite comes while the rover drives.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ResetAt {
     /// After this many executed motions.
@@ -255,6 +258,10 @@ pub enum ResetAt {
     /// the flight software's last status tracks an anchor besides the root. A mission whose tether never wraps is
     /// not reset.
     Wrapped,
+    /// The watchdog bites during the motion after this many executed motions, after its first increment: the
+    /// rover stops where it is (its drive commands die with the flight computer), the motion's report is never
+    /// sent, and the checkpoint the rebooted software recovers is the one from before the motion.
+    BiteInMotion(u32),
 }
 
 /// Why a mission could not run (as opposed to how it ended).
@@ -582,7 +589,7 @@ impl<L: FlightLink> Sim<'_, L> {
 
     /// Resets the flight computer now (the link's reset: watchdog bite or reset command) and notes what the flight
     /// software had tracked; its boot status (absorbed by the next receive) says what it recovered.
-    fn reset_flight(&mut self) -> Result<(), MissionError> {
+    fn reset_flight(&mut self, cause: ResetCause) -> Result<(), MissionError> {
         let t_s = self.now_s();
         self.rep.resets.push(ResetSeen {
             t_s,
@@ -591,9 +598,13 @@ impl<L: FlightLink> Sim<'_, L> {
             anchors_recovered: 0,
             reason: String::new(),
             true_contacts: self.rover.tether.contacts.len(),
+            cause: match cause {
+                ResetCause::Command => "command",
+                ResetCause::Watchdog => "watchdog",
+            },
         });
-        log::warn!("mission: resetting the flight computer at t {t_s:.1} s");
-        self.s.link_mut().reset_flight().map_err(SessionError::Link)?;
+        log::warn!("mission: resetting the flight computer ({cause:?}) at t {t_s:.1} s");
+        self.s.link_mut().reset_flight(cause).map_err(SessionError::Link)?;
         // drive commands of the software that was reset are void
         self.pending.clear();
         self.recv()?;
@@ -647,6 +658,13 @@ impl<L: FlightLink> Sim<'_, L> {
             if let Progress::Ended(o, b) = progress {
                 break (o, b);
             }
+            if self.reset == Some(ResetAt::BiteInMotion(self.rep.motions)) {
+                // the flight computer dies mid-motion: the rover stops here and no report is ever sent
+                self.reset = None;
+                self.rep.motions += 1;
+                self.reset_flight(ResetCause::Watchdog)?;
+                return Ok(true);
+            }
             // a stop (or a new command) from the flight software ends the motion where it is
             if self.pending.iter().any(|(_, m)| matches!(m, Motion::Stop)) {
                 self.pending.retain(|(_, m)| !matches!(m, Motion::Stop));
@@ -692,11 +710,11 @@ impl<L: FlightLink> Sim<'_, L> {
             Some(ResetAt::Wrapped) => {
                 !self.rover.tether.contacts.is_empty() && self.status.is_some_and(|s| s.anchors >= 2)
             }
-            None => false,
+            Some(ResetAt::BiteInMotion(_)) | None => false,
         };
         if reset_due {
             self.reset = None;
-            self.reset_flight()?;
+            self.reset_flight(ResetCause::Command)?;
             return Ok(true);
         }
         // a scan after every motion, from where the rover stands (with the same pose estimate)

@@ -480,6 +480,11 @@ impl QemuBoard {
     /// board's `.uninit`, where the tether checkpoint lives) keeps its content.
     pub fn reboot(&mut self, timeout: Duration) -> io::Result<()> {
         self.control_send(b"B")?;
+        self.await_hello(timeout)
+    }
+
+    /// Waits for the hello of a rebooted board.
+    fn await_hello(&mut self, timeout: Duration) -> io::Result<()> {
         let mut hello = [0u8; 1];
         self.control_recv_exact(&mut hello, timeout)?;
         if hello != *b"H" {
@@ -489,6 +494,14 @@ impl QemuBoard {
             ));
         }
         Ok(())
+    }
+
+    /// Makes the board's flight loop stop kicking its watchdog (control byte `W`, test builds only): the CMSDK
+    /// watchdog's interrupt (the NMI) lets the bite pass and its reset output reboots the Cortex-M7, as a stuck
+    /// flight loop would; waits for the rebooted board's hello.
+    pub fn bite_watchdog(&mut self, timeout: Duration) -> io::Result<()> {
+        self.control_send(b"W")?;
+        self.await_hello(timeout)
     }
 
     /// Sends `bytes` on the control port.

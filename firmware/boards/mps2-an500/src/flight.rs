@@ -23,6 +23,9 @@
 //! - host -> board `B` (reboot, 1 byte, both clocks; between runs): the board requests a system reset
 //!   (SYSRESETREQ), as a watchdog bite does; it boots again and says `H`. The tether checkpoint in `.uninit`
 //!   (`storage::take_retained`, `firmware::nav::retained`) survives: the rebooted flight software recovers it.
+//! - host -> board `W` (watchdog bite, 1 byte, both clocks, test builds only): the flight loop stops kicking the
+//!   watchdog (`watchdog::stop_kicking`); its interrupt, then its reset output reboot the board, which prints
+//!   `board: REBOOTED by the watchdog's reset output` and says `H`. The checkpoint survives as for `B`.
 //!
 //! In lockstep the executive's link behaves like the in-process byte queue: `read` returns exactly the announced
 //! bytes not yet consumed (waiting for them to cross the emulated UART, they are already sent) and `write` takes
@@ -279,6 +282,10 @@ pub fn run(systick: SysTickClock, lockstep: bool) -> ! {
             crate::fault::fail()
         }
     };
+    #[cfg(feature = "test-probes")]
+    if crate::watchdog::take_reset_mark() {
+        host_eprintln!("board: REBOOTED by the watchdog's reset output");
+    }
     // before the first step: what a reset left (the flight software comes back Safe with its tether state)
     autonomy.recover_retained(retained);
     let mut exec: BoardExecutive = Executive::new(link, clock, wdog, autonomy, storage);
@@ -299,6 +306,10 @@ pub fn run(systick: SysTickClock, lockstep: bool) -> ! {
             if tag == *b"B" {
                 cortex_m::peripheral::SCB::sys_reset();
             }
+            #[cfg(feature = "test-probes")]
+            if tag == *b"W" {
+                watchdog_bite()
+            }
             host_eprintln!(
                 "board: bad control byte 0x{:02x} in free-running mode",
                 tag[0]
@@ -316,6 +327,14 @@ pub fn run(systick: SysTickClock, lockstep: bool) -> ! {
     }
 }
 
+/// Control byte `W`: the watchdog bites (`watchdog::stop_kicking`); reaching the end means it did not reset.
+#[cfg(feature = "test-probes")]
+fn watchdog_bite() -> ! {
+    crate::watchdog::stop_kicking();
+    host_eprintln!("board: the watchdog did not reset the board after a bite");
+    crate::fault::fail()
+}
+
 fn run_lockstep(exec: &mut BoardExecutive, ctl: &mut Uart, retained: &mut RetainedBlock) -> ! {
     loop {
         let mut tag = [0u8; 1];
@@ -323,6 +342,8 @@ fn run_lockstep(exec: &mut BoardExecutive, ctl: &mut Uart, retained: &mut Retain
         match &tag {
             b"Q" => quit(exec),
             b"B" => cortex_m::peripheral::SCB::sys_reset(),
+            #[cfg(feature = "test-probes")]
+            b"W" => watchdog_bite(),
             b"R" => {}
             _ => {
                 host_eprintln!("board: bad control byte 0x{:02x} in lockstep mode", tag[0]);

@@ -129,6 +129,25 @@ pub fn set_reset_mark() {
     unsafe { core::ptr::write_volatile(slot, RESET_MARK) }
 }
 
+/// Timeout of a bite on command (control byte `W`): 10 ms, so the reset comes 20 ms after the last kick.
+#[cfg(feature = "test-probes")]
+const BITE_TICKS: u32 = WDOGCLK_HZ / 100;
+
+/// Test build: the flight loop stops kicking (control byte `W`, a watchdog bite in the middle of a mission): the
+/// timeout is cut to `BITE_TICKS`, the NMI handler lets the bite pass and the second expiry's reset output reboots
+/// the board, which finds the mark and says so. Returns only if no reset came.
+#[cfg(feature = "test-probes")]
+pub fn stop_kicking() {
+    set_reset_mark();
+    LET_RESET_ACT.store(true, Ordering::Relaxed);
+    ACTIVE_TIMEOUT_TICKS.store(BITE_TICKS, Ordering::Relaxed);
+    wr(LOCK, UNLOCK_KEY);
+    wr(LOAD, BITE_TICKS);
+    wr(INTCLR, 1);
+    wr(LOCK, 0);
+    await_reset();
+}
+
 /// Spins (bounded: 10^9 iterations, seconds on the emulator) while the reset output comes; returns if it did not.
 #[cfg(feature = "test-probes")]
 pub fn await_reset() {
