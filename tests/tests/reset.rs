@@ -38,18 +38,17 @@ fn header(scenario: &str, link: &str) -> fieldlog::Header {
     }
 }
 
-#[test]
-fn a_reset_mid_descent_recovers_the_wrapped_tether_continues_and_replays() {
-    let (sc, opts) = snag_with_reset();
+/// Runs the snag mission with `opts` in-process, recorded; checks what every reset must give (one reset, reason
+/// `Reset`, the anchor history recovered, more motions after it, an arrival or a safe stop with a reason, the
+/// reset's record with its `cause` in the log and an identical replay). Returns the reset and the log.
+fn reset_mission(opts: &MissionOptions, cause: ResetCause) -> (host_sim::mission::run::ResetSeen, fieldlog::FieldLog) {
+    let (sc, _) = snag_with_reset();
     let writer = fieldlog::Writer::new(Vec::new(), &header(&sc.name, "inproc")).unwrap();
     let mut link = RecordingLink::new(host_sim::mission::link::mission_link(&sc).unwrap(), writer);
-    let rep = run_mission(&mut link, &sc, &opts).unwrap();
+    let rep = run_mission(&mut link, &sc, opts).unwrap();
     let (flight, bytes) = link.finish().unwrap();
     assert_eq!(flight.resets(), 1);
-
     let [r] = rep.resets.as_slice() else { panic!("one reset expected: {:?}", rep.resets) };
-    // the precondition: the tether was wrapped, by the simulator's own tether and by the flight software's
-    assert!(r.true_contacts >= 1 && r.anchors_before >= 2, "not a wrapped tether at the reset: {r:?}");
     assert_eq!(r.reason, "Reset");
     assert_eq!(r.anchors_recovered, r.anchors_before, "the anchor history did not come back: {r:?}");
     // it continued: more motions after the reset, and an end that is an arrival or a safe stop with a reason
@@ -62,13 +61,22 @@ fn a_reset_mid_descent_recovers_the_wrapped_tether_continues_and_replays() {
         ),
         v => panic!("after the reset the mission ended {v:?}"),
     }
-
     // the log holds the reset, and a fresh flight software fed the same bytes resets there and answers the same
     let log = fieldlog::parse(&bytes).unwrap();
-    assert_eq!(log.faults.iter().filter(|f| f.bytes == RESET_RECORD).count(), 1);
+    assert_eq!(log.faults.iter().filter(|f| f.bytes == cause.record()).count(), 1);
     let out = replay(&log, &mut InProcLink::new(DEFAULT_STEP_US)).unwrap();
     assert!(matches!(out, ReplayOutcome::Identical { .. }), "{out:?}");
-    // without the reset the replay cannot match: the check above can fail
+    (r.clone(), log)
+}
+
+#[test]
+fn a_reset_mid_descent_recovers_the_wrapped_tether_continues_and_replays() {
+    let (_, opts) = snag_with_reset();
+    let (r, log) = reset_mission(&opts, ResetCause::Command);
+    // the precondition: the tether was wrapped, by the simulator's own tether and by the flight software's
+    assert!(r.true_contacts >= 1 && r.anchors_before >= 2, "not a wrapped tether at the reset: {r:?}");
+    assert_eq!(log.faults.iter().filter(|f| f.bytes == RESET_RECORD).count(), 1);
+    // without the reset the replay cannot match: the check in `reset_mission` can fail
     let mut no_reset = log.clone();
     no_reset.faults.clear();
     let out = replay(&no_reset, &mut InProcLink::new(DEFAULT_STEP_US)).unwrap();
@@ -81,30 +89,10 @@ fn a_reset_mid_descent_recovers_the_wrapped_tether_continues_and_replays() {
 /// The log names the watchdog, and its replay bites at the same point.
 #[test]
 fn a_watchdog_bite_mid_motion_recovers_the_tether_continues_and_replays() {
-    let (sc, mut opts) = snag_with_reset();
+    let (_, mut opts) = snag_with_reset();
     opts.reset = Some(ResetAt::BiteInMotion(6));
-    let writer = fieldlog::Writer::new(Vec::new(), &header(&sc.name, "inproc")).unwrap();
-    let mut link = RecordingLink::new(host_sim::mission::link::mission_link(&sc).unwrap(), writer);
-    let rep = run_mission(&mut link, &sc, &opts).unwrap();
-    let (flight, bytes) = link.finish().unwrap();
-    assert_eq!(flight.resets(), 1);
-    let [r] = rep.resets.as_slice() else { panic!("one reset expected: {:?}", rep.resets) };
-    assert_eq!(r.after_motions, 7, "the bite ends the seventh motion: {r:?}");
-    assert_eq!(r.reason, "Reset");
-    assert_eq!(r.anchors_recovered, r.anchors_before, "the anchor history did not come back: {r:?}");
-    assert!(rep.motions > r.after_motions, "nothing driven after the bite: {} motions", rep.motions);
-    match rep.verdict {
-        Verdict::Arrived => {}
-        Verdict::SafeStop(reason) => assert!(
-            !matches!(reason, StopReason::Reset | StopReason::TetherStateLost | StopReason::None),
-            "{reason:?}"
-        ),
-        v => panic!("after the bite the mission ended {v:?}"),
-    }
-    let log = fieldlog::parse(&bytes).unwrap();
-    assert_eq!(log.faults.iter().filter(|f| f.bytes == ResetCause::Watchdog.record()).count(), 1);
-    let out = replay(&log, &mut InProcLink::new(DEFAULT_STEP_US)).unwrap();
-    assert!(matches!(out, ReplayOutcome::Identical { .. }), "{out:?}");
+    let (r, _) = reset_mission(&opts, ResetCause::Watchdog);
+    assert_eq!((r.after_motions, r.cause), (7, "watchdog"), "the bite ends the seventh motion: {r:?}");
 }
 
 /// The reboot path on a link: boot, `Configure`, a tether reading (the flight software checkpoints root and payout),

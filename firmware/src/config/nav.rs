@@ -4,6 +4,8 @@
 //! The flight computer (mps2-an500) holds these arenas in SRAM `.bss` (the map's block pool fills the PSRAM); the
 //! sizes below keep the navigator's planning storage at about 1 MiB (`NavPlanStorage`, see `crate::nav`).
 
+use crate::geom::Real;
+
 /// Nodes of the on-board ABIT* arena (start, goals, samples and tree vertices). Default 512: five batches of
 /// [`SAMPLES_PER_BATCH`] with room for goals and history twins. A tethered node carries its anchor history
 /// (~0.8 KiB), so the 4096 of `config::abit` would need 4 MiB.
@@ -55,3 +57,9 @@ pub const TRACK_APPROXIMATE: bool = true;
 /// Mass fraction of the rover's `Configure.rover.mass_kg` carried by the boom (the rest is the body at the axle).
 /// Default 0.2 (`config::rover::RoverParams::AXEL`: 10 of 50 kg).
 pub const BOOM_MASS_FRACTION: f32 = 0.2;
+
+/// Radius, in voxels, of the zone round a start that collides with the map's extra voxel of body clearance (a rock
+/// that appeared beside the rover) where states settle with the rover's own clearance (`plan::tethered::StartEscape`,
+/// `nav::planning`). Default 2: the start is less than one voxel into the extra clearance, so a motion leaves it
+/// within the zone when it heads up to 60 degrees off the direction straight away from the obstacle.
+pub const START_ESCAPE_VOXELS: Real = 2.0;

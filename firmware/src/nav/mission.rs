@@ -11,7 +11,7 @@ use crate::config::nav::MAX_PLAN_ITERATIONS;
 use crate::exec::DriveStep;
 use crate::geom::{norm3, wrap_angle, Real, Vec3};
 use crate::map::{Block, Map, UnobservedAsFree};
-use crate::plan::tethered::{TetherSpace, TetherSpaceParams};
+use crate::plan::tethered::TetherSpaceParams;
 use crate::protocol::{
     GoalRequest, MissionConfig, MissionState, MissionStatus, Motion, MotionOutcome, MotionReport, PlanState,
     Point3, Pose, Quat, StopReason, Tracking, TetherReading,
@@ -848,7 +848,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
             self.mission.state = MissionState::Driving;
             return DriveStep::Wait;
         };
-        let Ok(space) = TetherSpace::new(&map, problem.bounds, problem.rover, TetherSpaceParams::ONBOARD) else {
+        let Some(space) = problem.space(&map) else {
             self.mission.recheck_left = 0;
             self.mission.state = MissionState::Driving;
             return DriveStep::Wait;

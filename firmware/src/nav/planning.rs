@@ -18,8 +18,8 @@ use crate::plan::space::{
     Budget, GoalState, MotionCheck, MotionValidator, Planner, PlannerStatus, ProblemDefinition, Termination,
 };
 use crate::plan::tethered::{
-    MotionPlan, MotionStats, PlanBounds, RoverState, SettleFailure, TetherMotionValidator, TetherObjective, TetherSpace, TetherSpaceParams,
-    TetherValidity,
+    MotionPlan, MotionStats, PlanBounds, RoverState, SettleFailure, StartEscape, TetherMotionValidator, TetherObjective,
+    TetherSpace, TetherSpaceParams, TetherValidity,
 };
 use crate::protocol::{Configure, Motion, PlanState, Point3, Pose, Quat, Waypoint};
 use crate::tether::{Anchor, AnchorHistory};
@@ -211,6 +211,18 @@ pub(crate) struct Problem {
     pub cut: u32,
     /// The space's work and motion-failure counters summed over this goal's steps (logged when the search ends).
     pub work: MotionStats,
+    /// Set when the start collides with the extra voxel of clearance: the zone round it where states settle with
+    /// the rover's own clearance, so motions can take it away ([`StartEscape`]).
+    pub escape: Option<StartEscape>,
+}
+
+impl Problem {
+    /// The space this problem is planned in, over `map`.
+    pub fn space<'m, D: DistanceField>(&self, map: &'m D) -> Option<TetherSpace<'m, D>> {
+        TetherSpace::new(map, self.bounds, self.rover, TetherSpaceParams::ONBOARD)
+            .ok()
+            .map(|s| s.with_start_escape(self.escape))
+    }
 }
 
 /// The planning bounds of the map: the extent of its **surface blocks** (blocks whose centre is known to lie
@@ -283,14 +295,24 @@ pub(crate) fn set_up(
     let space =
         TetherSpace::new(map, bounds, rover, TetherSpaceParams::ONBOARD).map_err(|_| GoalRefusal::PlannerRejected)?;
     let yaw = crate::geom::heading(&pose.to_isometry().rotation);
+    let mut escape = None;
     let start = match space.settle_state(p.x, p.y, yaw) {
         Ok(s) => Ok(s),
         // The rover stands here: within the map's extra voxel of an obstacle (a rock that appeared in front of it),
-        // not within its own clearance. Plan from the pose it settles in with its own clearance, so the planner can
-        // take it away; every other state keeps the extra voxel.
-        Err(SettleFailure::Collision) => TetherSpace::new(map, bounds, setup.rover, TetherSpaceParams::ONBOARD)
-            .map_err(|_| SettleFailure::InvalidInput)
-            .and_then(|own| own.settle_state(p.x, p.y, yaw)),
+        // not within its own clearance. Plan from the pose it settles in with its own clearance, and let states
+        // within START_ESCAPE_VOXELS of it do the same, so motions can take it away (every motion from it would
+        // otherwise collide in its first interpolated state); every other state keeps the extra voxel.
+        Err(SettleFailure::Collision) => {
+            escape = Some(StartEscape {
+                x: p.x,
+                y: p.y,
+                radius_m: cfg::START_ESCAPE_VOXELS * map.config().voxel_size,
+                rover: setup.rover,
+            });
+            TetherSpace::new(map, bounds, rover, TetherSpaceParams::ONBOARD)
+                .map_err(|_| SettleFailure::InvalidInput)
+                .and_then(|relaxed| relaxed.with_start_escape(escape).settle_state(p.x, p.y, yaw))
+        }
         Err(e) => Err(e),
     }
     .map_err(|e| {
@@ -330,6 +352,7 @@ pub(crate) fn set_up(
         max_payout_m: setup.max_payout_m,
         cut: 0,
         work: MotionStats::default(),
+        escape,
     })
 }
 
@@ -413,7 +436,7 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
     let out_of_time = problem.deadline.is_some_and(|d| now >= d);
     // With no time left, only the best solution so far is restored (no new iterations).
     let target = if out_of_time { problem.done } else { problem.done.saturating_add(iterations).min(problem.budget) };
-    let Ok(mut space) = TetherSpace::new(map, problem.bounds, problem.rover, TetherSpaceParams::ONBOARD) else {
+    let Some(mut space) = problem.space(map) else {
         problem.finished = Some(PlanState::InvalidInput);
         return finished(problem, PlanState::InvalidInput);
     };

@@ -106,6 +106,6 @@ pub use motion::{tether_bend, tether_pull_anchor, MotionFailure, MotionPlan, Mot
 pub use objective::TetherObjective;
 pub use params::{PlanBounds, TetherSpaceParams};
 pub use space::{
-    fall_line_theta, settle_at, surface_point, wraps, MotionStats, RoverState, SettleFailure, TetherSpace,
-    TetherValidity,
+    fall_line_theta, settle_at, surface_point, wraps, MotionStats, RoverState, SettleFailure, StartEscape,
+    TetherSpace, TetherValidity,
 };

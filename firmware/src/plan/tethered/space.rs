@@ -246,6 +246,23 @@ pub struct TetherSpace<'m, D> {
     pub(super) rover: RoverParams,
     pub(super) params: TetherSpaceParams,
     pub(super) stats: Cell<MotionStats>,
+    pub(super) escape: Option<StartEscape>,
+}
+
+/// Where a state may settle with the rover's own body clearance instead of the space's ([`TetherSpace::with_start_escape`]):
+/// within `radius_m` (horizontally) of a start that is itself within the space's extra clearance of an obstacle
+/// (the rover stands there; a rock appeared beside it). Without it every motion from such a start collides in its
+/// first interpolated state and the planner has no way out.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StartEscape {
+    /// The start's axle position, x (m).
+    pub x: Real,
+    /// The start's axle position, y (m).
+    pub y: Real,
+    /// Radius of the zone (m).
+    pub radius_m: Real,
+    /// The rover with its own clearance.
+    pub rover: RoverParams,
 }
 
 impl<'m, D: DistanceField> TetherSpace<'m, D> {
@@ -260,7 +277,13 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
             return Err(("bounds", "must be a finite box with min < max on every axis"));
         }
         params.validate()?;
-        Ok(Self { map, bounds, rover, params, stats: Cell::new(MotionStats::default()) })
+        Ok(Self { map, bounds, rover, params, stats: Cell::new(MotionStats::default()), escape: None })
+    }
+    /// The same space where a state within `escape.radius_m` of the start that collides with the space's body
+    /// clearance settles with the rover's own ([`StartEscape`]).
+    pub fn with_start_escape(mut self, escape: Option<StartEscape>) -> Self {
+        self.escape = escape;
+        self
     }
     /// The distance field planned on.
     pub fn map(&self) -> &'m D {
@@ -299,7 +322,12 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
     /// Settle a state at the surface under `(x, y)` (counted).
     pub fn settle_state(&self, x: Real, y: Real, theta: Real) -> Result<RoverState, SettleFailure> {
         self.count(|s| s.settles += 1);
-        settle_at(self.map, &self.bounds, &self.rover, x, y, theta)
+        match (settle_at(self.map, &self.bounds, &self.rover, x, y, theta), self.escape) {
+            (Err(SettleFailure::Collision), Some(e)) if libm::hypotf(x - e.x, y - e.y) <= e.radius_m => {
+                settle_at(self.map, &self.bounds, &e.rover, x, y, theta)
+            }
+            (r, _) => r,
+        }
     }
     /// A goal state: settled at `(x, y)` when inside the bounds (at the first yaw that settles), an off-map goal at
     /// `point` otherwise.

@@ -171,3 +171,43 @@ fn a_steep_contact_needs_a_steep_surface_too() {
     assert!(!space::rests_on_steep_surface(&Plane(incline(90.0)), &level));
     assert!(!space::rests_on_steep_surface(&Nothing, &level));
 }
+
+/// The plane z = 0 and a ball of radius 5 cm floating at `0` (exact signed distance): an obstacle at the body's
+/// height between the wheels.
+struct GroundAndBall(Vec3);
+impl DistanceField for GroundAndBall {
+    fn query(&self, p: &Vec3) -> DistanceQuery {
+        let d = p - self.0;
+        let ball = d.norm() - 0.05;
+        if ball < p.z {
+            DistanceQuery::Known { distance: ball, gradient: d / d.norm() }
+        } else {
+            Ground.query(p)
+        }
+    }
+}
+
+/// A start within the extra clearance of an obstacle (not within the rover's own) settles only through the escape
+/// zone, and so do states within the zone's radius of it; a state as near the obstacle outside the zone still
+/// collides, and so does one in the zone that collides with the rover's own clearance.
+#[test]
+fn a_start_escape_relaxes_the_clearance_only_round_the_start() {
+    let own = RoverParams::AXEL;
+    let mut padded = own;
+    padded.body_clearance_m += 0.1;
+    let axle = own.wheel_radius_m;
+    let settles = |rover, x: Real| {
+        let ball = GroundAndBall(Vec3::new(x, 0.0, axle));
+        TetherSpace::new(&ball, BOUNDS, rover, TetherSpaceParams::ONBOARD).unwrap().settle_state(0.0, 0.0, 0.0)
+    };
+    // the nearest ball ahead (1 cm steps) with which the rover settles with its own clearance
+    let x = (0..200).map(|i| 0.05 + 0.01 * i as Real).find(|&x| settles(own, x).is_ok()).unwrap();
+    assert_eq!(settles(padded, x), Err(SettleFailure::Collision), "ball at {x}");
+    let ball = GroundAndBall(Vec3::new(x, 0.0, axle));
+    let escape = StartEscape { x: 0.0, y: 0.0, radius_m: 0.1, rover: own };
+    let relaxed = TetherSpace::new(&ball, BOUNDS, padded, TetherSpaceParams::ONBOARD).unwrap().with_start_escape(Some(escape));
+    assert!(relaxed.settle_state(0.0, 0.0, 0.0).is_ok());
+    assert!(relaxed.settle_state(-0.05, 0.05, 0.0).is_ok(), "inside the zone");
+    assert_eq!(relaxed.settle_state(2.0 * x, 0.0, 0.0), Err(SettleFailure::Collision), "outside the zone, as near");
+    assert_eq!(relaxed.settle_state(0.05, 0.0, 0.0), Err(SettleFailure::Collision), "nearer than its own clearance");
+}
