@@ -58,8 +58,8 @@ pub const TRACK_APPROXIMATE: bool = true;
 /// Default 0.2 (`config::rover::RoverParams::AXEL`: 10 of 50 kg).
 pub const BOOM_MASS_FRACTION: f32 = 0.2;
 
-/// Radius, in voxels, of the zone round a start that collides with the map's extra voxel of body clearance (a rock
-/// that appeared beside the rover) where states settle with the rover's own clearance (`plan::tethered::StartEscape`,
-/// `nav::planning`). Default 2: the start is less than one voxel into the extra clearance, so a motion leaves it
+/// Radius, in voxels, of the zone round a start that the map refuses (within its extra voxel of body clearance of a
+/// rock that appeared beside the rover, or a wheel against the rock's side) where states settle with the rover's own
+/// clearance and, if the start needed it, a steep wheel contact (`plan::tethered::StartEscape`, `nav::planning`). Default 2: the start is less than one voxel into the extra clearance, so a motion leaves it
 /// within the zone when it heads up to 60 degrees off the direction straight away from the obstacle.
 pub const START_ESCAPE_VOXELS: Real = 2.0;

@@ -298,20 +298,40 @@ pub(crate) fn set_up(
     let mut escape = None;
     let start = match space.settle_state(p.x, p.y, yaw) {
         Ok(s) => Ok(s),
-        // The rover stands here: within the map's extra voxel of an obstacle (a rock that appeared in front of it),
-        // not within its own clearance. Plan from the pose it settles in with its own clearance, and let states
-        // within START_ESCAPE_VOXELS of it do the same, so motions can take it away (every motion from it would
-        // otherwise collide in its first interpolated state); every other state keeps the extra voxel.
-        Err(SettleFailure::Collision) => {
-            escape = Some(StartEscape {
+        // The rover stands here, but on the map it is within the extra voxel of an obstacle (a rock that appeared
+        // beside it) or has a wheel against a steep face (the rock's side). Plan from the pose it settles in with
+        // its own clearance (and, only if that is still refused, with the steep contact), and let states within
+        // START_ESCAPE_VOXELS of it do the same, so motions can take it away (every motion from it would otherwise
+        // fail in its first interpolated state); every other state keeps every check.
+        Err(SettleFailure::Collision | SettleFailure::SteepContact) => {
+            let zone = |steep_ok| StartEscape {
                 x: p.x,
                 y: p.y,
                 radius_m: cfg::START_ESCAPE_VOXELS * map.config().voxel_size,
                 rover: setup.rover,
-            });
-            TetherSpace::new(map, bounds, rover, TetherSpaceParams::ONBOARD)
-                .map_err(|_| SettleFailure::InvalidInput)
-                .and_then(|relaxed| relaxed.with_start_escape(escape).settle_state(p.x, p.y, yaw))
+                steep_ok,
+            };
+            let settle_with = |e: StartEscape| {
+                TetherSpace::new(map, bounds, rover, TetherSpaceParams::ONBOARD)
+                    .map_err(|_| SettleFailure::InvalidInput)
+                    .and_then(|relaxed| relaxed.with_start_escape(Some(e)).settle_state(p.x, p.y, yaw))
+                    .map(|s| (s, e))
+            };
+            match settle_with(zone(false)) {
+                Err(SettleFailure::SteepContact) => settle_with(zone(true)),
+                r => r,
+            }
+            .map(|(s, e)| {
+                log::info!(
+                    "nav: the start ({}, {}) settles only with the rover's own clearance{}: states within {} m of it too",
+                    e.x,
+                    e.y,
+                    if e.steep_ok { " and a steep wheel contact" } else { "" },
+                    e.radius_m
+                );
+                escape = Some(e);
+                s
+            })
         }
         Err(e) => Err(e),
     }

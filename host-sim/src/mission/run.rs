@@ -258,8 +258,8 @@ pub enum ResetAt {
     /// the flight software's last status tracks an anchor besides the root. A mission whose tether never wraps is
     /// not reset.
     Wrapped,
-    /// The watchdog bites during the motion after this many executed motions, after its first increment: the
-    /// rover stops where it is (its drive commands die with the flight computer), the motion's report is never
+    /// The watchdog bites during the motion after this many executed motions, after its first increment (before
+    /// the report of a motion that took one increment): the rover stops where it is (its drive commands die with the flight computer), the motion's report is never
     /// sent, and the checkpoint the rebooted software recovers is the one from before the motion.
     BiteInMotion(u32),
 }
@@ -655,15 +655,16 @@ impl<L: FlightLink> Sim<'_, L> {
             self.trace();
             let t = self.s.link().now_us() + dt_us;
             self.run_to(t)?;
-            if let Progress::Ended(o, b) = progress {
-                break (o, b);
-            }
             if self.reset == Some(ResetAt::BiteInMotion(self.rep.motions)) {
-                // the flight computer dies mid-motion: the rover stops here and no report is ever sent
+                // the flight computer dies mid-motion (or, for a one-increment motion, before its report): the
+                // rover stops here and no report is ever sent
                 self.reset = None;
                 self.rep.motions += 1;
                 self.reset_flight(ResetCause::Watchdog)?;
                 return Ok(true);
+            }
+            if let Progress::Ended(o, b) = progress {
+                break (o, b);
             }
             // a stop (or a new command) from the flight software ends the motion where it is
             if self.pending.iter().any(|(_, m)| matches!(m, Motion::Stop)) {

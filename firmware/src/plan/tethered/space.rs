@@ -137,12 +137,25 @@ pub fn settle_at(
     y: Real,
     theta: Real,
 ) -> Result<RoverState, SettleFailure> {
+    settle_checked(map, bounds, rover, x, y, theta, true)
+}
+
+/// [`settle_at`], with the steep-contact check only when `check_steep` ([`StartEscape::steep_ok`]).
+fn settle_checked(
+    map: &impl DistanceField,
+    bounds: &PlanBounds,
+    rover: &RoverParams,
+    x: Real,
+    y: Real,
+    theta: Real,
+    check_steep: bool,
+) -> Result<RoverState, SettleFailure> {
     if !(x.is_finite() && y.is_finite() && theta.is_finite()) {
         return Err(SettleFailure::InvalidInput);
     }
     let ground = surface_point(map, x, y, bounds.max[2], bounds.min[2]).ok_or(SettleFailure::NoSurface)?;
     match settle(map, &ground, theta, rover) {
-        SettleOutcome::Settled(settled) if settled.wheels.iter().any(|w| rests_on_steep_surface(map, w)) => {
+        SettleOutcome::Settled(settled) if check_steep && settled.wheels.iter().any(|w| rests_on_steep_surface(map, w)) => {
             Err(SettleFailure::SteepContact)
         }
         SettleOutcome::Settled(settled) => Ok(RoverState { ground, theta, settled, off_map: false }),
@@ -249,10 +262,11 @@ pub struct TetherSpace<'m, D> {
     pub(super) escape: Option<StartEscape>,
 }
 
-/// Where a state may settle with the rover's own body clearance instead of the space's ([`TetherSpace::with_start_escape`]):
-/// within `radius_m` (horizontally) of a start that is itself within the space's extra clearance of an obstacle
-/// (the rover stands there; a rock appeared beside it). Without it every motion from such a start collides in its
-/// first interpolated state and the planner has no way out.
+/// Where a state may settle with the rover's own body clearance instead of the space's, and, if the start needed
+/// it, with a wheel against a steep surface ([`TetherSpace::with_start_escape`]): within `radius_m` (horizontally)
+/// of a start that the rover stands on but the map refuses (within the space's extra clearance of a rock that
+/// appeared beside it, or a wheel against the rock's side). Without it every motion from such a start fails in its
+/// first interpolated state, and a start that does not settle cannot be planned from at all.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StartEscape {
     /// The start's axle position, x (m).
@@ -263,6 +277,8 @@ pub struct StartEscape {
     pub radius_m: Real,
     /// The rover with its own clearance.
     pub rover: RoverParams,
+    /// Steep wheel contacts accepted in the zone.
+    pub steep_ok: bool,
 }
 
 impl<'m, D: DistanceField> TetherSpace<'m, D> {
@@ -323,8 +339,10 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
     pub fn settle_state(&self, x: Real, y: Real, theta: Real) -> Result<RoverState, SettleFailure> {
         self.count(|s| s.settles += 1);
         match (settle_at(self.map, &self.bounds, &self.rover, x, y, theta), self.escape) {
-            (Err(SettleFailure::Collision), Some(e)) if libm::hypotf(x - e.x, y - e.y) <= e.radius_m => {
-                settle_at(self.map, &self.bounds, &e.rover, x, y, theta)
+            (Err(SettleFailure::Collision | SettleFailure::SteepContact), Some(e))
+                if libm::hypotf(x - e.x, y - e.y) <= e.radius_m =>
+            {
+                settle_checked(self.map, &self.bounds, &e.rover, x, y, theta, !e.steep_ok)
             }
             (r, _) => r,
         }

@@ -204,7 +204,7 @@ fn a_start_escape_relaxes_the_clearance_only_round_the_start() {
     let x = (0..200).map(|i| 0.05 + 0.01 * i as Real).find(|&x| settles(own, x).is_ok()).unwrap();
     assert_eq!(settles(padded, x), Err(SettleFailure::Collision), "ball at {x}");
     let ball = GroundAndBall(Vec3::new(x, 0.0, axle));
-    let escape = StartEscape { x: 0.0, y: 0.0, radius_m: 0.1, rover: own };
+    let escape = StartEscape { x: 0.0, y: 0.0, radius_m: 0.1, rover: own, steep_ok: false };
     let relaxed = TetherSpace::new(&ball, BOUNDS, padded, TetherSpaceParams::ONBOARD).unwrap().with_start_escape(Some(escape));
     assert!(relaxed.settle_state(0.0, 0.0, 0.0).is_ok());
     assert!(relaxed.settle_state(-0.05, 0.05, 0.0).is_ok(), "inside the zone");
