@@ -133,6 +133,12 @@ pub trait Autonomy {
     fn motion_report(&mut self, _report: &MotionReport, _motion: Motion, _now: Instant) {}
     /// No report for drive command `command_id` within `MOTION_REPORT_TIMEOUT_US`; the executive has sent `Stop`.
     fn motion_timeout(&mut self, _command_id: u32, _now: Instant) {}
+    /// While a drive command is in flight (called every step until its report, bounded work): `true` when the
+    /// motion must stop now (the map changed and its segment no longer checks); the executive then sends `Stop`
+    /// once and waits for the report as usual.
+    fn stop_in_flight(&mut self, _now: Instant) -> bool {
+        false
+    }
     /// A `GoalCancel` for the current goal (the executive stops the rover and returns to `Mapping`). `Err` ->
     /// `Nack(Refused)`, nothing changed. Default: refused (no mission to cancel).
     fn cancel(&mut self, _goal_id: u32, _now: Instant) -> Result<(), Refused> {

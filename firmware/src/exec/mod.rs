@@ -142,6 +142,8 @@ struct Awaiting {
     command_id: u32,
     motion: Motion,
     sent_at: Instant,
+    /// A `Stop` was sent for it ([`Autonomy::stop_in_flight`]).
+    stopping: bool,
 }
 
 /// What a dispatched frame asks to send after its `Ack`.
@@ -666,6 +668,12 @@ where
                 } else {
                     Some(tx)
                 };
+            } else if let Some(a) = self.awaiting.as_mut().filter(|a| self.mode == Mode::Driving && !a.stopping) {
+                if self.autonomy.stop_in_flight(now) {
+                    a.stopping = true;
+                    self.send_motion(Motion::Stop);
+                }
+                return;
             } else if self.mode == Mode::Driving && self.awaiting.is_none() {
                 match self.autonomy.drive_step(now) {
                     DriveStep::Motion(m) => {
@@ -734,6 +742,7 @@ where
                 command_id,
                 motion,
                 sent_at: self.now,
+                stopping: false,
             });
         }
         self.send(&Message::DriveCommand(DriveCommand { command_id, motion }));

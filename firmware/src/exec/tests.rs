@@ -298,9 +298,18 @@ struct Mission {
     timeouts: StdVec<u32>,
     cancels: StdVec<u32>,
     goals: StdVec<u32>,
+    /// `stop_in_flight` answers true this many times.
+    stops_wanted: u32,
+    stop_asks: u32,
 }
 
 impl Autonomy for Mission {
+    fn stop_in_flight(&mut self, _now: Instant) -> bool {
+        self.stop_asks += 1;
+        let stop = self.stops_wanted > 0;
+        self.stops_wanted = self.stops_wanted.saturating_sub(1);
+        stop
+    }
     fn goal(&mut self, g: &GoalRequest, _now: Instant) -> PlanState {
         self.goals.push(g.goal_id);
         self.inner.steps = 0;
@@ -393,6 +402,25 @@ fn reports_for_unknown_or_reported_commands_are_refused_and_counted() {
     let t = e.telemetry();
     assert_eq!(t.frames_rejected[NackReason::UnknownCommand.index()], 2);
     assert_eq!(t.motion_reports, 1);
+}
+
+/// The autonomy asks for the motion in flight to stop (the map changed under it): one `Stop` goes out, the
+/// executive asks no more for that motion and waits for its report, and the next motion follows the report.
+#[test]
+fn a_stop_asked_for_in_flight_is_sent_once_and_the_report_still_awaited() {
+    let (mut e, id) = mission_exec();
+    let stops = |r: &[Message]| r.iter().filter(|m| matches!(m, Message::DriveCommand(d) if d.motion == Motion::Stop)).count();
+    e.autonomy_mut().stops_wanted = 5;
+    let r = exchange(&mut e, &[]);
+    assert_eq!(stops(&r), 1, "{r:?}");
+    assert!(drive_ids(&r).is_empty());
+    let asked = e.autonomy().stop_asks;
+    let r = exchange(&mut e, &[]);
+    assert_eq!((stops(&r), e.autonomy().stop_asks), (0, asked), "asked again for a motion already stopping");
+    let r = exchange(&mut e, &[report(id)]);
+    assert_eq!(e.autonomy().reports, [(id, Motion::Turn { yaw_rad: 0.5 })]);
+    // the next motion (the stop took a command id of its own)
+    assert_eq!(drive_ids(&r), [id + 2]);
 }
 
 #[test]

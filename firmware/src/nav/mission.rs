@@ -91,6 +91,8 @@ pub struct Mission {
     reason: StopReason,
     body: Option<BodyPose>,
     in_flight: Option<InFlight>,
+    /// A scan changed the map while a motion was in flight: check its segment once ([`Navigator::mission_stop_in_flight`]).
+    flight_check_due: bool,
     /// Path segment being driven (`path[seg] -> path[seg + 1]`).
     seg: usize,
     /// Next motion of the plan's motion list (open loop).
@@ -153,6 +155,7 @@ impl Mission {
             reason: StopReason::None,
             body: None,
             in_flight: None,
+            flight_check_due: false,
             seg: 0,
             next_open: 0,
             recheck_left: 0,
@@ -553,6 +556,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
     /// An accepted scan is integrated: re-check the whole remaining plan on the changed map.
     pub(super) fn mission_map_changed(&mut self) {
         let m = &mut self.mission;
+        m.flight_check_due = m.in_flight.is_some();
         if matches!(m.state, MissionState::Driving | MissionState::Verifying) {
             m.recheck_at = m.seg;
             m.recheck_left = usize::MAX;
@@ -560,9 +564,39 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         }
     }
 
+    /// While a motion is in flight and a scan changed the map: one motion check of the segment being driven (from
+    /// the plan's state at its start to its end), once per scan. `true`: the motion stops now, so the rover does not
+    /// drive on into what the scan showed (a rock that appeared in the corridor); the re-check after its report
+    /// plans again from where it stopped.
+    pub(super) fn mission_stop_in_flight(&mut self) -> bool {
+        if !core::mem::take(&mut self.mission.flight_check_due) || self.mission.in_flight.is_none() {
+            return false;
+        }
+        let Some(problem) = self.problem else { return false };
+        let (cfg, used) = (self.cfg, self.used);
+        let Ok(map) = Map::reattach(cfg, self.blocks.borrow_mut(), self.index.borrow_mut(), used) else {
+            return false;
+        };
+        let Some(space) = problem.space(&map) else { return false };
+        let m = &mut self.mission;
+        let path = &self.storage.borrow_mut().path;
+        let k = m.seg;
+        m.counters.rechecks = m.counters.rechecks.saturating_add(1);
+        let ok = match (path.get(k), path.get(k + 1)) {
+            (Some((a, ha)), Some((c, _))) if !c.off_map => space.check(a, ha, c).is_ok(),
+            _ => true,
+        };
+        if !ok {
+            m.counters.recheck_failures = m.counters.recheck_failures.saturating_add(1);
+            log::info!("mission: segment {k} fails on the map a scan changed while driving it: stop the motion");
+        }
+        !ok
+    }
+
     /// The report of the motion in flight (the executive checked the command id).
     pub(super) fn mission_report(&mut self, r: &MotionReport, motion: Motion) {
         self.mission.unmoved_since_recovery = false;
+        self.mission.flight_check_due = false;
         let flight = self.mission.in_flight.take();
         let reported = BodyPose::from_wire(&r.pose);
         let prev = flight.map(|f| f.from).or(self.mission.body);

@@ -502,6 +502,10 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
         self.mission_timeout();
     }
 
+    fn stop_in_flight(&mut self, _now: Instant) -> bool {
+        self.mission_stop_in_flight()
+    }
+
     fn cancel(&mut self, _goal_id: u32, _now: Instant) -> Result<(), Refused> {
         self.mission_cancel();
         Ok(())

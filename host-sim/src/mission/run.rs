@@ -645,7 +645,7 @@ impl<L: FlightLink> Sim<'_, L> {
         let turn = gaussian(&mut self.rng) * self.m.turn_error_deg.to_radians();
         let mut ex = Execution::new(id, motion, &self.rover, &self.m, scale, turn);
         let dt_us = (ex.step_seconds(&self.m) * 1e6).round().max(1.0) as u64;
-        let (outcome, _blocked) = loop {
+        let (outcome, blocked) = loop {
             let before = self.rover.driven_m;
             let progress = ex.step(&self.truth, &mut self.rover, self.m.slip_threshold_m);
             self.loc.moved(self.rover.driven_m - before);
@@ -690,6 +690,8 @@ impl<L: FlightLink> Sim<'_, L> {
                 self.rep.slips += 1;
                 MotionOutcome::Slipped
             }
+            // the flight software stopped it (PROTOCOL.md: reported `Stopped`, with what was achieved)
+            TrueOutcome::Stalled if matches!(blocked, Some(Blocked::StopCommanded)) => MotionOutcome::Stopped,
             TrueOutcome::Stalled => {
                 self.rep.stalls += 1;
                 MotionOutcome::Stalled
