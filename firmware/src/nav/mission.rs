@@ -10,8 +10,8 @@ use crate::config::mission as mcfg;
 use crate::config::nav::MAX_PLAN_ITERATIONS;
 use crate::exec::DriveStep;
 use crate::geom::{norm3, wrap_angle, Real, Vec3};
-use crate::map::{Block, Map, UnobservedAsFree};
-use crate::plan::tethered::TetherSpaceParams;
+use crate::map::{Block, DistanceField, Map, UnobservedAsFree};
+use crate::plan::tethered::{RoverState, TetherSpace, TetherSpaceParams};
 use crate::protocol::{
     GoalRequest, MissionConfig, MissionState, MissionStatus, Motion, MotionOutcome, MotionReport, PlanState,
     Point3, Pose, Quat, StopReason, Tracking, TetherReading,
@@ -582,10 +582,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         let path = &self.storage.borrow_mut().path;
         let k = m.seg;
         m.counters.rechecks = m.counters.rechecks.saturating_add(1);
-        let ok = match (path.get(k), path.get(k + 1)) {
-            (Some((a, ha)), Some((c, _))) if !c.off_map => space.check(a, ha, c).is_ok(),
-            _ => true,
-        };
+        let ok = planned_segment_checks(&space, path, k);
         if !ok {
             m.counters.recheck_failures = m.counters.recheck_failures.saturating_add(1);
             log::info!("mission: segment {k} fails on the map a scan changed while driving it: stop the motion");
@@ -919,10 +916,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
                 Err(_) => false,
             }
         } else {
-            match (path.get(k), path.get(k + 1)) {
-                (Some((a, ha)), Some((c, _))) if !c.off_map => space.check(a, ha, c).is_ok(),
-                _ => true,
-            }
+            planned_segment_checks(&space, path, k)
         };
         m.recheck_at = k + 1;
         m.recheck_left = m.recheck_left.saturating_sub(1);
@@ -1000,5 +994,18 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         self.mission.cross_track_m = 0.0;
         log::info!("mission: replan {} from ({}, {})", self.mission.replans, pose.position.x, pose.position.y);
         DriveStep::Replan
+    }
+}
+
+/// The plan's segment `k` (from its planned state and anchor history to the next state) passes one motion check on
+/// `space`'s map; a segment that ends off the map (an unobserved goal) or does not exist passes.
+fn planned_segment_checks<D: DistanceField>(
+    space: &TetherSpace<'_, D>,
+    path: &[(RoverState, AnchorHistory)],
+    k: usize,
+) -> bool {
+    match (path.get(k), path.get(k + 1)) {
+        (Some((a, ha)), Some((c, _))) if !c.off_map => space.check(a, ha, c).is_ok(),
+        _ => true,
     }
 }
