@@ -26,7 +26,9 @@
 //!    with its wheels just above `p_m` instead (`wheel_radius_m + 2 contact_threshold_m` up along `n`).
 //! 4. Search discrete roll perturbations (`roll_step_rad` steps, up to `SETTLE_ROLL_STEPS` each way) for the roll
 //!    at which the two wheels' lowest points are equally far from the surface; drop again; repeat until both wheels
-//!    touch (at most `SETTLE_MAX_ITERATIONS`).
+//!    touch (at most `SETTLE_MAX_ITERATIONS`). Rolling lifts one wheel and lowers the other, so the search brackets
+//!    the gap difference's sign change by doubling steps and bisects it on the grid (`roll_search`: about 12 wheel
+//!    evaluations, not the grid's 120; the grid's answer wherever the difference is monotone in the roll).
 //! 5. Wheel contacts: from each wheel's lowest contact point the rim is searched within half a point spacing either
 //!    way (`RIM_REFINE_STEPS` steps each side) for the rim point nearest the surface (the tangent point on smooth
 //!    ground, the point on the edge-to-centre line on an edge); the contact is the surface point under it. Its normal
@@ -207,6 +209,68 @@ fn wheel_contact_normal(surface: &Vec3, point: &Vec3, centre: &Vec3, axle: &Vec3
     normalize3(&(in_plane * libm::sqrtf(1.0 - lateral * lateral) + axle * lateral), 1e-6)
 }
 
+/// Step 4's roll search on the grid `roll + k * step`, `|k| <= SETTLE_ROLL_STEPS`: the roll whose wheel-gap
+/// difference `f = gap(left) - gap(right)` is nearest 0, as `(|f|, roll)`; `f0` is `f` at `k = 0`. Rolling lifts
+/// one wheel and lowers the other, so `f` grows with the roll and `|f|` falls to the root and rises after it: the
+/// search steps from 0 towards the side where `|f|` falls, doubling the step until `f` changes sign (or the grid
+/// ends, or `|f|` rises again: no root on that side), then bisects the bracket down to neighbouring grid points.
+/// About 2 log2(`SETTLE_ROLL_STEPS`) evaluations instead of the whole grid's 120, with the grid's answer whenever
+/// `f` is monotone over it; the best point evaluated is returned either way. `None` in unknown space.
+fn roll_search(
+    map: &impl DistanceField,
+    pts: &[[Vec3; WHEEL_CONTACT_POINTS]; 2],
+    origin: &Vec3,
+    base: &Matrix3<Real>,
+    roll: Real,
+    f0: Real,
+    step: Real,
+) -> Option<(Real, Real)> {
+    let f = |k: i32| -> Option<Real> {
+        let g = wheel_gaps(map, pts, origin, &roll_matrix(base, roll + k as Real * step))?;
+        Some(g[0].0 - g[1].0)
+    };
+    let mut best = (libm::fabsf(f0), 0i32);
+    let keep = |e: Real, k: i32, best: &mut (Real, i32)| {
+        if e < best.0 {
+            *best = (e, k);
+        }
+    };
+    let (fp, fm) = (f(1)?, f(-1)?);
+    keep(libm::fabsf(fm), -1, &mut best);
+    keep(libm::fabsf(fp), 1, &mut best);
+    if best.1 == 0 {
+        return Some((best.0, roll));
+    }
+    let dir = best.1;
+    // bracket: (k_in, f_in) on f0's side of the root, (k_out, f_out) the last point stepped to
+    let (mut k_in, mut f_in) = (0i32, f0);
+    let (mut k_out, mut f_out) = (dir, if dir > 0 { fp } else { fm });
+    while (f_out > 0.0) == (f0 > 0.0) {
+        let k_next = (k_out * 2).clamp(-SETTLE_ROLL_STEPS, SETTLE_ROLL_STEPS);
+        if k_next == k_out {
+            return Some((best.0, roll + best.1 as Real * step));
+        }
+        let f_next = f(k_next)?;
+        keep(libm::fabsf(f_next), k_next, &mut best);
+        if libm::fabsf(f_next) > libm::fabsf(f_out) && (f_next > 0.0) == (f0 > 0.0) {
+            return Some((best.0, roll + best.1 as Real * step));
+        }
+        (k_in, f_in, k_out, f_out) = (k_out, f_out, k_next, f_next);
+    }
+    // f changes sign between k_in and k_out: bisect on the grid
+    while (k_out - k_in).abs() > 1 {
+        let mid = k_in + (k_out - k_in) / 2;
+        let fm = f(mid)?;
+        keep(libm::fabsf(fm), mid, &mut best);
+        if (fm > 0.0) == (f_in > 0.0) {
+            (k_in, f_in) = (mid, fm);
+        } else {
+            k_out = mid;
+        }
+    }
+    Some((best.0, roll + best.1 as Real * step))
+}
+
 fn roll_matrix(base: &Matrix3<Real>, roll: Real) -> Matrix3<Real> {
     let (s, c) = (libm::sinf(roll), libm::cosf(roll));
     let rx = Matrix3::new(1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c);
@@ -321,20 +385,9 @@ pub fn settle(map: &impl DistanceField, p_m: &Vec3, theta_m: Real, params: &Rove
             break;
         }
         // discrete roll search: the roll at which both wheels' lowest points are equally far from the surface
-        let mut best = (libm::fabsf(g[0].0 - g[1].0), roll);
-        for k in -SETTLE_ROLL_STEPS..=SETTLE_ROLL_STEPS {
-            if k == 0 {
-                continue;
-            }
-            let r = roll + k as Real * params.roll_step_rad;
-            let Some(gk) = wheel_gaps(map, &pts, &origin, &roll_matrix(&base, r)) else {
-                return SettleOutcome::UnknownSpace;
-            };
-            let e = libm::fabsf(gk[0].0 - gk[1].0);
-            if e < best.0 {
-                best = (e, r);
-            }
-        }
+        let Some(best) = roll_search(map, &pts, &origin, &base, roll, g[0].0 - g[1].0, params.roll_step_rad) else {
+            return SettleOutcome::UnknownSpace;
+        };
         if best.1 == roll {
             // no perturbation improves: the wheels are as level as the roll grid allows
             settled = libm::fabsf(g[0].0) <= 2.0 * thr && libm::fabsf(g[1].0) <= 2.0 * thr;
@@ -528,6 +581,30 @@ pub fn check_pose_stability(
     last_anchor: Option<&Vec3>,
     params: &RoverParams,
 ) -> Result<(StabilityOutcome, BoomConfig), StabilityError> {
+    pose_stability(map, settled, last_anchor, params, None)
+}
+
+/// [`check_pose_stability`] for callers that need only the verdict "stable with a margin of at least
+/// `min_margin`" (the planners' motion checks): the in-contact boom is tried first, and when it holds with that
+/// margin the inline boom's LP is not solved (the answer then has that margin, not necessarily the larger).
+/// Otherwise the answer is [`check_pose_stability`]'s, so the verdict is the same.
+pub fn check_pose_stability_at_least(
+    map: &impl DistanceField,
+    settled: &SettledPose,
+    last_anchor: Option<&Vec3>,
+    params: &RoverParams,
+    min_margin: f64,
+) -> Result<(StabilityOutcome, BoomConfig), StabilityError> {
+    pose_stability(map, settled, last_anchor, params, Some(min_margin))
+}
+
+fn pose_stability(
+    map: &impl DistanceField,
+    settled: &SettledPose,
+    last_anchor: Option<&Vec3>,
+    params: &RoverParams,
+    enough: Option<f64>,
+) -> Result<(StabilityOutcome, BoomConfig), StabilityError> {
     let inline = match last_anchor {
         Some(a) => boom_inline_angle(settled, a),
         None => core::f32::consts::PI,
@@ -551,14 +628,34 @@ pub fn check_pose_stability(
             best = Some((o, c));
         }
     };
-    let tip = boom_tip(settled, inline, params);
-    if matches!(query(map, &tip), Some((d, _)) if d > params.contact_threshold_m) {
-        let p = stability_problem(settled, inline, None, last_anchor, params);
-        consider(check_stability(&p)?, BoomConfig::Inline);
-    }
-    if let Some(bc) = boom_in_contact(map, settled, inline, params) {
-        let p = stability_problem(settled, bc.angle_rad, Some(&bc), last_anchor, params);
-        consider(check_stability(&p)?, BoomConfig::InContact);
+    // the in-contact boom first when only the verdict is needed: it is the one that holds more often (its tip
+    // adds a contact with the terrain)
+    let order = if enough.is_some() {
+        [BoomConfig::InContact, BoomConfig::Inline]
+    } else {
+        [BoomConfig::Inline, BoomConfig::InContact]
+    };
+    for config in order {
+        let p = match config {
+            BoomConfig::Inline => {
+                let tip = boom_tip(settled, inline, params);
+                if !matches!(query(map, &tip), Some((d, _)) if d > params.contact_threshold_m) {
+                    continue;
+                }
+                stability_problem(settled, inline, None, last_anchor, params)
+            }
+            BoomConfig::InContact => {
+                let Some(bc) = boom_in_contact(map, settled, inline, params) else { continue };
+                stability_problem(settled, bc.angle_rad, Some(&bc), last_anchor, params)
+            }
+        };
+        let o = check_stability(&p)?;
+        if let (StabilityOutcome::Stable(r), Some(min)) = (&o, enough) {
+            if r.margin >= min {
+                return Ok((o, config));
+            }
+        }
+        consider(o, config);
     }
     Ok(best.unwrap_or((
         StabilityOutcome::Unknown(crate::stability::UnknownReason::NumericalFailure),
@@ -764,6 +861,38 @@ mod tests {
         let SettleOutcome::Settled(s) = settle(&plane, &Vec3::zeros(), 0.3, &params) else { panic!() };
         let (o, _) = check_pose_stability(&plane, &s, None, &params).unwrap_or_else(|e| panic!("{e:?}"));
         assert!(o.is_stable(), "{o:?}");
+    }
+
+    #[test]
+    fn the_verdict_only_check_agrees_with_the_full_one() {
+        // slopes from flat to past the tether's help, yaws all round, anchors uphill, beside and below: both
+        // verdicts (stable with at least the minimum margin) agree, and both occur
+        let params = RoverParams::AXEL;
+        let min = crate::config::stability::MIN_MARGIN;
+        let (mut stable, mut unstable) = (0, 0);
+        for slope_deg in [0.0f32, 15.0, 30.0, 45.0, 60.0] {
+            let plane = Plane::new(slope_deg.to_radians());
+            for yaw_k in 0..8 {
+                let yaw = yaw_k as Real * core::f32::consts::FRAC_PI_4;
+                let SettleOutcome::Settled(s) = settle(&plane, &Vec3::zeros(), yaw, &params) else { continue };
+                for anchor in [Vec3::new(-6.0, 0.0, 6.0), Vec3::new(0.0, 6.0, 1.0), Vec3::new(4.0, 0.0, -4.0)] {
+                    for a in [Some(&anchor), None] {
+                        let verdict = |r: Result<(StabilityOutcome, BoomConfig), StabilityError>| {
+                            matches!(r, Ok((StabilityOutcome::Stable(m), _)) if m.margin >= min)
+                        };
+                        let full = verdict(check_pose_stability(&plane, &s, a, &params));
+                        let quick = verdict(check_pose_stability_at_least(&plane, &s, a, &params, min));
+                        assert_eq!(full, quick, "slope {slope_deg} yaw {yaw} anchor {a:?}");
+                        if full {
+                            stable += 1;
+                        } else {
+                            unstable += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(stable > 10 && unstable > 10, "{stable} stable, {unstable} unstable: the sweep no longer covers both");
     }
 
     /// Flat ground `z = 0` plus a vertical pole of radius 0.25 m at `(0.93, 0)`: exact SDF (union).

@@ -127,6 +127,10 @@ impl DistanceField for Truth<'_> {
     fn query(&self, p: &Vec3) -> DistanceQuery {
         self.0.query(p)
     }
+
+    fn lipschitz_bound(&self) -> Option<Real> {
+        self.0.lipschitz_bound()
+    }
 }
 
 /// The planning map's storage and how it was built.

@@ -223,6 +223,12 @@ pub fn build_map(world: &dyn World, poses: &[Pose3], cfg: &CheckConfig, map: &mu
         if std::env::var_os("TETHERBOT_ESDF_TRACE").is_some() {
             eprintln!("scan {k}: {cpu:.1} ms CPU {e:?} blocks {}", map.blocks_used());
         }
+        if std::env::var_os("TETHERBOT_ESDF_DIGEST").is_some() {
+            eprintln!("scan {k}: esdf digest {:016x}", esdf_digest(map));
+        }
+        if let Some(dir) = std::env::var_os("TETHERBOT_ESDF_DUMP") {
+            let _ = std::fs::write(std::path::Path::new(&dir).join(format!("esdf_{k:03}.bin")), esdf_dump(map));
+        }
         rep.esdf_all_converged &= e.converged;
         rep.scans += 1;
     }
@@ -231,6 +237,55 @@ pub fn build_map(world: &dyn World, poses: &[Pose3], cfg: &CheckConfig, map: &mu
     rep.esdf_wall_ms_mean = esdf_wall.iter().sum::<f64>() / esdf_wall.len().max(1) as f64;
     rep.blocks_used = map.blocks_used();
     rep
+}
+
+/// FNV-1a digest of every voxel's ESDF value and site distance (bit patterns) over the blocks in use, in slot
+/// order: two maps built by the same calls have the same digest exactly when their ESDFs are bit-identical
+/// (`TETHERBOT_ESDF_DIGEST=1 tetherbot map-check ...` prints it after every scan).
+pub fn esdf_digest(map: &Map<'_>) -> u64 {
+    let e = firmware::config::map::BLOCK_EDGE as i32;
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |v: u32| {
+        for b in v.to_le_bytes() {
+            h = (h ^ b as u64).wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    for slot in 0..map.blocks_used() {
+        let Some(c) = map.block_coord(slot) else { break };
+        for z in 0..e {
+            for y in 0..e {
+                for x in 0..e {
+                    let g = [c[0] * e + x, c[1] * e + y, c[2] * e + z];
+                    eat(map.esdf_voxel(g).map_or(u32::MAX, f32::to_bits));
+                    eat(map.site_distance_voxels(g).map_or(u32::MAX, f32::to_bits));
+                }
+            }
+        }
+    }
+    h
+}
+
+/// Every voxel of the blocks in use, slot order: coordinates (3 x i32), ESDF value and site distance (f32 bits,
+/// `u32::MAX` = none), little endian (`TETHERBOT_ESDF_DUMP=DIR` writes one file per scan).
+pub fn esdf_dump(map: &Map<'_>) -> Vec<u8> {
+    let e = firmware::config::map::BLOCK_EDGE as i32;
+    let mut out = Vec::new();
+    for slot in 0..map.blocks_used() {
+        let Some(c) = map.block_coord(slot) else { break };
+        for z in 0..e {
+            for y in 0..e {
+                for x in 0..e {
+                    let g = [c[0] * e + x, c[1] * e + y, c[2] * e + z];
+                    for v in g {
+                        out.extend_from_slice(&v.to_le_bytes());
+                    }
+                    out.extend_from_slice(&map.esdf_voxel(g).map_or(u32::MAX, f32::to_bits).to_le_bytes());
+                    out.extend_from_slice(&map.site_distance_voxels(g).map_or(u32::MAX, f32::to_bits).to_le_bytes());
+                }
+            }
+        }
+    }
+    out
 }
 
 /// Observed surface area from the TSDF zero crossings: each crossing along axis `a` stands for
@@ -358,7 +413,7 @@ pub fn write_grid(path: &std::path::Path, grid: &[bool], n: usize) -> std::io::R
 pub fn full_esdf_on_grid(grid: &[bool], n: usize) -> Result<(f64, Vec<f32>), String> {
     let mut cfg = MapConfig::with_voxel_size(0.1);
     cfg.esdf_max_distance = 12.7;
-    cfg.esdf_max_sweeps = 10_000;
+    cfg.esdf_max_sweeps = firmware::config::map::ESDF_SWEEPS_LIMIT;
     let blocks = (n / 8 + 1).pow(3);
     let (mut b, mut i) = host_storage(blocks);
     let mut map = Map::from_slices(cfg, &mut b, &mut i).map_err(|e| format!("{e:?}"))?;

@@ -184,7 +184,8 @@ pub struct PlanSection {
 pub struct Budgets {
     /// Planner iterations per plan. Default 750 (Paton et al. VI-A).
     pub planner_iterations: u32,
-    /// ESDF sweeps per update. Default 32.
+    /// ESDF budget per update, in sweeps of `firmware::config::map::ESDF_VISITS_PER_BLOCK` voxel visits per block in
+    /// use. Default 32.
     pub esdf_max_sweeps: usize,
     /// Voxels per integrated ray. Default 128 (at 5 cm).
     pub max_ray_voxels: usize,

@@ -12,8 +12,8 @@ pub const BLOCK_EDGE: usize = 8;
 /// Voxels per block (`BLOCK_EDGE^3`).
 pub const BLOCK_VOXELS: usize = BLOCK_EDGE * BLOCK_EDGE * BLOCK_EDGE;
 
-/// Default number of blocks in the flight computer's pool. 3072 blocks x 4112 B = 12.0 MiB of the mps2-an500
-/// board's 16 MiB PSRAM, leaving ~4 MiB of PSRAM for the planners' arenas (the board's `bench` mode places the
+/// Default number of blocks in the flight computer's pool. 3072 blocks x 4184 B = 12.3 MiB of the mps2-an500
+/// board's 16 MiB PSRAM, leaving ~3.7 MiB of PSRAM for the planners' arenas (the board's `bench` mode places the
 /// ABIT*, homotopy and team arenas there). At 5 cm voxels a block is 0.4 m on a side; observed terrain costs
 /// 84-120 kB per m^2 (host-sim/doc/map.md), so the pool holds ~100-150 m^2 of terrain at 5 cm.
 pub const FLIGHT_BLOCKS: usize = 3072;
@@ -47,9 +47,23 @@ pub const MIN_INCIDENCE_COSINE: Real = 0.1;
 /// Largest [`MapConfig::max_ray_voxels`] accepted: 1024 voxels per ray (51 m at 5 cm). A map configuration can
 /// come over the link (`Configure.map`); this keeps the work per point, and so per executive step, bounded.
 pub const MAX_RAY_VOXELS_LIMIT: usize = 1024;
-/// Largest [`MapConfig::esdf_max_sweeps`] accepted: 256 sweeps per ESDF update (8 times the default), for the
-/// same reason.
+/// Largest [`MapConfig::esdf_max_sweeps`] accepted: 256 sweeps (of [`ESDF_VISITS_PER_BLOCK`] voxel visits per
+/// block in use) per ESDF update, 8 times the default, for the same reason.
 pub const ESDF_SWEEPS_LIMIT: usize = 256;
+
+/// Capacity of the ESDF's lower queue (the wavefront of voxels whose site just improved), in voxels: a fixed array
+/// of this many `u32` on the stack of [`crate::map::Map::update_esdf`]. Default 8192 (32 KiB of stack, a quarter
+/// of the board's stack guard). A voxel that finds the queue full is not lost: the cells around it are marked for
+/// a pull (each voxel compared with its 26 neighbours) in the next round, so a full queue costs time, not
+/// correctness.
+pub const ESDF_QUEUE_CAPACITY: usize = 8192;
+
+/// The unit of the ESDF budget [`MapConfig::esdf_max_sweeps`]: one "sweep" of the wavefront is this many voxel
+/// visits (a pull or a pop, each comparing one voxel with its 26 neighbours) per block in use, and at least
+/// [`ESDF_QUEUE_CAPACITY`] visits. Default 64 (an eighth of a block's voxels: the wavefront touches only changed
+/// voxels, where a raster sweep visited all of them), so the default budget of 32 is 2048 visits per block in use,
+/// 6.3 M visits for the full flight pool.
+pub const ESDF_VISITS_PER_BLOCK: usize = 64;
 
 /// Per-mission map parameters (runtime). Every field is validated by [`MapConfig::validate`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -81,8 +95,9 @@ pub struct MapConfig {
     /// ESDF saturation distance, metres: beyond it the ESDF reports exactly this value (a lower bound on the true
     /// distance). Default 1.5 (covers Axel's 1 m wheel base and the tether sweep). At most 127 voxels.
     pub esdf_max_distance: Real,
-    /// ESDF budget: sweeps over the dirty blocks per [`crate::map::Map::update_esdf`] call. Default 32. A call that
-    /// runs out returns `converged: false` and the next call continues from where it stopped.
+    /// ESDF budget per [`crate::map::Map::update_esdf`] call, in sweeps of [`ESDF_VISITS_PER_BLOCK`] voxel visits
+    /// per block in use (the name is the link protocol's, from the raster sweeps the wavefront replaced). Default
+    /// 32. A call that runs out returns `converged: false` and the next call continues from where it stopped.
     pub esdf_max_sweeps: usize,
 }
 

@@ -46,6 +46,19 @@ pub fn clamp(x: Real, lo: Real, hi: Real) -> Real {
     }
 }
 
+/// `libm::floorf(x) as i32` without the software floor (on x86_64 and the Cortex-M7 alike `libm` computes it
+/// with integer bit operations; a truncating conversion is one instruction): `x` truncated towards zero, one less
+/// when that is above `x`. Equal to `floorf(x) as i32` for every `x`, saturating as the cast does (NaN gives 0).
+#[inline]
+pub fn floor_i32(x: Real) -> i32 {
+    let t = x as i32;
+    if (t as Real) > x {
+        t.saturating_sub(1)
+    } else {
+        t
+    }
+}
+
 /// Euclidean norm through `libm` (bit-identical on every target).
 pub fn norm3(v: &Vec3) -> Real {
     libm::sqrtf(v.x * v.x + v.y * v.y + v.z * v.z)
@@ -70,6 +83,25 @@ pub fn unit_ball_measure(n: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn floor_i32_is_libm_floor_cast_everywhere() {
+        let specials = [
+            0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 1.0 - f32::EPSILON, -1.0 + f32::EPSILON, 16_777_215.5, -16_777_215.5,
+            16_777_217.0, 2_147_483_520.0, 2_147_483_648.0, -2_147_483_648.0, -2_147_483_904.0, 1e30, -1e30,
+            f32::MIN_POSITIVE, -f32::MIN_POSITIVE, f32::INFINITY, f32::NEG_INFINITY, f32::NAN,
+        ];
+        for x in specials {
+            assert_eq!(floor_i32(x), libm::floorf(x) as i32, "x = {x:e}");
+        }
+        // every 997th bit pattern of the whole f32 line
+        let mut bits: u32 = 0;
+        while let Some(next) = bits.checked_add(997) {
+            let x = f32::from_bits(bits);
+            assert_eq!(floor_i32(x), libm::floorf(x) as i32, "x = {x:e}");
+            bits = next;
+        }
+    }
 
     #[test]
     fn normalize_rejects_zero_and_nan() {

@@ -1,9 +1,42 @@
-//! ESDF from the TSDF: fixed-band sites, incremental reset of stale sites, vector propagation by raster sweeps.
+//! ESDF from the TSDF: fixed-band sites, incremental reset of stale sites, and a queue-based wavefront of
+//! nearest-site offsets (vector propagation) that touches only the voxels whose site changed and their neighbours.
+//!
+//! The wavefront follows Voxblox (Oleynikova et al., "Voxblox: Incremental 3D Euclidean Signed Distance Fields for
+//! On-Board MAV Planning", IROS 2017) and FIESTA (Han et al., "FIESTA: Fast Incremental Euclidean Distance Fields
+//! for Online Motion Planning of Aerial Robots", IROS 2019): a raise step forgets the sites that vanished or
+//! changed, then a lower queue (FIFO) carries every improved site to the 26 neighbours.
+//!
+//! 1. Sites: the blocks whose TSDF changed get their fixed-band sites rebuilt; a site that appears or changes value
+//!    is pushed onto the lower queue.
+//! 2. Raise (done directly, as each voxel stores the offset of its site): in every block within
+//!    `esdf_max_distance` of a block whose sites moved or vanished, a voxel whose site is no longer a fixed-band
+//!    voxel with the same value is reset, and so is a fixed-band site that left the band; a reset voxel's unused
+//!    offset holds the marker `RESET` until it is pulled. Voxels that changed sign (marked by the integration) and
+//!    newly allocated blocks are marked by 2x2x2-voxel cells in the block's `pending` mask (64 bits in the lent
+//!    storage).
+//! 3. Lower: every reset voxel and every voxel of a marked cell is **pulled** (takes the best site of its 26
+//!    neighbours) and queued if it improved; then the queue runs: each pop offers the voxel's site to its 26
+//!    neighbours and queues those it improves (strictly better by 1e-5 voxel, within `esdf_max_distance`).
+//!    Fixed-band sites keep their own value.
+//!
+//! The fixed point is the one the raster sweeps this replaced reached: every voxel holds the best site among its
+//! own and its 26 neighbours' sites. Which of several such fixed points is reached depends on the order, so
+//! individual voxels can differ from the sweeps' (where vector propagation is not exact either way).
+//!
+//! Bounds: the lower queue is a fixed array of [`ESDF_QUEUE_CAPACITY`] entries (default 8192, 32 KiB) on the
+//! stack of [`Map::update_esdf`]. A voxel that finds it full sets its bit in its block's `queued` mask (one bit
+//! per voxel, in the lent storage) and is counted in [`EsdfOutcome::queue_overflows`]; when the queue runs dry it
+//! is refilled from those bits, block by block round robin. The budget is `esdf_max_sweeps` (default 32) times
+//! [`ESDF_VISITS_PER_BLOCK`] (default 64) voxel visits (pulls and pops) per block in use, at least
+//! `esdf_max_sweeps` times the queue capacity. A call that runs out moves the voxels still queued into their bits
+//! and returns `converged: false`; the next call continues from the marks and bits. No heap, every loop bounded,
+//! slot and raster order only (deterministic).
 
 use super::{
-    local_coords, local_index, split, Map, BLOCK_EDGE, BLOCK_VOXELS, FLAG_ESDF_DIRTY, FLAG_ESDF_NEXT, FLAG_REGION,
+    cell_bit, local_coords, local_index, split, Map, BLOCK_EDGE, BLOCK_VOXELS, FLAG_ESDF_NEW, FLAG_QUEUED, FLAG_REGION, FLAG_RESET,
     FLAG_SITES_CHANGED, FLAG_TSDF_DIRTY, NO_SITE,
 };
+use crate::config::map::{ESDF_QUEUE_CAPACITY, ESDF_VISITS_PER_BLOCK};
 use crate::geom::Real;
 
 /// What one call of [`Map::update_esdf`] did.
@@ -13,14 +46,18 @@ pub struct EsdfOutcome {
     pub blocks_rebuilt: u32,
     /// Blocks checked for stale sites (within `esdf_max_distance` of a block whose sites moved or vanished).
     pub blocks_in_region: u32,
-    /// Sweeps run (each visits every dirty block once forward and once backward).
-    pub sweeps: u32,
-    /// Block visits over all sweeps.
-    pub blocks_processed: u32,
-    /// Voxel site changes over all sweeps.
+    /// Times the empty queue was refilled from the spilled voxels.
+    pub refills: u32,
+    /// Voxels pulled (compared with their 26 neighbours) from the pending cells.
+    pub voxels_pulled: u32,
+    /// Voxels popped from the lower queue (each offers its site to its 26 neighbours).
+    pub voxels_popped: u32,
+    /// Voxel site changes (pulls and pushes).
     pub voxels_changed: u32,
-    /// True when the propagation reached its fixed point; false when `esdf_max_sweeps` ran out first (the next
-    /// call continues where this one stopped).
+    /// Voxels that found the lower queue full (they wait in their block's spill bits instead).
+    pub queue_overflows: u32,
+    /// True when the wavefront reached its fixed point; false when the budget (`esdf_max_sweeps` times the blocks
+    /// in use times their voxels, in pulls and pops) ran out first (the next call continues where this one stopped).
     pub converged: bool,
 }
 
@@ -62,45 +99,143 @@ const NEIGHBOURS: [[i32; 3]; 26] = {
     out
 };
 
+/// The lower queue: a FIFO ring of voxels (`slot << 9 | local index`) over a fixed array.
+struct Ring<'q> {
+    buf: &'q mut [u32],
+    head: usize,
+    len: usize,
+}
+
+/// The site offset of a voxel that lost its site in the current update and is still to be pulled (with
+/// `site_tsdf == NO_SITE`, whose offset is otherwise unused).
+const RESET: [i8; 3] = [i8::MIN; 3];
+
+/// Bits of a queue entry for the local voxel index.
+const LOCAL_BITS: u32 = BLOCK_VOXELS.trailing_zeros();
+
+impl Ring<'_> {
+    fn push(&mut self, s: usize, i: usize) -> bool {
+        let cap = self.buf.len();
+        if self.len >= cap || s >= (1usize << (32 - LOCAL_BITS)) {
+            return false;
+        }
+        let Some(e) = self.buf.get_mut((self.head + self.len) % cap) else { return false };
+        *e = ((s as u32) << LOCAL_BITS) | i as u32;
+        self.len += 1;
+        true
+    }
+
+    fn pop(&mut self) -> Option<(usize, usize)> {
+        if self.len == 0 {
+            return None;
+        }
+        let e = *self.buf.get(self.head)?;
+        self.head = (self.head + 1) % self.buf.len().max(1);
+        self.len -= 1;
+        Some(((e >> LOCAL_BITS) as usize, (e & ((1 << LOCAL_BITS) - 1)) as usize))
+    }
+}
+
+/// Slots of the 27 blocks around recently visited blocks, looked up on demand: a direct-mapped cache of
+/// [`AROUND_WAYS`] blocks (by slot), since the queue interleaves the voxels of neighbouring blocks.
+struct Around {
+    keys: [u32; AROUND_WAYS],
+    slots: [[u32; 27]; AROUND_WAYS],
+}
+
+const AROUND_WAYS: usize = 16;
+const AROUND_UNKNOWN: u32 = u32::MAX;
+const AROUND_MISSING: u32 = u32::MAX - 1;
+
+impl Around {
+    fn new() -> Around {
+        Around { keys: [u32::MAX; AROUND_WAYS], slots: [[AROUND_UNKNOWN; 27]; AROUND_WAYS] }
+    }
+}
+
+/// Work counters and the queue of one [`Map::update_esdf`] call.
+struct Wave<'q> {
+    queue: Ring<'q>,
+    around: Around,
+    /// Some block has pending cells.
+    pending: bool,
+    /// Some block has queued bits (voxels that found the queue full).
+    spilled: bool,
+    /// Voxel visits (pulls and pops) left in this call.
+    budget: u64,
+    /// Where the next refill starts (round robin over the slots, so spilled voxels are served in turn).
+    cursor: usize,
+    dmax: Real,
+    out: EsdfOutcome,
+}
+
 impl Map<'_> {
-    /// Brings the ESDF up to date with the TSDF. Bounded by `esdf_max_sweeps` sweeps over the blocks in use.
+    /// Brings the ESDF up to date with the TSDF (see the module docs). Bounded by the budget of `esdf_max_sweeps`
+    /// times [`ESDF_VISITS_PER_BLOCK`] voxel visits per block in use; `converged: false` means the next call
+    /// continues.
     pub fn update_esdf(&mut self) -> EsdfOutcome {
-        let mut out = EsdfOutcome::default();
+        let mut buf = [0u32; ESDF_QUEUE_CAPACITY];
+        let mut wave = Wave {
+            queue: Ring { buf: &mut buf, head: 0, len: 0 },
+            around: Around::new(),
+            pending: true,
+            spilled: true,
+            cursor: 0,
+            budget: (self.cfg.esdf_max_sweeps as u64)
+                .saturating_mul(((self.used * ESDF_VISITS_PER_BLOCK) as u64).max(ESDF_QUEUE_CAPACITY as u64)),
+            dmax: self.cfg.esdf_max_distance / self.cfg.voxel_size,
+            out: EsdfOutcome::default(),
+        };
         let used = self.used;
         let vs = self.cfg.voxel_size;
         let band = self.cfg.esdf_band * vs;
         let tq = self.cfg.truncation / 32767.0;
-        let dmax = self.cfg.esdf_max_distance / vs;
+        let dmax = wave.dmax;
 
-        // 1. Rebuild the fixed-band sites of blocks whose TSDF changed (values within the hysteresis are kept).
+        // 1. Rebuild the fixed-band sites of blocks whose TSDF changed (values within the hysteresis are kept). New
+        // sites are queued; voxels that lost their site, and every voxel of a new block, are marked for a pull.
         let tol = self.site_tolerance();
-        for b in self.blocks.iter_mut().take(used) {
+        for s in 0..used {
+            let Some(b) = self.blocks.get_mut(s) else { break };
             if b.flags & FLAG_TSDF_DIRTY == 0 {
                 continue;
             }
-            out.blocks_rebuilt += 1;
+            wave.out.blocks_rebuilt += 1;
             let mut sites_changed = false;
-            for ((t, w), (s, sw)) in
-                b.tsdf.iter().zip(b.weight.iter()).zip(b.site.iter_mut().zip(b.site_tsdf.iter_mut()))
-            {
+            let mut pending = b.pending;
+            if b.flags & FLAG_ESDF_NEW != 0 {
+                pending = u64::MAX; // a new block's voxels have not seen the sites around them yet
+            }
+            for i in 0..BLOCK_VOXELS {
+                let Some(b) = self.blocks.get_mut(s) else { break };
+                let (Some(t), Some(w), Some(so), Some(sw)) =
+                    (b.tsdf.get(i), b.weight.get(i), b.site.get_mut(i), b.site_tsdf.get_mut(i))
+                else {
+                    break;
+                };
                 let nb = if *w > 0 { band_site(*t as Real * tq, band, vs) } else { NO_SITE };
-                let is_site = *sw != NO_SITE && *s == [0, 0, 0];
+                let is_site = *sw != NO_SITE && *so == [0, 0, 0];
                 if nb != NO_SITE {
                     if !(is_site && (nb as i32 - *sw as i32).abs() <= tol) {
                         sites_changed |= is_site;
-                        *s = [0; 3];
+                        *so = [0; 3];
                         *sw = nb;
+                        wave.out.voxels_changed += 1;
+                        self.queue_or_spill(&mut wave, s, i);
                     }
                 } else if is_site {
                     *sw = NO_SITE;
+                    *so = RESET;
                     sites_changed = true;
                 }
             }
-            b.flags |= FLAG_ESDF_DIRTY;
-            if sites_changed {
-                b.flags |= FLAG_SITES_CHANGED;
+            if let Some(b) = self.blocks.get_mut(s) {
+                b.pending |= pending;
+                b.flags &= !(FLAG_TSDF_DIRTY | FLAG_ESDF_NEW);
+                if sites_changed {
+                    b.flags |= FLAG_SITES_CHANGED | FLAG_RESET;
+                }
             }
-            b.flags &= !FLAG_TSDF_DIRTY;
         }
 
         // 2. The raise region: every block within esdf_max_distance of a block whose sites moved or vanished.
@@ -125,7 +260,7 @@ impl Map<'_> {
                 }
             }
         }
-        // 3. Raise: forget every site that is no longer a fixed-band voxel with the same value.
+        // 3. Raise: forget every site that is no longer a fixed-band voxel with the same value; mark its cell.
         if any_changed {
             let e = BLOCK_EDGE as i32;
             for s in 0..used {
@@ -133,7 +268,7 @@ impl Map<'_> {
                 if b.flags & FLAG_REGION == 0 {
                     continue;
                 }
-                out.blocks_in_region += 1;
+                wave.out.blocks_in_region += 1;
                 let bc = b.coord;
                 let mut cache: Option<([i32; 3], Option<usize>)> = None;
                 let mut reset = false;
@@ -167,14 +302,17 @@ impl Map<'_> {
                     });
                     if !valid {
                         reset = true;
-                        if let Some(sw) = self.blocks.get_mut(s).and_then(|b| b.site_tsdf.get_mut(i)) {
-                            *sw = NO_SITE;
+                        if let Some(b) = self.blocks.get_mut(s) {
+                            if let (Some(sw), Some(so)) = (b.site_tsdf.get_mut(i), b.site.get_mut(i)) {
+                                *sw = NO_SITE;
+                                *so = RESET;
+                            }
                         }
                     }
                 }
                 if reset {
                     if let Some(b) = self.blocks.get_mut(s) {
-                        b.flags |= FLAG_ESDF_DIRTY;
+                        b.flags |= FLAG_RESET;
                     }
                 }
             }
@@ -183,118 +321,277 @@ impl Map<'_> {
             b.flags &= !(FLAG_REGION | FLAG_SITES_CHANGED);
         }
 
-        // 4. Lower: sweep the dirty blocks until nothing changes.
-        for sweep in 0..self.cfg.esdf_max_sweeps {
-            let mut any = false;
-            // Alternate the block order so distances cross block borders in both directions.
-            for j in 0..used {
-                let s = if sweep % 2 == 0 { j } else { used - 1 - j };
-                let Some(b) = self.blocks.get(s) else { break };
-                if b.flags & FLAG_ESDF_DIRTY == 0 {
-                    continue;
+        // 4. Lower: pull the pending cells, then run the queue (refilled from the spilled bits when it runs dry)
+        // until it is empty or the budget is spent.
+        self.pull_pending(&mut wave);
+        self.pull_resets(&mut wave);
+        loop {
+            if wave.queue.len == 0 {
+                if wave.pending {
+                    self.pull_pending(&mut wave);
                 }
-                any = true;
-                let c = b.coord;
-                let mut nb = [None; 27];
-                for (j, slot) in nb.iter_mut().enumerate() {
-                    let d = [(j % 3) as i32 - 1, ((j / 3) % 3) as i32 - 1, (j / 9) as i32 - 1];
-                    *slot = self.find_block([c[0] + d[0], c[1] + d[1], c[2] + d[2]]);
+                if wave.spilled {
+                    self.refill(&mut wave);
                 }
-                let changed = self.sweep_block(s, &nb, dmax);
-                out.blocks_processed += 1;
-                out.voxels_changed += changed;
-                if let Some(b) = self.blocks.get_mut(s) {
-                    b.flags &= !FLAG_ESDF_DIRTY;
-                }
-                if changed > 0 {
-                    for n in nb.iter().flatten() {
-                        if let Some(b) = self.blocks.get_mut(*n) {
-                            b.flags |= FLAG_ESDF_NEXT;
-                        }
-                    }
+                if wave.queue.len == 0 {
+                    break;
                 }
             }
-            if !any {
-                out.converged = true;
-                return out;
+            if wave.budget == 0 {
+                break;
             }
-            out.sweeps += 1;
-            for b in self.blocks.iter_mut().take(used) {
-                if b.flags & FLAG_ESDF_NEXT != 0 {
-                    b.flags = (b.flags & !FLAG_ESDF_NEXT) | FLAG_ESDF_DIRTY;
-                }
-            }
+            let Some((s, i)) = wave.queue.pop() else { break };
+            wave.budget -= 1;
+            self.offer_site(&mut wave, s, i);
         }
-        out.converged = !self.blocks.iter().take(used).any(|b| b.flags & FLAG_ESDF_DIRTY != 0);
-        out
+        // Out of budget: the voxels still queued have not offered their sites yet; they wait in the spill bits.
+        while let Some((s, i)) = wave.queue.pop() {
+            self.spill(&mut wave, s, i);
+        }
+        wave.out.converged =
+            !self.blocks.iter().take(used).any(|b| b.pending != 0 || b.flags & FLAG_QUEUED != 0);
+        wave.out
     }
 
-    /// One forward and one backward raster pass over block `s`; returns the number of voxels whose site changed.
-    fn sweep_block(&mut self, s: usize, nb: &[Option<usize>; 27], dmax: Real) -> u32 {
+    /// Queues voxel `(s, i)` (its site improved), or sets its spill bit when the queue is full.
+    #[inline]
+    fn queue_or_spill(&mut self, wave: &mut Wave<'_>, s: usize, i: usize) {
+        if !wave.queue.push(s, i) {
+            wave.out.queue_overflows += 1;
+            self.spill(wave, s, i);
+        }
+    }
+
+    fn spill(&mut self, wave: &mut Wave<'_>, s: usize, i: usize) {
+        if let Some(b) = self.blocks.get_mut(s) {
+            if let Some(w) = b.queued.get_mut(i / 64) {
+                *w |= 1u64 << (i % 64);
+                b.flags |= FLAG_QUEUED;
+                wave.spilled = true;
+            }
+        }
+    }
+
+    /// Moves spilled voxels into the empty queue until it is full, block by block from where the last refill
+    /// stopped.
+    fn refill(&mut self, wave: &mut Wave<'_>) {
+        wave.spilled = false;
+        wave.out.refills += 1;
+        let used = self.used;
+        for k in 0..used {
+            let s = (wave.cursor + k) % used;
+            let Some(b) = self.blocks.get_mut(s) else { break };
+            if b.flags & FLAG_QUEUED == 0 {
+                continue;
+            }
+            for (k, w) in b.queued.iter_mut().enumerate() {
+                while *w != 0 {
+                    let i = k * 64 + w.trailing_zeros() as usize;
+                    if !wave.queue.push(s, i) {
+                        wave.spilled = true;
+                        wave.cursor = s;
+                        return;
+                    }
+                    *w &= *w - 1;
+                }
+            }
+            b.flags &= !FLAG_QUEUED;
+        }
+    }
+
+    /// Slot and local index of the voxel at offset `d` (each component in -1..=1) from local voxel `l` of block
+    /// `s`, if its block exists.
+    #[inline]
+    fn neighbour(&self, around: &mut Around, s: usize, l: [usize; 3], d: [i32; 3]) -> Option<(usize, usize)> {
         let e = BLOCK_EDGE as i32;
-        let mut changed = 0;
-        for pass in 0..2 {
-            for k in 0..BLOCK_VOXELS {
-                let i = if pass == 0 { k } else { BLOCK_VOXELS - 1 - k };
-                let l = local_coords(i);
-                let Some(b) = self.blocks.get(s) else { return changed };
-                let (Some(&w0), Some(&o0), Some(&t0)) = (b.site_tsdf.get(i), b.site.get(i), b.tsdf.get(i)) else {
-                    return changed;
-                };
-                if w0 != NO_SITE && o0 == [0, 0, 0] {
-                    continue; // a fixed-band site keeps its own value
-                }
-                let inside = t0 < 0;
-                let mut cand = Candidate::new(w0, o0, inside);
-                // Forward pass: the 13 neighbours before the voxel in raster order; backward: the 13 after. A sweep
-                // without changes has therefore compared every voxel with all 26 neighbours (the fixed point).
-                let (nbrs, deltas) = if pass == 0 {
-                    (NEIGHBOURS.get(..13), NEIGHBOUR_DELTAS.get(..13))
-                } else {
-                    (NEIGHBOURS.get(13..), NEIGHBOUR_DELTAS.get(13..))
-                };
-                let (Some(nbrs), Some(deltas)) = (nbrs, deltas) else { return changed };
-                let interior = l.iter().all(|&c| c >= 1 && c + 1 < BLOCK_EDGE);
-                if interior {
-                    // Fast path: all 26 neighbours are in this block.
-                    for (d, delta) in nbrs.iter().zip(deltas.iter()) {
-                        let ni = (i as isize + delta) as usize;
-                        if let (Some(&w), Some(&so)) = (b.site_tsdf.get(ni), b.site.get(ni)) {
-                            cand.consider(w, so, d, dmax);
-                        }
-                    }
-                } else {
-                    for d in nbrs.iter() {
-                        let nl = [l[0] as i32 + d[0], l[1] as i32 + d[1], l[2] as i32 + d[2]];
-                        let ob = [
-                            if nl[0] < 0 { 0 } else if nl[0] >= e { 2 } else { 1 },
-                            if nl[1] < 0 { 0 } else if nl[1] >= e { 2 } else { 1 },
-                            if nl[2] < 0 { 0 } else if nl[2] >= e { 2 } else { 1 },
-                        ];
-                        let Some(Some(ns)) = nb.get(ob[0] + 3 * ob[1] + 9 * ob[2]) else { continue };
-                        let Some(nblk) = self.blocks.get(*ns) else { continue };
-                        let ni = local_index([
-                            (nl[0] & (e - 1)) as usize,
-                            (nl[1] & (e - 1)) as usize,
-                            (nl[2] & (e - 1)) as usize,
-                        ]);
-                        if let (Some(&w), Some(&so)) = (nblk.site_tsdf.get(ni), nblk.site.get(ni)) {
-                            cand.consider(w, so, d, dmax);
-                        }
-                    }
-                }
-                if let Some((off, w)) = cand.best {
-                    if let Some(b) = self.blocks.get_mut(s) {
-                        if let (Some(sw), Some(so)) = (b.site_tsdf.get_mut(i), b.site.get_mut(i)) {
-                            *sw = w;
-                            *so = off;
-                            changed += 1;
-                        }
+        let nl = [l[0] as i32 + d[0], l[1] as i32 + d[1], l[2] as i32 + d[2]];
+        let ob = [
+            if nl[0] < 0 { 0 } else if nl[0] >= e { 2 } else { 1 },
+            if nl[1] < 0 { 0 } else if nl[1] >= e { 2 } else { 1 },
+            if nl[2] < 0 { 0 } else if nl[2] >= e { 2 } else { 1 },
+        ];
+        let ni = local_index([(nl[0] & (e - 1)) as usize, (nl[1] & (e - 1)) as usize, (nl[2] & (e - 1)) as usize]);
+        let j = ob[0] + 3 * ob[1] + 9 * ob[2];
+        if j == 13 {
+            return Some((s, ni));
+        }
+        let way = s % AROUND_WAYS;
+        let (key, slots) = (around.keys.get_mut(way)?, around.slots.get_mut(way)?);
+        if *key != s as u32 {
+            *key = s as u32;
+            *slots = [AROUND_UNKNOWN; 27];
+        }
+        let slot = slots.get_mut(j)?;
+        if *slot == AROUND_UNKNOWN {
+            let c = self.blocks.get(s)?.coord;
+            let nc = [c[0] + ob[0] as i32 - 1, c[1] + ob[1] as i32 - 1, c[2] + ob[2] as i32 - 1];
+            *slot = self.find_block(nc).map_or(AROUND_MISSING, |n| n as u32);
+        }
+        if *slot == AROUND_MISSING {
+            None
+        } else {
+            Some((*slot as usize, ni))
+        }
+    }
+
+    /// Pulls every voxel of every pending cell (in slot order) and clears the marks; voxels that improved are
+    /// queued.
+    fn pull_pending(&mut self, wave: &mut Wave<'_>) {
+        wave.pending = false;
+        let sh = super::CELL_SHIFT;
+        let ce = BLOCK_EDGE >> sh; // cells per edge (4)
+        for s in 0..self.used {
+            let Some(b) = self.blocks.get_mut(s) else { break };
+            let mut p = b.pending;
+            if p == 0 {
+                continue;
+            }
+            if wave.budget == 0 {
+                wave.pending = true;
+                return;
+            }
+            b.pending = 0;
+            while p != 0 {
+                let c = p.trailing_zeros() as usize;
+                p &= p - 1;
+                let c0 = [(c % ce) << sh, ((c / ce) % ce) << sh, (c / (ce * ce)) << sh];
+                for v in 0..(1usize << (3 * sh)) {
+                    let l = [
+                        c0[0] + (v & ((1 << sh) - 1)),
+                        c0[1] + ((v >> sh) & ((1 << sh) - 1)),
+                        c0[2] + (v >> (2 * sh)),
+                    ];
+                    let i = local_index(l);
+                    wave.out.voxels_pulled += 1;
+                    wave.budget = wave.budget.saturating_sub(1);
+                    if self.pull(wave, s, i) {
+                        wave.out.voxels_changed += 1;
+                        self.queue_or_spill(wave, s, i);
                     }
                 }
             }
         }
-        changed
+    }
+
+    /// Pulls every voxel that lost its site in this update (offset [`RESET`]), in slot order, and clears the
+    /// markers; voxels that found a site are queued. Out of budget, the rest are marked in `pending`.
+    fn pull_resets(&mut self, wave: &mut Wave<'_>) {
+        for s in 0..self.used {
+            let Some(b) = self.blocks.get_mut(s) else { break };
+            if b.flags & FLAG_RESET == 0 {
+                continue;
+            }
+            b.flags &= !FLAG_RESET;
+            for i in 0..BLOCK_VOXELS {
+                let Some(b) = self.blocks.get_mut(s) else { break };
+                let (Some(&w), Some(so)) = (b.site_tsdf.get(i), b.site.get_mut(i)) else { break };
+                if w != NO_SITE || *so != RESET {
+                    continue;
+                }
+                *so = [0; 3];
+                if wave.budget == 0 {
+                    b.pending |= cell_bit(i);
+                    wave.pending = true;
+                    continue;
+                }
+                wave.budget -= 1;
+                wave.out.voxels_pulled += 1;
+                if self.pull(wave, s, i) {
+                    wave.out.voxels_changed += 1;
+                    self.queue_or_spill(wave, s, i);
+                }
+            }
+        }
+    }
+
+    /// Compares voxel `(s, i)` with its 26 neighbours and takes the best site; true if its site changed.
+    fn pull(&mut self, wave: &mut Wave<'_>, s: usize, i: usize) -> bool {
+        let l = local_coords(i);
+        let Some(b) = self.blocks.get(s) else { return false };
+        let (Some(&w0), Some(&o0), Some(&t0)) = (b.site_tsdf.get(i), b.site.get(i), b.tsdf.get(i)) else {
+            return false;
+        };
+        if w0 != NO_SITE && o0 == [0, 0, 0] {
+            return false; // a fixed-band site keeps its own value
+        }
+        let mut cand = Candidate::new(w0, o0, t0 < 0);
+        let interior = l.iter().all(|&c| c >= 1 && c + 1 < BLOCK_EDGE);
+        if interior {
+            for (d, delta) in NEIGHBOURS.iter().zip(NEIGHBOUR_DELTAS.iter()) {
+                let ni = (i as isize + delta) as usize;
+                if let (Some(&w), Some(&so)) = (b.site_tsdf.get(ni), b.site.get(ni)) {
+                    cand.consider(w, so, d, wave.dmax);
+                }
+            }
+        } else {
+            for d in NEIGHBOURS.iter() {
+                let Some((ns, ni)) = self.neighbour(&mut wave.around, s, l, *d) else { continue };
+                let Some(nb) = self.blocks.get(ns) else { continue };
+                if let (Some(&w), Some(&so)) = (nb.site_tsdf.get(ni), nb.site.get(ni)) {
+                    cand.consider(w, so, d, wave.dmax);
+                }
+            }
+        }
+        let Some((off, w)) = cand.best else { return false };
+        let Some(b) = self.blocks.get_mut(s) else { return false };
+        if let (Some(sw), Some(so)) = (b.site_tsdf.get_mut(i), b.site.get_mut(i)) {
+            *sw = w;
+            *so = off;
+            return true;
+        }
+        false
+    }
+
+    /// Offers the site of voxel `(s, i)` to its 26 neighbours; queues those that improve.
+    fn offer_site(&mut self, wave: &mut Wave<'_>, s: usize, i: usize) {
+        wave.out.voxels_popped += 1;
+        let l = local_coords(i);
+        let Some(b) = self.blocks.get(s) else { return };
+        let (Some(&wu), Some(&ou)) = (b.site_tsdf.get(i), b.site.get(i)) else { return };
+        if wu == NO_SITE {
+            return;
+        }
+        let interior = l.iter().all(|&c| c >= 1 && c + 1 < BLOCK_EDGE);
+        for (d, delta) in NEIGHBOURS.iter().zip(NEIGHBOUR_DELTAS.iter()) {
+            let (ns, ni) = if interior {
+                (s, (i as isize + delta) as usize)
+            } else {
+                match self.neighbour(&mut wave.around, s, l, *d) {
+                    Some(v) => v,
+                    None => continue,
+                }
+            };
+            // The site seen from the neighbour: u + ou - v = ou - d.
+            let off = [ou[0] as i32 - d[0], ou[1] as i32 - d[1], ou[2] as i32 - d[2]];
+            if off.iter().any(|o| o.abs() > 127) {
+                continue;
+            }
+            let off8 = [off[0] as i8, off[1] as i8, off[2] as i8];
+            let Some(nb) = self.blocks.get_mut(ns) else { continue };
+            let (Some(sw), Some(so), Some(&t)) = (nb.site_tsdf.get_mut(ni), nb.site.get_mut(ni), nb.tsdf.get(ni))
+            else {
+                continue;
+            };
+            if *sw != NO_SITE && (*so == [0, 0, 0] || (*so == off8 && *sw == wu)) {
+                continue; // a fixed-band site keeps its own value; or the neighbour has this site already
+            }
+            let inside = t < 0;
+            let dist = site_distance(wu, off, inside);
+            if dist > wave.dmax {
+                continue;
+            }
+            let cur = if *sw == NO_SITE {
+                Real::INFINITY
+            } else {
+                site_distance(*sw, [so[0] as i32, so[1] as i32, so[2] as i32], inside)
+            };
+            if dist < cur - 1e-5 {
+                *sw = wu;
+                *so = off8;
+                wave.out.voxels_changed += 1;
+                self.queue_or_spill(wave, ns, ni);
+            }
+        }
     }
 }
 

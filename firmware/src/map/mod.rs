@@ -8,7 +8,9 @@
 //! ## Layout
 //! - [`Block`]: `BLOCK_EDGE`^3 voxels (8^3 by default), [`VOXEL_BYTES`] = 8 bytes per voxel: quantised TSDF
 //!   (`i16`, units of truncation / 32767), weight (`u16`, 1/64 units), the ESDF site (`[i8; 3]` offset to the
-//!   nearest fixed-band voxel) and that site's signed TSDF (`i8`, hundredths of a voxel).
+//!   nearest fixed-band voxel) and that site's signed TSDF (`i8`, hundredths of a voxel); plus the ESDF
+//!   wavefront's bookkeeping, 72 bytes a block: a 64-bit mask of cells to pull and one bit per voxel for the
+//!   queue's overflow (4184 B a block at the default edge).
 //! - [`MapStorage`]: the block pool plus the block index, owned by the caller (`static` on the board, `Box` on the
 //!   host) and lent to [`Map::new`]. The index is open addressing with linear probing, bounded by
 //!   [`MAX_PROBE`](crate::config::map::MAX_PROBE). Blocks are allocated on demand and never evicted: a full pool
@@ -34,14 +36,17 @@
 //! true distance: a site on the same side as `v` is `|TSDF_s|` from the surface, so the surface is within
 //! `|c_v - c_s| + |TSDF_s|`; a site on the other side is `|TSDF_s|` beyond the surface along the segment from
 //! `v`, so the surface is within `|c_v - c_s| - |TSDF_s|` (Voxblox's fixed band, with the opposite-side case made
-//! tight; without it the ESDF is biased by up to two band widths). The minimum is found by vector propagation (each voxel stores the offset of its
-//! nearest site and takes the best site of its 26 neighbours), run as forward/backward raster sweeps over the dirty
-//! blocks until nothing changes or the sweep budget `esdf_max_sweeps` runs out (then the next call continues).
+//! tight; without it the ESDF is biased by up to two band widths). The minimum is found by vector propagation (each
+//! voxel stores the offset of its nearest site and takes the best site of its 26 neighbours), run as a queue-based
+//! incremental wavefront (Voxblox; FIESTA, Han et al. 2019) that touches only the voxels whose site changed and
+//! their neighbours, within the budget `esdf_max_sweeps` (then the next call continues; see `map::esdf` for the
+//! steps, the fixed-capacity queue and its overflow into per-voxel bits of the lent blocks).
 //! Fixed-band sites keep their own value (they are never overwritten by propagation). Updates are incremental:
 //! a TSDF update marks its block only if it changes what the ESDF uses (observed, sign, band membership, or the
-//! site value by more than `esdf_site_tolerance`); the sites of marked blocks are rebuilt; voxels within
-//! `esdf_max_distance` of a block whose sites moved or vanished are checked against their site and reset if it
-//! is gone (Voxblox's "raise" wave, done directly since each voxel knows its site); the sweeps lower the rest. Vector propagation with 26 neighbours is not
+//! site value by more than `esdf_site_tolerance`), and a voxel whose sign changed marks its cell; the sites of
+//! marked blocks are rebuilt; voxels within `esdf_max_distance` of a block whose sites moved or vanished are
+//! checked against their site and reset if it is gone (Voxblox's "raise" wave, done directly since each voxel knows
+//! its site); the wavefront lowers the rest. Vector propagation with 26 neighbours is not
 //! guaranteed exact in every configuration (Danielsson 1980; Cuisenaire & Macq 1999); the tests measure it
 //! against brute force.
 //!
@@ -85,6 +90,15 @@ pub enum DistanceQuery {
 pub trait DistanceField {
     /// Signed distance and gradient at `p`.
     fn query(&self, p: &Vec3) -> DistanceQuery;
+
+    /// `Some(L)` when the field is known everywhere (never `Unknown` at a finite point) and `L`-Lipschitz:
+    /// `|d(p) - d(q)| <= L |p - q|` (an exact signed distance field has `L = 1`). A sample at distance `d` then
+    /// proves every point closer than `(d - c) / L` farther than `c` from the terrain, and the tether's sweep lines
+    /// skip them ([`crate::tether`]). Default `None`: every sample is queried (the onboard map: its unknown space
+    /// must be seen, and its interpolated field carries no such bound).
+    fn lipschitz_bound(&self) -> Option<Real> {
+        None
+    }
 }
 
 /// A distance field whose unobserved space reads as free, [`UNOBSERVED_FREE_DISTANCE_M`] from any surface: for
@@ -114,16 +128,44 @@ pub(crate) const NO_SITE: i8 = i8::MIN;
 
 const FLAG_IN_USE: u8 = 1;
 const FLAG_TSDF_DIRTY: u8 = 2;
-const FLAG_ESDF_DIRTY: u8 = 4;
-const FLAG_ESDF_NEXT: u8 = 8;
+/// Allocated since the last ESDF update: its voxels have not heard of the sites around it yet.
+const FLAG_ESDF_NEW: u8 = 4;
+/// Some bit of `queued` is set.
+const FLAG_QUEUED: u8 = 8;
 const FLAG_REGION: u8 = 16;
 const FLAG_SITES_CHANGED: u8 = 32;
+/// Some voxel lost its site in this ESDF update (its offset holds `esdf::RESET`) and is still to be pulled.
+const FLAG_RESET: u8 = 64;
+
+/// Words of a block's `queued` bit set.
+const QUEUED_WORDS: usize = BLOCK_VOXELS.div_ceil(64);
+
+/// Voxel coordinate shift from a voxel to its pull cell: a block has 4^3 = 64 cells (of 2^3 voxels at the default
+/// edge of 8), one bit each in [`Block`]'s `pending` mask.
+const CELL_SHIFT: u32 = {
+    assert!(BLOCK_EDGE >= 4 && BLOCK_EDGE.is_power_of_two(), "a block needs 4^3 pull cells");
+    BLOCK_EDGE.trailing_zeros() - 2
+};
+
+/// The bit of `pending` for the cell of local voxel `i`.
+#[inline]
+pub(crate) fn cell_bit(i: usize) -> u64 {
+    let l = local_coords(i);
+    let c = (l[0] >> CELL_SHIFT) + 4 * ((l[1] >> CELL_SHIFT) + 4 * (l[2] >> CELL_SHIFT));
+    1u64 << (c & 63)
+}
 
 /// One voxel block: `BLOCK_EDGE`^3 voxels, structure of arrays, voxel `(x, y, z)` at `x + E * (y + E * z)`.
 #[derive(Clone, Copy)]
 pub struct Block {
     coord: [i32; 3],
     flags: u8,
+    /// Cells (see [`cell_bit`]) whose voxels the ESDF must compare with their neighbours again: a voxel changed
+    /// sign, the block is new, or an ESDF update ran out of budget before pulling them.
+    pending: u64,
+    /// Voxels whose improved site is still to be offered to their neighbours and that found the ESDF's lower queue
+    /// full (one bit per voxel): the queue's overflow, in the lent storage.
+    queued: [u64; QUEUED_WORDS],
     tsdf: [i16; BLOCK_VOXELS],
     weight: [u16; BLOCK_VOXELS],
     site: [[i8; 3]; BLOCK_VOXELS],
@@ -135,6 +177,8 @@ impl Block {
     pub const EMPTY: Block = Block {
         coord: [0; 3],
         flags: 0,
+        pending: 0,
+        queued: [0; QUEUED_WORDS],
         tsdf: [0; BLOCK_VOXELS],
         weight: [0; BLOCK_VOXELS],
         site: [[0; 3]; BLOCK_VOXELS],
@@ -147,6 +191,8 @@ impl Block {
     pub const ZEROED: Block = Block {
         coord: [0; 3],
         flags: 0,
+        pending: 0,
+        queued: [0; QUEUED_WORDS],
         tsdf: [0; BLOCK_VOXELS],
         weight: [0; BLOCK_VOXELS],
         site: [[0; 3]; BLOCK_VOXELS],
@@ -346,7 +392,7 @@ impl<'a> Map<'a> {
                     let b = self.blocks.get_mut(slot).ok_or(MapError::PoolFull)?;
                     *b = Block::EMPTY;
                     b.coord = c;
-                    b.flags = FLAG_IN_USE | FLAG_TSDF_DIRTY;
+                    b.flags = FLAG_IN_USE | FLAG_TSDF_DIRTY | FLAG_ESDF_NEW;
                     if let Some(e) = self.index.get_mut(h) {
                         *e = slot as u32 + 1;
                     }
@@ -386,6 +432,9 @@ impl<'a> Map<'a> {
         if let Some(b) = self.blocks.get_mut(slot) {
             let li = local_index([lx, ly, lz]);
             if let (Some(t), Some(wt)) = (b.tsdf.get_mut(li), b.weight.get_mut(li)) {
+                if (*t < 0) != (q < 0) {
+                    b.pending |= cell_bit(li);
+                }
                 *t = q;
                 *wt = w;
             }

@@ -444,3 +444,161 @@ fn esdf_budget_exhaustion_is_resumable() {
     let (max_err, _, _) = compare_with_brute_force(&map, &sites, n);
     assert!(max_err < 0.1);
 }
+
+/// Brute force with the voxel's own sign: `inside` voxels (TSDF < 0) count a site's value negatively.
+fn brute_force_signed(sites: &[([i32; 3], i8)], g: [i32; 3], inside: bool, dmax: Real) -> Option<Real> {
+    if let Some((_, w)) = sites.iter().find(|(s, _)| *s == g) {
+        return Some((*w as Real * 0.01).abs());
+    }
+    let sign = if inside { -1.0 } else { 1.0 };
+    let mut best = Real::INFINITY;
+    for (s, w) in sites {
+        let d = [(g[0] - s[0]) as f64, (g[1] - s[1]) as f64, (g[2] - s[2]) as f64];
+        let v = ((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() + sign * *w as f64 * 0.01).max(0.0);
+        best = best.min(v as Real);
+    }
+    if best <= dmax { Some(best) } else { None }
+}
+
+/// Max error (voxels) and count of inexact voxels against [`brute_force_signed`], over the `n`^3 cube.
+fn compare_signed(map: &Map<'_>, sites: &[([i32; 3], i8)], n: i32) -> (Real, usize, usize) {
+    let dmax = map.config().esdf_max_distance / map.config().voxel_size;
+    let (mut max_err, mut inexact, mut total) = (0.0 as Real, 0, 0);
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let g = [x - n / 2, y - n / 2, z - n / 2];
+                let inside = map.tsdf_voxel(g).is_some_and(|(d, _)| d < 0.0);
+                let want = brute_force_signed(sites, g, inside, dmax);
+                let got = map.site_distance_voxels(g);
+                total += 1;
+                match (want, got) {
+                    (Some(a), Some(b)) => {
+                        let e = (a - b).abs();
+                        max_err = max_err.max(e);
+                        if e > 1e-4 {
+                            inexact += 1;
+                        }
+                    }
+                    (None, None) => {}
+                    (a, b) => panic!("voxel {g:?}: brute force {a:?}, map {b:?}"),
+                }
+            }
+        }
+    }
+    (max_err, inexact, total)
+}
+
+fn random_voxel(rng: &mut impl Rng, n: i32) -> [i32; 3] {
+    [
+        (rng.next_u32() % n as u32) as i32 - n / 2,
+        (rng.next_u32() % n as u32) as i32 - n / 2,
+        (rng.next_u32() % n as u32) as i32 - n / 2,
+    ]
+}
+
+/// The wavefront's raise and lower steps, one scan after another: each step removes sites (raise), adds sites
+/// (lower), moves site values both ways, and turns free voxels into inside voxels and back (a sign change re-pulls
+/// the voxel); after every update the ESDF matches the brute force: at most 1 % of the voxels inexact, none by a
+/// voxel or more. (An inside voxel next to sites of both signs can miss its optimum by part of a voxel with
+/// 26-neighbour vector propagation: step 1 of this seed has one voxel 0.54 voxel off, exactly as with the raster
+/// sweeps this wavefront replaced, checked on 2026-12-03.)
+#[test]
+fn incremental_raise_and_lower_match_brute_force_step_by_step() {
+    let mut rng = rand_pcg::Pcg32::new(21, 8);
+    let (mut b, mut i) = slices(256, 512);
+    let mut map = Map::from_slices(brute_force_config(), &mut b, &mut i).unwrap();
+    let n = 24;
+    let vs = map.config().voxel_size;
+    let t = map.config().truncation;
+    let mut sites = random_site_map(&mut map, &mut rng, n, 12);
+    assert!(map.update_esdf().converged);
+    let mut flipped: Vec<[i32; 3]> = Vec::new();
+    for step in 0..8 {
+        for _ in 0..2 {
+            if sites.len() > 4 {
+                let k = (rng.next_u32() as usize) % sites.len();
+                let (g, _) = sites.remove(k);
+                map.set_voxel(g, t, 1.0).unwrap();
+            }
+        }
+        for (g, w) in sites.iter_mut().take(2) {
+            *w = if *w > 0 { *w - 50 } else { *w + 50 };
+            map.set_voxel(*g, *w as Real * 0.01 * vs, 1.0).unwrap();
+        }
+        for _ in 0..2 {
+            let g = random_voxel(&mut rng, n);
+            let w = ((rng.next_u32() % 199) as i32 - 99) as i8;
+            map.set_voxel(g, w as Real * 0.01 * vs, 1.0).unwrap();
+            sites.retain(|(s, _)| *s != g);
+            flipped.retain(|f| *f != g);
+            sites.push((g, w));
+        }
+        // sign changes of non-site voxels: some inside, the previous ones back to free
+        for g in flipped.drain(..) {
+            if !sites.iter().any(|(s, _)| *s == g) {
+                map.set_voxel(g, t, 1.0).unwrap();
+            }
+        }
+        for _ in 0..6 {
+            let g = random_voxel(&mut rng, n);
+            if !sites.iter().any(|(s, _)| *s == g) {
+                map.set_voxel(g, -t, 1.0).unwrap();
+                flipped.push(g);
+            }
+        }
+        let e = map.update_esdf();
+        assert!(e.converged, "step {step}: {e:?}");
+        let (max_err, inexact, total) = compare_signed(&map, &sites, n);
+        std::eprintln!("step {step}: {e:?}, max error {max_err} voxels, {inexact} of {total} inexact");
+        assert!(max_err < 1.0, "step {step}: max error {max_err} voxels");
+        assert!(inexact * 100 <= total, "step {step}: {inexact} of {total} voxels inexact");
+    }
+}
+
+/// More voxels improve at once than the lower queue holds (`ESDF_QUEUE_CAPACITY`): the overflow waits in the
+/// blocks' spill bits, nothing is lost, and the result matches the brute force; with a budget of one sweep's worth
+/// of voxel visits the same grid takes several calls and ends at the same values.
+#[test]
+fn esdf_queue_overflow_spills_and_stays_exact() {
+    use crate::config::map::ESDF_QUEUE_CAPACITY;
+    let n = 40;
+    let mut rng = rand_pcg::Pcg32::new(5, 17);
+    let (mut b, mut i) = slices(512, 1024);
+    let mut map = Map::from_slices(brute_force_config(), &mut b, &mut i).unwrap();
+    let sites = random_site_map(&mut map, &mut rng, n, ESDF_QUEUE_CAPACITY / 8);
+    let e = map.update_esdf();
+    assert!(e.converged, "{e:?}");
+    assert!(e.queue_overflows > 0, "the queue never overflowed: {e:?}");
+    let (max_err, inexact, total) = compare_signed(&map, &sites, n);
+    std::eprintln!("{e:?}: max error {max_err} voxels, {inexact} of {total} inexact");
+    assert!(max_err < 0.1 && inexact * 100 <= total, "{max_err} {inexact}");
+    let first: Vec<Option<Real>> = (0..n * n * n)
+        .map(|k| map.site_distance_voxels([k % n - n / 2, (k / n) % n - n / 2, k / (n * n) - n / 2]))
+        .collect();
+
+    // The same grid with a budget of one sweep (esdf_max_sweeps = 1): resumable, same values at the end.
+    let mut rng = rand_pcg::Pcg32::new(5, 17);
+    let (mut b, mut i) = slices(512, 1024);
+    let mut cfg = brute_force_config();
+    cfg.esdf_max_sweeps = 1;
+    let mut map = Map::from_slices(cfg, &mut b, &mut i).unwrap();
+    let again = random_site_map(&mut map, &mut rng, n, ESDF_QUEUE_CAPACITY / 8);
+    assert_eq!(again, sites);
+    let mut calls = 1;
+    let mut e = map.update_esdf();
+    assert!(!e.converged, "{e:?}");
+    while !e.converged {
+        e = map.update_esdf();
+        calls += 1;
+        assert!(calls < 100, "{e:?}");
+    }
+    let (max_err, inexact, _) = compare_signed(&map, &sites, n);
+    std::eprintln!("budget 1: {calls} calls, max error {max_err} voxels, {inexact} inexact");
+    assert!(max_err < 0.1 && inexact * 100 <= total, "{max_err} {inexact}");
+    let resumed: Vec<Option<Real>> = (0..n * n * n)
+        .map(|k| map.site_distance_voxels([k % n - n / 2, (k / n) % n - n / 2, k / (n * n) - n / 2]))
+        .collect();
+    let differ = first.iter().zip(resumed.iter()).filter(|(a, b)| a != b).count();
+    assert!(differ * 100 <= total, "{differ} voxels differ between one call and resumed calls");
+}

@@ -6,7 +6,7 @@
 //! index. The ray walk steps voxel indices with checked arithmetic and stops rather than wrap.
 
 use super::esdf::band_site;
-use super::{quantize_weight, NO_SITE, split, local_index, Map, MapError, FLAG_TSDF_DIRTY, WEIGHT_SCALE};
+use super::{cell_bit, quantize_weight, NO_SITE, split, local_index, Map, MapError, FLAG_TSDF_DIRTY, WEIGHT_SCALE};
 use crate::config::map::{MAX_VOXEL_COORD, MIN_INCIDENCE_COSINE};
 use crate::geom::{norm3, Pose3, Real, Vec3};
 
@@ -215,6 +215,10 @@ impl Map<'_> {
             (false, false) => false,
             _ => true,
         };
+        if was_inside != (q < 0) {
+            // Its distance to every site changes with the sign: the ESDF compares it with its neighbours again.
+            b.pending |= cell_bit(li);
+        }
         if !was_observed || was_inside != (q < 0) || site_moved {
             b.flags |= FLAG_TSDF_DIRTY;
         }

@@ -185,8 +185,9 @@
 //!
 //! ## Budgets
 //! Work per chunk is bounded by `points * max_ray_voxels` voxel updates, per complete scan by `esdf_max_sweeps` ESDF
-//! sweeps (`Configure.map` keeps both within `MAX_RAY_VOXELS_LIMIT` and `ESDF_SWEEPS_LIMIT`); an
-//! ESDF that runs out of sweeps is counted and continues with the next scan. Work per `plan_step` is bounded by
+//! sweeps of `ESDF_VISITS_PER_BLOCK` voxel visits per block in use (`Configure.map` keeps both within
+//! `MAX_RAY_VOXELS_LIMIT` and `ESDF_SWEEPS_LIMIT`); an ESDF that runs out of budget is counted and continues with
+//! the next scan. Work per `plan_step` is bounded by
 //! its new iterations, `MOTION_CHECKS_PER_STEP` and `DRAWS_PER_STEP`, each iteration bounded by the planner's own
 //! budgets.
 //!

@@ -379,6 +379,11 @@ impl DistanceField for Ledge {
             gradient: Vec3::new(g[0] as Real, g[1] as Real, g[2] as Real),
         }
     }
+
+    /// An exact signed distance (the union's is the minimum of the parts'): 1-Lipschitz, known everywhere.
+    fn lipschitz_bound(&self) -> Option<Real> {
+        Some(1.0)
+    }
 }
 
 #[cfg(test)]
@@ -387,6 +392,31 @@ mod tests {
 
     fn d(w: &Ledge, q: P) -> f64 {
         w.sdf(q).0
+    }
+
+    /// The bound the field declares (`lipschitz_bound`, which lets the tether's sweep lines skip samples) holds:
+    /// 200 000 pairs of points 1 mm to 1 m apart, over the whole world and packed round the lip and the pole.
+    #[test]
+    fn the_field_is_one_lipschitz() {
+        let w = Ledge::with_pole();
+        let mut state: u64 = 0x9E37_79B9_7F4A_7C15;
+        let mut unit = move || {
+            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let centres = [[0.0, 0.0, 4.0], [-2.5, 0.0, 5.0], [-2.5, 0.25, 4.1], [3.0, 0.0, 0.0], [-6.0, 3.0, 4.0]];
+        let mut worst: f64 = 0.0;
+        for k in 0..200_000 {
+            let c = centres[k % centres.len()];
+            let spread = if k % 2 == 0 { 0.5 } else { 8.0 };
+            let p = [c[0] + spread * (unit() - 0.5), c[1] + spread * (unit() - 0.5), c[2] + spread * (unit() - 0.5)];
+            let step = 1e-3 + unit();
+            let dir = [unit() - 0.5, unit() - 0.5, unit() - 0.5];
+            let n = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt().max(1e-9);
+            let q = [p[0] + step * dir[0] / n, p[1] + step * dir[1] / n, p[2] + step * dir[2] / n];
+            worst = worst.max((d(&w, p) - d(&w, q)).abs() / step);
+        }
+        assert!(worst <= 1.0 + 1e-9, "|d(p) - d(q)| / |p - q| reached {worst}");
     }
 
     /// Hand-computed distances at points whose nearest face is obvious.

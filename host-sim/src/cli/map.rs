@@ -352,7 +352,7 @@ pub fn edt_bench(a: &EdtBenchArgs) -> Result<(), String> {
     let occupied = grid.iter().filter(|o| **o).count();
     println!("grid {n}^3 = {} voxels, {occupied} occupied", n * n * n);
     println!("thread CPU time, full transform from occupancy (cap 127 voxels):");
-    println!("  onboard ESDF (update_esdf: site rebuild + vector propagation sweeps): {ms_ours:.1} ms");
+    println!("  onboard ESDF (update_esdf: site rebuild + vector propagation wavefront): {ms_ours:.1} ms");
     println!("  libdynamicedt3d (DynamicEDT3D initializeMap + update):              {ms_ref:.1} ms");
     println!("ratio onboard / dynamicedt3d: {:.2}", ms_ours / ms_ref);
     println!("agreement: {differ} of {} voxels differ by > 0.001 voxel, max difference {max_diff:.4} voxel", ours.len());

@@ -100,6 +100,10 @@ impl DistanceField for LedgeWorld {
     fn query(&self, p: &Vec3) -> DistanceQuery {
         self.ledge.query(p)
     }
+
+    fn lipschitz_bound(&self) -> Option<Real> {
+        self.ledge.lipschitz_bound()
+    }
 }
 
 impl World for LedgeWorld {

@@ -6,7 +6,7 @@ use crate::config::tethered::{BOOM_REACH_CLEARANCE_M, MAX_MOTION_STATES, MAX_REF
 use crate::geom::{angle_diff, norm3, Real, Vec3};
 use crate::map::DistanceField;
 use crate::plan::space::{MotionCheck, MotionValidator};
-use crate::rover::{check_pose_stability, SettledPose};
+use crate::rover::{check_pose_stability, check_pose_stability_at_least, SettledPose};
 use crate::stability::StabilityOutcome;
 use crate::tether::{AnchorHistory, TetherError};
 
@@ -20,6 +20,19 @@ impl<D: DistanceField> TetherSpace<'_, D> {
         let pull = tether_pull_anchor(st, history, &self.rover);
         match check_pose_stability(self.map, st, pull.as_ref(), &self.rover) {
             Ok((StabilityOutcome::Stable(r), _)) if r.margin >= self.params.min_stability_margin => Ok(r.margin),
+            Ok((StabilityOutcome::Unknown(_), _)) => Err(MotionFailure::Unknown),
+            _ => Err(MotionFailure::Unstable),
+        }
+    }
+
+    /// [`Self::stable_with`]'s verdict alone (counted the same): `Ok` when stable with at least
+    /// `min_stability_margin`, with one stability LP instead of two whenever the inline boom holds.
+    pub fn stable_enough(&self, st: &SettledPose, history: &AnchorHistory) -> Result<(), MotionFailure> {
+        self.count(|s| s.stability_checks += 1);
+        let pull = tether_pull_anchor(st, history, &self.rover);
+        let min = self.params.min_stability_margin;
+        match check_pose_stability_at_least(self.map, st, pull.as_ref(), &self.rover, min) {
+            Ok((StabilityOutcome::Stable(r), _)) if r.margin >= min => Ok(()),
             Ok((StabilityOutcome::Unknown(_), _)) => Err(MotionFailure::Unknown),
             _ => Err(MotionFailure::Unstable),
         }
@@ -120,7 +133,7 @@ impl<D: DistanceField> TetherSpace<'_, D> {
         for sign in [-1.0, 1.0] {
             let (dx, dy) = (sign * u * along.x / len, sign * u * along.y / len);
             let near = self.settle_state(st.ground.x + dx, st.ground.y + dy, st.theta).map_err(MotionFailure::Settle)?;
-            self.stable_with(&near.settled, hist)?;
+            self.stable_enough(&near.settled, hist)?;
         }
         Ok(())
     }
@@ -137,7 +150,7 @@ impl<D: DistanceField> TetherSpace<'_, D> {
                 return Err(MotionFailure::TetherBend);
             }
         }
-        self.stable_with(&st.settled, &walk.hist).map(|_| ())
+        self.stable_enough(&st.settled, &walk.hist)
     }
 }
 

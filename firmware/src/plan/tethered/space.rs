@@ -519,7 +519,7 @@ impl<D: DistanceField> StateSpace for TetherSpace<'_, D> {
     /// Statically stable with the tether pulling towards the history's pull anchor, margin at least
     /// `min_stability_margin` (the end-state check of a motion that keeps this history).
     fn valid_with_attachment(&self, state: &RoverState, attachment: &AnchorHistory) -> bool {
-        self.stable_with(&state.settled, attachment).is_ok()
+        self.stable_enough(&state.settled, attachment).is_ok()
     }
     /// Alg. 1 over the straight line between the two axles, from `attachment` (no settling, no stability).
     fn predict_attachment(
