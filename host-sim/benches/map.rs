@@ -3,10 +3,12 @@
 //!
 //! `cargo bench -p host-sim --bench map`. Reference (different machine, different sensor): Voxblox's fast
 //! integrator at 5 cm, 23 ms per scan (Oleynikova et al. 2017). The first-visit figures of a whole drive are
-//! printed by `tetherbot map-check`.
+//! printed by `tetherbot map-check`. `query_near_surface` times one interpolated ESDF query (what the settler, the
+//! anchor prediction and the planners pay per lookup) at points up to 0.6 m above observed surface points.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use firmware::map::Map;
+use firmware::geom::Vec3;
+use firmware::map::{DistanceField, Map, SurfaceCursor, SurfacePoint};
 use host_sim::mapcheck::{host_storage, standard_poses, CheckConfig};
 use host_sim::sensor::{scan, Scan};
 use host_sim::world::crater::{CraterWall, CraterWallParams};
@@ -45,6 +47,11 @@ fn bench(c: &mut Criterion) {
             })
         });
         map.update_esdf();
+        let probes = query_points(&map);
+        g.throughput(Throughput::Elements(probes.len() as u64));
+        g.bench_function("query_near_surface", |bch| {
+            bch.iter(|| probes.iter().map(|p| matches!(map.query(black_box(p)), firmware::map::DistanceQuery::Known { .. }) as u32).sum::<u32>())
+        });
         g.throughput(Throughput::Elements(1));
         let mut k = 0;
         g.bench_function("esdf_update_per_scan", |bch| {
@@ -63,6 +70,19 @@ fn bench(c: &mut Criterion) {
         });
         g.finish();
     }
+}
+
+/// 4096 probe points: every k-th observed surface point raised along its normal by 0 to 0.6 m (a fixed pattern).
+fn query_points(map: &Map<'_>) -> Vec<Vec3> {
+    let mut cur = SurfaceCursor::default();
+    let mut buf = vec![SurfacePoint { position: Vec3::zeros(), normal: Vec3::zeros() }; 4096];
+    let mut all = Vec::new();
+    while !cur.is_done() {
+        let n = map.extract_surface(&mut cur, &mut buf);
+        all.extend_from_slice(&buf[..n]);
+    }
+    let step = (all.len() / 4096).max(1);
+    all.iter().step_by(step).take(4096).enumerate().map(|(k, sp)| sp.position + sp.normal * (0.6 * (k % 13) as f32 / 12.0)).collect()
 }
 
 criterion_group!(benches, bench);

@@ -168,7 +168,8 @@ impl PlanningMap {
         cfg.validate().map_err(|e| format!("planning map: {}: {}", e.field, e.reason))?;
         let n = |a: usize| ((hi[a] - lo[a]) / voxel_m).ceil() as i64 + 1;
         let (nx, ny, nz) = (n(0), n(1), n(2));
-        let blocks_needed = ((nx / 8 + 2) * (ny / 8 + 2) * (nz / 8 + 2)) as usize;
+        let e = firmware::config::map::BLOCK_EDGE as i64;
+        let blocks_needed = ((nx / e + 2) * (ny / e + 2) * (nz / e + 2)) as usize;
         if blocks_needed > 1 << 20 {
             return Err(format!("planning map: {blocks_needed} blocks needed; use a larger --voxel"));
         }

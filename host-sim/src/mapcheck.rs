@@ -101,7 +101,7 @@ impl CheckConfig {
     pub fn at_voxel_size(voxel: Real) -> CheckConfig {
         CheckConfig {
             map: MapConfig::with_voxel_size(voxel),
-            pool_blocks: 16384,
+            pool_blocks: 16384 * 512 / firmware::config::map::BLOCK_VOXELS,
             sensor: RangeSensorParams::default(),
             seed: 1,
             chunk_points: 128,
@@ -414,7 +414,7 @@ pub fn full_esdf_on_grid(grid: &[bool], n: usize) -> Result<(f64, Vec<f32>), Str
     let mut cfg = MapConfig::with_voxel_size(0.1);
     cfg.esdf_max_distance = 12.7;
     cfg.esdf_max_sweeps = firmware::config::map::ESDF_SWEEPS_LIMIT;
-    let blocks = (n / 8 + 1).pow(3);
+    let blocks = (n / firmware::config::map::BLOCK_EDGE + 1).pow(3);
     let (mut b, mut i) = host_storage(blocks);
     let mut map = Map::from_slices(cfg, &mut b, &mut i).map_err(|e| format!("{e:?}"))?;
     for z in 0..n {
@@ -439,4 +439,59 @@ pub fn full_esdf_on_grid(grid: &[bool], n: usize) -> Result<(f64, Vec<f32>), Str
         }
     }
     Ok((ms, d))
+}
+
+/// Where a map's blocks go: each block in use classified by the smallest |ESDF| among its observed voxels, and the
+/// work area it covers (voxel columns, seen from above, that hold a TSDF zero crossing).
+#[derive(Debug, Clone, Default)]
+pub struct MapCensus {
+    /// Blocks in use.
+    pub blocks: usize,
+    /// Blocks by the smallest |ESDF| of their observed voxels: `[< 0.25, 0.25-0.5, 0.5-1.0, >= 1.0 m, none
+    /// observed]`.
+    pub by_min_distance: [usize; 5],
+    /// Unknown voxels in the blocks in use, fraction.
+    pub unknown_fraction: f64,
+    /// Plan-view area of the voxel columns with a surface crossing, m^2.
+    pub footprint_m2: f64,
+}
+
+/// Counts [`MapCensus`] over the blocks in use.
+pub fn census(map: &Map<'_>) -> MapCensus {
+    let e = firmware::config::map::BLOCK_EDGE as i32;
+    let vs = map.config().voxel_size as f64;
+    let mut c = MapCensus { blocks: map.blocks_used(), ..Default::default() };
+    let mut unknown = 0usize;
+    let mut columns = std::collections::BTreeSet::new();
+    for slot in 0..map.blocks_used() {
+        let Some(b) = map.block_coord(slot) else { break };
+        let mut min_d = f64::INFINITY;
+        for z in 0..e {
+            for y in 0..e {
+                for x in 0..e {
+                    let g = [b[0] * e + x, b[1] * e + y, b[2] * e + z];
+                    match map.esdf_voxel(g) {
+                        Some(d) => min_d = min_d.min((d as f64).abs()),
+                        None => unknown += 1,
+                    }
+                    if let (Some((t, _)), Some((u, _))) = (map.tsdf_voxel(g), map.tsdf_voxel([g[0], g[1], g[2] + 1])) {
+                        if (t < 0.0) != (u < 0.0) {
+                            columns.insert((g[0], g[1]));
+                        }
+                    }
+                }
+            }
+        }
+        let k = match min_d {
+            d if d < 0.25 => 0,
+            d if d < 0.5 => 1,
+            d if d < 1.0 => 2,
+            d if d.is_finite() => 3,
+            _ => 4,
+        };
+        c.by_min_distance[k] += 1;
+    }
+    c.unknown_fraction = unknown as f64 / (c.blocks.max(1) * (e * e * e) as usize) as f64;
+    c.footprint_m2 = columns.len() as f64 * vs * vs;
+    c
 }

@@ -207,7 +207,7 @@ pub struct MapSection {
     pub truncation_m: Option<f64>,
     /// ESDF saturation distance, metres. Default 1.5.
     pub esdf_max_distance_m: f64,
-    /// Pool size in blocks. Default `FLIGHT_BLOCKS` (the flight board's pool, 3072).
+    /// Pool size in blocks. Default `FLIGHT_BLOCKS` (the flight board's pool, 23,040 blocks of 4^3 voxels).
     pub pool_blocks: usize,
     /// Free space carved along each ray in front of its return, metres (`MapConfig::max_carve_length`). Default
     /// 4.0; bounded by `budgets.max_ray_voxels` voxels per ray.

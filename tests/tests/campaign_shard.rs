@@ -235,6 +235,7 @@ fn mission_args(out: &Path, seeds: u32, shard: Option<Shard>) -> MissionArgs {
         reset_after_motions: None,
         reset_when_wrapped: false,
         watchdog_bite_in_motion: None,
+        watchdog_bite_when_wrapped: false,
     }
 }
 

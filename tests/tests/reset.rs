@@ -83,18 +83,27 @@ fn a_reset_mid_descent_recovers_the_wrapped_tether_continues_and_replays() {
     assert!(matches!(out, ReplayOutcome::Differs { .. }), "{out:?}");
 }
 
-/// The watchdog bites in the middle of the twelfth motion (`ResetAt::BiteInMotion`), the tether wrapped on the
-/// hidden rock: the rover stops where it is, the motion's report is lost, and the rebooted software recovers the
-/// checkpoint from before the motion; the ground's scan gives it the pose the rover really has, and the mission
-/// goes on to an arrival or a safe stop with a reason. The log names the watchdog, and its replay bites at the same
-/// point.
+/// The watchdog bites in the middle of the first motion that starts with the tether wrapped on the hidden rock
+/// (`ResetAt::BiteWhenWrapped`): the rover stops where it is, the motion's report is lost, and the rebooted
+/// software recovers the checkpoint from before the motion; the ground's scan gives it the pose the rover really
+/// has, and the mission goes on to an arrival or a safe stop with a reason. The log names the watchdog, and its
+/// replay bites at the same point.
 #[test]
 fn a_watchdog_bite_mid_motion_recovers_the_wrapped_tether_continues_and_replays() {
     let (_, mut opts) = snag_with_reset();
-    opts.reset = Some(ResetAt::BiteInMotion(11));
+    opts.reset = Some(ResetAt::BiteWhenWrapped);
     let (r, _) = reset_mission(&opts, ResetCause::Watchdog);
-    assert_eq!((r.after_motions, r.cause), (12, "watchdog"), "the bite ends the twelfth motion: {r:?}");
+    assert_eq!(r.cause, "watchdog", "{r:?}");
     assert!(r.true_contacts >= 1 && r.anchors_before >= 2, "not a wrapped tether at the bite: {r:?}");
+}
+
+/// A fixed motion number still bites there (`ResetAt::BiteInMotion`), wrapped or not.
+#[test]
+fn a_watchdog_bite_in_a_given_motion_ends_that_motion() {
+    let (_, mut opts) = snag_with_reset();
+    opts.reset = Some(ResetAt::BiteInMotion(3));
+    let (r, _) = reset_mission(&opts, ResetCause::Watchdog);
+    assert_eq!((r.after_motions, r.cause), (4, "watchdog"), "the bite ends the fourth motion: {r:?}");
 }
 
 /// The reboot path on a link: boot, `Configure`, a tether reading (the flight software checkpoints root and payout),

@@ -6,19 +6,24 @@
 
 use crate::geom::Real;
 
-/// Voxels along one edge of a voxel block. Default 8 (Voxblox's default): a block of 8^3 = 512 voxels is
-/// 4 KiB at [`crate::map::VOXEL_BYTES`] = 8 bytes per voxel, a good unit of allocation for a static pool.
-pub const BLOCK_EDGE: usize = 8;
+/// Voxels along one edge of a voxel block. Default 4 (Voxblox's default is 8): a block of 4^3 = 64 voxels is
+/// 544 B at [`crate::map::VOXEL_BYTES`] = 8 bytes per voxel plus 32 B of header. Terrain is a thin shell: in 8^3
+/// blocks 56-60 % of the voxels of the blocks in use were never observed (the inside of the terrain under the
+/// surface band); 4^3 blocks bring that to 37-39 % and the map's memory down by 26-32 % at the same ESDF error and
+/// no slower integration, ESDF update or queries (`host-sim/doc/map.md`, 2026-12-03). Must be a power of two >= 4
+/// (the ESDF's 4^3 pull cells).
+pub const BLOCK_EDGE: usize = 4;
 /// Voxels per block (`BLOCK_EDGE^3`).
 pub const BLOCK_VOXELS: usize = BLOCK_EDGE * BLOCK_EDGE * BLOCK_EDGE;
 
-/// Default number of blocks in the flight computer's pool. 3072 blocks x 4184 B = 12.3 MiB of the mps2-an500
-/// board's 16 MiB PSRAM, leaving ~3.7 MiB of PSRAM for the planners' arenas (the board's `bench` mode places the
-/// ABIT*, homotopy and team arenas there). At 5 cm voxels a block is 0.4 m on a side; observed terrain costs
-/// 84-120 kB per m^2 (host-sim/doc/map.md), so the pool holds ~100-150 m^2 of terrain at 5 cm.
-pub const FLIGHT_BLOCKS: usize = 3072;
+/// Default number of blocks in the flight computer's pool. 23,040 blocks x 544 B = 11.95 MiB of the mps2-an500
+/// board's 16 MiB PSRAM (with the index, 12.2 MiB: no more than the 3072 blocks of 8^3 voxels it replaced), leaving
+/// ~3.8 MiB of PSRAM for the planners' arenas (the board's `bench` mode places the ABIT*, homotopy and team arenas
+/// there). At 5 cm voxels a block is 0.2 m on a side; observed terrain costs 62-84 kB per m^2 of surface
+/// (host-sim/doc/map.md), so the pool holds ~150-200 m^2 of terrain at 5 cm.
+pub const FLIGHT_BLOCKS: usize = 23_040;
 /// Default size of the block index (open addressing, power of two, at least 2x the pool so probes stay short).
-pub const FLIGHT_INDEX: usize = 8192;
+pub const FLIGHT_INDEX: usize = 65_536;
 
 /// Longest probe sequence in the block index before an insert gives up with
 /// [`crate::map::MapError::IndexProbeExhausted`]. Default 32: at load factor <= 0.5 linear probing needs ~1.5
@@ -60,10 +65,10 @@ pub const ESDF_QUEUE_CAPACITY: usize = 8192;
 
 /// The unit of the ESDF budget [`MapConfig::esdf_max_sweeps`]: one "sweep" of the wavefront is this many voxel
 /// visits (a pull or a pop, each comparing one voxel with its 26 neighbours) per block in use, and at least
-/// [`ESDF_QUEUE_CAPACITY`] visits. Default 64 (an eighth of a block's voxels: the wavefront touches only changed
-/// voxels, where a raster sweep visited all of them), so the default budget of 32 is 2048 visits per block in use,
-/// 6.3 M visits for the full flight pool.
-pub const ESDF_VISITS_PER_BLOCK: usize = 64;
+/// [`ESDF_QUEUE_CAPACITY`] visits. Default `BLOCK_VOXELS / 8`, 8 at the default edge (an eighth of a block's
+/// voxels: the wavefront touches only changed voxels, where a raster sweep visited all of them), so the default
+/// budget of 32 is 256 visits per block in use, 5.9 M visits for the full flight pool.
+pub const ESDF_VISITS_PER_BLOCK: usize = BLOCK_VOXELS / 8;
 
 /// Per-mission map parameters (runtime). Every field is validated by [`MapConfig::validate`].
 #[derive(Debug, Clone, Copy, PartialEq)]

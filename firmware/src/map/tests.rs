@@ -564,7 +564,8 @@ fn esdf_queue_overflow_spills_and_stays_exact() {
     use crate::config::map::ESDF_QUEUE_CAPACITY;
     let n = 40;
     let mut rng = rand_pcg::Pcg32::new(5, 17);
-    let (mut b, mut i) = slices(512, 1024);
+    let blocks = (n as usize / BLOCK_EDGE + 1).pow(3);
+    let (mut b, mut i) = slices(blocks, (2 * blocks).next_power_of_two());
     let mut map = Map::from_slices(brute_force_config(), &mut b, &mut i).unwrap();
     let sites = random_site_map(&mut map, &mut rng, n, ESDF_QUEUE_CAPACITY / 8);
     let e = map.update_esdf();
@@ -579,7 +580,7 @@ fn esdf_queue_overflow_spills_and_stays_exact() {
 
     // The same grid with a budget of one sweep (esdf_max_sweeps = 1): resumable, same values at the end.
     let mut rng = rand_pcg::Pcg32::new(5, 17);
-    let (mut b, mut i) = slices(512, 1024);
+    let (mut b, mut i) = slices(blocks, (2 * blocks).next_power_of_two());
     let mut cfg = brute_force_config();
     cfg.esdf_max_sweeps = 1;
     let mut map = Map::from_slices(cfg, &mut b, &mut i).unwrap();

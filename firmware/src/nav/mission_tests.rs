@@ -542,10 +542,13 @@ fn an_approximate_solution_is_driven_only_when_allowed_and_only_to_its_last_stat
         let mut nav = mapped_where(ROOT, MissionConfig::DEFAULT, &seen);
         let mut g = goal(1, 3.5, 0.0);
         g.allow_approximate = allow;
-        g.max_iterations = 24;
+        g.max_iterations = 48;
         assert_eq!(nav.goal(&g, Instant::from_micros(0)), PlanState::Accepted);
         let p = plan(&mut nav);
         let PlanProgress::Finished { state, .. } = p else { unreachable!() };
+        // 48 iterations: enough for the search to get off the start, so the allowed case really drives (24 left it
+        // within 0.25 m of the start on some maps that differ from this one only in the last ESDF bits)
+        assert_eq!(state, PlanState::ApproximateSolution);
         let mut world = World::new(ROOT, 0.0);
         let run = drive(&mut nav, &mut world, 400, &mut |_, _, _| {});
         let st = nav.mission_status().unwrap();
@@ -621,3 +624,4 @@ fn an_unreadable_checkpoint_stops_safe_and_refuses_goals() {
     let nav = rebooted(&[0u8; retained::RETAINED_BYTES]);
     assert_ne!(nav.mission_status().map(|s| s.reason), Some(StopReason::TetherStateLost));
 }
+

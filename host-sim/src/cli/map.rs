@@ -1,7 +1,7 @@
 //! `tetherbot map-check`, `render-map` and `edt-bench`: the onboard map against ground truth, pictures of it,
 //! and the distance transform against `libdynamicedt3d` (see `host-sim/doc/map.md`).
 
-use crate::mapcheck::{build_map, esdf_errors, host_storage, observed_surface_m2, standard_poses, CheckConfig};
+use crate::mapcheck::{build_map, census, esdf_errors, host_storage, observed_surface_m2, standard_poses, CheckConfig};
 use crate::world::World;
 use firmware::geom::Real;
 use firmware::map::{Map, VoxelState};
@@ -202,6 +202,19 @@ pub fn map_check(a: &MapCheckArgs) -> Result<(), String> {
         rep.voxels_dropped,
         rep.surface_m2,
         rep.bytes_used() as f64 / rep.surface_m2.max(1e-9)
+    );
+    let c = census(&map);
+    println!(
+        "blocks by the smallest |ESDF| in them: < 0.25 m {}, 0.25-0.5 m {}, 0.5-1 m {}, >= 1 m {}, none observed {}; \
+         unknown voxels {:.1} %; plan-view footprint {:.1} m^2 -> {:.0} B/m^2",
+        c.by_min_distance[0],
+        c.by_min_distance[1],
+        c.by_min_distance[2],
+        c.by_min_distance[3],
+        c.by_min_distance[4],
+        100.0 * c.unknown_fraction,
+        c.footprint_m2,
+        rep.bytes_used() as f64 / c.footprint_m2.max(1e-9)
     );
     let need = rep.bytes_used() as f64 / rep.surface_m2.max(1e-9) * 400.0;
     println!(

@@ -165,6 +165,10 @@ pub struct MissionArgs {
     /// the flight software is reset. One mission only.
     #[arg(long, value_name = "N", conflicts_with = "reset_after_motions")]
     pub watchdog_bite_in_motion: Option<u32>,
+    /// The watchdog bites once, during the first motion that starts with the tether wrapped (as
+    /// `--reset-when-wrapped` judges it); no bite if it never wraps. One mission only.
+    #[arg(long, conflicts_with_all = ["reset_after_motions", "reset_when_wrapped", "watchdog_bite_in_motion"])]
+    pub watchdog_bite_when_wrapped: bool,
     /// Serve the running mission to the Foxglove app over the Foxglove SDK's WebSocket server at HOST:PORT
     /// (default 127.0.0.1:8765; port 0 picks a free one); one seed only. The line `live view: ws://HOST:PORT`
     /// on stdout names the address.
@@ -290,6 +294,7 @@ fn one(args: &MissionArgs, sc: &Scenario) -> Result<(MissionReport, Vec<PathBuf>
             (Some(n), _, _) => Some(ResetAt::Motions(n)),
             (None, true, _) => Some(ResetAt::Wrapped),
             (None, false, Some(n)) => Some(ResetAt::BiteInMotion(n)),
+            (None, false, None) if args.watchdog_bite_when_wrapped => Some(ResetAt::BiteWhenWrapped),
             (None, false, None) => None,
         },
     };
@@ -714,7 +719,10 @@ pub fn main(args: &MissionArgs) -> ExitCode {
     if args.live.is_some() && (args.seeds > 1 || args.shard.is_some()) {
         return super::fail("--live shows one mission: drop --seeds / --shard");
     }
-    let resets = args.reset_after_motions.is_some() || args.reset_when_wrapped || args.watchdog_bite_in_motion.is_some();
+    let resets = args.reset_after_motions.is_some()
+        || args.reset_when_wrapped
+        || args.watchdog_bite_in_motion.is_some()
+        || args.watchdog_bite_when_wrapped;
     if resets && (args.seeds > 1 || args.shard.is_some() || args.fault_campaign) {
         return super::fail("a reset (--reset-after-motions / --reset-when-wrapped / --watchdog-bite-in-motion) is for one mission: drop --seeds / --shard / --fault-campaign");
     }

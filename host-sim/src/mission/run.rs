@@ -262,6 +262,10 @@ pub enum ResetAt {
     /// the report of a motion that took one increment): the rover stops where it is (its drive commands die with the flight computer), the motion's report is never
     /// sent, and the checkpoint the rebooted software recovers is the one from before the motion.
     BiteInMotion(u32),
+    /// The watchdog bites, as in `BiteInMotion`, during the first motion that starts with the tether wrapped (as
+    /// `Wrapped` judges it after each motion): a bite mid-descent that does not depend on how many motions the
+    /// flight software needed to get there.
+    BiteWhenWrapped,
 }
 
 /// Why a mission could not run (as opposed to how it ended).
@@ -708,10 +712,15 @@ impl<L: FlightLink> Sim<'_, L> {
         };
         self.s.send(&Message::MotionReport(report))?;
         self.recv()?;
+        let wrapped = !self.rover.tether.contacts.is_empty() && self.status.is_some_and(|s| s.anchors >= 2);
         let reset_due = match self.reset {
             Some(ResetAt::Motions(n)) => n == self.rep.motions,
-            Some(ResetAt::Wrapped) => {
-                !self.rover.tether.contacts.is_empty() && self.status.is_some_and(|s| s.anchors >= 2)
+            Some(ResetAt::Wrapped) => wrapped,
+            Some(ResetAt::BiteWhenWrapped) => {
+                if wrapped {
+                    self.reset = Some(ResetAt::BiteInMotion(self.rep.motions));
+                }
+                false
             }
             Some(ResetAt::BiteInMotion(_)) | None => false,
         };
