@@ -4,6 +4,7 @@
 use crate::mapcheck::{build_map, census, esdf_errors, host_storage, observed_surface_m2, standard_poses, CheckConfig};
 use crate::world::World;
 use firmware::geom::Real;
+use firmware::config::map::{FLIGHT_BLOCKS, FLIGHT_INDEX};
 use firmware::map::{Map, VoxelState};
 use std::path::PathBuf;
 
@@ -216,11 +217,15 @@ pub fn map_check(a: &MapCheckArgs) -> Result<(), String> {
         c.footprint_m2,
         rep.bytes_used() as f64 / c.footprint_m2.max(1e-9)
     );
-    let need = rep.bytes_used() as f64 / rep.surface_m2.max(1e-9) * 400.0;
+    // sized by the plan-view footprint: a work area is measured from above
+    let need = rep.bytes_used() as f64 / c.footprint_m2.max(1e-9) * 400.0;
+    let pool = (FLIGHT_BLOCKS * bb + FLIGHT_INDEX * 4) as f64;
     println!(
-        "20 m x 20 m at this density: {:.1} MiB of blocks (+ index) vs 4 MiB SRAM + 16 MiB PSRAM = 20 MiB: {}",
+        "20 m x 20 m at this density: {:.1} MiB of blocks vs the flight pool's {:.1} MiB (FLIGHT_BLOCKS {} + index): {}",
         mib(need),
-        if need + (8192.0 * 4.0) < 20.0 * 1024.0 * 1024.0 { "fits" } else { "does NOT fit" }
+        mib(pool),
+        FLIGHT_BLOCKS,
+        if need <= FLIGHT_BLOCKS as f64 * bb as f64 { "fits" } else { "does NOT fit" }
     );
     Ok(())
 }
