@@ -226,8 +226,8 @@ impl Default for MapSection {
     }
 }
 
-/// `[faults]`: a fault profile for the mission's uplink (`host-sim/doc/faults.md`), the same keys as
-/// `--faults`: a rate per byte in [0, 1] for each kind (`bitflip`, `drop`, `duplicate`, `reorder`, `truncate`,
+/// `[faults]`: a fault profile for the mission's link (`host-sim/doc/faults.md`), the same keys as
+/// `--faults` (the kind keys are the uplink's; `[faults.down]`, or `down.KIND = RATE` in `[faults]`, the downlink's): a rate per byte in [0, 1] for each kind (`bitflip`, `drop`, `duplicate`, `reorder`, `truncate`,
 /// `delay`, `stall`; `all` sets every kind first, the named ones then override it), `delay_us` (default 200 ms),
 /// `stall_us` (500 ms), `reorder_hold_us` (200 ms) and the injector's `seed` (0; a campaign's mission `s` uses
 /// `seed ^ s`).
@@ -258,36 +258,69 @@ pub struct FaultsSection {
     pub reorder_hold_us: Option<u64>,
     /// Seed of the injector.
     pub seed: Option<u64>,
+    /// The downlink's rates (`[faults.down]`).
+    pub down: Option<DownlinkFaults>,
+}
+
+/// `[faults.down]`: the downlink's rates per byte, the same kind keys as `[faults]` (`all` first).
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DownlinkFaults {
+    /// Every kind's rate per byte (before the named kinds).
+    pub all: Option<f64>,
+    /// Bit flips per byte.
+    pub bitflip: Option<f64>,
+    /// Lost frames per byte.
+    pub drop: Option<f64>,
+    /// Duplicated frames per byte.
+    pub duplicate: Option<f64>,
+    /// Reordered frames per byte.
+    pub reorder: Option<f64>,
+    /// Truncated frames per byte.
+    pub truncate: Option<f64>,
+    /// Delayed frames per byte.
+    pub delay: Option<f64>,
+    /// Stalls per byte.
+    pub stall: Option<f64>,
+}
+
+/// Fills `rates` from `all` then each kind's given rate ([`FaultKind::ALL`] order); errors name `prefix.KEY`.
+fn fill_rates(
+    rates: &mut [f64; 7],
+    prefix: &str,
+    all: Option<f64>,
+    given: [Option<f64>; 7],
+) -> Result<(), (String, String)> {
+    use crate::link::faults::FaultKind;
+    let rate = |key: &str, r: f64| {
+        if (0.0..=1.0).contains(&r) {
+            Ok(r)
+        } else {
+            Err((format!("{prefix}.{key}"), format!("a rate per byte must be in [0, 1], got {r}")))
+        }
+    };
+    if let Some(r) = all {
+        *rates = [rate("all", r)?; 7];
+    }
+    for ((kind, given), slot) in FaultKind::ALL.iter().zip(given).zip(rates.iter_mut()) {
+        if let Some(r) = given {
+            *slot = rate(kind.name(), r)?;
+        }
+    }
+    Ok(())
 }
 
 impl FaultsSection {
     /// The injector's profile; errors name the field (`faults.KIND`) and the reason.
     pub fn profile(&self) -> Result<crate::link::faults::FaultProfile, (String, String)> {
-        use crate::link::faults::{FaultKind, FaultProfile};
+        use crate::link::faults::FaultProfile;
         let mut p = FaultProfile::default();
-        let rate = |key: &str, r: f64| {
-            if (0.0..=1.0).contains(&r) {
-                Ok(r)
-            } else {
-                Err((format!("faults.{key}"), format!("a rate per byte must be in [0, 1], got {r}")))
-            }
-        };
-        if let Some(r) = self.all {
-            p.rates = [rate("all", r)?; 7];
-        }
-        for (i, kind) in FaultKind::ALL.iter().enumerate() {
-            let given = match kind {
-                FaultKind::BitFlip => self.bitflip,
-                FaultKind::Drop => self.drop,
-                FaultKind::Duplicate => self.duplicate,
-                FaultKind::Reorder => self.reorder,
-                FaultKind::Truncate => self.truncate,
-                FaultKind::Delay => self.delay,
-                FaultKind::Stall => self.stall,
-            };
-            if let (Some(r), Some(slot)) = (given, p.rates.get_mut(i)) {
-                *slot = rate(kind.name(), r)?;
-            }
+        // in `FaultKind::ALL` order
+        let up = [self.bitflip, self.drop, self.duplicate, self.reorder, self.truncate, self.delay, self.stall];
+        fill_rates(&mut p.rates, "faults", self.all, up)?;
+        if let Some(d) = &self.down {
+            let down = [d.bitflip, d.drop, d.duplicate, d.reorder, d.truncate, d.delay, d.stall];
+            fill_rates(&mut p.down_rates, "faults.down", d.all, down)?;
         }
         p.delay_us = self.delay_us.unwrap_or(p.delay_us);
         p.stall_us = self.stall_us.unwrap_or(p.stall_us);
