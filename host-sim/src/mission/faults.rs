@@ -121,6 +121,10 @@ pub struct CellSummary {
     pub acked_damaged: u64,
     /// Drive commands received again and not executed again (the host's count).
     pub commands_repeated: u64,
+    /// Resent requests the flight software answered without acting again (`Telemetry.requests_repeated`, v5).
+    pub requests_repeated: u64,
+    /// Drive commands the flight software sent again for want of a report (`Telemetry.drive_resends`, v5).
+    pub drive_resends: u64,
     /// Frames retransmitted by the host.
     pub retransmits: u64,
     /// Scan chunks the host sent again.
@@ -165,6 +169,10 @@ pub fn summarise(cell: &FaultCell) -> CellSummary {
         }
         s.acked_damaged += acc.acked_damaged + acc.executed_damaged;
         s.commands_repeated += rep.commands_repeated;
+        if let Some(t) = &acc.telemetry {
+            s.requests_repeated += u64::from(t.requests_repeated);
+            s.drive_resends += u64::from(t.drive_resends);
+        }
         s.retransmits += rep.retransmits;
         s.chunks_resent += rep.chunks_resent;
         s.max_step_us = s.max_step_us.max(rep.max_step_us);
@@ -190,16 +198,16 @@ pub fn table(name: &str, seeds: &[u64], cells: &[FaultCell]) -> String {
     let dir = cells.first().map_or("uplink", |c| c.direction.name());
     let _ = writeln!(
         out,
-        "fault campaign: {name}, seeds {seeds:?}, {dir} faults, one kind per mission (acked damaged: uplink frames acknowledged, or downlink frames whose drive command was executed; repeats: drive commands received again, not executed)"
+        "fault campaign: {name}, seeds {seeds:?}, {dir} faults, one kind per mission (acked damaged: uplink frames acknowledged, or downlink frames whose drive command was executed; repeats: drive commands received again, not executed; flight resends: requests answered without acting again / drive commands sent again)"
     );
     let _ = writeln!(out);
     let _ = writeln!(
         out,
-        "| rate/byte | kind | arrived | safe (reason) | fell | other | injected | detected | harmless | balanced | acked damaged | retransmits (frames / chunks) | repeats | max step s | slips |"
+        "| rate/byte | kind | arrived | safe (reason) | fell | other | injected | detected | harmless | balanced | acked damaged | retransmits (frames / chunks) | repeats | flight resends | max step s | slips |"
     );
     let _ = writeln!(
         out,
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     let (mut all, mut fell, mut other, mut unbalanced, mut acked, mut errors) = (0, 0, 0, 0, 0, 0);
     for c in cells {
@@ -212,7 +220,7 @@ pub fn table(name: &str, seeds: &[u64], cells: &[FaultCell]) -> String {
         errors += s.errors;
         let _ = writeln!(
             out,
-            "| {:e} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} / {} | {} | {:.3} | {} |",
+            "| {:e} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} / {} | {} | {} / {} | {:.3} | {} |",
             c.rate,
             c.kind.name(),
             s.arrived,
@@ -231,11 +239,13 @@ pub fn table(name: &str, seeds: &[u64], cells: &[FaultCell]) -> String {
             s.retransmits,
             s.chunks_resent,
             s.commands_repeated,
+            s.requests_repeated,
+            s.drive_resends,
             f64::from(s.max_step_us) * 1e-6,
             s.slips
         );
         for (seed, why) in &s.unbalanced {
-            let _ = writeln!(out, "|  | seed {seed}: {why} | | | | | | | | | | | | | |");
+            let _ = writeln!(out, "|  | seed {seed}: {why} | | | | | | | | | | | | | | |");
         }
     }
     let _ = writeln!(out);
