@@ -258,30 +258,8 @@ pub struct FaultsSection {
     pub reorder_hold_us: Option<u64>,
     /// Seed of the injector.
     pub seed: Option<u64>,
-    /// The downlink's rates (`[faults.down]`).
-    pub down: Option<DownlinkFaults>,
-}
-
-/// `[faults.down]`: the downlink's rates per byte, the same kind keys as `[faults]` (`all` first).
-#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct DownlinkFaults {
-    /// Every kind's rate per byte (before the named kinds).
-    pub all: Option<f64>,
-    /// Bit flips per byte.
-    pub bitflip: Option<f64>,
-    /// Lost frames per byte.
-    pub drop: Option<f64>,
-    /// Duplicated frames per byte.
-    pub duplicate: Option<f64>,
-    /// Reordered frames per byte.
-    pub reorder: Option<f64>,
-    /// Truncated frames per byte.
-    pub truncate: Option<f64>,
-    /// Delayed frames per byte.
-    pub delay: Option<f64>,
-    /// Stalls per byte.
-    pub stall: Option<f64>,
+    /// The downlink's rates (`[faults.down]`: the kind keys and `all` only).
+    pub down: Option<Box<FaultsSection>>,
 }
 
 /// Fills `rates` from `all` then each kind's given rate ([`FaultKind::ALL`] order); errors name `prefix.KEY`.
@@ -319,6 +297,19 @@ impl FaultsSection {
         let up = [self.bitflip, self.drop, self.duplicate, self.reorder, self.truncate, self.delay, self.stall];
         fill_rates(&mut p.rates, "faults", self.all, up)?;
         if let Some(d) = &self.down {
+            let shared = [
+                ("delay_us", d.delay_us.is_some()),
+                ("stall_us", d.stall_us.is_some()),
+                ("reorder_hold_us", d.reorder_hold_us.is_some()),
+                ("seed", d.seed.is_some()),
+                ("down", d.down.is_some()),
+            ];
+            if let Some((key, _)) = shared.iter().find(|(_, given)| *given) {
+                return Err((
+                    format!("faults.down.{key}"),
+                    "only rates per byte go here; the delays and the seed are the [faults] section's, for both directions".into(),
+                ));
+            }
             let down = [d.bitflip, d.drop, d.duplicate, d.reorder, d.truncate, d.delay, d.stall];
             fill_rates(&mut p.down_rates, "faults.down", d.all, down)?;
         }
@@ -796,6 +787,9 @@ position = [7.0, 0.0, 0.4]
             (format!("{CRATER}[faults]\nall = nan\n"), "faults.all", "[0, 1]"),
             (format!("{CRATER}[faults]\ndrops = 1e-4\n"), "(syntax)", "unknown field"),
             (format!("{CRATER}[faults]\nseed = -1\n"), "(syntax)", "expected u64"),
+            (format!("{CRATER}[faults.down]\ndrop = 2.0\n"), "faults.down.drop", "[0, 1]"),
+            (format!("{CRATER}[faults.down]\nseed = 3\n"), "faults.down.seed", "[faults] section"),
+            (format!("{CRATER}[faults.down]\ndrops = 1e-4\n"), "(syntax)", "unknown field"),
             (
                 CRATER.replace("kind = \"crater_wall\"", "kind = \"terrain\"\n[world.terrain]\nfile = \"no/such.tif\""),
                 "world.terrain.file",
@@ -820,6 +814,13 @@ position = [7.0, 0.0, 0.4]
         assert_eq!(p, FaultProfile::parse("all=1e-5,drop=1e-3,stall_us=1000,seed=7").unwrap());
         assert!(p.any());
         assert_eq!(check_text(CRATER).unwrap().faults, None);
+        // the downlink: `[faults.down]` or dotted keys in `[faults]`, the old keys still the uplink's
+        let text = format!("{CRATER}[faults]\ndrop = 1e-3\nseed = 7\n[faults.down]\nall = 1e-5\nstall = 1e-4\n");
+        let p = check_text(&text).unwrap().faults.unwrap().profile().unwrap();
+        assert_eq!(p, FaultProfile::parse("drop=1e-3,down.all=1e-5,down.stall=1e-4,seed=7").unwrap());
+        let text = format!("{CRATER}[faults]\ndown.drop = 2e-4\n");
+        let p = check_text(&text).unwrap().faults.unwrap().profile().unwrap();
+        assert_eq!(p, FaultProfile::parse("down.drop=2e-4").unwrap());
     }
 
     const HIRISE: &str = r#"

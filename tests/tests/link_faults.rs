@@ -8,6 +8,7 @@ use host_sim::fieldlog::{self, Completeness, Direction};
 use host_sim::link::faults::{FaultAccount, FaultEvent, FaultKind, FaultLink, FaultProfile, LinkDirection};
 use host_sim::link::inproc::{InProcLink, DEFAULT_STEP_US};
 use host_sim::link::recording::RecordingLink;
+use host_sim::mission::run::{run_mission, MissionOptions, MissionReport, Verdict};
 use host_sim::link::FlightLink;
 use host_sim::replay::{replay, ReplayOutcome};
 use host_sim::session::{DownlinkCounts, HostSession, RetransmitPolicy};
@@ -104,10 +105,17 @@ fn every_fault_kind_is_accounted_for_by_the_flight_telemetry() {
         assert_eq!(acc.acked_damaged, 0);
     }
     // every kind at once: the groups still balance
-    let (acc, _, configured, _) = run(FaultProfile::parse("all=5e-4,seed=3").unwrap(), 150);
+    let acc = every_kind_at_once("all=5e-4,seed=3");
     assert!(FaultKind::ALL.iter().map(|&k| acc.injected(k)).sum::<u64>() > 10);
-    assert_eq!(acc.check(), Ok(()));
-    assert!(configured);
+}
+
+/// The conversation under `profile` (every kind at once): the accounting balances and the configuration gets
+/// through.
+fn every_kind_at_once(profile: &str) -> FaultAccount {
+    let (acc, _, configured, _) = run(FaultProfile::parse(profile).unwrap(), 150);
+    assert_eq!(acc.check(), Ok(()), "{profile}");
+    assert!(configured, "{profile}");
+    acc
 }
 
 #[test]
@@ -204,7 +212,6 @@ fn fault_profiles_parse_and_bad_ones_say_why() {
 /// chunk lost its whole scan and such a mission stopped at once, its goal refused for want of a pose.
 #[test]
 fn a_mission_through_every_fault_kind_arrives_and_accounts_for_each_fault() {
-    use host_sim::mission::run::{run_mission, MissionOptions, Verdict};
     let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios/mission_faults.toml");
     let sc = host_sim::scenario::load(&p).unwrap_or_else(|e| panic!("{e}"));
     let opts = MissionOptions { seed: 11, tracking: firmware::protocol::Tracking::ClosedLoop, noiseless: false, live: false, reset: None };
@@ -259,10 +266,8 @@ fn every_downlink_fault_kind_is_accounted_for_by_the_host() {
         }
     }
     // both directions at once, every kind: each side balances
-    let (acc, _, configured, _) = run(FaultProfile::parse("all=5e-4,down.all=5e-4,seed=3").unwrap(), 150);
+    let acc = every_kind_at_once("all=5e-4,down.all=5e-4,seed=3");
     assert!(FaultKind::ALL.iter().map(|&k| acc.down_injected(k)).sum::<u64>() > 10);
-    assert_eq!(acc.check(), Ok(()));
-    assert!(configured);
 }
 
 /// Profiles name the downlink with `down.`; the old keys still mean the uplink, and adding downlink faults leaves
@@ -300,14 +305,7 @@ fn downlink_profiles_parse_and_leave_the_uplink_faults_alone() {
 /// log (recorded inside the injector) replays byte for byte.
 #[test]
 fn a_mission_through_downlink_faults_arrives_executes_no_motion_twice_and_replays() {
-    use host_sim::mission::run::{run_mission, MissionOptions, Verdict};
-    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios/mission_faults.toml");
-    let sc = host_sim::scenario::load(&p).unwrap_or_else(|e| panic!("{e}"));
-    let opts = MissionOptions { seed: 11, tracking: firmware::protocol::Tracking::ClosedLoop, noiseless: false, live: false, reset: None };
-    let mut link = faulty(FaultProfile::parse("down.all=1e-4,seed=21").unwrap());
-    let rep = run_mission(&mut link, &sc, &opts).unwrap();
-    let acc = link.account().with_host(rep.downlink, &rep.command_seqs);
-    let (_, bytes) = link.into_inner().finish().unwrap();
+    let (rep, acc, bytes) = faulty_mission(11, "down.all=1e-4,seed=21");
     println!("{:?}: {} motions, {} commands repeated, host {:?}, downlink injected {:?}", rep.verdict, rep.motions, rep.commands_repeated, rep.downlink, acc.down_injected);
     assert_eq!(acc.check(), Ok(()));
     assert_eq!(acc.executed_damaged, 0);
@@ -337,14 +335,7 @@ fn a_mission_through_downlink_faults_arrives_executes_no_motion_twice_and_replay
 /// drive command from a damaged frame, the host's counts balance the injected faults, and the log replays.
 #[test]
 fn a_mission_through_a_lossy_downlink_recovers_lost_commands_and_answers() {
-    use host_sim::mission::run::{run_mission, MissionOptions, Verdict};
-    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios/mission_faults.toml");
-    let sc = host_sim::scenario::load(&p).unwrap_or_else(|e| panic!("{e}"));
-    let opts = MissionOptions { seed: 5, tracking: firmware::protocol::Tracking::ClosedLoop, noiseless: false, live: false, reset: None };
-    let mut link = faulty(FaultProfile::parse("down.bitflip=1e-2,down.drop=1e-2,down.truncate=1e-2,seed=3").unwrap());
-    let rep = run_mission(&mut link, &sc, &opts).unwrap();
-    let acc = link.account().with_host(rep.downlink, &rep.command_seqs);
-    let (_, bytes) = link.into_inner().finish().unwrap();
+    let (rep, acc, bytes) = faulty_mission(5, "down.bitflip=1e-2,down.drop=1e-2,down.truncate=1e-2,seed=3");
     let t = acc.telemetry.expect("closing telemetry");
     println!(
         "{:?}: {} motions, retransmits {}, host {:?}, flight: requests repeated {}, drive resends {}",
@@ -359,4 +350,17 @@ fn a_mission_through_a_lossy_downlink_recovers_lost_commands_and_answers() {
     let log = fieldlog::parse(&bytes).unwrap();
     let out = replay(&log, &mut InProcLink::new(DEFAULT_STEP_US)).unwrap();
     assert!(matches!(out, ReplayOutcome::Identical { .. }), "{out}");
+}
+
+/// The fault campaign's mission (the crater-wall descent) with mission seed `seed` over `profile`, recorded inside
+/// the injector: its report, the accounting with the host's side added, and the field log.
+fn faulty_mission(seed: u64, profile: &str) -> (MissionReport, FaultAccount, Vec<u8>) {
+    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios/mission_faults.toml");
+    let sc = host_sim::scenario::load(&p).unwrap_or_else(|e| panic!("{e}"));
+    let opts = MissionOptions { seed, tracking: firmware::protocol::Tracking::ClosedLoop, noiseless: false, live: false, reset: None };
+    let mut link = faulty(FaultProfile::parse(profile).unwrap());
+    let rep = run_mission(&mut link, &sc, &opts).unwrap();
+    let acc = link.account().with_host(rep.downlink, &rep.command_seqs);
+    let (_, bytes) = link.into_inner().finish().unwrap();
+    (rep, acc, bytes)
 }

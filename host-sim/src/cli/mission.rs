@@ -549,49 +549,42 @@ fn campaign(args: &MissionArgs, sc: &Scenario) -> Result<bool, String> {
     Ok(!campaign_failed(&file) && reports.len() == seeds.len())
 }
 
-/// The fault accounting of one mission, one line per kind injected.
+/// The fault accounting of one mission, one line per kind injected in each direction.
 fn fault_summary(acc: &crate::link::faults::FaultAccount) -> String {
+    use crate::link::faults::DetectionGroup;
     let mut s = String::new();
-    for k in FaultKind::ALL {
-        if acc.injected(k) > 0 {
-            s.push_str(&format!(
-                "  faults {:<9} injected {}, harmless {}\n",
-                k.name(),
-                acc.injected(k),
-                acc.harmless(k)
-            ));
+    for d in [LinkDirection::Up, LinkDirection::Down] {
+        let (injected, harmless, by) = match d {
+            LinkDirection::Up => (&acc.injected, &acc.harmless, "telemetry"),
+            LinkDirection::Down => (&acc.down_injected, &acc.down_harmless, "the host"),
+        };
+        if injected.iter().all(|&n| n == 0) {
+            continue;
         }
-    }
-    for g in crate::link::faults::DetectionGroup::ALL {
-        let (inj, harmless) = acc.group_totals(g);
-        if let Some(d) = acc.detected(g) {
-            s.push_str(&format!("  detected by telemetry ({g:?}): {d} (injected {inj} = detected {d} + harmless {harmless}?)\n"));
+        for (k, (inj, h)) in FaultKind::ALL.iter().zip(injected.iter().zip(harmless)) {
+            if *inj > 0 {
+                s.push_str(&format!("  {} faults {:<9} injected {inj}, harmless {h}\n", d.name(), k.name()));
+            }
         }
-    }
-    for k in FaultKind::ALL {
-        if acc.down_injected(k) > 0 {
-            s.push_str(&format!(
-                "  downlink faults {:<9} injected {}, harmless {}\n",
-                k.name(),
-                acc.down_injected(k),
-                acc.down_harmless(k)
-            ));
+        for g in DetectionGroup::ALL {
+            let (inj, h) = acc.totals_in(d, g);
+            let detected = match d {
+                LinkDirection::Up => acc.detected(g),
+                LinkDirection::Down => acc.down_detected(g),
+            };
+            if let Some(det) = detected {
+                s.push_str(&format!("  detected by {by} ({g:?}): {det} (injected {inj} = detected {det} + harmless {h}?)\n"));
+            }
         }
     }
     if acc.down_injected.iter().any(|&n| n > 0) {
-        for g in crate::link::faults::DetectionGroup::ALL {
-            let (inj, harmless) = acc.down_group_totals(g);
-            if let Some(d) = acc.down_detected(g) {
-                s.push_str(&format!("  detected by the host ({g:?}): {d} (injected {inj} = detected {d} + harmless {harmless}?)\n"));
-            }
-        }
         s.push_str(&format!("  drive commands executed from damaged downlink frames: {}\n", acc.executed_damaged));
-        if let Some(t) = &acc.telemetry {
-            s.push_str(&format!(
-                "  flight software: resent requests answered without acting {}, drive commands resent {}\n",
-                t.requests_repeated, t.drive_resends
-            ));
-        }
+    }
+    if let Some(t) = &acc.telemetry {
+        s.push_str(&format!(
+            "  flight software: resent requests answered without acting {}, drive commands resent {}\n",
+            t.requests_repeated, t.drive_resends
+        ));
     }
     s.push_str(&match acc.check() {
         Ok(()) => format!(

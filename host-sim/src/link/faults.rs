@@ -456,11 +456,21 @@ impl FaultAccount {
 
     /// Injected and harmless downlink faults of the kinds of a group.
     pub fn down_group_totals(&self, g: DetectionGroup) -> (u64, u64) {
+        self.totals_in(LinkDirection::Down, g)
+    }
+
+    /// Injected and harmless faults of the kinds of a group in direction `d`.
+    pub fn totals_in(&self, d: LinkDirection, g: DetectionGroup) -> (u64, u64) {
+        let (injected, harmless) = match d {
+            LinkDirection::Up => (&self.injected, &self.harmless),
+            LinkDirection::Down => (&self.down_injected, &self.down_harmless),
+        };
         FaultKind::ALL
             .iter()
             .filter(|k| k.group() == g)
             .fold((0, 0), |(i, h), &k| {
-                (i + self.down_injected(k), h + self.down_harmless(k))
+                let at = |a: &[u64; 7]| a.get(k.index()).copied().unwrap_or(0);
+                (i + at(injected), h + at(harmless))
             })
     }
 
@@ -482,12 +492,7 @@ impl FaultAccount {
 
     /// Injected and harmless faults of the kinds of a group.
     pub fn group_totals(&self, g: DetectionGroup) -> (u64, u64) {
-        FaultKind::ALL
-            .iter()
-            .filter(|k| k.group() == g)
-            .fold((0, 0), |(i, h), &k| {
-                (i + self.injected(k), h + self.harmless(k))
-            })
+        self.totals_in(LinkDirection::Up, g)
     }
 
     /// Checks injected = detected + harmless for every group and no `Ack` for a damaged frame; the reason if not.
@@ -496,36 +501,31 @@ impl FaultAccount {
             return Err("no telemetry from the flight software".into());
         };
         let mut bad = Vec::new();
-        for g in DetectionGroup::ALL {
-            let (inj, harmless) = self.group_totals(g);
-            let det = g.detected(t);
-            if inj != det + harmless {
-                bad.push(format!(
-                    "{g:?}: injected {inj} != detected {det} + harmless {harmless}"
-                ));
+        // per group of a direction: injected = detected + harmless
+        let mut balance = |d: LinkDirection, detected: &dyn Fn(DetectionGroup) -> u64| {
+            for g in DetectionGroup::ALL {
+                let (inj, harmless) = self.totals_in(d, g);
+                let det = detected(g);
+                if inj != det + harmless {
+                    let side = if d == LinkDirection::Down { "downlink " } else { "" };
+                    bad.push(format!(
+                        "{side}{g:?}: injected {inj} != detected {det} + harmless {harmless}"
+                    ));
+                }
             }
+        };
+        balance(LinkDirection::Up, &|g| g.detected(t));
+        let down_faults = self.down_injected.iter().any(|&n| n > 0);
+        match &self.host {
+            None if down_faults => bad.push("downlink faults but no host downlink counts".into()),
+            None => {}
+            Some(h) => balance(LinkDirection::Down, &|g| g.detected_down(h)),
         }
         if self.acked_damaged > 0 {
             bad.push(format!(
                 "{} damaged frame(s) acknowledged",
                 self.acked_damaged
             ));
-        }
-        let down_faults = self.down_injected.iter().any(|&n| n > 0);
-        match &self.host {
-            None if down_faults => bad.push("downlink faults but no host downlink counts".into()),
-            None => {}
-            Some(h) => {
-                for g in DetectionGroup::ALL {
-                    let (inj, harmless) = self.down_group_totals(g);
-                    let det = g.detected_down(h);
-                    if inj != det + harmless {
-                        bad.push(format!(
-                            "downlink {g:?}: injected {inj} != detected {det} + harmless {harmless}"
-                        ));
-                    }
-                }
-            }
         }
         if self.executed_damaged > 0 {
             bad.push(format!(
