@@ -2,7 +2,7 @@
 //!
 //! Format (all integers little-endian; `host-sim/doc/fieldlog.md` has the same table):
 //!
-//! Header: `magic "TBOTFLOG"` (8) | `format_version u16` (= 3; 1 and 2 are still read) | `protocol_version u8` |
+//! Header: `magic "TBOTFLOG"` (8) | `format_version u16` (= 4; 1, 2 and 3 are still read) | `protocol_version u8` |
 //! `reserved u8` (0) | `created_at_unix_ms u64` (passed in by the caller) | `seed u64` | `config_len u32` |
 //! `config` (UTF-8 JSON, at most 1 MiB) | `header_crc u32` (CRC-32/ISO-HDLC of all header bytes before it).
 //!
@@ -15,7 +15,9 @@
 //!
 //! Fault record (format 3): direction 4, the link time of an injected link fault, its description
 //! (`link::faults::FaultEvent::to_bytes`). Fault records are kept apart from the data records ([`FieldLog::faults`]),
-//! so replay and export see only the bytes that crossed the link; the end record counts both.
+//! so replay and export see only the bytes that crossed the link; the end record counts both. Format 4 (downlink
+//! faults): a fault record's payload ends with the faulted direction (26 bytes; a format-3 payload has 25 and was
+//! always an uplink fault).
 //!
 //! The reader keeps every valid record. At damage (a bad checksum, direction or length, or a truncated record)
 //! it reports where (byte offset) and why, then resynchronises: it looks for the next byte offset where a whole
@@ -27,8 +29,11 @@ use std::io::Write;
 
 /// Magic bytes at the start of a field log.
 pub const MAGIC: &[u8; 8] = b"TBOTFLOG";
-/// Format version this build writes (it also reads [`FORMAT_VERSION_1`] and [`FORMAT_VERSION_2`]).
-pub const FORMAT_VERSION: u16 = 3;
+/// Format version this build writes (it also reads [`FORMAT_VERSION_1`], [`FORMAT_VERSION_2`] and
+/// [`FORMAT_VERSION_3`]).
+pub const FORMAT_VERSION: u16 = 4;
+/// The third format: fault records of uplink faults only (25-byte payloads, no direction byte).
+pub const FORMAT_VERSION_3: u16 = 3;
 /// The second format: an end record, no fault records.
 pub const FORMAT_VERSION_2: u16 = 2;
 /// The first format: the same records, no end record.
@@ -511,7 +516,7 @@ fn record_at(b: &[u8], at: usize, version: u16) -> Result<RawRecord<'_>, DamageR
     }
     let known = Direction::from_u8(dir).is_some()
         || (version >= FORMAT_VERSION_2 && dir == END_DIRECTION)
-        || (version >= FORMAT_VERSION && dir == FAULT_DIRECTION);
+        || (version >= FORMAT_VERSION_3 && dir == FAULT_DIRECTION);
     if !known {
         return Err(DamageReason::BadDirection);
     }
@@ -655,8 +660,8 @@ mod tests {
         );
     }
 
-    /// Format 3: fault records are kept apart from the data records and counted by the end record; a format-2
-    /// log (every log before issue 24 item 1) still reads, and a fault record is not a format-2 record.
+    /// Format 3 (and 4): fault records are kept apart from the data records and counted by the end record; a
+    /// format-2 log (every log before issue 24 item 1) still reads, and a fault record is not a format-2 record.
     #[test]
     fn fault_records_in_format_3_and_format_2_logs_still_read() {
         let h = Header {
@@ -671,7 +676,7 @@ mod tests {
         w.append(Direction::FlightToHost, 20, &[3]).unwrap();
         let b = w.finish().unwrap();
         let log = parse(&b).unwrap();
-        assert_eq!(log.format_version, 3);
+        assert_eq!(log.format_version, FORMAT_VERSION);
         assert_eq!(log.records.len(), 2);
         assert_eq!(log.faults.len(), 1);
         assert_eq!(
@@ -717,12 +722,12 @@ mod tests {
             parse(
                 &b2[..8]
                     .iter()
-                    .chain(&4u16.to_le_bytes())
+                    .chain(&(FORMAT_VERSION + 1).to_le_bytes())
                     .copied()
                     .collect::<Vec<u8>>()
             )
             .map(|_| ()),
-            Err(HeaderError::UnsupportedVersion(4))
+            Err(HeaderError::UnsupportedVersion(FORMAT_VERSION + 1))
         );
     }
 

@@ -226,8 +226,8 @@ impl Default for MapSection {
     }
 }
 
-/// `[faults]`: a fault profile for the mission's uplink (`host-sim/doc/faults.md`), the same keys as
-/// `--faults`: a rate per byte in [0, 1] for each kind (`bitflip`, `drop`, `duplicate`, `reorder`, `truncate`,
+/// `[faults]`: a fault profile for the mission's link (`host-sim/doc/faults.md`), the same keys as
+/// `--faults` (the kind keys are the uplink's; `[faults.down]`, or `down.KIND = RATE` in `[faults]`, the downlink's): a rate per byte in [0, 1] for each kind (`bitflip`, `drop`, `duplicate`, `reorder`, `truncate`,
 /// `delay`, `stall`; `all` sets every kind first, the named ones then override it), `delay_us` (default 200 ms),
 /// `stall_us` (500 ms), `reorder_hold_us` (200 ms) and the injector's `seed` (0; a campaign's mission `s` uses
 /// `seed ^ s`).
@@ -258,36 +258,60 @@ pub struct FaultsSection {
     pub reorder_hold_us: Option<u64>,
     /// Seed of the injector.
     pub seed: Option<u64>,
+    /// The downlink's rates (`[faults.down]`: the kind keys and `all` only).
+    pub down: Option<Box<FaultsSection>>,
+}
+
+/// Fills `rates` from `all` then each kind's given rate ([`FaultKind::ALL`] order); errors name `prefix.KEY`.
+fn fill_rates(
+    rates: &mut [f64; 7],
+    prefix: &str,
+    all: Option<f64>,
+    given: [Option<f64>; 7],
+) -> Result<(), (String, String)> {
+    use crate::link::faults::FaultKind;
+    let rate = |key: &str, r: f64| {
+        if (0.0..=1.0).contains(&r) {
+            Ok(r)
+        } else {
+            Err((format!("{prefix}.{key}"), format!("a rate per byte must be in [0, 1], got {r}")))
+        }
+    };
+    if let Some(r) = all {
+        *rates = [rate("all", r)?; 7];
+    }
+    for ((kind, given), slot) in FaultKind::ALL.iter().zip(given).zip(rates.iter_mut()) {
+        if let Some(r) = given {
+            *slot = rate(kind.name(), r)?;
+        }
+    }
+    Ok(())
 }
 
 impl FaultsSection {
     /// The injector's profile; errors name the field (`faults.KIND`) and the reason.
     pub fn profile(&self) -> Result<crate::link::faults::FaultProfile, (String, String)> {
-        use crate::link::faults::{FaultKind, FaultProfile};
+        use crate::link::faults::FaultProfile;
         let mut p = FaultProfile::default();
-        let rate = |key: &str, r: f64| {
-            if (0.0..=1.0).contains(&r) {
-                Ok(r)
-            } else {
-                Err((format!("faults.{key}"), format!("a rate per byte must be in [0, 1], got {r}")))
+        // in `FaultKind::ALL` order
+        let up = [self.bitflip, self.drop, self.duplicate, self.reorder, self.truncate, self.delay, self.stall];
+        fill_rates(&mut p.rates, "faults", self.all, up)?;
+        if let Some(d) = &self.down {
+            let shared = [
+                ("delay_us", d.delay_us.is_some()),
+                ("stall_us", d.stall_us.is_some()),
+                ("reorder_hold_us", d.reorder_hold_us.is_some()),
+                ("seed", d.seed.is_some()),
+                ("down", d.down.is_some()),
+            ];
+            if let Some((key, _)) = shared.iter().find(|(_, given)| *given) {
+                return Err((
+                    format!("faults.down.{key}"),
+                    "only rates per byte go here; the delays and the seed are the [faults] section's, for both directions".into(),
+                ));
             }
-        };
-        if let Some(r) = self.all {
-            p.rates = [rate("all", r)?; 7];
-        }
-        for (i, kind) in FaultKind::ALL.iter().enumerate() {
-            let given = match kind {
-                FaultKind::BitFlip => self.bitflip,
-                FaultKind::Drop => self.drop,
-                FaultKind::Duplicate => self.duplicate,
-                FaultKind::Reorder => self.reorder,
-                FaultKind::Truncate => self.truncate,
-                FaultKind::Delay => self.delay,
-                FaultKind::Stall => self.stall,
-            };
-            if let (Some(r), Some(slot)) = (given, p.rates.get_mut(i)) {
-                *slot = rate(kind.name(), r)?;
-            }
+            let down = [d.bitflip, d.drop, d.duplicate, d.reorder, d.truncate, d.delay, d.stall];
+            fill_rates(&mut p.down_rates, "faults.down", d.all, down)?;
         }
         p.delay_us = self.delay_us.unwrap_or(p.delay_us);
         p.stall_us = self.stall_us.unwrap_or(p.stall_us);
@@ -763,6 +787,9 @@ position = [7.0, 0.0, 0.4]
             (format!("{CRATER}[faults]\nall = nan\n"), "faults.all", "[0, 1]"),
             (format!("{CRATER}[faults]\ndrops = 1e-4\n"), "(syntax)", "unknown field"),
             (format!("{CRATER}[faults]\nseed = -1\n"), "(syntax)", "expected u64"),
+            (format!("{CRATER}[faults.down]\ndrop = 2.0\n"), "faults.down.drop", "[0, 1]"),
+            (format!("{CRATER}[faults.down]\nseed = 3\n"), "faults.down.seed", "[faults] section"),
+            (format!("{CRATER}[faults.down]\ndrops = 1e-4\n"), "(syntax)", "unknown field"),
             (
                 CRATER.replace("kind = \"crater_wall\"", "kind = \"terrain\"\n[world.terrain]\nfile = \"no/such.tif\""),
                 "world.terrain.file",
@@ -787,6 +814,13 @@ position = [7.0, 0.0, 0.4]
         assert_eq!(p, FaultProfile::parse("all=1e-5,drop=1e-3,stall_us=1000,seed=7").unwrap());
         assert!(p.any());
         assert_eq!(check_text(CRATER).unwrap().faults, None);
+        // the downlink: `[faults.down]` or dotted keys in `[faults]`, the old keys still the uplink's
+        let text = format!("{CRATER}[faults]\ndrop = 1e-3\nseed = 7\n[faults.down]\nall = 1e-5\nstall = 1e-4\n");
+        let p = check_text(&text).unwrap().faults.unwrap().profile().unwrap();
+        assert_eq!(p, FaultProfile::parse("drop=1e-3,down.all=1e-5,down.stall=1e-4,seed=7").unwrap());
+        let text = format!("{CRATER}[faults]\ndown.drop = 2e-4\n");
+        let p = check_text(&text).unwrap().faults.unwrap().profile().unwrap();
+        assert_eq!(p, FaultProfile::parse("down.drop=2e-4").unwrap());
     }
 
     const HIRISE: &str = r#"

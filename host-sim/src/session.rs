@@ -10,9 +10,25 @@
 //! next one replaces them. Scan chunks are retransmitted per scan, not per frame ([`HostSession::send_scan`]): one lost
 //! chunk would lose its scan; the flight software takes a scan's chunks in any order, so the chunks without an
 //! answer are sent again alone once the others are answered.
+//!
+//! **A resend is never executed twice** (protocol v5): when the downlink loses the `Ack`, a resend reaches a flight
+//! software that already acted on the first copy; the flight software answers it `Ack` without acting again (its
+//! last accepted request of each kind, `firmware/src/exec`). Any transmission's answer answers the message: the
+//! session keeps every sequence number a message was sent under. A `GoalRequest` supersedes older unanswered goals
+//! (they are not sent again: an old goal must never replace a newer one).
+//!
+//! **The downlink** ([`DownlinkCounts`], [`HostSession::downlink`]): a frame that fails its COBS structure, CRC or
+//! decoding is counted (`damaged`) and skipped, never acted on; the flight software's sequence numbers give frames
+//! lost (`gaps`), late (`late`) and duplicated (`duplicates`: the same sequence number and CRC as one of the last
+//! `SEQ_HISTORY_LEN` intact frames; dropped, so a copy made by the link is never acted on twice), with the same
+//! rules and windows as the flight side's counters on the uplink (`firmware/src/exec`). After a reset of the flight
+//! computer the mission calls [`HostSession::flight_rebooted`] (its numbering starts again from 0).
 
+use std::collections::VecDeque;
+
+use firmware::config::exec::{SEQ_HISTORY_LEN, SEQ_WINDOW};
 use firmware::protocol::{
-    self, Deframer, Header, Message, NackReason, SensorChunk, Telemetry, TelemetryRequest,
+    self, Deframer, Frame, Header, Message, NackReason, SensorChunk, Telemetry, TelemetryRequest,
 };
 
 use crate::link::{FlightLink, LinkError};
@@ -39,10 +55,28 @@ impl Default for RetransmitPolicy {
     }
 }
 
-/// A sent frame waiting for its answer.
+/// What the host saw of the downlink (flight -> host) frames: its own detection of downlink faults.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct DownlinkCounts {
+    /// Intact frames read (duplicates included).
+    pub frames: u64,
+    /// Frames that failed their COBS structure, CRC or decoding (skipped).
+    pub damaged: u64,
+    /// Flight sequence numbers skipped (frames lost or damaged on the way, or late ones not yet arrived).
+    pub gaps: u64,
+    /// Frames behind the expected sequence number (reordered or delayed; still read).
+    pub late: u64,
+    /// Copies of one of the last intact frames (dropped).
+    pub duplicates: u64,
+    /// Jumps beyond the window: a new flight session.
+    pub resyncs: u64,
+}
+
+/// A sent message waiting for its answer.
 #[derive(Debug, Clone)]
 struct Pending {
-    seq: u32,
+    /// Every sequence number it was sent under, the latest last.
+    seqs: Vec<u32>,
     msg: Message,
     sent_us: u64,
     tries: u32,
@@ -113,6 +147,14 @@ pub struct HostSession<L: FlightLink> {
     pub chunks_resent: u64,
     /// Kinds of the messages given up, in order.
     pub given_up_kinds: Vec<protocol::MessageKind>,
+    /// The host's detection on the downlink.
+    pub downlink: DownlinkCounts,
+    /// Expected next flight sequence number.
+    down_next: u32,
+    /// An intact flight frame has been read since the flight software (re)booted.
+    down_seen: bool,
+    /// (sequence number, CRC) of the last intact flight frames.
+    down_history: VecDeque<(u32, u32)>,
 }
 
 impl<L: FlightLink> HostSession<L> {
@@ -135,6 +177,10 @@ impl<L: FlightLink> HostSession<L> {
             given_up: 0,
             chunks_resent: 0,
             given_up_kinds: Vec::new(),
+            downlink: DownlinkCounts::default(),
+            down_next: 0,
+            down_seen: false,
+            down_history: VecDeque::new(),
         }
     }
 
@@ -167,10 +213,21 @@ impl<L: FlightLink> HostSession<L> {
 
     /// Encodes and sends `msg`; returns its sequence number.
     pub fn send(&mut self, msg: &Message) -> Result<u32, SessionError> {
-        self.send_try(msg, 1)
+        if matches!(msg, Message::GoalRequest(_)) {
+            // a newer goal supersedes an unanswered older one: never send the old one again (module docs)
+            self.pending.retain(|p| !matches!(p.msg, Message::GoalRequest(_)));
+        }
+        self.send_try(msg, 1, Vec::new())
     }
 
-    fn send_try(&mut self, msg: &Message, tries: u32) -> Result<u32, SessionError> {
+    /// The flight software rebooted: its frame numbering starts again (the downlink counters go on).
+    pub fn flight_rebooted(&mut self) {
+        self.down_next = 0;
+        self.down_seen = false;
+        self.down_history.clear();
+    }
+
+    fn send_try(&mut self, msg: &Message, tries: u32, mut seqs: Vec<u32>) -> Result<u32, SessionError> {
         let seq = self.take_seq();
         let mut buf = vec![0u8; firmware::config::protocol::MAX_ENCODED_FRAME_LEN];
         let n = protocol::encode(seq, msg, &mut buf).map_err(SessionError::Encode)?;
@@ -183,8 +240,9 @@ impl<L: FlightLink> HostSession<L> {
                 | Message::SensorChunk(_)
         );
         if self.retransmit.is_some() && !periodic {
+            seqs.push(seq);
             self.pending.push(Pending {
-                seq,
+                seqs,
                 msg: msg.clone(),
                 sent_us: self.link.now_us(),
                 tries,
@@ -216,7 +274,7 @@ impl<L: FlightLink> HostSession<L> {
                 continue;
             }
             self.retransmitted += 1;
-            self.send_try(&p.msg, p.tries + 1)?;
+            self.send_try(&p.msg, p.tries + 1, p.seqs)?;
         }
         Ok(())
     }
@@ -231,6 +289,33 @@ impl<L: FlightLink> HostSession<L> {
         Ok(self.link.send(bytes)?)
     }
 
+    /// Checks an intact flight frame's sequence number (module docs); false for a duplicate (not to be read).
+    fn track_down(&mut self, seq: u32, crc: u32) -> bool {
+        if self.down_history.contains(&(seq, crc)) {
+            self.downlink.duplicates += 1;
+            log::debug!("downlink frame seq {seq} duplicated: dropped");
+            return false;
+        }
+        if self.down_history.len() >= SEQ_HISTORY_LEN {
+            self.down_history.pop_front();
+        }
+        self.down_history.push_back((seq, crc));
+        self.downlink.frames += 1;
+        let ahead = seq.wrapping_sub(self.down_next);
+        let behind = self.down_next.wrapping_sub(seq);
+        if ahead <= SEQ_WINDOW || (self.down_seen && ahead < u32::MAX / 2) {
+            self.downlink.gaps += u64::from(ahead);
+            self.down_next = seq.wrapping_add(1);
+        } else if self.down_seen && behind <= SEQ_WINDOW {
+            self.downlink.late += 1;
+        } else {
+            self.downlink.resyncs += 1;
+            self.down_next = seq.wrapping_add(1);
+        }
+        self.down_seen = true;
+        true
+    }
+
     fn absorb(&mut self, bytes: &[u8]) -> Result<Vec<Message>, SessionError> {
         let t_us = self.link.now_us();
         let mut out = Vec::new();
@@ -239,18 +324,33 @@ impl<L: FlightLink> HostSession<L> {
             let (n, ev) = self.deframer.push(rest);
             rest = rest.get(n..).unwrap_or(&[]);
             let Some(ev) = ev else { continue };
-            let frame = ev.map_err(|e| SessionError::BadReply(e.into()))?;
-            let (header, message) =
-                protocol::decode_frame(frame).map_err(SessionError::BadReply)?;
+            // A damaged frame is counted and skipped: nothing in it can be trusted (module docs).
+            let decoded = ev.map_err(NackReason::from).and_then(|frame| {
+                let f = Frame::new_unchecked(frame);
+                f.check().map_err(NackReason::from)?;
+                let (header, message) = protocol::decode_frame(frame)?;
+                Ok((header, message, f.crc()))
+            });
+            let (header, message, crc) = match decoded {
+                Ok(d) => d,
+                Err(reason) => {
+                    self.downlink.damaged += 1;
+                    log::debug!("damaged downlink frame skipped ({reason:?})");
+                    continue;
+                }
+            };
+            if !self.track_down(header.seq, crc) {
+                continue;
+            }
             match &message {
-                Message::Ack(a) => self.pending.retain(|p| p.seq != a.seq),
+                Message::Ack(a) => self.pending.retain(|p| !p.seqs.contains(&a.seq)),
                 Message::Nack(n)
                     if !matches!(
                         n.reason,
                         NackReason::Truncated | NackReason::Oversize | NackReason::BadCrc
                     ) =>
                 {
-                    self.pending.retain(|p| p.seq != n.seq)
+                    self.pending.retain(|p| !p.seqs.contains(&n.seq))
                 }
                 _ => {}
             }

@@ -231,6 +231,7 @@ fn mission_args(out: &Path, seeds: u32, shard: Option<Shard>) -> MissionArgs {
         fault_campaign: false,
         fault_rates: Vec::new(),
         fault_kinds: Vec::new(),
+        fault_downlink: false,
         charge_host_time: false,
         reset_after_motions: None,
         reset_when_wrapped: false,

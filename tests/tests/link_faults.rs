@@ -5,12 +5,13 @@
 
 use firmware::protocol::{self, Configure, Deframer, GoalCancel, Message, TetherReading, TimeTick};
 use host_sim::fieldlog::{self, Completeness, Direction};
-use host_sim::link::faults::{FaultAccount, FaultEvent, FaultKind, FaultLink, FaultProfile};
+use host_sim::link::faults::{FaultAccount, FaultEvent, FaultKind, FaultLink, FaultProfile, LinkDirection};
 use host_sim::link::inproc::{InProcLink, DEFAULT_STEP_US};
 use host_sim::link::recording::RecordingLink;
+use host_sim::mission::run::{run_mission, MissionOptions, MissionReport, Verdict};
 use host_sim::link::FlightLink;
 use host_sim::replay::{replay, ReplayOutcome};
-use host_sim::session::{HostSession, RetransmitPolicy};
+use host_sim::session::{DownlinkCounts, HostSession, RetransmitPolicy};
 
 type Faulty = FaultLink<RecordingLink<InProcLink, Vec<u8>>>;
 
@@ -20,7 +21,7 @@ fn configure() -> Configure {
 
 /// A short conversation over `link`: `Configure`, then rounds of a time tick, a tether reading and a goal cancel
 /// (refused: no goal), with link time running between rounds; faults end, then the closing telemetry.
-fn converse(link: &mut Faulty, rounds: u32) -> (bool, u64) {
+fn converse(link: &mut Faulty, rounds: u32) -> (bool, u64, DownlinkCounts) {
     let mut s = HostSession::new(link);
     s.retransmit = Some(RetransmitPolicy::default());
     s.recv().unwrap();
@@ -45,7 +46,7 @@ fn converse(link: &mut Faulty, rounds: u32) -> (bool, u64) {
     s.link_mut().end_faults().unwrap();
     s.recv().unwrap();
     let t = s.telemetry().unwrap();
-    (t.configured, s.retransmitted)
+    (t.configured, s.retransmitted, s.downlink)
 }
 
 fn faulty(profile: FaultProfile) -> Faulty {
@@ -67,8 +68,8 @@ fn faulty(profile: FaultProfile) -> Faulty {
 /// Runs the conversation under `profile`; the accounting and the log bytes.
 fn run(profile: FaultProfile, rounds: u32) -> (FaultAccount, Vec<u8>, bool, u64) {
     let mut link = faulty(profile);
-    let (configured, retransmitted) = converse(&mut link, rounds);
-    let acc = link.account();
+    let (configured, retransmitted, down) = converse(&mut link, rounds);
+    let acc = link.account().with_host(down, &[]);
     let (_, bytes) = link.into_inner().finish().unwrap();
     (acc, bytes, configured, retransmitted)
 }
@@ -104,10 +105,17 @@ fn every_fault_kind_is_accounted_for_by_the_flight_telemetry() {
         assert_eq!(acc.acked_damaged, 0);
     }
     // every kind at once: the groups still balance
-    let (acc, _, configured, _) = run(FaultProfile::parse("all=5e-4,seed=3").unwrap(), 150);
+    let acc = every_kind_at_once("all=5e-4,seed=3");
     assert!(FaultKind::ALL.iter().map(|&k| acc.injected(k)).sum::<u64>() > 10);
-    assert_eq!(acc.check(), Ok(()));
-    assert!(configured);
+}
+
+/// The conversation under `profile` (every kind at once): the accounting balances and the configuration gets
+/// through.
+fn every_kind_at_once(profile: &str) -> FaultAccount {
+    let (acc, _, configured, _) = run(FaultProfile::parse(profile).unwrap(), 150);
+    assert_eq!(acc.check(), Ok(()), "{profile}");
+    assert!(configured, "{profile}");
+    acc
 }
 
 #[test]
@@ -204,7 +212,6 @@ fn fault_profiles_parse_and_bad_ones_say_why() {
 /// chunk lost its whole scan and such a mission stopped at once, its goal refused for want of a pose.
 #[test]
 fn a_mission_through_every_fault_kind_arrives_and_accounts_for_each_fault() {
-    use host_sim::mission::run::{run_mission, MissionOptions, Verdict};
     let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios/mission_faults.toml");
     let sc = host_sim::scenario::load(&p).unwrap_or_else(|e| panic!("{e}"));
     let opts = MissionOptions { seed: 11, tracking: firmware::protocol::Tracking::ClosedLoop, noiseless: false, live: false, reset: None };
@@ -218,4 +225,142 @@ fn a_mission_through_every_fault_kind_arrives_and_accounts_for_each_fault() {
     assert!(lossy.iter().map(|&k| acc.injected(k)).sum::<u64>() > 20, "{acc:?}");
     assert!(rep.chunks_resent > 0, "no scan chunk was sent again");
     assert_eq!(rep.verdict, Verdict::Arrived, "{:?}", rep.verdict);
+}
+
+/// Downlink faults (flight -> host): every kind is accounted for by the host's own counters (its deframer and CRC
+/// check and the flight software's sequence numbers: injected = detected + harmless), the conversation survives
+/// (a lost `Ack` makes the host resend, and the flight software answers the resend without acting again), and the
+/// flight software never saw a damaged frame (the uplink is clean).
+#[test]
+fn every_downlink_fault_kind_is_accounted_for_by_the_host() {
+    for kind in FaultKind::ALL {
+        let profile = FaultProfile::parse(&format!("down.{}=3e-3,seed=11", kind.name())).unwrap();
+        let (acc, _, configured, retransmitted) = run(profile, 150);
+        let injected = acc.down_injected(kind);
+        assert!(injected >= 5, "{kind:?}: only {injected} downlink faults injected");
+        assert_eq!(acc.injected(kind), 0, "{kind:?}: the uplink was faulted");
+        let host = acc.host.expect("host counts");
+        let detected = kind.group().detected_down(&host);
+        println!(
+            "{kind:?}: injected {injected}, detected {detected}, harmless {}, retransmitted {retransmitted}, host {host:?}",
+            acc.down_harmless(kind)
+        );
+        assert_eq!(acc.check(), Ok(()), "{kind:?}");
+        match kind {
+            FaultKind::BitFlip | FaultKind::Truncate => {
+                assert_eq!(acc.down_harmless(kind), 0);
+                assert!(host.damaged > 0, "{kind:?}: no damaged frame seen");
+            }
+            FaultKind::Drop => assert_eq!(acc.down_harmless(kind), 0),
+            FaultKind::Duplicate => assert_eq!(host.duplicates, injected),
+            FaultKind::Stall => assert_eq!(detected, 0),
+            FaultKind::Reorder | FaultKind::Delay => assert!(detected > 0, "{kind:?}: no late frame"),
+        }
+        assert!(configured, "{kind:?}: the configuration never got through");
+        let t = acc.telemetry.expect("closing telemetry");
+        // a clean uplink: the flight software saw no gap, no duplicate; a lost Ack's resend was answered, not
+        // applied again
+        assert_eq!((t.seq_gaps, t.seq_late), (0, 0), "{kind:?}");
+        if matches!(kind, FaultKind::Drop | FaultKind::BitFlip | FaultKind::Truncate) && retransmitted > 0 {
+            println!("  requests repeated {}", t.requests_repeated);
+        }
+    }
+    // both directions at once, every kind: each side balances
+    let acc = every_kind_at_once("all=5e-4,down.all=5e-4,seed=3");
+    assert!(FaultKind::ALL.iter().map(|&k| acc.down_injected(k)).sum::<u64>() > 10);
+}
+
+/// Profiles name the downlink with `down.`; the old keys still mean the uplink, and adding downlink faults leaves
+/// a seed's uplink faults as they were.
+#[test]
+fn downlink_profiles_parse_and_leave_the_uplink_faults_alone() {
+    let p = FaultProfile::parse("drop=1e-4,down.drop=2e-4,down.all=1e-5,seed=4").unwrap();
+    assert_eq!((p.rate(FaultKind::Drop), p.down_rate(FaultKind::Drop), p.down_rate(FaultKind::Stall)), (1e-4, 1e-5, 1e-5));
+    let p = FaultProfile::parse("down.drop=2e-4,seed=4").unwrap();
+    assert_eq!((p.rate(FaultKind::Drop), p.down_rate(FaultKind::Drop)), (0.0, 2e-4));
+    assert_eq!(FaultProfile::parse(&p.to_string()).unwrap(), p);
+    let e = FaultProfile::parse("down.flip=1e-3").unwrap_err();
+    assert!(e.contains("unknown key `down.flip`"), "{e}");
+    assert!(FaultProfile::parse("down.drop=2").unwrap_err().contains("must be in [0, 1]"));
+    let up = |profile: &str| {
+        let (acc, _, _, _) = run(FaultProfile::parse(profile).unwrap(), 60);
+        acc.injected
+    };
+    assert_eq!(up("drop=3e-3,seed=5"), up("drop=3e-3,down.all=3e-3,seed=5"));
+    // a format-3 fault record (no direction byte) reads as an uplink fault; a format-4 one keeps its direction
+    let ev = FaultEvent { t_us: 5, direction: LinkDirection::Down, kind: FaultKind::Delay, frame: 3, seq: 9, frame_len: 20, detail: 7 };
+    let b = ev.to_bytes();
+    assert_eq!(FaultEvent::from_bytes(5, &b), Some(ev));
+    assert_eq!(FaultEvent::from_bytes(5, &b[..b.len() - 1]), Some(FaultEvent { direction: LinkDirection::Up, ..ev }));
+    let mut bad = b.clone();
+    *bad.last_mut().unwrap() = 2;
+    assert_eq!(FaultEvent::from_bytes(5, &bad), None);
+}
+
+/// A whole closed-loop mission with every fault kind on the DOWNLINK at 1e-4 per byte (and the uplink clean): lost
+/// `Ack`s make the host resend goals, configurations and reports the flight software already took, lost or late
+/// drive commands are sent again by the flight software. The mission arrives; no motion is executed twice (the
+/// flight software accepted exactly one report per motion the rover made, and took exactly one goal); no drive
+/// command came from a damaged frame; every downlink fault is accounted for by the host's counters; and the field
+/// log (recorded inside the injector) replays byte for byte.
+#[test]
+fn a_mission_through_downlink_faults_arrives_executes_no_motion_twice_and_replays() {
+    let (rep, acc, bytes) = faulty_mission(11, "down.all=1e-4,seed=21");
+    println!("{:?}: {} motions, {} commands repeated, host {:?}, downlink injected {:?}", rep.verdict, rep.motions, rep.commands_repeated, rep.downlink, acc.down_injected);
+    assert_eq!(acc.check(), Ok(()));
+    assert_eq!(acc.executed_damaged, 0);
+    let lossy = [FaultKind::BitFlip, FaultKind::Drop, FaultKind::Truncate];
+    assert!(lossy.iter().map(|&k| acc.down_injected(k)).sum::<u64>() > 5, "{acc:?}");
+    assert_eq!(rep.verdict, Verdict::Arrived, "{:?}", rep.verdict);
+    let t = acc.telemetry.expect("closing telemetry");
+    assert_eq!(t.motion_reports, rep.motions, "a motion executed twice (or a report lost)");
+    assert_eq!(t.goals_received, 1, "the goal was applied again");
+    let log = fieldlog::parse(&bytes).unwrap();
+    assert_eq!(log.completeness(), Completeness::Complete);
+    let down_records = log
+        .faults
+        .iter()
+        .filter_map(|f| FaultEvent::from_bytes(f.t_us, &f.bytes))
+        .filter(|e| e.direction == LinkDirection::Down)
+        .count() as u64;
+    assert_eq!(down_records, acc.down_injected.iter().sum::<u64>());
+    let out = replay(&log, &mut InProcLink::new(DEFAULT_STEP_US)).unwrap();
+    assert!(matches!(out, ReplayOutcome::Identical { .. }), "{out}");
+}
+
+/// A lossy downlink (bit flips, drops and truncations at 1e-2 per byte each: about one `DriveCommand` in three and
+/// a sixth of the `Ack`s lost): the flight software sends drive commands again when their reports are late, the
+/// host resends what got no answer and the flight software answers a request it already took without taking it
+/// again. The mission arrives, one accepted report per motion the rover made (no motion twice), one goal taken, no
+/// drive command from a damaged frame, the host's counts balance the injected faults, and the log replays.
+#[test]
+fn a_mission_through_a_lossy_downlink_recovers_lost_commands_and_answers() {
+    let (rep, acc, bytes) = faulty_mission(5, "down.bitflip=1e-2,down.drop=1e-2,down.truncate=1e-2,seed=3");
+    let t = acc.telemetry.expect("closing telemetry");
+    println!(
+        "{:?}: {} motions, retransmits {}, host {:?}, flight: requests repeated {}, drive resends {}",
+        rep.verdict, rep.motions, rep.retransmits, rep.downlink, t.requests_repeated, t.drive_resends
+    );
+    assert_eq!(acc.check(), Ok(()));
+    assert_eq!(rep.verdict, Verdict::Arrived, "{:?}", rep.verdict);
+    assert!(t.drive_resends > 0, "no drive command was lost: the test exercises nothing");
+    assert_eq!(t.motion_reports, rep.motions, "a motion executed twice (or a report lost)");
+    assert_eq!(t.goals_received, 1, "the goal was applied again");
+    assert_eq!(t.motion_report_timeouts, 0);
+    let log = fieldlog::parse(&bytes).unwrap();
+    let out = replay(&log, &mut InProcLink::new(DEFAULT_STEP_US)).unwrap();
+    assert!(matches!(out, ReplayOutcome::Identical { .. }), "{out}");
+}
+
+/// The fault campaign's mission (the crater-wall descent) with mission seed `seed` over `profile`, recorded inside
+/// the injector: its report, the accounting with the host's side added, and the field log.
+fn faulty_mission(seed: u64, profile: &str) -> (MissionReport, FaultAccount, Vec<u8>) {
+    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios/mission_faults.toml");
+    let sc = host_sim::scenario::load(&p).unwrap_or_else(|e| panic!("{e}"));
+    let opts = MissionOptions { seed, tracking: firmware::protocol::Tracking::ClosedLoop, noiseless: false, live: false, reset: None };
+    let mut link = faulty(FaultProfile::parse(profile).unwrap());
+    let rep = run_mission(&mut link, &sc, &opts).unwrap();
+    let acc = link.account().with_host(rep.downlink, &rep.command_seqs);
+    let (_, bytes) = link.into_inner().finish().unwrap();
+    (rep, acc, bytes)
 }

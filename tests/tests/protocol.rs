@@ -170,6 +170,8 @@ fn one_of_every_kind() -> Vec<Message> {
             seq_late: 37,
             seq_resyncs: 38,
             cycle: CycleStats { budget_us: 39, max_step_us: 40, period_max_step_us: 41, slips: 42 },
+            requests_repeated: 43,
+            drive_resends: 44,
         }),
         Message::Log(Log {
             level: LogLevel::Warn,

@@ -19,6 +19,7 @@
 //! | [`STEP_BUDGET_US`] | 100_000 | a step longer than this is a cycle slip (counted in `Telemetry.cycle`): the fastest telemetry period a `Configure` may ask for (`MIN_TELEMETRY_PERIOD_MS`), a twentieth of the board's 2 s watchdog |
 //! | [`SEQ_WINDOW`] | 1024 | host sequence numbers within this distance of the expected one count as lost (ahead) or late (behind); further behind is a new host session (`exec` module docs) |
 //! | [`SEQ_HISTORY_LEN`] | 16 | accepted frames (sequence number, CRC) remembered to refuse a duplicate |
+//! | [`DRIVE_COMMAND_RESEND_US`] | 10_000_000 | flight time after which an unreported drive command is sent again (same `command_id`; v5), until `MOTION_REPORT_TIMEOUT_US` |
 
 use super::protocol::MAX_ENCODED_FRAME_LEN;
 
@@ -67,3 +68,11 @@ pub const STEP_BUDGET_US: u64 = 100_000;
 pub const SEQ_WINDOW: u32 = 1024;
 /// Accepted host frames remembered (sequence number and CRC) to refuse a duplicate.
 pub const SEQ_HISTORY_LEN: usize = 16;
+/// Flight time after which a drive command still awaiting its `MotionReport` is sent again, unchanged (same
+/// `command_id`; protocol v5), microseconds: the downlink may have lost it. Default 10 s: longer than most motions
+/// (a 1 m straight drive at Axel's ~0.1 m/s), so a clean link sees few resends, and short against
+/// `MOTION_REPORT_TIMEOUT_US`, which still ends the wait (at most 11 resends of one command). The host executes a
+/// command id once.
+pub const DRIVE_COMMAND_RESEND_US: u64 = 10_000_000;
+
+const _: () = assert!(DRIVE_COMMAND_RESEND_US > 0 && DRIVE_COMMAND_RESEND_US < MOTION_REPORT_TIMEOUT_US);

@@ -80,6 +80,8 @@ pub(super) struct Counters {
     pub(super) seq_gaps: u32,
     pub(super) seq_late: u32,
     pub(super) seq_resyncs: u32,
+    pub(super) requests_repeated: u32,
+    pub(super) drive_resends: u32,
     pub(super) cycle: CycleStats,
     /// A slip was logged since the last `Telemetry` frame (the throttle).
     pub(super) slip_noted: bool,
@@ -134,6 +136,8 @@ where
             seq_gaps: c.seq_gaps,
             seq_late: c.seq_late,
             seq_resyncs: c.seq_resyncs,
+            requests_repeated: c.requests_repeated,
+            drive_resends: c.drive_resends,
             cycle: CycleStats {
                 budget_us: u32::try_from(STEP_BUDGET_US).unwrap_or(u32::MAX),
                 ..c.cycle

@@ -39,6 +39,13 @@
 //! new host session (`seq_resyncs`). These
 //! counters are the flight side's detection of link faults (`host-sim/doc/faults.md`).
 //!
+//! ## Lost answers (v5, issue 24)
+//! The downlink can lose an `Ack`, and the host then resends a request the executive already acted on. A
+//! `Configure` or `GoalRequest` whose body equals the last accepted one of its kind is answered `Ack` and not
+//! dispatched again (`requests.rs`; `Telemetry.requests_repeated`). A drive command whose report has not come within
+//! `DRIVE_COMMAND_RESEND_US` is sent again unchanged, every period until the report or `MOTION_REPORT_TIMEOUT_US`
+//! (`Telemetry.drive_resends`); the host executes a command id once.
+//!
 //! ## Cycle accounting (v4)
 //! Each step reads the clock again at its end; the step's duration, the longest since boot and since the last
 //! `Telemetry` frame, and the slips (steps longer than `STEP_BUDGET_US`) are reported in `Telemetry.cycle`, as F Prime's
@@ -55,10 +62,12 @@
 //!   transmission of a plan;
 //! - `cycle.rs`: [`Executive::step`] and its budgets, the receive and transmit paths, the counters and
 //!   high-water marks of `Telemetry`, log forwarding, [`StepReport`];
-//! - `hooks.rs`: the [`Autonomy`] hook points where the map and the planners plug in.
+//! - `hooks.rs`: the [`Autonomy`] hook points where the map and the planners plug in;
+//! - `requests.rs`: the last accepted requests, so a resend is answered but not acted on twice (v5).
 
 mod cycle;
 mod hooks;
+mod requests;
 
 use core::borrow::BorrowMut;
 
@@ -69,6 +78,7 @@ pub use cycle::StepReport;
 pub use hooks::{Autonomy, DriveStep, NoAutonomy, PlanBuffer, PlanProgress, Refused, Scan};
 
 use cycle::Counters;
+use requests::LastRequests;
 
 use crate::config::exec::*;
 use crate::config::protocol::SCAN_POINTS_CAPACITY;
@@ -142,6 +152,8 @@ struct Awaiting {
     command_id: u32,
     motion: Motion,
     sent_at: Instant,
+    /// When it was last sent (again: `DRIVE_COMMAND_RESEND_US`).
+    last_sent: Instant,
     /// A `Stop` was sent for it ([`Autonomy::stop_in_flight`]).
     stopping: bool,
 }
@@ -191,6 +203,8 @@ pub struct Executive<L, C, W, A, S> {
     /// An intact host frame has arrived since boot (before that, a jump ahead is a session, not a loss burst).
     seq_seen: bool,
     seq_history: Deque<(u32, u32), SEQ_HISTORY_LEN>,
+    /// The last accepted `Configure` and `GoalRequest` (v5: a resend is answered, not acted on again).
+    requests: LastRequests,
 }
 
 impl<L, C, W, A, S> Executive<L, C, W, A, S>
@@ -235,6 +249,7 @@ where
             seq_next: 0,
             seq_seen: false,
             seq_history: Deque::new(),
+            requests: LastRequests::default(),
         }
     }
 
@@ -298,8 +313,17 @@ where
         if msg.kind().direction() != Direction::HostToFlight {
             return self.reject(seq, NackReason::WrongDirection);
         }
+        if self.requests.is_repeat(&msg, f.body()) {
+            // a resend of a request already acted on (its Ack was lost): the same answer, no second action (v5)
+            self.counters.requests_repeated = self.counters.requests_repeated.saturating_add(1);
+            log::debug!("frame {seq}: a {:?} already acted on; answered, not applied again", msg.kind());
+            self.counters.frames_accepted += 1;
+            self.send(&Message::Ack(Ack { seq }));
+            return;
+        }
         match self.dispatch(&msg) {
             Ok(reply) => {
+                self.requests.accepted(&msg, f.body());
                 self.counters.frames_accepted += 1;
                 self.send(&Message::Ack(Ack { seq }));
                 match reply {
@@ -629,8 +653,19 @@ where
 
     /// Gives up the awaited report after `MOTION_REPORT_TIMEOUT_US` (any mode but `Safe`, which clears it).
     fn check_report_timeout(&mut self, now: Instant) {
-        let Some(a) = self.awaiting else { return };
+        let Some(mut a) = self.awaiting else { return };
         if now.micros_since(a.sent_at) < MOTION_REPORT_TIMEOUT_US {
+            // v5: the downlink may have lost the command; it goes again, unchanged, until the report comes (the
+            // host executes a command id once). Not once a `Stop` is out for it: the motion is being ended.
+            if !a.stopping && now.micros_since(a.last_sent) >= DRIVE_COMMAND_RESEND_US {
+                a.last_sent = now;
+                self.awaiting = Some(a);
+                self.counters.drive_resends = self.counters.drive_resends.saturating_add(1);
+                self.send(&Message::DriveCommand(DriveCommand {
+                    command_id: a.command_id,
+                    motion: a.motion,
+                }));
+            }
             return;
         }
         self.awaiting = None;
@@ -742,6 +777,7 @@ where
                 command_id,
                 motion,
                 sent_at: self.now,
+                last_sent: self.now,
                 stopping: false,
             });
         }

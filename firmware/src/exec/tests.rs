@@ -760,3 +760,80 @@ fn cycle_accounting_measures_steps_on_the_clock_and_counts_slips() {
     assert_eq!(slip_logs, 1);
     assert_eq!(e.telemetry().cycle.max_step_us as u64, 3 * STEP_BUDGET_US);
 }
+
+/// Protocol v5 (issue 24): a `GoalRequest` or `Configure` sent again under a new sequence number with the same
+/// body (its `Ack` was lost on the downlink, so the host resent it) is answered `Ack` and not applied again: the
+/// goal is not replaced (no `PlanStatus`, no `Stop`, no replanning), the navigator not reconfigured; a changed
+/// request is applied.
+#[test]
+fn a_resent_request_already_acted_on_is_answered_but_not_applied_again() {
+    let (mut e, id) = mission_exec();
+    let goals = e.autonomy().goals.clone();
+    let before = e.telemetry();
+    let r = exchange_from(&mut e, 300, &[Message::GoalRequest(goal())]);
+    assert_eq!(r.first(), Some(&Message::Ack(Ack { seq: 300 })), "{r:?}");
+    assert!(!r.iter().any(|m| matches!(m, Message::PlanStatus(_) | Message::DriveCommand(_))), "{r:?}");
+    assert_eq!(e.autonomy().goals, goals, "the goal was applied again");
+    assert_eq!(e.mode(), Mode::Driving);
+    // the Configure of mission_exec again: answered, even while driving (where a new one is refused)
+    let mut cfg = configure();
+    cfg.telemetry.forward_log_level = LogLevel::Off;
+    let r = exchange_from(&mut e, 301, &[Message::Configure(cfg)]);
+    assert_eq!(r.first(), Some(&Message::Ack(Ack { seq: 301 })), "{r:?}");
+    let t = e.telemetry();
+    assert_eq!(t.requests_repeated, 2);
+    assert_eq!(t.frames_accepted, before.frames_accepted + 2);
+    // nothing was disturbed: the motion in flight is still awaited and its report taken once
+    let r = exchange_from(&mut e, 302, &[report(id)]);
+    assert_eq!(r[0], Message::Ack(Ack { seq: 302 }));
+    assert_eq!(e.autonomy().reports, [(id, Motion::Turn { yaw_rad: 0.5 })]);
+    // a changed request is a new one: another goal id is applied
+    let mut g2 = goal();
+    g2.goal_id = 10;
+    let r = exchange_from(&mut e, 303, &[Message::GoalRequest(g2)]);
+    assert!(r.iter().any(|m| matches!(m, Message::PlanStatus(p) if p.goal_id == 10)), "{r:?}");
+    assert_eq!(e.autonomy().goals.last(), Some(&10));
+    // a changed Configure is refused while driving, as before (and not remembered)
+    cfg.planner.rng_seed += 1;
+    let r = exchange_from(&mut e, 304, &[Message::Configure(cfg)]);
+    assert_eq!(r[0], Message::Nack(Nack { seq: 304, reason: NackReason::NotAllowedInMode }));
+    assert_eq!(e.telemetry().requests_repeated, 2);
+}
+
+/// A refused request changed nothing and is not remembered: its resend is handled afresh (here accepted once the
+/// reason is gone).
+#[test]
+fn a_resent_request_that_was_refused_is_handled_afresh() {
+    let mut e = exec(NoAutonomy);
+    exchange(&mut e, &[]);
+    let r = exchange(&mut e, &[Message::GoalRequest(goal())]);
+    assert_eq!(r[0], Message::Nack(Nack { seq: 100, reason: NackReason::NotConfigured }));
+    exchange_from(&mut e, 101, &[Message::Configure(configure())]);
+    let r = exchange_from(&mut e, 102, &[Message::GoalRequest(goal())]);
+    assert_eq!(r[0], Message::Ack(Ack { seq: 102 }));
+    assert!(r.iter().any(|m| matches!(m, Message::PlanStatus(_))), "{r:?}");
+    assert_eq!(e.telemetry().requests_repeated, 0);
+}
+
+/// Protocol v5: a drive command whose report is late is sent again unchanged (the downlink may have lost it), once
+/// per `DRIVE_COMMAND_RESEND_US`, counted; its report ends the resends and the next command has a new id.
+#[test]
+fn a_drive_command_without_its_report_is_sent_again_unchanged() {
+    let (mut e, id) = mission_exec();
+    let r = exchange(&mut e, &[]);
+    assert!(drive_ids(&r).is_empty(), "{r:?}");
+    e.clock_mut().0 += DRIVE_COMMAND_RESEND_US;
+    let r = exchange(&mut e, &[]);
+    assert_eq!(drive_ids(&r), [id]);
+    assert!(r.contains(&Message::DriveCommand(DriveCommand { command_id: id, motion: Motion::Turn { yaw_rad: 0.5 } })));
+    assert_eq!(e.telemetry().drive_resends, 1);
+    let r = exchange(&mut e, &[]);
+    assert!(drive_ids(&r).is_empty(), "again before its period: {r:?}");
+    e.clock_mut().0 += DRIVE_COMMAND_RESEND_US;
+    assert_eq!(drive_ids(&exchange(&mut e, &[])), [id]);
+    let r = exchange(&mut e, &[report(id)]);
+    assert_eq!(e.autonomy().reports, [(id, Motion::Turn { yaw_rad: 0.5 })]);
+    assert_eq!(drive_ids(&r), [id + 1]);
+    assert_eq!(e.telemetry().drive_resends, 2);
+    assert_eq!(e.telemetry().motion_report_timeouts, 0);
+}

@@ -897,6 +897,10 @@ pub struct Telemetry {
     pub seq_resyncs: u32,
     /// Cycle accounting of the executive's steps (v4).
     pub cycle: CycleStats,
+    /// Resent state-changing requests answered `Ack` without acting again (v5; `exec` module docs).
+    pub requests_repeated: u32,
+    /// Drive commands sent again because their `MotionReport` was late (v5; `DRIVE_COMMAND_RESEND_US`).
+    pub drive_resends: u32,
 }
 
 /// Cycle accounting of [`Telemetry`] (v4): each executive step's duration on the flight clock against the step

@@ -76,23 +76,27 @@ pub fn main(args: &InspectArgs) -> ExitCode {
         println!("  {dir} {kind}: {n}");
     }
     if !log.faults.is_empty() {
-        let mut by_kind: BTreeMap<&str, u32> = BTreeMap::new();
+        let mut by_kind: BTreeMap<String, u32> = BTreeMap::new();
         for f in &log.faults {
             match crate::link::faults::FaultEvent::from_bytes(f.t_us, &f.bytes) {
                 Some(e) => {
                     if args.frames {
                         println!("  fault: {e}");
                     }
-                    *by_kind.entry(e.kind.name()).or_default() += 1;
+                    let name = match e.direction {
+                        crate::link::faults::LinkDirection::Up => e.kind.name().to_string(),
+                        crate::link::faults::LinkDirection::Down => format!("down.{}", e.kind.name()),
+                    };
+                    *by_kind.entry(name).or_default() += 1;
                 }
                 None if crate::link::ResetCause::from_record(&f.bytes).is_some() => {
                     if args.frames {
                         let how = String::from_utf8_lossy(&f.bytes);
                         println!("  {how} at t {:.6} s", f.t_us as f64 / 1e6);
                     }
-                    *by_kind.entry("flight reset").or_default() += 1;
+                    *by_kind.entry("flight reset".into()).or_default() += 1;
                 }
-                None => *by_kind.entry("unreadable").or_default() += 1,
+                None => *by_kind.entry("unreadable".into()).or_default() += 1,
             }
         }
         let text: Vec<String> = by_kind.iter().map(|(k, n)| format!("{k} {n}")).collect();

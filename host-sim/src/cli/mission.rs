@@ -28,7 +28,7 @@ use std::process::ExitCode;
 use firmware::protocol::Tracking;
 
 use crate::fieldlog::{self, Writer};
-use crate::link::faults::{FaultKind, FaultLink, FaultProfile};
+use crate::link::faults::{FaultKind, FaultLink, FaultProfile, LinkDirection};
 use crate::link::recording::RecordingLink;
 use crate::link::{FlightLink, LinkKind};
 use crate::mission::campaign::{
@@ -132,8 +132,8 @@ pub struct MissionArgs {
     /// No live progress line.
     #[arg(long)]
     pub quiet: bool,
-    /// Fault the uplink with this profile: `KIND=RATE,...` per byte (kinds bitflip, drop, duplicate, reorder,
-    /// truncate, delay, stall; `all=RATE`), `delay_us=`, `stall_us=`, `reorder_hold_us=`, `seed=`. Replaces the
+    /// Fault the link with this profile: `KIND=RATE,...` per byte on the uplink (kinds bitflip, drop, duplicate,
+    /// reorder, truncate, delay, stall; `all=RATE`), `down.KIND=RATE` (`down.all=`) on the downlink, `delay_us=`, `stall_us=`, `reorder_hold_us=`, `seed=`. Replaces the
     /// scenario's `[faults]` section (`--faults none`: a clean link whatever the scenario says).
     #[arg(long, value_name = "PROFILE", value_parser = FaultProfile::parse)]
     pub faults: Option<FaultProfile>,
@@ -147,6 +147,9 @@ pub struct MissionArgs {
     /// Kinds of the fault campaign (default: all).
     #[arg(long, value_delimiter = ',', value_parser = parse_kind)]
     pub fault_kinds: Vec<FaultKind>,
+    /// The fault campaign faults the downlink (flight -> host; the host detects) instead of the uplink.
+    #[arg(long)]
+    pub fault_downlink: bool,
     /// In-process: the executive measures its steps in host time (cycle accounting in telemetry); the log of such
     /// a run does not replay byte for byte.
     #[arg(long)]
@@ -356,7 +359,7 @@ fn one(args: &MissionArgs, sc: &Scenario) -> Result<(MissionReport, Vec<PathBuf>
         };
         let mut faulty = FaultLink::new(rec, profile.clone());
         let rep = run_mission(&mut faulty, sc, &opts)?;
-        let acc = faulty.account();
+        let acc = faulty.account().with_host(rep.downlink, &rep.command_seqs);
         print!("{}", fault_summary(&acc));
         faulty.into_inner().finish()?;
         Ok(rep)
@@ -551,24 +554,42 @@ fn campaign(args: &MissionArgs, sc: &Scenario) -> Result<bool, String> {
     Ok(!campaign_failed(&file) && reports.len() == seeds.len())
 }
 
-/// The fault accounting of one mission, one line per kind injected.
+/// The fault accounting of one mission, one line per kind injected in each direction.
 fn fault_summary(acc: &crate::link::faults::FaultAccount) -> String {
+    use crate::link::faults::DetectionGroup;
     let mut s = String::new();
-    for k in FaultKind::ALL {
-        if acc.injected(k) > 0 {
-            s.push_str(&format!(
-                "  faults {:<9} injected {}, harmless {}\n",
-                k.name(),
-                acc.injected(k),
-                acc.harmless(k)
-            ));
+    for d in [LinkDirection::Up, LinkDirection::Down] {
+        let (injected, harmless, by) = match d {
+            LinkDirection::Up => (&acc.injected, &acc.harmless, "telemetry"),
+            LinkDirection::Down => (&acc.down_injected, &acc.down_harmless, "the host"),
+        };
+        if injected.iter().all(|&n| n == 0) {
+            continue;
+        }
+        for (k, (inj, h)) in FaultKind::ALL.iter().zip(injected.iter().zip(harmless)) {
+            if *inj > 0 {
+                s.push_str(&format!("  {} faults {:<9} injected {inj}, harmless {h}\n", d.name(), k.name()));
+            }
+        }
+        for g in DetectionGroup::ALL {
+            let (inj, h) = acc.totals_in(d, g);
+            let detected = match d {
+                LinkDirection::Up => acc.detected(g),
+                LinkDirection::Down => acc.down_detected(g),
+            };
+            if let Some(det) = detected {
+                s.push_str(&format!("  detected by {by} ({g:?}): {det} (injected {inj} = detected {det} + harmless {h}?)\n"));
+            }
         }
     }
-    for g in crate::link::faults::DetectionGroup::ALL {
-        let (inj, harmless) = acc.group_totals(g);
-        if let Some(d) = acc.detected(g) {
-            s.push_str(&format!("  detected by telemetry ({g:?}): {d} (injected {inj} = detected {d} + harmless {harmless}?)\n"));
-        }
+    if acc.down_injected.iter().any(|&n| n > 0) {
+        s.push_str(&format!("  drive commands executed from damaged downlink frames: {}\n", acc.executed_damaged));
+    }
+    if let Some(t) = &acc.telemetry {
+        s.push_str(&format!(
+            "  flight software: resent requests answered without acting {}, drive commands resent {}\n",
+            t.requests_repeated, t.drive_resends
+        ));
     }
     s.push_str(&match acc.check() {
         Ok(()) => format!(
@@ -613,6 +634,7 @@ fn fault_campaign(args: &MissionArgs, sc: &Scenario) -> Result<bool, String> {
         &args.fault_rates,
         &kinds,
         &base,
+        if args.fault_downlink { LinkDirection::Down } else { LinkDirection::Up },
         args.tracking.into(),
         threads,
         args.charge_host_time,

@@ -1,8 +1,10 @@
 //! Seeded link-fault injection (issue 24, item 1): a [`FlightLink`] wrapper that damages the host -> flight
-//! frames of any link (in-process or QEMU), after smoltcp's `phy::FaultInjector` (a wrapper around a device that
+//! (uplink) and flight -> host (downlink) frames of any link (in-process or QEMU), after smoltcp's `phy::FaultInjector` (a wrapper around a device that
 //! drops and corrupts packets at configured rates from a seeded generator), here on a COBS byte stream.
 //!
-//! **Faults** ([`FaultKind`], each at its own rate per byte, [`FaultProfile`]): a frame of `n` encoded bytes meets
+//! **Faults** ([`FaultKind`], each at its own rate per byte and direction, [`FaultProfile`]; profile keys `KIND`
+//! for the uplink as before, `down.KIND` for the downlink; each direction has its own generator, so downlink
+//! faults leave a seed's uplink faults as they were): a frame of `n` encoded bytes meets
 //! kind `k` with probability `1 - (1 - rate_k)^n`; the kinds are drawn in table order and at most one fault hits a
 //! frame.
 //!
@@ -14,7 +16,7 @@
 //! | `reorder` | swapped with the next frame (delivered in order if none follows within the hold) | `reorder_hold_us` (200 ms) |
 //! | `truncate` | cut after a random number of bytes, delimiter kept | |
 //! | `delay` | held, later frames overtake it | `delay_us` (200 ms) |
-//! | `stall` | the uplink stops: this frame and all after it are held, then delivered in order | `stall_us` (500 ms) |
+//! | `stall` | the direction stops: this frame and all after it are held, then delivered in order | `stall_us` (500 ms) |
 //!
 //! The delays stay below the host session's retransmission timeout (1 s, `session::RetransmitPolicy`), so a
 //! delayed frame is not also retransmitted.
@@ -22,7 +24,10 @@
 //! **Recording.** Put the field-log recorder *inside* the injector (`FaultLink<RecordingLink<L>>`): the log then
 //! holds the bytes the flight software really received, when it received them, so `replay` reproduces a faulty
 //! run byte for byte with no change, and every fault is written as a fault record ([`FlightLink::note_fault`],
-//! `fieldlog` format 3), which `inspect` lists.
+//! `fieldlog` format 4: with its direction), which `inspect` lists. Downlink faults need nothing more for the
+//! replay: the log holds what the flight software sent, and the host's answers to the damaged downlink are in its
+//! recorded uplink bytes. Downlink frames are delivered to the host by the link call (`advance_to`,
+//! `recv_until_quiet`) whose link time reaches their release.
 //!
 //! **Accounting** ([`FaultAccount`]): the injector knows what it did (injected; harmless = the frame reached the
 //! flight software intact and in order: a delay no intact frame overtook, a stall, a reorder with no frame to swap
@@ -33,8 +38,10 @@
 //! injected must equal detected plus harmless. The injector also reads every `Ack` on the downlink: an `Ack` for
 //! the sequence number of a damaged frame would mean the flight software acted on it (it must be 0).
 //!
-//! Only the uplink is faulted: downlink faults need the host to survive a lost `DriveCommand` or `Ack`, which is
-//! not done (`host-sim/doc/faults.md`).
+//! On the downlink the detection side is the host's ([`crate::session::DownlinkCounts`]: its deframer and CRC
+//! check, and the flight software's sequence numbers, with the same rules as the flight side's on the uplink), added
+//! by [`FaultAccount::with_host`] with the flight sequence numbers of the frames whose drive commands the host took:
+//! none may be one the injector damaged or dropped (`executed_damaged`, must be 0).
 
 use std::collections::BTreeSet;
 
@@ -42,6 +49,7 @@ use firmware::protocol::{self, Deframer, Frame, Message, NackReason, Telemetry};
 use rand_core::{Rng, SeedableRng};
 
 use super::{FlightLink, LinkError};
+pub use crate::session::DownlinkCounts;
 
 /// A kind of link fault (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
@@ -105,6 +113,25 @@ impl FaultKind {
     }
 }
 
+/// Which way a faulted frame was going.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
+pub enum LinkDirection {
+    /// Host -> flight.
+    Up,
+    /// Flight -> host.
+    Down,
+}
+
+impl LinkDirection {
+    /// "uplink" or "downlink".
+    pub fn name(self) -> &'static str {
+        match self {
+            LinkDirection::Up => "uplink",
+            LinkDirection::Down => "downlink",
+        }
+    }
+}
+
 /// The telemetry evidence of a fault (module docs, "Accounting").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
 pub enum DetectionGroup {
@@ -137,13 +164,25 @@ impl DetectionGroup {
             DetectionGroup::Late => u64::from(t.seq_late),
         }
     }
+
+    /// What the host counted for this group on the downlink ([`DownlinkCounts`]; the same evidence as the flight
+    /// side's on the uplink).
+    pub fn detected_down(self, h: &DownlinkCounts) -> u64 {
+        match self {
+            DetectionGroup::Lost => h.gaps.saturating_sub(h.late),
+            DetectionGroup::Duplicate => h.duplicates,
+            DetectionGroup::Late => h.late,
+        }
+    }
 }
 
 /// Rates (per byte) and parameters of the injected faults.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FaultProfile {
-    /// Rate per byte of each kind, in [`FaultKind::ALL`] order.
+    /// Rate per byte of each kind on the uplink (host -> flight), in [`FaultKind::ALL`] order.
     pub rates: [f64; 7],
+    /// Rate per byte of each kind on the downlink (flight -> host), in [`FaultKind::ALL`] order.
+    pub down_rates: [f64; 7],
     /// Hold of a delayed frame, microseconds (default 200 ms).
     pub delay_us: u64,
     /// Length of a stall, microseconds (default 500 ms).
@@ -158,6 +197,7 @@ impl Default for FaultProfile {
     fn default() -> Self {
         Self {
             rates: [0.0; 7],
+            down_rates: [0.0; 7],
             delay_us: 200_000,
             stall_us: 500_000,
             reorder_hold_us: 200_000,
@@ -179,13 +219,27 @@ impl FaultProfile {
         p
     }
 
-    /// The rate of `kind`.
+    /// The uplink rate of `kind`.
     pub fn rate(&self, kind: FaultKind) -> f64 {
         self.rates.get(kind.index()).copied().unwrap_or(0.0)
     }
 
-    /// Parses `KIND=RATE,...` (`all=RATE` sets every kind), `delay_us=`, `stall_us=`, `reorder_hold_us=`, `seed=`;
-    /// `none` is no fault. Rates are per byte, in [0, 1].
+    /// The downlink rate of `kind`.
+    pub fn down_rate(&self, kind: FaultKind) -> f64 {
+        self.down_rates.get(kind.index()).copied().unwrap_or(0.0)
+    }
+
+    /// The rates of direction `d`.
+    pub fn rates_of(&self, d: LinkDirection) -> &[f64; 7] {
+        match d {
+            LinkDirection::Up => &self.rates,
+            LinkDirection::Down => &self.down_rates,
+        }
+    }
+
+    /// Parses `KIND=RATE,...` (`all=RATE` sets every kind) for the uplink, `down.KIND=RATE` (`down.all=RATE`) for
+    /// the downlink, `delay_us=`, `stall_us=`, `reorder_hold_us=`, `seed=` (both directions); `none` is no fault.
+    /// Rates are per byte, in [0, 1].
     pub fn parse(text: &str) -> Result<Self, String> {
         let mut p = Self::default();
         for item in text
@@ -217,14 +271,18 @@ impl FaultProfile {
                             "fault profile `{key}={value}`: a rate per byte must be in [0, 1]"
                         ));
                     }
-                    if key == "all" {
-                        p.rates = [rate; 7];
+                    let (rates, name) = match key.strip_prefix("down.") {
+                        Some(name) => (&mut p.down_rates, name),
+                        None => (&mut p.rates, key),
+                    };
+                    if name == "all" {
+                        *rates = [rate; 7];
                     } else {
-                        let kind = FaultKind::ALL.iter().find(|k| k.name() == key).ok_or_else(|| {
+                        let kind = FaultKind::ALL.iter().find(|k| k.name() == name).ok_or_else(|| {
                             let names: Vec<&str> = FaultKind::ALL.iter().map(|k| k.name()).collect();
-                            format!("fault profile: unknown key `{key}` (kinds: {}, all; delay_us, stall_us, reorder_hold_us, seed)", names.join(", "))
+                            format!("fault profile: unknown key `{key}` (kinds: {}, all, each alone for the uplink or after `down.` for the downlink; delay_us, stall_us, reorder_hold_us, seed)", names.join(", "))
                         })?;
-                        p.rates[kind.index()] = rate;
+                        rates[kind.index()] = rate;
                     }
                 }
             }
@@ -234,7 +292,7 @@ impl FaultProfile {
 
     /// Whether any rate is non-zero.
     pub fn any(&self) -> bool {
-        self.rates.iter().any(|&r| r > 0.0)
+        self.rates.iter().chain(&self.down_rates).any(|&r| r > 0.0)
     }
 }
 
@@ -243,6 +301,11 @@ impl core::fmt::Display for FaultProfile {
         for k in FaultKind::ALL {
             if self.rate(k) > 0.0 {
                 write!(f, "{}={:e},", k.name(), self.rate(k))?;
+            }
+        }
+        for k in FaultKind::ALL {
+            if self.down_rate(k) > 0.0 {
+                write!(f, "down.{}={:e},", k.name(), self.down_rate(k))?;
             }
         }
         write!(
@@ -258,11 +321,13 @@ impl core::fmt::Display for FaultProfile {
 pub struct FaultEvent {
     /// Link time of the injection, microseconds.
     pub t_us: u64,
+    /// The direction of the faulted frame.
+    pub direction: LinkDirection,
     /// The kind.
     pub kind: FaultKind,
-    /// Index of the uplink frame (0 = the first frame the host sent through the injector).
+    /// Index of the frame in its direction (0 = the first frame that went through the injector that way).
     pub frame: u64,
-    /// The frame's host sequence number (0 if its header could not be read).
+    /// The frame's sequence number (its sender's; 0 if its header could not be read).
     pub seq: u32,
     /// The frame's encoded length, bytes.
     pub frame_len: u32,
@@ -270,11 +335,14 @@ pub struct FaultEvent {
     pub detail: u64,
 }
 
-/// Bytes of an encoded [`FaultEvent`] (without its time, which is the record's).
-pub const FAULT_EVENT_LEN: usize = 1 + 8 + 4 + 4 + 8;
+/// Bytes of an encoded [`FaultEvent`] (without its time, which is the record's): field-log format 4.
+pub const FAULT_EVENT_LEN: usize = 1 + 8 + 4 + 4 + 8 + 1;
+/// Bytes of a format-3 fault record's payload (no direction byte: every fault was on the uplink).
+pub const FAULT_EVENT_LEN_V3: usize = FAULT_EVENT_LEN - 1;
 
 impl FaultEvent {
-    /// The payload of a fault record: `kind u8 | frame u64 | seq u32 | frame_len u32 | detail u64`, little-endian.
+    /// The payload of a fault record: `kind u8 | frame u64 | seq u32 | frame_len u32 | detail u64 | direction u8`
+    /// (0 uplink, 1 downlink), little-endian (field-log format 4; format 3 had no direction byte).
     pub fn to_bytes(&self) -> Vec<u8> {
         let mut b = Vec::with_capacity(FAULT_EVENT_LEN);
         b.push(self.kind as u8);
@@ -282,14 +350,20 @@ impl FaultEvent {
         b.extend_from_slice(&self.seq.to_le_bytes());
         b.extend_from_slice(&self.frame_len.to_le_bytes());
         b.extend_from_slice(&self.detail.to_le_bytes());
+        b.push(match self.direction {
+            LinkDirection::Up => 0,
+            LinkDirection::Down => 1,
+        });
         b
     }
 
-    /// Reads a fault record's payload (`None` if it is not one).
+    /// Reads a fault record's payload (`None` if it is not one); a format-3 payload (25 bytes) is an uplink fault.
     pub fn from_bytes(t_us: u64, b: &[u8]) -> Option<Self> {
-        if b.len() != FAULT_EVENT_LEN {
-            return None;
-        }
+        let direction = match (b.len(), b.get(FAULT_EVENT_LEN_V3)) {
+            (FAULT_EVENT_LEN_V3, _) | (FAULT_EVENT_LEN, Some(0)) => LinkDirection::Up,
+            (FAULT_EVENT_LEN, Some(1)) => LinkDirection::Down,
+            _ => return None,
+        };
         let u64_at = |at: usize| {
             b.get(at..at + 8)
                 .and_then(|s| s.try_into().ok())
@@ -302,6 +376,7 @@ impl FaultEvent {
         };
         Some(Self {
             t_us,
+            direction,
             kind: FaultKind::from_u8(*b.first()?)?,
             frame: u64_at(1)?,
             seq: u32_at(9)?,
@@ -315,9 +390,10 @@ impl core::fmt::Display for FaultEvent {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         write!(
             f,
-            "t {:.6} s  {:<9} uplink frame #{} (seq {}, {} bytes), detail {}",
+            "t {:.6} s  {:<9} {} frame #{} (seq {}, {} bytes), detail {}",
             self.t_us as f64 / 1e6,
             self.kind.name(),
+            self.direction.name(),
             self.frame,
             self.seq,
             self.frame_len,
@@ -326,18 +402,30 @@ impl core::fmt::Display for FaultEvent {
     }
 }
 
-/// What the injector did and what the flight software saw (module docs, "Accounting").
+/// What the injector did and what each receiver saw (module docs, "Accounting").
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct FaultAccount {
-    /// Faults injected, per kind ([`FaultKind::ALL`] order).
+    /// Uplink faults injected, per kind ([`FaultKind::ALL`] order).
     pub injected: [u64; 7],
-    /// Faults that left their frame intact and in order, per kind.
+    /// Uplink faults that left their frame intact and in order, per kind.
     pub harmless: [u64; 7],
+    /// Downlink faults injected, per kind.
+    pub down_injected: [u64; 7],
+    /// Downlink faults that left their frame intact and in order, per kind.
+    pub down_harmless: [u64; 7],
     /// `Ack`s the flight software sent for the sequence number of a frame the injector damaged (must be 0).
     pub acked_damaged: u64,
+    /// Drive commands the host executed from a downlink frame the injector damaged or dropped (must be 0;
+    /// [`Self::with_host`]).
+    pub executed_damaged: u64,
     /// The last `Telemetry` seen on the downlink.
     #[serde(skip)]
     pub telemetry: Option<Telemetry>,
+    /// The host's own detection on the downlink ([`Self::with_host`]).
+    pub host: Option<DownlinkCounts>,
+    /// Flight sequence numbers of the downlink frames damaged or lost.
+    #[serde(skip)]
+    pub damaged_down_seqs: BTreeSet<u32>,
 }
 
 impl FaultAccount {
@@ -351,6 +439,52 @@ impl FaultAccount {
         self.harmless.get(k.index()).copied().unwrap_or(0)
     }
 
+    /// Injected downlink faults of a kind.
+    pub fn down_injected(&self, k: FaultKind) -> u64 {
+        self.down_injected.get(k.index()).copied().unwrap_or(0)
+    }
+
+    /// Harmless downlink faults of a kind.
+    pub fn down_harmless(&self, k: FaultKind) -> u64 {
+        self.down_harmless.get(k.index()).copied().unwrap_or(0)
+    }
+
+    /// What the host counted on the downlink for a group (`None` without the host's counts).
+    pub fn down_detected(&self, g: DetectionGroup) -> Option<u64> {
+        self.host.as_ref().map(|h| g.detected_down(h))
+    }
+
+    /// Injected and harmless downlink faults of the kinds of a group.
+    pub fn down_group_totals(&self, g: DetectionGroup) -> (u64, u64) {
+        self.totals_in(LinkDirection::Down, g)
+    }
+
+    /// Injected and harmless faults of the kinds of a group in direction `d`.
+    pub fn totals_in(&self, d: LinkDirection, g: DetectionGroup) -> (u64, u64) {
+        let (injected, harmless) = match d {
+            LinkDirection::Up => (&self.injected, &self.harmless),
+            LinkDirection::Down => (&self.down_injected, &self.down_harmless),
+        };
+        FaultKind::ALL
+            .iter()
+            .filter(|k| k.group() == g)
+            .fold((0, 0), |(i, h), &k| {
+                let at = |a: &[u64; 7]| a.get(k.index()).copied().unwrap_or(0);
+                (i + at(injected), h + at(harmless))
+            })
+    }
+
+    /// Adds the host's side: its downlink counts (`HostSession::downlink`) and the flight sequence numbers of the
+    /// frames whose drive commands it executed (any of them damaged on the way is counted in `executed_damaged`).
+    pub fn with_host(mut self, host: DownlinkCounts, executed_seqs: &[u32]) -> Self {
+        self.host = Some(host);
+        self.executed_damaged = executed_seqs
+            .iter()
+            .filter(|s| self.damaged_down_seqs.contains(s))
+            .count() as u64;
+        self
+    }
+
     /// What the last telemetry counted for a group (`None` without telemetry).
     pub fn detected(&self, g: DetectionGroup) -> Option<u64> {
         self.telemetry.as_ref().map(|t| g.detected(t))
@@ -358,12 +492,7 @@ impl FaultAccount {
 
     /// Injected and harmless faults of the kinds of a group.
     pub fn group_totals(&self, g: DetectionGroup) -> (u64, u64) {
-        FaultKind::ALL
-            .iter()
-            .filter(|k| k.group() == g)
-            .fold((0, 0), |(i, h), &k| {
-                (i + self.injected(k), h + self.harmless(k))
-            })
+        self.totals_in(LinkDirection::Up, g)
     }
 
     /// Checks injected = detected + harmless for every group and no `Ack` for a damaged frame; the reason if not.
@@ -372,19 +501,36 @@ impl FaultAccount {
             return Err("no telemetry from the flight software".into());
         };
         let mut bad = Vec::new();
-        for g in DetectionGroup::ALL {
-            let (inj, harmless) = self.group_totals(g);
-            let det = g.detected(t);
-            if inj != det + harmless {
-                bad.push(format!(
-                    "{g:?}: injected {inj} != detected {det} + harmless {harmless}"
-                ));
+        // per group of a direction: injected = detected + harmless
+        let mut balance = |d: LinkDirection, detected: &dyn Fn(DetectionGroup) -> u64| {
+            for g in DetectionGroup::ALL {
+                let (inj, harmless) = self.totals_in(d, g);
+                let det = detected(g);
+                if inj != det + harmless {
+                    let side = if d == LinkDirection::Down { "downlink " } else { "" };
+                    bad.push(format!(
+                        "{side}{g:?}: injected {inj} != detected {det} + harmless {harmless}"
+                    ));
+                }
             }
+        };
+        balance(LinkDirection::Up, &|g| g.detected(t));
+        let down_faults = self.down_injected.iter().any(|&n| n > 0);
+        match &self.host {
+            None if down_faults => bad.push("downlink faults but no host downlink counts".into()),
+            None => {}
+            Some(h) => balance(LinkDirection::Down, &|g| g.detected_down(h)),
         }
         if self.acked_damaged > 0 {
             bad.push(format!(
                 "{} damaged frame(s) acknowledged",
                 self.acked_damaged
+            ));
+        }
+        if self.executed_damaged > 0 {
+            bad.push(format!(
+                "{} drive command(s) executed from a damaged downlink frame",
+                self.executed_damaged
             ));
         }
         if bad.is_empty() {
@@ -403,13 +549,11 @@ struct Held {
     bytes: Vec<u8>,
 }
 
-/// The fault-injecting wrapper (module docs).
-pub struct FaultLink<L: FlightLink> {
-    inner: L,
-    profile: FaultProfile,
+/// One direction's injector state: its generator, the frame being cut out of the byte stream, the held frames and
+/// what it knows of delivery order.
+struct Lane {
     rng: rand_pcg::Pcg64,
-    enabled: bool,
-    /// Host bytes of a frame not yet ended by its delimiter.
+    /// Bytes of a frame not yet ended by its delimiter.
     partial: Vec<u8>,
     frames: u64,
     /// Delayed frames, released at their times.
@@ -425,23 +569,14 @@ pub struct FaultLink<L: FlightLink> {
     late: BTreeSet<u64>,
     /// Sequence numbers of frames damaged or lost (never delivered intact).
     damaged_seqs: BTreeSet<u32>,
-    /// Frame indices delivered damaged: the flight software never reads them, so they make nothing late.
+    /// Frame indices delivered damaged: the receiver never reads them, so they make nothing late.
     damaged_frames: BTreeSet<u64>,
-    events: Vec<FaultEvent>,
-    downlink: Deframer,
-    acked_damaged: u64,
-    telemetry: Option<Telemetry>,
 }
 
-impl<L: FlightLink> FaultLink<L> {
-    /// Wraps `inner` with `profile` (seeded by `profile.seed`).
-    pub fn new(inner: L, profile: FaultProfile) -> Self {
-        let rng = rand_pcg::Pcg64::seed_from_u64(profile.seed);
+impl Lane {
+    fn new(seed: u64) -> Self {
         Self {
-            inner,
-            profile,
-            rng,
-            enabled: true,
+            rng: rand_pcg::Pcg64::seed_from_u64(seed),
             partial: Vec::new(),
             frames: 0,
             delayed: Vec::new(),
@@ -452,8 +587,83 @@ impl<L: FlightLink> FaultLink<L> {
             late: BTreeSet::new(),
             damaged_seqs: BTreeSet::new(),
             damaged_frames: BTreeSet::new(),
+        }
+    }
+
+    fn uniform(&mut self) -> f64 {
+        (self.rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    fn below(&mut self, n: u64) -> u64 {
+        self.rng.next_u64() % n.max(1)
+    }
+
+    /// Notes that `frame` reaches the receiver now (a damaged frame is never read, so it makes nothing late).
+    fn note_delivery(&mut self, frame: u64) {
+        if self.damaged_frames.contains(&frame) {
+            return;
+        }
+        match self.delivered_max {
+            Some(m) if frame < m => {
+                self.late.insert(frame);
+            }
+            _ => self.delivered_max = Some(frame),
+        }
+    }
+
+    /// The next time something held falls due.
+    fn next_release(&self) -> Option<u64> {
+        let stall = (!self.stalled.is_empty()).then_some(self.stall_until_us);
+        let reorder = self.reordered.as_ref().map(|h| h.at_us);
+        let delayed = self.delayed.iter().map(|h| h.at_us).min();
+        [stall, reorder, delayed].into_iter().flatten().min()
+    }
+
+    /// Takes the whole frames (each up to and with its delimiter) out of `partial` after appending `bytes`.
+    fn frames_of(&mut self, bytes: &[u8]) -> Vec<Vec<u8>> {
+        self.partial.extend_from_slice(bytes);
+        let mut out = Vec::new();
+        // Each pass takes one whole frame out of `partial`.
+        while let Some(end) = self.partial.iter().position(|&b| b == 0) {
+            let rest = self.partial.split_off(end + 1);
+            out.push(core::mem::replace(&mut self.partial, rest));
+        }
+        out
+    }
+}
+
+/// The downlink generator's seed is the profile's seed with this mixed in, so adding downlink faults leaves the
+/// uplink's faults of a seed as they were.
+const DOWNLINK_SEED_SALT: u64 = 0x646f_776e_6c69_6e6b;
+
+/// The fault-injecting wrapper (module docs).
+pub struct FaultLink<L: FlightLink> {
+    inner: L,
+    profile: FaultProfile,
+    enabled: bool,
+    up: Lane,
+    down: Lane,
+    /// Downlink bytes delivered to the host, handed over by the current link call.
+    to_host: Vec<u8>,
+    events: Vec<FaultEvent>,
+    /// Reads the flight software's true output (before downlink faults).
+    watcher: Deframer,
+    acked_damaged: u64,
+    telemetry: Option<Telemetry>,
+}
+
+impl<L: FlightLink> FaultLink<L> {
+    /// Wraps `inner` with `profile` (seeded by `profile.seed`).
+    pub fn new(inner: L, profile: FaultProfile) -> Self {
+        Self {
+            inner,
+            up: Lane::new(profile.seed),
+            down: Lane::new(profile.seed ^ DOWNLINK_SEED_SALT),
+            profile,
+            enabled: true,
+            to_host: Vec::new(),
             events: Vec::new(),
-            downlink: Deframer::new(),
+            watcher: Deframer::new(),
             acked_damaged: 0,
             telemetry: None,
         }
@@ -479,120 +689,157 @@ impl<L: FlightLink> FaultLink<L> {
         &self.events
     }
 
-    /// The accounting so far (module docs).
+    /// The flight sequence numbers of the downlink frames damaged or lost so far (the host must never act on one).
+    pub fn damaged_downlink_seqs(&self) -> &BTreeSet<u32> {
+        &self.down.damaged_seqs
+    }
+
+    /// The accounting so far (module docs); the host's side of the downlink is added with
+    /// [`FaultAccount::with_host`].
     pub fn account(&self) -> FaultAccount {
         let mut a = FaultAccount {
             acked_damaged: self.acked_damaged,
             telemetry: self.telemetry,
+            damaged_down_seqs: self.down.damaged_seqs.clone(),
             ..FaultAccount::default()
         };
         for e in &self.events {
             let k = e.kind.index();
-            a.injected[k] += 1;
+            let lane = self.lane_ref(e.direction);
             let intact_in_order = match e.kind {
-                FaultKind::Delay | FaultKind::Stall | FaultKind::Reorder => {
-                    !self.late.contains(&e.frame)
-                }
+                FaultKind::Delay | FaultKind::Stall | FaultKind::Reorder => !lane.late.contains(&e.frame),
                 _ => false,
             };
+            let (injected, harmless) = match e.direction {
+                LinkDirection::Up => (&mut a.injected, &mut a.harmless),
+                LinkDirection::Down => (&mut a.down_injected, &mut a.down_harmless),
+            };
+            injected[k] += 1;
             if intact_in_order {
-                a.harmless[k] += 1;
+                harmless[k] += 1;
             }
         }
         a
     }
 
-    fn uniform(&mut self) -> f64 {
-        (self.rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    fn lane_ref(&self, d: LinkDirection) -> &Lane {
+        match d {
+            LinkDirection::Up => &self.up,
+            LinkDirection::Down => &self.down,
+        }
     }
 
-    fn below(&mut self, n: u64) -> u64 {
-        self.rng.next_u64() % n.max(1)
+    fn lane(&mut self, d: LinkDirection) -> &mut Lane {
+        match d {
+            LinkDirection::Up => &mut self.up,
+            LinkDirection::Down => &mut self.down,
+        }
     }
 
-    /// Hands `bytes` of frame `frame` to the flight side now (through a stall if one is on).
-    fn emit(&mut self, frame: u64, bytes: Vec<u8>) -> Result<(), LinkError> {
+    /// Hands `bytes` of frame `frame` to the receiver now (through a stall if one is on).
+    fn emit(&mut self, d: LinkDirection, frame: u64, bytes: Vec<u8>) -> Result<(), LinkError> {
         let now = self.inner.now_us();
-        if now < self.stall_until_us || !self.stalled.is_empty() {
-            self.stalled.push(Held {
-                at_us: self.stall_until_us,
-                frame,
-                bytes,
-            });
+        let lane = self.lane(d);
+        if now < lane.stall_until_us || !lane.stalled.is_empty() {
+            let at_us = lane.stall_until_us;
+            lane.stalled.push(Held { at_us, frame, bytes });
             return Ok(());
         }
-        self.deliver(frame, &bytes)
+        self.deliver(d, frame, &bytes)
     }
 
-    fn deliver(&mut self, frame: u64, bytes: &[u8]) -> Result<(), LinkError> {
-        if self.damaged_frames.contains(&frame) {
-            return self.inner.send(bytes);
-        }
-        match self.delivered_max {
-            Some(m) if frame < m => {
-                self.late.insert(frame);
+    fn deliver(&mut self, d: LinkDirection, frame: u64, bytes: &[u8]) -> Result<(), LinkError> {
+        self.lane(d).note_delivery(frame);
+        match d {
+            LinkDirection::Up => self.inner.send(bytes),
+            LinkDirection::Down => {
+                self.to_host.extend_from_slice(bytes);
+                Ok(())
             }
-            _ => self.delivered_max = Some(frame),
         }
-        self.inner.send(bytes)
     }
 
-    /// Releases everything due at the current time: the stall's frames, delayed frames, an expired reorder hold.
-    fn release_due(&mut self) -> Result<(), LinkError> {
+    /// Releases everything due at the current time in direction `d`: the stall's frames, delayed frames, an
+    /// expired reorder hold.
+    fn release_due(&mut self, d: LinkDirection) -> Result<(), LinkError> {
         let now = self.inner.now_us();
-        if now >= self.stall_until_us && !self.stalled.is_empty() {
-            for h in core::mem::take(&mut self.stalled) {
-                self.deliver(h.frame, &h.bytes)?;
+        let lane = self.lane(d);
+        if now >= lane.stall_until_us && !lane.stalled.is_empty() {
+            for h in core::mem::take(&mut self.lane(d).stalled) {
+                self.deliver(d, h.frame, &h.bytes)?;
             }
         }
-        if self.reordered.as_ref().is_some_and(|h| h.at_us <= now) {
-            if let Some(h) = self.reordered.take() {
-                self.emit(h.frame, h.bytes)?;
+        let lane = self.lane(d);
+        if lane.reordered.as_ref().is_some_and(|h| h.at_us <= now) {
+            if let Some(h) = lane.reordered.take() {
+                self.emit(d, h.frame, h.bytes)?;
             }
         }
-        let (due, rest): (Vec<Held>, Vec<Held>) = core::mem::take(&mut self.delayed)
+        let lane = self.lane(d);
+        let (due, rest): (Vec<Held>, Vec<Held>) = core::mem::take(&mut lane.delayed)
             .into_iter()
             .partition(|h| h.at_us <= now);
-        self.delayed = rest;
+        lane.delayed = rest;
         for h in due {
-            self.emit(h.frame, h.bytes)?;
+            self.emit(d, h.frame, h.bytes)?;
         }
         Ok(())
     }
 
-    /// The next time something held falls due.
+    fn release_all_due(&mut self) -> Result<(), LinkError> {
+        self.release_due(LinkDirection::Up)?;
+        self.release_due(LinkDirection::Down)
+    }
+
+    /// The next time something held (either way) falls due.
     fn next_release(&self) -> Option<u64> {
-        let stall = (!self.stalled.is_empty()).then_some(self.stall_until_us);
-        let reorder = self.reordered.as_ref().map(|h| h.at_us);
-        let delayed = self.delayed.iter().map(|h| h.at_us).min();
-        [stall, reorder, delayed].into_iter().flatten().min()
+        [self.up.next_release(), self.down.next_release()].into_iter().flatten().min()
+    }
+
+    /// Whether downlink frames go through the injector (else the flight's bytes pass as they come).
+    fn downlink_faulted(&self) -> bool {
+        self.enabled && self.profile.down_rates.iter().any(|&r| r > 0.0)
+    }
+
+    /// Takes the flight software's output of one inner link call: watched for the accounting, then faulted frame by
+    /// frame on its way to the host.
+    fn take_down(&mut self, got: Vec<u8>) -> Result<(), LinkError> {
+        self.watch(&got);
+        if !self.downlink_faulted() {
+            let partial = core::mem::take(&mut self.down.partial);
+            self.to_host.extend(partial);
+            self.to_host.extend(got);
+            return Ok(());
+        }
+        for frame in self.down.frames_of(&got) {
+            self.inject(LinkDirection::Down, frame)?;
+        }
+        Ok(())
     }
 
     /// Runs the inner link to `t_us`, releasing held frames at their times on the way.
-    fn run_to(&mut self, t_us: u64, out: &mut Vec<u8>) -> Result<(), LinkError> {
-        // Each pass releases at least one held frame (or the stall); at most as many passes as frames held.
+    fn run_to(&mut self, t_us: u64) -> Result<(), LinkError> {
+        // Each pass releases at least one held frame (or a stall); at most as many passes as frames held.
         while let Some(at) = self.next_release().filter(|&at| at <= t_us) {
             let got = self.inner.advance_to(at)?;
-            self.watch(&got);
-            out.extend(got);
-            self.release_due()?;
+            self.take_down(got)?;
+            self.release_all_due()?;
         }
         let got = self.inner.advance_to(t_us)?;
-        self.watch(&got);
-        out.extend(got);
-        Ok(())
+        self.take_down(got)?;
+        self.release_due(LinkDirection::Down)
     }
 
-    /// Reads the downlink: `Ack`s of damaged frames and the latest `Telemetry`.
+    /// Reads the flight software's true output: `Ack`s of damaged uplink frames and the latest `Telemetry`.
     fn watch(&mut self, bytes: &[u8]) {
         let mut rest = bytes;
         // Each pass consumes at least one byte.
         while !rest.is_empty() {
-            let (used, ev) = self.downlink.push(rest);
+            let (used, ev) = self.watcher.push(rest);
             rest = rest.get(used.max(1)..).unwrap_or(&[]);
             let Some(Ok(frame)) = ev else { continue };
             match protocol::decode_frame(frame) {
-                Ok((_, Message::Ack(a))) if self.damaged_seqs.contains(&a.seq) => {
+                Ok((_, Message::Ack(a))) if self.up.damaged_seqs.contains(&a.seq) => {
                     self.acked_damaged += 1
                 }
                 Ok((_, Message::Telemetry(t))) => self.telemetry = Some(t),
@@ -601,30 +848,36 @@ impl<L: FlightLink> FaultLink<L> {
         }
     }
 
-    /// Draws the fault of one frame and applies it.
-    fn inject(&mut self, bytes: Vec<u8>) -> Result<(), LinkError> {
-        let frame = self.frames;
-        self.frames += 1;
+    /// Draws the fault of one frame going in direction `d` and applies it.
+    fn inject(&mut self, d: LinkDirection, bytes: Vec<u8>) -> Result<(), LinkError> {
+        let enabled = self.enabled;
+        let rates = match d {
+            LinkDirection::Up => self.profile.rates,
+            LinkDirection::Down => self.profile.down_rates,
+        };
+        let lane = self.lane(d);
+        let frame = lane.frames;
+        lane.frames += 1;
         let n = bytes.len() as u64;
         let mut chosen = None;
-        if self.enabled && n >= 3 {
+        if enabled && n >= 3 {
             for k in FaultKind::ALL {
-                let rate = self.profile.rate(k);
+                let rate = rates.get(k.index()).copied().unwrap_or(0.0);
                 if rate <= 0.0 {
                     continue;
                 }
                 let p = 1.0 - (1.0 - rate).powf(n as f64);
-                if self.uniform() < p && chosen.is_none() {
+                if lane.uniform() < p && chosen.is_none() {
                     chosen = Some(k);
                 }
             }
         }
         // A frame held for a swap goes out right after this one (or this one is the swap's first frame).
-        let swap = self.reordered.take();
+        let swap = lane.reordered.take();
         let Some(kind) = chosen else {
-            self.emit(frame, bytes)?;
+            self.emit(d, frame, bytes)?;
             if let Some(h) = swap {
-                self.emit(h.frame, h.bytes)?;
+                self.emit(d, h.frame, h.bytes)?;
             }
             return Ok(());
         };
@@ -632,41 +885,45 @@ impl<L: FlightLink> FaultLink<L> {
         let seq = frame_seq(&bytes);
         let mut event = FaultEvent {
             t_us: now,
+            direction: d,
             kind,
             frame,
             seq,
             frame_len: n as u32,
             detail: 0,
         };
+        let (delay_us, stall_us, reorder_hold_us) =
+            (self.profile.delay_us, self.profile.stall_us, self.profile.reorder_hold_us);
+        let lane = self.lane(d);
         let mut out = bytes;
         match kind {
             FaultKind::BitFlip => {
-                let at = self.below(n - 1);
-                let bit = self.below(8);
+                let at = lane.below(n - 1);
+                let bit = lane.below(8);
                 if let Some(b) = out.get_mut(at as usize) {
                     *b ^= 1 << bit;
                 }
                 event.detail = at * 8 + bit;
-                self.damaged_seqs.insert(seq);
-                self.damaged_frames.insert(frame);
+                lane.damaged_seqs.insert(seq);
+                lane.damaged_frames.insert(frame);
             }
             FaultKind::Truncate => {
-                let keep = 1 + self.below(n - 2);
+                let keep = 1 + lane.below(n - 2);
                 out.truncate(keep as usize);
                 out.push(0);
                 event.detail = keep;
-                self.damaged_seqs.insert(seq);
-                self.damaged_frames.insert(frame);
+                lane.damaged_seqs.insert(seq);
+                lane.damaged_frames.insert(frame);
             }
             FaultKind::Drop => {
-                self.damaged_seqs.insert(seq);
+                lane.damaged_seqs.insert(seq);
             }
-            FaultKind::Delay => event.detail = self.profile.delay_us,
+            FaultKind::Delay => event.detail = delay_us,
             FaultKind::Stall => {
-                event.detail = self.profile.stall_us;
-                self.stall_until_us = self.stall_until_us.max(now + self.profile.stall_us);
+                event.detail = stall_us;
+                lane.stall_until_us = lane.stall_until_us.max(now + stall_us);
             }
-            FaultKind::Reorder => event.detail = self.profile.reorder_hold_us,
+            FaultKind::Reorder => event.detail = reorder_hold_us,
             FaultKind::Duplicate => {}
         }
         self.inner.note_fault(&event)?;
@@ -674,32 +931,52 @@ impl<L: FlightLink> FaultLink<L> {
         match kind {
             FaultKind::Drop => {}
             FaultKind::Duplicate => {
-                self.emit(frame, out.clone())?;
-                self.emit(frame, out)?;
+                self.emit(d, frame, out.clone())?;
+                self.emit(d, frame, out)?;
             }
-            FaultKind::Delay => self.delayed.push(Held {
-                at_us: now + self.profile.delay_us,
+            FaultKind::Delay => self.lane(d).delayed.push(Held {
+                at_us: now + delay_us,
                 frame,
                 bytes: out,
             }),
             FaultKind::Reorder if swap.is_none() => {
-                self.reordered = Some(Held {
-                    at_us: now + self.profile.reorder_hold_us,
+                self.lane(d).reordered = Some(Held {
+                    at_us: now + reorder_hold_us,
                     frame,
                     bytes: out,
                 });
                 return Ok(());
             }
-            _ => self.emit(frame, out)?,
+            _ => self.emit(d, frame, out)?,
         }
         if let Some(h) = swap {
-            self.emit(h.frame, h.bytes)?;
+            self.emit(d, h.frame, h.bytes)?;
+        }
+        Ok(())
+    }
+
+    /// Delivers every frame held in direction `d`, in the order they would have come.
+    fn flush(&mut self, d: LinkDirection) -> Result<(), LinkError> {
+        let lane = self.lane(d);
+        lane.stall_until_us = 0;
+        let stalled = core::mem::take(&mut lane.stalled);
+        let reordered = lane.reordered.take();
+        let mut delayed = core::mem::take(&mut lane.delayed);
+        for h in stalled {
+            self.deliver(d, h.frame, &h.bytes)?;
+        }
+        if let Some(h) = reordered {
+            self.deliver(d, h.frame, &h.bytes)?;
+        }
+        delayed.sort_by_key(|h| (h.at_us, h.frame));
+        for h in delayed {
+            self.deliver(d, h.frame, &h.bytes)?;
         }
         Ok(())
     }
 }
 
-/// The host sequence number in an encoded frame's header (0 if it does not deframe).
+/// The sequence number in an encoded frame's header (0 if it does not deframe).
 fn frame_seq(wire: &[u8]) -> u32 {
     let mut d = Deframer::new();
     match d.push(wire) {
@@ -720,36 +997,29 @@ impl<L: FlightLink> FlightLink for FaultLink<L> {
     }
 
     fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
-        self.release_due()?;
-        self.partial.extend_from_slice(bytes);
-        // Each pass takes one whole frame (up to and with its delimiter) out of `partial`.
-        while let Some(end) = self.partial.iter().position(|&b| b == 0) {
-            let rest = self.partial.split_off(end + 1);
-            let frame = core::mem::replace(&mut self.partial, rest);
-            self.inject(frame)?;
+        self.release_all_due()?;
+        for frame in self.up.frames_of(bytes) {
+            self.inject(LinkDirection::Up, frame)?;
         }
         Ok(())
     }
 
     fn recv_until_quiet(&mut self, max_wait_us: u64) -> Result<Vec<u8>, LinkError> {
-        let mut out = Vec::new();
         let start = self.inner.now_us();
         let deadline = start.saturating_add(max_wait_us);
         if let Some(at) = self.next_release().filter(|&at| at <= deadline) {
-            self.run_to(at, &mut out)?;
+            self.run_to(at)?;
         }
         let left = deadline.saturating_sub(self.inner.now_us());
         let got = self.inner.recv_until_quiet(left.max(1))?;
-        self.watch(&got);
-        out.extend(got);
-        self.release_due()?;
-        Ok(out)
+        self.take_down(got)?;
+        self.release_all_due()?;
+        Ok(core::mem::take(&mut self.to_host))
     }
 
     fn advance_to(&mut self, t_us: u64) -> Result<Vec<u8>, LinkError> {
-        let mut out = Vec::new();
-        self.run_to(t_us, &mut out)?;
-        Ok(out)
+        self.run_to(t_us)?;
+        Ok(core::mem::take(&mut self.to_host))
     }
 
     fn note_fault(&mut self, event: &FaultEvent) -> Result<(), LinkError> {
@@ -758,24 +1028,15 @@ impl<L: FlightLink> FlightLink for FaultLink<L> {
 
     fn end_faults(&mut self) -> Result<(), LinkError> {
         self.enabled = false;
-        self.stall_until_us = 0;
-        for h in core::mem::take(&mut self.stalled) {
-            self.deliver(h.frame, &h.bytes)?;
-        }
-        if let Some(h) = self.reordered.take() {
-            self.deliver(h.frame, &h.bytes)?;
-        }
-        let mut delayed = core::mem::take(&mut self.delayed);
-        delayed.sort_by_key(|h| (h.at_us, h.frame));
-        for h in delayed {
-            self.deliver(h.frame, &h.bytes)?;
-        }
+        self.flush(LinkDirection::Up)?;
+        // the downlink's held frames reach the host with the next receive
+        self.flush(LinkDirection::Down)?;
         self.inner.end_faults()
     }
 
     fn reset_flight(&mut self, cause: super::ResetCause) -> Result<(), LinkError> {
         // frames held on the way (delayed, stalled, reordered) are in the radio path, not the flight computer:
-        // they still arrive, at the rebooted software
+        // they still arrive (uplink: at the rebooted software)
         self.inner.reset_flight(cause)
     }
 }

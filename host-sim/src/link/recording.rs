@@ -1,5 +1,5 @@
 //! A [`FlightLink`] wrapper that records every byte, both ways, into a field log, and the faults a
-//! [`super::faults::FaultLink`] outside it injected (fault records, field-log format 3).
+//! [`super::faults::FaultLink`] outside it injected (fault records, field-log format 4).
 
 use std::io::Write;
 

@@ -80,7 +80,8 @@ pub fn run_one(
             };
             let mut faulty = FaultLink::new(link, profile);
             let rep = run_mission(&mut faulty, sc, &opts).map_err(|e| e.to_string())?;
-            Ok((rep, Some(faulty.account())))
+            let acc = faulty.account().with_host(rep.downlink, &rep.command_seqs);
+            Ok((rep, Some(acc)))
         }
     }
 }

@@ -1,6 +1,7 @@
-//! Fault campaigns (issue 24, item 1): missions over a faulted uplink (`link::faults`), one fault kind at a time,
-//! at rates per byte from 1e-5 to 1e-2, and the table: how the missions ended (arrived, safe with the reason,
-//! fell, anything else), the faults injected, detected by the flight software's telemetry and harmless, whether
+//! Fault campaigns (issue 24, item 1): missions over a faulted uplink or downlink (`link::faults`), one fault kind
+//! at a time, at rates per byte from 1e-5 to 1e-2, and the table: how the missions ended (arrived, safe with the
+//! reason, fell, anything else), the faults injected, detected (uplink: by the flight software's telemetry;
+//! downlink: by the host's counters) and harmless, whether
 //! injected = detected + harmless held in every mission, `Ack`s of damaged frames, the host's retransmissions and
 //! the executive's cycle accounting (longest step, slips). `host-sim/doc/faults.md` has the figures.
 
@@ -11,7 +12,7 @@ use firmware::protocol::Tracking;
 
 use super::campaign::{run_one, run_parallel};
 use super::run::{MissionReport, Verdict};
-use crate::link::faults::{FaultAccount, FaultKind, FaultProfile};
+use crate::link::faults::{FaultAccount, FaultKind, FaultProfile, LinkDirection};
 use crate::scenario::Scenario;
 
 /// Default rates per byte of a fault campaign.
@@ -24,13 +25,18 @@ pub struct FaultCell {
     pub rate: f64,
     /// The kind.
     pub kind: FaultKind,
+    /// The faulted direction.
+    pub direction: LinkDirection,
     /// Each mission (seed order): its report and accounting, or why it could not run.
     pub missions: Vec<Result<(MissionReport, FaultAccount), String>>,
 }
 
-/// The profile of one cell's mission: `kind` alone at `rate`, the other parameters from `base`.
-pub fn cell_profile(base: &FaultProfile, kind: FaultKind, rate: f64) -> FaultProfile {
+/// The profile of one cell's mission: `kind` alone at `rate` in direction `d`, the other parameters from `base`.
+pub fn cell_profile(base: &FaultProfile, kind: FaultKind, rate: f64, d: LinkDirection) -> FaultProfile {
     let mut p = FaultProfile::single(kind, rate, base.seed);
+    if d == LinkDirection::Down {
+        core::mem::swap(&mut p.rates, &mut p.down_rates);
+    }
     p.delay_us = base.delay_us;
     p.stall_us = base.stall_us;
     p.reorder_hold_us = base.reorder_hold_us;
@@ -45,6 +51,7 @@ pub fn run(
     rates: &[f64],
     kinds: &[FaultKind],
     base: &FaultProfile,
+    direction: LinkDirection,
     tracking: Tracking,
     threads: usize,
     charge_host_time: bool,
@@ -61,7 +68,7 @@ pub fn run(
             .copied()
             .unwrap_or((0.0, FaultKind::Drop));
         let seed = seeds.get(i % per).copied().unwrap_or_default();
-        let profile = cell_profile(base, kind, rate);
+        let profile = cell_profile(base, kind, rate, direction);
         let r =
             run_one(sc, seed, tracking, Some(&profile), charge_host_time).and_then(|(rep, acc)| {
                 acc.map(|a| (rep, a))
@@ -76,6 +83,7 @@ pub fn run(
         .map(|(rate, kind)| FaultCell {
             rate,
             kind,
+            direction,
             missions: it.by_ref().take(seeds.len()).collect(),
         })
         .collect()
@@ -109,8 +117,14 @@ pub struct CellSummary {
     pub harmless: u64,
     /// Missions whose accounting did not balance (with the first reason).
     pub unbalanced: Vec<(u64, String)>,
-    /// `Ack`s of damaged frames.
+    /// `Ack`s of damaged uplink frames, plus drive commands executed from damaged downlink frames.
     pub acked_damaged: u64,
+    /// Drive commands received again and not executed again (the host's count).
+    pub commands_repeated: u64,
+    /// Resent requests the flight software answered without acting again (`Telemetry.requests_repeated`, v5).
+    pub requests_repeated: u64,
+    /// Drive commands the flight software sent again for want of a report (`Telemetry.drive_resends`, v5).
+    pub drive_resends: u64,
     /// Frames retransmitted by the host.
     pub retransmits: u64,
     /// Scan chunks the host sent again.
@@ -138,13 +152,27 @@ pub fn summarise(cell: &FaultCell) -> CellSummary {
             Verdict::Undelivered => *s.safe.entry("Undelivered(ground)".into()).or_default() += 1,
             v => *s.other.entry(v.name()).or_default() += 1,
         }
-        s.injected += acc.injected(cell.kind);
-        s.harmless += acc.harmless(cell.kind);
-        s.detected += acc.detected(cell.kind.group()).unwrap_or(0);
+        match cell.direction {
+            LinkDirection::Up => {
+                s.injected += acc.injected(cell.kind);
+                s.harmless += acc.harmless(cell.kind);
+                s.detected += acc.detected(cell.kind.group()).unwrap_or(0);
+            }
+            LinkDirection::Down => {
+                s.injected += acc.down_injected(cell.kind);
+                s.harmless += acc.down_harmless(cell.kind);
+                s.detected += acc.down_detected(cell.kind.group()).unwrap_or(0);
+            }
+        }
         if let Err(e) = acc.check() {
             s.unbalanced.push((rep.seed, e));
         }
-        s.acked_damaged += acc.acked_damaged;
+        s.acked_damaged += acc.acked_damaged + acc.executed_damaged;
+        s.commands_repeated += rep.commands_repeated;
+        if let Some(t) = &acc.telemetry {
+            s.requests_repeated += u64::from(t.requests_repeated);
+            s.drive_resends += u64::from(t.drive_resends);
+        }
         s.retransmits += rep.retransmits;
         s.chunks_resent += rep.chunks_resent;
         s.max_step_us = s.max_step_us.max(rep.max_step_us);
@@ -167,18 +195,19 @@ fn join(m: &BTreeMap<String, usize>) -> String {
 /// The fault campaign table (Markdown) and its closing verdict lines.
 pub fn table(name: &str, seeds: &[u64], cells: &[FaultCell]) -> String {
     let mut out = String::new();
+    let dir = cells.first().map_or("uplink", |c| c.direction.name());
     let _ = writeln!(
         out,
-        "fault campaign: {name}, seeds {seeds:?}, uplink faults, one kind per mission"
+        "fault campaign: {name}, seeds {seeds:?}, {dir} faults, one kind per mission (acked damaged: uplink frames acknowledged, or downlink frames whose drive command was executed; repeats: drive commands received again, not executed; flight resends: requests answered without acting again / drive commands sent again)"
     );
     let _ = writeln!(out);
     let _ = writeln!(
         out,
-        "| rate/byte | kind | arrived | safe (reason) | fell | other | injected | detected | harmless | balanced | acked damaged | retransmits (frames / chunks) | max step s | slips |"
+        "| rate/byte | kind | arrived | safe (reason) | fell | other | injected | detected | harmless | balanced | acked damaged | retransmits (frames / chunks) | repeats | flight resends | max step s | slips |"
     );
     let _ = writeln!(
         out,
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     let (mut all, mut fell, mut other, mut unbalanced, mut acked, mut errors) = (0, 0, 0, 0, 0, 0);
     for c in cells {
@@ -191,7 +220,7 @@ pub fn table(name: &str, seeds: &[u64], cells: &[FaultCell]) -> String {
         errors += s.errors;
         let _ = writeln!(
             out,
-            "| {:e} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} / {} | {:.3} | {} |",
+            "| {:e} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} / {} | {} | {} / {} | {:.3} | {} |",
             c.rate,
             c.kind.name(),
             s.arrived,
@@ -209,11 +238,14 @@ pub fn table(name: &str, seeds: &[u64], cells: &[FaultCell]) -> String {
             s.acked_damaged,
             s.retransmits,
             s.chunks_resent,
+            s.commands_repeated,
+            s.requests_repeated,
+            s.drive_resends,
             f64::from(s.max_step_us) * 1e-6,
             s.slips
         );
         for (seed, why) in &s.unbalanced {
-            let _ = writeln!(out, "|  | seed {seed}: {why} | | | | | | | | | | | | |");
+            let _ = writeln!(out, "|  | seed {seed}: {why} | | | | | | | | | | | | | | |");
         }
     }
     let _ = writeln!(out);

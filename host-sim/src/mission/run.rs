@@ -201,6 +201,13 @@ pub struct MissionReport {
     pub given_up: u64,
     /// Scan chunks the host sent again for want of an answer (`HostSession::send_scan`).
     pub chunks_resent: u64,
+    /// Drive commands received again (a flight resend or a copy; protocol v5) and not executed again.
+    pub commands_repeated: u64,
+    /// The host's detection on the downlink (`HostSession::downlink`).
+    pub downlink: crate::session::DownlinkCounts,
+    /// The flight sequence number of every frame whose drive command the host took (executed or a stop).
+    #[serde(skip)]
+    pub command_seqs: Vec<u32>,
     /// Resets of the flight computer during the mission, and what it recovered each time.
     pub resets: Vec<ResetSeen>,
     /// Host wall time, s.
@@ -380,6 +387,8 @@ struct Sim<'a, L: FlightLink> {
     reset: Option<ResetAt>,
     /// The flight software booted `Safe` with reason `Reset`: the ground configures it and sends the goal again.
     recovery_due: bool,
+    /// The id of the last drive command taken (none since boot).
+    last_command_id: Option<u32>,
 }
 
 impl<L: FlightLink> Sim<'_, L> {
@@ -393,10 +402,21 @@ impl<L: FlightLink> Sim<'_, L> {
         if self.planning || msgs.iter().any(|m| matches!(m, Message::PlanStatus(_))) {
             self.plan_host_s += host_s;
         }
-        for msg in msgs {
+        // the replies are the last frames the session read: their headers give the flight sequence numbers
+        let first = self.s.log.len().saturating_sub(msgs.len());
+        let seqs: Vec<u32> = self.s.log.get(first..).unwrap_or(&[]).iter().map(|r| r.header.seq).collect();
+        for (i, msg) in msgs.into_iter().enumerate() {
             match msg {
                 Message::DriveCommand(d) => {
+                    // a command id is executed once: the flight software resends a command whose report is late
+                    // (protocol v5), and ids increase (wrapping)
+                    if self.last_command_id.is_some_and(|l| (d.command_id.wrapping_sub(l) as i32) <= 0) {
+                        self.rep.commands_repeated += 1;
+                        continue;
+                    }
+                    self.last_command_id = Some(d.command_id);
                     self.last_news_us = now;
+                    self.rep.command_seqs.extend(seqs.get(i).copied());
                     self.pending.push((d.command_id, d.motion));
                 }
                 Message::MissionStatus(st) => {
@@ -609,8 +629,10 @@ impl<L: FlightLink> Sim<'_, L> {
         });
         log::warn!("mission: resetting the flight computer ({cause:?}) at t {t_s:.1} s");
         self.s.link_mut().reset_flight(cause).map_err(SessionError::Link)?;
-        // drive commands of the software that was reset are void
+        // drive commands of the software that was reset are void; the rebooted one numbers from 0 again
         self.pending.clear();
+        self.last_command_id = None;
+        self.s.flight_rebooted();
         self.recv()?;
         if let Some(r) = self.rep.resets.last_mut().filter(|r| r.reason.is_empty()) {
             r.reason = self.status.map_or_else(String::new, |s| format!("{:?}", s.reason));
@@ -803,6 +825,9 @@ pub fn run_mission_from(
         retransmits: 0,
         given_up: 0,
         chunks_resent: 0,
+        commands_repeated: 0,
+        downlink: Default::default(),
+        command_seqs: vec![],
         resets: vec![],
         host_s: 0.0,
         trace: vec![],
@@ -853,6 +878,7 @@ pub fn run_mission_from(
         goal: None,
         reset: opts.reset,
         recovery_due: false,
+        last_command_id: None,
     };
     sim.recv()?;
     sim.s.send(&Message::Configure(cfg))?;
@@ -922,6 +948,7 @@ pub fn run_mission_from(
     sim.rep.retransmits = sim.s.retransmitted;
     sim.rep.given_up = sim.s.given_up;
     sim.rep.chunks_resent = sim.s.chunks_resent;
+    sim.rep.downlink = sim.s.downlink;
     sim.snapshot_tether();
     let mut rep = sim.rep;
     rep.verdict = sim.done.unwrap_or(Verdict::TimeLimit);
