@@ -239,28 +239,27 @@ pub fn build_map(world: &dyn World, poses: &[Pose3], cfg: &CheckConfig, map: &mu
     rep
 }
 
+/// Every voxel of the blocks in use, in slot order, then z, y, x within a block.
+pub fn voxels_in_use<'m>(map: &'m Map<'_>) -> impl Iterator<Item = [i32; 3]> + 'm {
+    let e = firmware::config::map::BLOCK_EDGE as i32;
+    (0..map.blocks_used()).map_while(|slot| map.block_coord(slot)).flat_map(move |c| {
+        (0..e * e * e).map(move |k| [c[0] * e + k % e, c[1] * e + (k / e) % e, c[2] * e + k / (e * e)])
+    })
+}
+
 /// FNV-1a digest of every voxel's ESDF value and site distance (bit patterns) over the blocks in use, in slot
 /// order: two maps built by the same calls have the same digest exactly when their ESDFs are bit-identical
 /// (`TETHERBOT_ESDF_DIGEST=1 tetherbot map-check ...` prints it after every scan).
 pub fn esdf_digest(map: &Map<'_>) -> u64 {
-    let e = firmware::config::map::BLOCK_EDGE as i32;
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     let mut eat = |v: u32| {
         for b in v.to_le_bytes() {
             h = (h ^ b as u64).wrapping_mul(0x0100_0000_01b3);
         }
     };
-    for slot in 0..map.blocks_used() {
-        let Some(c) = map.block_coord(slot) else { break };
-        for z in 0..e {
-            for y in 0..e {
-                for x in 0..e {
-                    let g = [c[0] * e + x, c[1] * e + y, c[2] * e + z];
-                    eat(map.esdf_voxel(g).map_or(u32::MAX, f32::to_bits));
-                    eat(map.site_distance_voxels(g).map_or(u32::MAX, f32::to_bits));
-                }
-            }
-        }
+    for g in voxels_in_use(map) {
+        eat(map.esdf_voxel(g).map_or(u32::MAX, f32::to_bits));
+        eat(map.site_distance_voxels(g).map_or(u32::MAX, f32::to_bits));
     }
     h
 }
@@ -268,22 +267,13 @@ pub fn esdf_digest(map: &Map<'_>) -> u64 {
 /// Every voxel of the blocks in use, slot order: coordinates (3 x i32), ESDF value and site distance (f32 bits,
 /// `u32::MAX` = none), little endian (`TETHERBOT_ESDF_DUMP=DIR` writes one file per scan).
 pub fn esdf_dump(map: &Map<'_>) -> Vec<u8> {
-    let e = firmware::config::map::BLOCK_EDGE as i32;
     let mut out = Vec::new();
-    for slot in 0..map.blocks_used() {
-        let Some(c) = map.block_coord(slot) else { break };
-        for z in 0..e {
-            for y in 0..e {
-                for x in 0..e {
-                    let g = [c[0] * e + x, c[1] * e + y, c[2] * e + z];
-                    for v in g {
-                        out.extend_from_slice(&v.to_le_bytes());
-                    }
-                    out.extend_from_slice(&map.esdf_voxel(g).map_or(u32::MAX, f32::to_bits).to_le_bytes());
-                    out.extend_from_slice(&map.site_distance_voxels(g).map_or(u32::MAX, f32::to_bits).to_le_bytes());
-                }
-            }
+    for g in voxels_in_use(map) {
+        for v in g {
+            out.extend_from_slice(&v.to_le_bytes());
         }
+        out.extend_from_slice(&map.esdf_voxel(g).map_or(u32::MAX, f32::to_bits).to_le_bytes());
+        out.extend_from_slice(&map.site_distance_voxels(g).map_or(u32::MAX, f32::to_bits).to_le_bytes());
     }
     out
 }

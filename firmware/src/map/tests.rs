@@ -282,19 +282,7 @@ fn a_one_voxel_gap_between_observed_voxels_is_bridged_and_a_wider_one_is_not() {
 /// Brute force: for every voxel of the grid, min over sites of (|c - c_s| + sign_v * site value), capped; the
 /// voxel is inside (sign -1) only if it is itself a site with a negative value.
 fn brute_force(sites: &[([i32; 3], i8)], g: [i32; 3], dmax: Real) -> Option<Real> {
-    // A fixed-band site keeps its own value.
-    if let Some((_, w)) = sites.iter().find(|(s, _)| *s == g) {
-        return Some((*w as Real * 0.01).abs());
-    }
-    let inside = false;
-    let sign = if inside { -1.0 } else { 1.0 };
-    let mut best = Real::INFINITY;
-    for (s, w) in sites {
-        let d = [(g[0] - s[0]) as f64, (g[1] - s[1]) as f64, (g[2] - s[2]) as f64];
-        let v = ((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() + sign * *w as f64 * 0.01).max(0.0);
-        best = best.min(v as Real);
-    }
-    if best <= dmax { Some(best) } else { None }
+    brute_force_signed(sites, g, false, dmax)
 }
 
 /// The configuration of the brute-force comparisons: 0.1 m voxels, distances up to 1.2 m, every site exact.
@@ -350,17 +338,19 @@ fn assert_close_to_brute_force(map: &Map<'_>, sites: &[([i32; 3], i8)], n: i32, 
 
 fn compare_with_brute_force(map: &Map<'_>, sites: &[([i32; 3], i8)], n: i32) -> (Real, usize, usize) {
     let dmax = map.config().esdf_max_distance / map.config().voxel_size;
-    let mut max_err: Real = 0.0;
-    let mut inexact = 0;
-    let mut total = 0;
+    compare_over_cube(map, n, |g| brute_force(sites, g, dmax))
+}
+
+/// Max error (voxels), count of inexact voxels and voxels compared: the map's site distance against `want` over the
+/// `n`^3 cube; a voxel that one side has and the other has not fails the test.
+fn compare_over_cube(map: &Map<'_>, n: i32, want: impl Fn([i32; 3]) -> Option<Real>) -> (Real, usize, usize) {
+    let (mut max_err, mut inexact, mut total) = (0.0 as Real, 0, 0);
     for z in 0..n {
         for y in 0..n {
             for x in 0..n {
                 let g = [x - n / 2, y - n / 2, z - n / 2];
-                let want = brute_force(sites, g, dmax);
-                let got = map.site_distance_voxels(g);
                 total += 1;
-                match (want, got) {
+                match (want(g), map.site_distance_voxels(g)) {
                     (Some(a), Some(b)) => {
                         let e = (a - b).abs();
                         max_err = max_err.max(e);
@@ -463,30 +453,10 @@ fn brute_force_signed(sites: &[([i32; 3], i8)], g: [i32; 3], inside: bool, dmax:
 /// Max error (voxels) and count of inexact voxels against [`brute_force_signed`], over the `n`^3 cube.
 fn compare_signed(map: &Map<'_>, sites: &[([i32; 3], i8)], n: i32) -> (Real, usize, usize) {
     let dmax = map.config().esdf_max_distance / map.config().voxel_size;
-    let (mut max_err, mut inexact, mut total) = (0.0 as Real, 0, 0);
-    for z in 0..n {
-        for y in 0..n {
-            for x in 0..n {
-                let g = [x - n / 2, y - n / 2, z - n / 2];
-                let inside = map.tsdf_voxel(g).is_some_and(|(d, _)| d < 0.0);
-                let want = brute_force_signed(sites, g, inside, dmax);
-                let got = map.site_distance_voxels(g);
-                total += 1;
-                match (want, got) {
-                    (Some(a), Some(b)) => {
-                        let e = (a - b).abs();
-                        max_err = max_err.max(e);
-                        if e > 1e-4 {
-                            inexact += 1;
-                        }
-                    }
-                    (None, None) => {}
-                    (a, b) => panic!("voxel {g:?}: brute force {a:?}, map {b:?}"),
-                }
-            }
-        }
-    }
-    (max_err, inexact, total)
+    compare_over_cube(map, n, |g| {
+        let inside = map.tsdf_voxel(g).is_some_and(|(d, _)| d < 0.0);
+        brute_force_signed(sites, g, inside, dmax)
+    })
 }
 
 fn random_voxel(rng: &mut impl Rng, n: i32) -> [i32; 3] {
