@@ -306,7 +306,7 @@ pub fn run_protocol(link: impl FlightLink, seed: u64) -> Result<ScenarioReport, 
             matches!(
                 m,
                 Message::DriveCommand(DriveCommand {
-                    motion: Motion::Stop,
+                    motion: Motion::Stop { .. },
                     ..
                 })
             )

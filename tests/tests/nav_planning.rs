@@ -114,7 +114,7 @@ fn plan_goal<L: FlightLink>(s: &mut HostSession<L>, goal: GoalRequest) -> Vec<Me
                         pose = Some((w.pose.position.x, w.pose.position.y, w.pose.position.z, yaw));
                     }
                 }
-                Message::DriveCommand(DriveCommand { command_id, motion }) if motion != Motion::Stop => {
+                Message::DriveCommand(DriveCommand { command_id, motion }) if !matches!(motion, Motion::Stop { .. }) => {
                     let (mut x, mut y, z, mut yaw) = pose.expect("a plan before the first drive command");
                     let (mut dyaw, mut dist) = (0.0, 0.0);
                     match motion {
@@ -127,7 +127,7 @@ fn plan_goal<L: FlightLink>(s: &mut HostSession<L>, goal: GoalRequest) -> Vec<Me
                             y += distance_m * yaw.sin();
                             dist = distance_m;
                         }
-                        Motion::Stop => {}
+                        Motion::Stop { .. } => {}
                     }
                     pose = Some((x, y, z, yaw));
                     let report = MotionReport {
@@ -188,7 +188,7 @@ fn goal_over_the_link_is_planned_on_board_and_driven() {
                     x += distance_m * yaw.cos();
                     y += distance_m * yaw.sin();
                 }
-                Motion::Stop => {}
+                Motion::Stop { .. } => {}
             }
         }
     }

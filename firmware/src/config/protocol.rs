@@ -2,7 +2,7 @@
 //!
 //! | const | default | reason |
 //! |---|---|---|
-//! | [`PROTOCOL_VERSION`] | 4 | first byte of every frame; a receiver rejects any other value (v2: the closed-loop mission messages; v3: `Configure.map`; v4: sequence and cycle accounting in `Telemetry`, `Nack(DuplicateFrame)`; v5: resent requests answered without acting again, drive commands resent) |
+//! | [`PROTOCOL_VERSION`] | 6 | first byte of every frame; a receiver rejects any other value (v2: the closed-loop mission messages; v3: `Configure.map`; v4: sequence and cycle accounting in `Telemetry`, `Nack(DuplicateFrame)`; v5: resent requests answered without acting again, drive commands resent; v6: a `Stop` names the motion it stops and is resent) |
 //! | [`HEADER_LEN`] | 6 | version u8, kind u8, sequence u32 little-endian |
 //! | [`CRC_LEN`] | 4 | CRC-32 (ISO-HDLC, the Ethernet/zlib CRC) over header and body, little-endian |
 //! | [`MAX_FRAME_LEN`] | 2048 | largest decoded frame (header + body + CRC): a full sensor chunk plus margin; small enough for a UART DMA buffer |
@@ -18,7 +18,7 @@
 //! | [`MIN_TELEMETRY_PERIOD_MS`] | 100 | telemetry rate limit: a `Configure` asking for periodic telemetry faster than 10 Hz is rejected |
 
 /// The protocol version this build speaks (first byte of every frame).
-pub const PROTOCOL_VERSION: u8 = 5;
+pub const PROTOCOL_VERSION: u8 = 6;
 /// Header length in bytes: version (u8), kind (u8), sequence number (u32 LE).
 pub const HEADER_LEN: usize = 6;
 /// Trailer length in bytes: CRC-32 (ISO-HDLC) little-endian.

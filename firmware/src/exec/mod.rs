@@ -44,7 +44,9 @@
 //! `Configure` or `GoalRequest` whose body equals the last accepted one of its kind is answered `Ack` and not
 //! dispatched again (`requests.rs`; `Telemetry.requests_repeated`). A drive command whose report has not come within
 //! `DRIVE_COMMAND_RESEND_US` is sent again unchanged, every period until the report or `MOTION_REPORT_TIMEOUT_US`
-//! (`Telemetry.drive_resends`); the host executes a command id once.
+//! (`Telemetry.drive_resends`); the host executes a command id once. v6: a `Stop` names the motion it stops
+//! (`Motion::Stop { motion_id }`); once one is out for the awaited motion, that `Stop` is what goes again, on the same
+//! schedule and counter, so a lost `Stop` is not the end of it and a late copy cannot stop the next motion.
 //!
 //! ## Cycle accounting (v4)
 //! Each step reads the clock again at its end; the step's duration, the longest since boot and since the last
@@ -154,8 +156,8 @@ struct Awaiting {
     sent_at: Instant,
     /// When it was last sent (again: `DRIVE_COMMAND_RESEND_US`).
     last_sent: Instant,
-    /// A `Stop` was sent for it ([`Autonomy::stop_in_flight`]).
-    stopping: bool,
+    /// The `command_id` of the `Stop` sent for it (v6: resent like a drive command until the report comes).
+    stop_id: Option<u32>,
 }
 
 /// What a dispatched frame asks to send after its `Ack`.
@@ -189,6 +191,8 @@ pub struct Executive<L, C, W, A, S> {
     goal: Option<ActiveGoal>,
     plan_tx: Option<PlanTx>,
     drive_command_id: u32,
+    /// The `command_id` of the last `Turn` / `Straight` sent (0 before any).
+    last_motion_id: u32,
     awaiting: Option<Awaiting>,
     last_mission: Option<(u32, MissionState, StopReason)>,
     last_host_time_us: u64,
@@ -236,6 +240,7 @@ where
             goal: None,
             plan_tx: None,
             drive_command_id: 0,
+            last_motion_id: 0,
             awaiting: None,
             last_mission: None,
             last_host_time_us: 0,
@@ -332,9 +337,9 @@ where
                     Reply::PlanStatus => self.send_plan_status(),
                     Reply::PlanStatusAndStop => {
                         self.send_plan_status();
-                        self.send_motion(Motion::Stop);
+                        self.send_stop();
                     }
-                    Reply::Stop => self.send_motion(Motion::Stop),
+                    Reply::Stop => self.send_stop(),
                     Reply::MissionStatus => self.send_mission_status(),
                 }
             }
@@ -656,15 +661,17 @@ where
         let Some(mut a) = self.awaiting else { return };
         if now.micros_since(a.sent_at) < MOTION_REPORT_TIMEOUT_US {
             // v5: the downlink may have lost the command; it goes again, unchanged, until the report comes (the
-            // host executes a command id once). Not once a `Stop` is out for it: the motion is being ended.
-            if !a.stopping && now.micros_since(a.last_sent) >= DRIVE_COMMAND_RESEND_US {
+            // host executes a command id once). Once a `Stop` is out for it, the `Stop` goes again instead (v6: it
+            // names this motion, so a late copy cannot stop another).
+            if now.micros_since(a.last_sent) >= DRIVE_COMMAND_RESEND_US {
                 a.last_sent = now;
                 self.awaiting = Some(a);
                 self.counters.drive_resends = self.counters.drive_resends.saturating_add(1);
-                self.send(&Message::DriveCommand(DriveCommand {
-                    command_id: a.command_id,
-                    motion: a.motion,
-                }));
+                let (command_id, motion) = match a.stop_id {
+                    Some(id) => (id, Motion::Stop { motion_id: a.command_id }),
+                    None => (a.command_id, a.motion),
+                };
+                self.send(&Message::DriveCommand(DriveCommand { command_id, motion }));
             }
             return;
         }
@@ -674,7 +681,7 @@ where
             LogLevel::Warn,
             format_args!("no report for drive command {}: stop", a.command_id),
         );
-        self.send_motion(Motion::Stop);
+        self.send_stop_of(a.command_id);
         self.autonomy.motion_timeout(a.command_id, now);
     }
 
@@ -703,10 +710,9 @@ where
                 } else {
                     Some(tx)
                 };
-            } else if let Some(a) = self.awaiting.as_mut().filter(|a| self.mode == Mode::Driving && !a.stopping) {
+            } else if self.awaiting.is_some_and(|a| self.mode == Mode::Driving && a.stop_id.is_none()) {
                 if self.autonomy.stop_in_flight(now) {
-                    a.stopping = true;
-                    self.send_motion(Motion::Stop);
+                    self.send_stop();
                 }
                 return;
             } else if self.mode == Mode::Driving && self.awaiting.is_none() {
@@ -745,7 +751,7 @@ where
             // A safe stop (or arrival) decided between reports, e.g. on a tether reading: stop the motion in
             // flight now (its report is still awaited).
             if matches!(m.state, MissionState::Safe | MissionState::Arrived) && self.awaiting.is_some() {
-                self.send_motion(Motion::Stop);
+                self.send_stop();
             }
         }
     }
@@ -769,19 +775,52 @@ where
         }
     }
 
+    /// Sends a `Turn` or `Straight` and awaits its report.
     fn send_motion(&mut self, motion: Motion) {
-        let command_id = self.drive_command_id;
-        self.drive_command_id = self.drive_command_id.wrapping_add(1);
-        if motion != Motion::Stop {
-            self.awaiting = Some(Awaiting {
-                command_id,
-                motion,
-                sent_at: self.now,
-                last_sent: self.now,
-                stopping: false,
-            });
-        }
+        let command_id = self.next_command_id();
+        self.last_motion_id = command_id;
+        self.awaiting = Some(Awaiting {
+            command_id,
+            motion,
+            sent_at: self.now,
+            last_sent: self.now,
+            stop_id: None,
+        });
         self.send(&Message::DriveCommand(DriveCommand { command_id, motion }));
+    }
+
+    /// Stops the motion awaiting its report (its report is still awaited, and the `Stop` is resent until it comes),
+    /// or, with none, sends a `Stop` of the last motion (already reported: the host does nothing with it).
+    fn send_stop(&mut self) {
+        match self.awaiting {
+            Some(mut a) => {
+                // a second stop of the same motion (a goal change after a stop in flight) is the same command
+                let stop_id = match a.stop_id {
+                    Some(id) => id,
+                    None => self.next_command_id(),
+                };
+                a.stop_id = Some(stop_id);
+                a.last_sent = self.now;
+                self.awaiting = Some(a);
+                self.send(&Message::DriveCommand(DriveCommand {
+                    command_id: stop_id,
+                    motion: Motion::Stop { motion_id: a.command_id },
+                }));
+            }
+            None => self.send_stop_of(self.last_motion_id),
+        }
+    }
+
+    /// Sends a `Stop` of motion `motion_id` with nothing awaited for it.
+    fn send_stop_of(&mut self, motion_id: u32) {
+        let command_id = self.next_command_id();
+        self.send(&Message::DriveCommand(DriveCommand { command_id, motion: Motion::Stop { motion_id } }));
+    }
+
+    fn next_command_id(&mut self) -> u32 {
+        let id = self.drive_command_id;
+        self.drive_command_id = self.drive_command_id.wrapping_add(1);
+        id
     }
 }
 

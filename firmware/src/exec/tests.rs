@@ -274,7 +274,7 @@ fn planning_sends_status_plan_parts_and_drive_commands_then_returns_to_mapping()
 fn drive_ids(r: &[Message]) -> StdVec<u32> {
     r.iter()
         .filter_map(|m| match m {
-            Message::DriveCommand(d) if d.motion != Motion::Stop => Some(d.command_id),
+            Message::DriveCommand(d) if !matches!(d.motion, Motion::Stop { .. }) => Some(d.command_id),
             _ => None,
         })
         .collect()
@@ -409,7 +409,7 @@ fn reports_for_unknown_or_reported_commands_are_refused_and_counted() {
 #[test]
 fn a_stop_asked_for_in_flight_is_sent_once_and_the_report_still_awaited() {
     let (mut e, id) = mission_exec();
-    let stops = |r: &[Message]| r.iter().filter(|m| matches!(m, Message::DriveCommand(d) if d.motion == Motion::Stop)).count();
+    let stops = |r: &[Message]| r.iter().filter(|m| matches!(m, Message::DriveCommand(d) if matches!(d.motion, Motion::Stop { .. }))).count();
     e.autonomy_mut().stops_wanted = 5;
     let r = exchange(&mut e, &[]);
     assert_eq!(stops(&r), 1, "{r:?}");
@@ -428,13 +428,7 @@ fn a_missing_report_times_out_with_a_stop() {
     let (mut e, id) = mission_exec();
     e.clock_mut().0 += MOTION_REPORT_TIMEOUT_US;
     let r = exchange(&mut e, &[]);
-    assert!(r.iter().any(|m| matches!(
-        m,
-        Message::DriveCommand(DriveCommand {
-            motion: Motion::Stop,
-            ..
-        })
-    )));
+    assert_eq!(stops_of(&r), [(id + 1, id)], "the stop names the motion given up: {r:?}");
     assert_eq!(e.autonomy().timeouts, [id]);
     assert_eq!(e.telemetry().motion_report_timeouts, 1);
     // the late report is refused
@@ -459,7 +453,7 @@ fn a_goal_while_driving_replaces_it_and_stops_the_motion_in_flight() {
     assert!(matches!(
         r[2],
         Message::DriveCommand(DriveCommand {
-            motion: Motion::Stop,
+            motion: Motion::Stop { .. },
             ..
         })
     ));
@@ -494,7 +488,7 @@ fn a_cancel_stops_and_returns_to_mapping() {
     assert!(matches!(
         r[1],
         Message::DriveCommand(DriveCommand {
-            motion: Motion::Stop,
+            motion: Motion::Stop { .. },
             ..
         })
     ));
@@ -567,7 +561,7 @@ fn shutdown_stops_and_safe_mode_refuses_work() {
     assert!(matches!(
         r[1],
         Message::DriveCommand(DriveCommand {
-            motion: Motion::Stop,
+            motion: Motion::Stop { .. },
             ..
         })
     ));
@@ -669,16 +663,48 @@ fn a_safe_stop_between_reports_stops_the_motion_in_flight() {
     e.autonomy_mut().cancels.push(9);
     let r = exchange(&mut e, &[]);
     assert!(r.iter().any(|m| matches!(m, Message::MissionStatus(s) if s.state == MissionState::Safe)));
-    assert!(r.iter().any(|m| matches!(
-        m,
-        Message::DriveCommand(DriveCommand {
-            motion: Motion::Stop,
-            ..
-        })
-    )));
+    assert_eq!(stops_of(&r), [(id + 1, id)]);
     // the interrupted motion's report is still accepted
     let r = exchange(&mut e, &[report(id)]);
     assert_eq!(r[0], Message::Ack(Ack { seq: 100 }));
+}
+
+/// The `Stop`s in `r`: (its command id, the motion it stops).
+fn stops_of(r: &[Message]) -> std::vec::Vec<(u32, u32)> {
+    r.iter()
+        .filter_map(|m| match m {
+            Message::DriveCommand(DriveCommand { command_id, motion: Motion::Stop { motion_id } }) => {
+                Some((*command_id, *motion_id))
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+/// Protocol v6: a `Stop` names the motion in flight and, like a drive command, goes again unchanged every
+/// `DRIVE_COMMAND_RESEND_US` until that motion's report (the downlink may have lost it); the motion itself is not
+/// resent once stopped. The report ends the resends.
+#[test]
+fn a_stop_names_its_motion_and_is_sent_again_until_the_report() {
+    let (mut e, id) = mission_exec();
+    e.autonomy_mut().cancels.push(9);
+    let r = exchange(&mut e, &[]);
+    assert_eq!(stops_of(&r), [(id + 1, id)]);
+    let r = exchange(&mut e, &[]);
+    assert!(stops_of(&r).is_empty(), "again before its period: {r:?}");
+    for resends in 1..=2 {
+        e.clock_mut().0 += DRIVE_COMMAND_RESEND_US;
+        let r = exchange(&mut e, &[]);
+        assert_eq!(stops_of(&r), [(id + 1, id)], "{r:?}");
+        assert!(drive_ids(&r).is_empty(), "the stopped motion is not resent: {r:?}");
+        assert_eq!(e.telemetry().drive_resends, resends);
+    }
+    let r = exchange(&mut e, &[report(id)]);
+    assert_eq!(r[0], Message::Ack(Ack { seq: 100 }));
+    e.clock_mut().0 += DRIVE_COMMAND_RESEND_US;
+    let r = exchange(&mut e, &[]);
+    // (this test autonomy drives on: the next motion's own resend may follow, never the stop)
+    assert!(stops_of(&r).is_empty() && !drive_ids(&r).contains(&id), "{r:?}");
 }
 
 /// Protocol v4: the same frame twice (seq and CRC) is refused `DuplicateFrame` and not acted on; lost, late and

@@ -564,10 +564,13 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         }
     }
 
-    /// While a motion is in flight and a scan changed the map: one motion check of the segment being driven (from
-    /// the plan's state at its start to its end), once per scan. `true`: the motion stops now, so the rover does not
-    /// drive on into what the scan showed (a rock that appeared in the corridor); the re-check after its report
-    /// plans again from where it stopped.
+    /// While a motion is in flight and a scan changed the map: one motion check of the segment being driven, from
+    /// where the motion started to the segment's end (what the re-check after a report checks from the current
+    /// state), once per scan. `true`: the motion stops now, so the rover does not drive on into what the scan
+    /// showed (a rock that appeared in the corridor); the re-check after its report plans again from where it
+    /// stopped. (Checked from the plan's state at the segment's start instead, a segment the rover had already
+    /// driven part of could fail in flight and pass the re-check from where it stopped, and the rover stopped each
+    /// new motion of it, without end.)
     pub(super) fn mission_stop_in_flight(&mut self) -> bool {
         if !core::mem::take(&mut self.mission.flight_check_due) || self.mission.in_flight.is_none() {
             return false;
@@ -582,7 +585,13 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         let path = &self.storage.borrow_mut().path;
         let k = m.seg;
         m.counters.rechecks = m.counters.rechecks.saturating_add(1);
-        let ok = planned_segment_checks(&space, path, k);
+        let ok = match m.in_flight.map(|f| f.from) {
+            Some(from) => match space.settle_state(from.position.x, from.position.y, from.yaw) {
+                Ok(start) => check_to_segment_end(&space, &start, &m.tracked, path, k),
+                Err(_) => false,
+            },
+            None => true,
+        };
         if !ok {
             m.counters.recheck_failures = m.counters.recheck_failures.saturating_add(1);
             log::info!("mission: segment {k} fails on the map a scan changed while driving it: stop the motion");
@@ -908,10 +917,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
                             return DriveStep::Finished;
                         }
                     }
-                    match path.get(k + 1) {
-                        Some((next, _)) if !next.off_map => space.check(&cur, &m.tracked, next).is_ok(),
-                        _ => true,
-                    }
+                    check_to_segment_end(&space, &cur, &m.tracked, path, k)
                 }
                 Err(_) => false,
             }
@@ -994,6 +1000,21 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         self.mission.cross_track_m = 0.0;
         log::info!("mission: replan {} from ({}, {})", self.mission.replans, pose.position.x, pose.position.y);
         DriveStep::Replan
+    }
+}
+
+/// The motion from `cur` with history `tracked` to the end of the plan's segment `k` passes one motion check on
+/// the current map (an off-map end, or no segment `k`: nothing to check).
+fn check_to_segment_end<D: DistanceField>(
+    space: &TetherSpace<'_, D>,
+    cur: &RoverState,
+    tracked: &AnchorHistory,
+    path: &[(RoverState, AnchorHistory)],
+    k: usize,
+) -> bool {
+    match path.get(k + 1) {
+        Some((next, _)) if !next.off_map => space.check(cur, tracked, next).is_ok(),
+        _ => true,
     }
 }
 

@@ -130,7 +130,7 @@ impl World {
                 }
                 (0.0, distance_m)
             }
-            Motion::Stop => (0.0, 0.0),
+            Motion::Stop { .. } => (0.0, 0.0),
         }
     }
     fn pose(&self) -> Pose {
@@ -434,34 +434,38 @@ fn a_scan_along_the_drive_in_flight_is_integrated_and_one_past_it_is_not() {
     assert_eq!(nav.mission_status().unwrap().scans_rejected, 1);
 }
 
+/// Replaces the planned path by states settled on the map at `xs` along y = 0, yaw 0 (the first state's anchor
+/// history for each), and its motions by theirs.
+fn replace_plan(nav: &mut TestNav, xs: &[f32]) {
+    use core::borrow::BorrowMut;
+    let problem = nav.problem.unwrap();
+    let map = Map::reattach(nav.cfg, nav.blocks.borrow_mut(), nav.index.borrow_mut(), nav.used).unwrap();
+    let params = crate::plan::tethered::TetherSpaceParams::ONBOARD;
+    let space = crate::plan::tethered::TetherSpace::new(&map, problem.bounds, problem.rover, params).unwrap();
+    let store = &mut nav.storage;
+    let h = store.path[0].1.clone();
+    store.path.clear();
+    store.motions.clear();
+    for &x in xs {
+        store.path.push((space.settle_state(x, 0.0, 0.0).unwrap(), h.clone())).unwrap();
+    }
+    for w in store.path.clone().windows(2) {
+        for m in segment_motions(&w[0].0, &w[1].0, &params).into_iter().flatten() {
+            store.motions.push(m).unwrap();
+        }
+    }
+}
+
 /// A rock seen on a later segment of the plan: the segments before it passed the re-check on the same map, so the
 /// plan ends before the failing segment (driven, then planned again there), instead of a replan from here.
 #[test]
 fn a_later_segment_that_fails_its_re_check_ends_the_plan_before_it() {
-    use core::borrow::BorrowMut;
     let t0 = Instant::from_micros(0);
     let mut nav = mapped(ROOT, MissionConfig::DEFAULT);
     assert_eq!(nav.goal(&goal(1, 4.0, 0.0), t0), PlanState::Accepted);
     assert!(matches!(plan(&mut nav), PlanProgress::Finished { state: PlanState::ExactSolution, .. }));
     // the stored plan as five states along the line, settled every metre (four segments)
-    {
-        let problem = nav.problem.unwrap();
-        let map = Map::reattach(nav.cfg, nav.blocks.borrow_mut(), nav.index.borrow_mut(), nav.used).unwrap();
-        let params = crate::plan::tethered::TetherSpaceParams::ONBOARD;
-        let space = crate::plan::tethered::TetherSpace::new(&map, problem.bounds, problem.rover, params).unwrap();
-        let store = &mut nav.storage;
-        let h = store.path[0].1.clone();
-        store.path.clear();
-        store.motions.clear();
-        for i in 0..5 {
-            store.path.push((space.settle_state(i as f32, 0.0, 0.0).unwrap(), h.clone())).unwrap();
-        }
-        for w in store.path.clone().windows(2) {
-            for m in segment_motions(&w[0].0, &w[1].0, &params).into_iter().flatten() {
-                store.motions.push(m).unwrap();
-            }
-        }
-    }
+    replace_plan(&mut nav, &[0.0, 1.0, 2.0, 3.0, 4.0]);
     // one motion, so the navigator has a body pose
     let mut world = World::new(ROOT, 0.0);
     let DriveStep::Motion(m) = nav.drive_step(t0) else { panic!("no motion") };
@@ -498,6 +502,69 @@ fn a_later_segment_that_fails_its_re_check_ends_the_plan_before_it() {
     assert!(matches!(next, Some(DriveStep::Motion(_))), "after the failed re-check: {next:?}");
     assert_eq!(nav.plan_path().len(), 4, "the plan ends at the state before the rock's segment");
     assert_eq!(nav.mission_status().unwrap().replans, 0);
+}
+
+/// The check of a motion in flight after a scan runs from where that motion started, as the re-check after its
+/// report runs from where the rover stands: a rock seen on the part of the segment already driven does not stop
+/// the motion; one ahead of it on the segment does. (Checked from the segment's planned start, the first case
+/// stopped every new motion of the segment while the re-check from the rover passed it: a rover stopped without
+/// end.)
+#[test]
+fn a_motion_in_flight_stops_for_a_rock_ahead_on_its_segment_not_for_one_behind() {
+    use core::borrow::BorrowMut;
+    let t0 = Instant::from_micros(0);
+    for (rock_x, stops) in [(0.6_f32, false), (3.0, true)] {
+        let mut nav = mapped(ROOT, MissionConfig::DEFAULT);
+        assert_eq!(nav.goal(&goal(1, 4.0, 0.0), t0), PlanState::Accepted);
+        assert!(matches!(plan(&mut nav), PlanProgress::Finished { state: PlanState::ExactSolution, .. }));
+        // the stored plan as one straight segment, x 0 -> 3.8
+        replace_plan(&mut nav, &[0.0, 3.8]);
+        // drive (closed loop: short pieces of the segment) until the rover is 1.5 m along it, the next motion in
+        // flight
+        let mut world = World::new(ROOT, 0.0);
+        let mut in_flight = None;
+        for id in 0..60 {
+            match nav.drive_step(t0) {
+                DriveStep::Motion(m) if world.x >= 1.5 => {
+                    in_flight = Some(m);
+                    break;
+                }
+                DriveStep::Motion(m) => {
+                    let r = world.report(id, m);
+                    nav.motion_report(&r, m, t0);
+                }
+                DriveStep::Wait => {}
+                other => panic!("driving ended: {other:?}"),
+            }
+        }
+        assert!(in_flight.is_some(), "never 1.5 m along the segment: x {}", world.x);
+        // a rock 0.5 m high in the corridor at x rock_x .. rock_x + 0.3, seen from above the rover
+        let rock = |x: f32, y: f32| if (rock_x..=rock_x + 0.3).contains(&x) && y.abs() <= 0.3 { Z0 + 0.5 } else { Z0 };
+        let (sx, step) = (world.x, 0.5 * VOXEL);
+        let mut pts = Vec::new();
+        for i in 0..=20 {
+            for j in -30..=30 {
+                let (x, y) = (rock_x - 0.35 + i as f32 * step, j as f32 * step);
+                pts.push(Point3 { x: x - sx, y, z: rock(x, y) - SENSOR_H });
+            }
+        }
+        let pose = Pose { position: Point3 { x: sx, y: 0.0, z: SENSOR_H }, orientation: Quat::IDENTITY };
+        let before = nav.map_status().scans_integrated;
+        // the TSDF averages: enough looks at the rock to outweigh the free space seen there before
+        let mut stopped = false;
+        for id in 900..912 {
+            nav.integrate_scan(&Scan { scan_id: id, sensor_pose: pose, points: &pts }, t0);
+            stopped |= nav.stop_in_flight(t0);
+        }
+        assert_eq!(stopped, stops, "rock at x {rock_x}");
+        assert_eq!(nav.map_status().scans_integrated, before + 12);
+        // the rock is on the map: the segment from its planned start now fails (the old in-flight check)
+        let problem = nav.problem.unwrap();
+        let map = Map::reattach(nav.cfg, nav.blocks.borrow_mut(), nav.index.borrow_mut(), nav.used).unwrap();
+        let space = problem.space(&map).unwrap();
+        let path = &nav.storage.path;
+        assert!(space.check(&path[0].0, &path[0].1, &path[1].0).is_err(), "rock at x {rock_x} not on the map");
+    }
 }
 
 #[test]

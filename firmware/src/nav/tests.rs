@@ -222,7 +222,7 @@ mod planning {
                     x += distance_m * c * libm::cosf(yaw);
                     y += distance_m * c * libm::sinf(yaw);
                 }
-                Motion::Stop => {}
+                Motion::Stop { .. } => {}
             }
         }
         (x, y)
@@ -567,7 +567,7 @@ fn segment_motions_end_at_the_next_state() {
                             x += distance_m * libm::cosf(yaw);
                             y += distance_m * libm::sinf(yaw);
                         }
-                        Motion::Stop => panic!("no stop in a segment"),
+                        Motion::Stop { .. } => panic!("no stop in a segment"),
                     }
                 }
                 let dyaw = libm::remainderf(yaw - b.theta, core::f32::consts::TAU);

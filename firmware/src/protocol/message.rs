@@ -616,8 +616,14 @@ pub struct Plan {
 /// A rover motion primitive (Axel: in-place turn, straight drive).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub enum Motion {
-    /// Stop the wheels and hold the tether.
-    Stop,
+    /// Stop the wheels and hold the tether (v6: names the motion it stops).
+    Stop {
+        /// The `command_id` of the `Turn` / `Straight` this stops. A host stops that motion only: one it is
+        /// executing, or one not started yet (never started, reported `Stopped` with nothing achieved); a stop
+        /// for a motion already reported is stale and does nothing, so a late or repeated `Stop` cannot stop the
+        /// next motion.
+        motion_id: u32,
+    },
     /// Turn in place, radians (positive counter-clockwise).
     Turn {
         /// Yaw change, radians.
@@ -1155,7 +1161,7 @@ impl Validate for Plan {
 impl Validate for DriveCommand {
     fn validate(&self) -> Result<(), Invalid> {
         match self.motion {
-            Motion::Stop => Ok(()),
+            Motion::Stop { .. } => Ok(()),
             Motion::Turn { yaw_rad } => finite(yaw_rad),
             Motion::Straight { distance_m } => finite(distance_m),
         }

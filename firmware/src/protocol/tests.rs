@@ -32,7 +32,7 @@ fn spec_example_time_tick() {
     let mut raw = [0u8; 64];
     let n = build_raw(
         Header {
-            version: 5,
+            version: 6,
             kind: 1,
             seq: 1,
         },
@@ -141,7 +141,7 @@ fn header_errors_and_nonfinite_values() {
         Err(NackReason::Truncated)
     );
     let mut raw = [0u8; 64];
-    for version in [0u8, 1, 2, 3, 4, 6, 0xFF] {
+    for version in [0u8, 1, 2, 3, 4, 5, 7, 0xFF] {
         let n = build_raw(
             Header {
                 version,
@@ -300,7 +300,7 @@ fn round_trip(m: &Message) -> Message {
     let (n, ev) = d.push(&w);
     assert_eq!(n, w.len());
     let (h, back) = decode_frame(ev.unwrap().unwrap()).unwrap();
-    assert_eq!(h.version, 5);
+    assert_eq!(h.version, 6);
     assert_eq!(h.kind, m.kind() as u8);
     back
 }
@@ -391,11 +391,19 @@ fn spec_examples_v2() {
     let mut d = Deframer::new();
     let (_, ev) = d.push(&w);
     assert_eq!(ev.unwrap().unwrap(), &frame[..]);
-    // real version-1, -2 and -3 frames (the earlier documents' example) are a wrong version, not a CRC or kind
+    // real version-1 to -5 frames (the earlier documents' example) are a wrong version, not a CRC or kind
     // error
-    for old in ["example-v1-time-tick-frame", "example-v2-time-tick-frame", "example-v3-time-tick-frame", "example-v4-time-tick-frame"] {
+    for old in ["example-v1-time-tick-frame", "example-v2-time-tick-frame", "example-v3-time-tick-frame", "example-v4-time-tick-frame", "example-v5-time-tick-frame"] {
         assert_eq!(decode_frame(&spec_bytes(old)).map(|_| ()), Err(NackReason::WrongVersion));
     }
+}
+
+/// v6: a `Stop` names the motion it stops.
+#[test]
+fn spec_example_v6_stop() {
+    let stop = Message::DriveCommand(DriveCommand { command_id: 5, motion: Motion::Stop { motion_id: 4 } });
+    assert_eq!(wire(4, &stop), spec_bytes("example-stop-wire"));
+    assert_eq!(round_trip(&stop), stop);
 }
 
 #[test]

@@ -173,7 +173,7 @@ impl Execution {
                 let n = (total.abs() / m.drive_step_m).ceil().max(1.0) as u32;
                 (n, total / f64::from(n))
             }
-            Motion::Stop => (0, 0.0),
+            Motion::Stop { .. } => (0, 0.0),
         };
         let x = rover.axis(0);
         let h = (x[0] * x[0] + x[1] * x[1]).sqrt().max(1e-9);
@@ -200,7 +200,7 @@ impl Execution {
         match self.motion {
             Motion::Turn { .. } => self.per_step.abs().to_degrees() / m.turn_rate_dps,
             Motion::Straight { .. } => self.per_step.abs() / m.speed_mps,
-            Motion::Stop => 0.0,
+            Motion::Stop { .. } => 0.0,
         }
     }
 
@@ -242,7 +242,7 @@ impl Execution {
                     self.per_step,
                 )
             }
-            Motion::Stop => return Progress::Ended(TrueOutcome::Completed, None),
+            Motion::Stop { .. } => return Progress::Ended(TrueOutcome::Completed, None),
         };
         let Some(next) = truth.settle(x, y, theta) else {
             return Progress::Ended(TrueOutcome::Stalled, Some(Blocked::NoSettle));

@@ -203,6 +203,9 @@ pub struct MissionReport {
     pub chunks_resent: u64,
     /// Drive commands received again (a flight resend or a copy; protocol v5) and not executed again.
     pub commands_repeated: u64,
+    /// `Stop`s taken (v6), by what each stopped: the motion executing, a motion that never arrived (reported
+    /// `Stopped` with nothing done), or nothing (stale: its motion was already reported).
+    pub stops: StopCounts,
     /// The host's detection on the downlink (`HostSession::downlink`).
     pub downlink: crate::session::DownlinkCounts,
     /// The flight sequence number of every frame whose drive command the host took (executed or a stop).
@@ -389,6 +392,9 @@ struct Sim<'a, L: FlightLink> {
     recovery_due: bool,
     /// The id of the last drive command taken (none since boot).
     last_command_id: Option<u32>,
+    /// The id of the last `Turn` / `Straight` taken (none since boot): a `Stop` of a newer one names a motion that
+    /// never arrived.
+    last_motion_id: Option<u32>,
 }
 
 impl<L: FlightLink> Sim<'_, L> {
@@ -415,6 +421,9 @@ impl<L: FlightLink> Sim<'_, L> {
                         continue;
                     }
                     self.last_command_id = Some(d.command_id);
+                    if !matches!(d.motion, Motion::Stop { .. }) {
+                        self.last_motion_id = Some(d.command_id);
+                    }
                     self.last_news_us = now;
                     self.rep.command_seqs.extend(seqs.get(i).copied());
                     self.pending.push((d.command_id, d.motion));
@@ -632,6 +641,7 @@ impl<L: FlightLink> Sim<'_, L> {
         // drive commands of the software that was reset are void; the rebooted one numbers from 0 again
         self.pending.clear();
         self.last_command_id = None;
+        self.last_motion_id = None;
         self.s.flight_rebooted();
         self.recv()?;
         if let Some(r) = self.rep.resets.last_mut().filter(|r| r.reason.is_empty()) {
@@ -662,18 +672,45 @@ impl<L: FlightLink> Sim<'_, L> {
         Ok(())
     }
 
-    /// Executes one drive command on the truth; returns false when the mission ended (fall).
+    /// Reports a motion the flight software stopped before it arrived: `Stopped`, nothing achieved, from where the
+    /// rover stands.
+    fn report_unstarted(&mut self, id: u32) -> Result<(), MissionError> {
+        let pose = self.rover.state.settled.pose;
+        self.estimate = self.loc.estimate(&pose);
+        let report = MotionReport {
+            command_id: id,
+            outcome: MotionOutcome::Stopped,
+            achieved_yaw_rad: 0.0,
+            achieved_distance_m: 0.0,
+            pose: to_wire_pose(&self.estimate),
+        };
+        self.s.send(&Message::MotionReport(report))?;
+        self.recv()?;
+        Ok(())
+    }
+
+    /// Executes one `Turn` or `Straight` on the truth; returns false when the mission ended (fall).
     fn execute(&mut self, id: u32, motion: Motion) -> Result<bool, MissionError> {
-        if matches!(motion, Motion::Stop) {
-            return Ok(true);
-        }
         let scale = gaussian(&mut self.rng) * self.m.drive_scale_sigma;
         let turn = gaussian(&mut self.rng) * self.m.turn_error_deg.to_radians();
         let mut ex = Execution::new(id, motion, &self.rover, &self.m, scale, turn);
         let dt_us = (ex.step_seconds(&self.m) * 1e6).round().max(1.0) as u64;
+        let mut stepped = false;
         let (outcome, blocked) = loop {
+            // a stop of this motion from the flight software ends it where it is (v6: a stop names its motion)
+            let stop = |p: &(u32, Motion)| matches!(p.1, Motion::Stop { motion_id } if motion_id == id);
+            if self.pending.iter().any(stop) {
+                self.pending.retain(|p| !stop(p));
+                if stepped {
+                    self.rep.stops.executing += 1;
+                } else {
+                    self.rep.stops.unstarted += 1;
+                }
+                break (TrueOutcome::Stalled, Some(Blocked::StopCommanded));
+            }
             let before = self.rover.driven_m;
             let progress = ex.step(&self.truth, &mut self.rover, self.m.slip_threshold_m);
+            stepped = true;
             self.loc.moved(self.rover.driven_m - before);
             if self.truth.world.advance(self.rover.driven_m) > 0 {
                 log::info!("a rock appeared after {:.2} m", self.rover.driven_m);
@@ -691,11 +728,6 @@ impl<L: FlightLink> Sim<'_, L> {
             }
             if let Progress::Ended(o, b) = progress {
                 break (o, b);
-            }
-            // a stop (or a new command) from the flight software ends the motion where it is
-            if self.pending.iter().any(|(_, m)| matches!(m, Motion::Stop)) {
-                self.pending.retain(|(_, m)| !matches!(m, Motion::Stop));
-                break (TrueOutcome::Stalled, Some(Blocked::StopCommanded));
             }
             if self.rover.driven_m - self.last_scan_driven >= self.m.scan_every_m {
                 self.scan_here()?;
@@ -758,6 +790,23 @@ impl<L: FlightLink> Sim<'_, L> {
         self.send_scan(&scan)?;
         Ok(true)
     }
+}
+
+/// What the `Stop`s a mission took stopped (`MissionReport::stops`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct StopCounts {
+    /// Stops of the motion being executed.
+    pub executing: u64,
+    /// Stops of a motion not started (never arrived, or queued): reported `Stopped`, nothing achieved.
+    pub unstarted: u64,
+    /// Stops of a motion already reported: nothing done.
+    pub stale: u64,
+}
+
+/// Does a `Stop` of `motion_id` name a motion newer than the last one taken (`None`: none since boot), i.e. one that
+/// never arrived? Command ids increase, wrapping (protocol section 5).
+fn names_an_unseen_motion(last_motion_id: Option<u32>, motion_id: u32) -> bool {
+    last_motion_id.is_none_or(|l| (motion_id.wrapping_sub(l) as i32) > 0)
 }
 
 /// Horizontal distance from `p` to the polyline `pts`.
@@ -826,6 +875,7 @@ pub fn run_mission_from(
         given_up: 0,
         chunks_resent: 0,
         commands_repeated: 0,
+        stops: StopCounts::default(),
         downlink: Default::default(),
         command_seqs: vec![],
         resets: vec![],
@@ -879,6 +929,7 @@ pub fn run_mission_from(
         reset: opts.reset,
         recovery_due: false,
         last_command_id: None,
+        last_motion_id: None,
     };
     sim.recv()?;
     sim.s.send(&Message::Configure(cfg))?;
@@ -929,6 +980,19 @@ pub fn run_mission_from(
             continue;
         }
         let (id, motion) = sim.pending.remove(0);
+        if let Motion::Stop { motion_id } = motion {
+            // a stop of a motion not executing: of one that never arrived (lost on the way; a late copy is now a
+            // repeat of an older id and is not taken), report it stopped with nothing done; of one already
+            // reported, nothing (a late or repeated stop must not stop the next motion)
+            if names_an_unseen_motion(sim.last_motion_id, motion_id) {
+                sim.last_motion_id = Some(motion_id);
+                sim.rep.stops.unstarted += 1;
+                sim.report_unstarted(motion_id)?;
+            } else {
+                sim.rep.stops.stale += 1;
+            }
+            continue;
+        }
         if !sim.execute(id, motion)? {
             break;
         }
@@ -960,4 +1024,20 @@ pub fn run_mission_from(
     rep.link_s = sim.s.link().now_us() as f64 / 1e6;
     rep.host_s = host_t0.elapsed().as_secs_f64();
     Ok(rep)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::names_an_unseen_motion;
+
+    /// A `Stop` names a motion that never arrived when its id is newer than the last motion taken (ids wrap).
+    #[test]
+    fn a_stop_of_a_newer_motion_names_one_that_never_arrived() {
+        assert!(names_an_unseen_motion(None, 0));
+        assert!(names_an_unseen_motion(Some(4), 5));
+        assert!(!names_an_unseen_motion(Some(5), 5), "the last motion taken: stale once reported");
+        assert!(!names_an_unseen_motion(Some(6), 5), "an older motion: stale");
+        assert!(names_an_unseen_motion(Some(u32::MAX), 0), "across the wrap");
+        assert!(!names_an_unseen_motion(Some(0), u32::MAX), "across the wrap, older");
+    }
 }
