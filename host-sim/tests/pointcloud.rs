@@ -79,3 +79,33 @@ fn real_cloud_thins_to_capacity() {
         }
     }
 }
+
+/// Regression (fuzz target `las`): `simple.laz` with 13 bytes changed (header, chunk data) made the `laz`
+/// crate's arithmetic decoder fail a `debug_assert` (decoders.rs:284, a symbol out of range): the reader returns
+/// an error (the caught panic as `DecoderPanic` where debug assertions are on, else the crate's error), and never
+/// unwinds into the caller.
+#[test]
+fn corrupt_laz_chunk_data_is_an_error() {
+    let mut b = std::fs::read(data("simple.laz")).unwrap();
+    let changes: [(usize, u8); 13] = [
+        (7, 1),
+        (14, 14),
+        (2913, 10),
+        (2914, 132),
+        (2915, 157),
+        (2916, 151),
+        (9320, 94),
+        (9321, 130),
+        (9322, 131),
+        (9323, 93),
+        (9324, 87),
+        (9325, 41),
+        (12509, 41),
+    ];
+    for (at, v) in changes {
+        b[at] = v;
+    }
+    let r = host_sim::terrain::pointcloud::las::parse_las(&b, &PointCloudOptions::default());
+    let e = r.expect_err("corrupt LAZ accepted");
+    println!("corrupt simple.laz: {e}");
+}
