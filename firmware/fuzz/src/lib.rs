@@ -46,7 +46,12 @@ pub fn check_heightmap(h: &Heightmap) {
 
 /// Point-cloud reader limits picked by byte `b`: the default, none, tiny and small.
 pub fn max_points(b: u8) -> u64 {
-    const LIMITS: [u64; 4] = [host_sim::terrain::pointcloud::PointCloudOptions::DEFAULT_MAX_POINTS, 0, 1, 1000];
+    const LIMITS: [u64; 4] = [
+        host_sim::terrain::pointcloud::PointCloudOptions::DEFAULT_MAX_POINTS,
+        0,
+        1,
+        1000,
+    ];
     LIMITS[usize::from(b) % LIMITS.len()]
 }
 
@@ -65,13 +70,33 @@ pub fn point_cloud(data: &[u8], parse: host_sim::terrain::pointcloud::Parser) {
         return;
     };
     assert!(!c.points.is_empty(), "empty cloud accepted");
-    assert!(c.points.len() as u64 <= max_points, "{} points over the limit {max_points}", c.points.len());
-    assert!(c.points.iter().flatten().all(|v| v.is_finite()), "non-finite coordinate accepted");
+    assert!(
+        c.points.len() as u64 <= max_points,
+        "{} points over the limit {max_points}",
+        c.points.len()
+    );
+    assert!(
+        c.points.iter().flatten().all(|v| v.is_finite()),
+        "non-finite coordinate accepted"
+    );
     let capacity = usize::from(b % 64) + 1;
-    let t = thin_to_capacity(&c.points, &ThinOptions { capacity, ..ThinOptions::default() })
-        .expect("thinning a finite cloud to a positive capacity");
-    assert!(!t.points.is_empty() && t.points.len() <= capacity, "{} points for capacity {capacity}", t.points.len());
-    assert!(t.points.iter().all(|p| c.points.contains(p)), "a thinned point is not an input point");
+    let t = thin_to_capacity(
+        &c.points,
+        &ThinOptions {
+            capacity,
+            ..ThinOptions::default()
+        },
+    )
+    .expect("thinning a finite cloud to a positive capacity");
+    assert!(
+        !t.points.is_empty() && t.points.len() <= capacity,
+        "{} points for capacity {capacity}",
+        t.points.len()
+    );
+    assert!(
+        t.points.iter().all(|p| c.points.contains(p)),
+        "a thinned point is not an input point"
+    );
 }
 
 /// Source paths of the crates whose panics `host_sim::terrain::pointcloud::las::parse_las` catches and returns
@@ -87,7 +112,9 @@ fn tolerate_decoder_panics() {
     ONCE.call_once(|| {
         let fuzzer_hook = std::panic::take_hook();
         std::panic::set_hook(Box::new(move |info| {
-            let in_decoder = info.location().is_some_and(|l| DECODER_CRATES.iter().any(|c| l.file().contains(c)));
+            let in_decoder = info
+                .location()
+                .is_some_and(|l| DECODER_CRATES.iter().any(|c| l.file().contains(c)));
             if !in_decoder {
                 fuzzer_hook(info);
             }

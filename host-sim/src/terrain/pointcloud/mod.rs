@@ -235,11 +235,12 @@ impl fmt::Display for PointCloudError {
             PointCloudError::BadMagic { format } => write!(f, "not a {format} file (wrong magic / first line)"),
             PointCloudError::BadHeader { format, line, reason } => write!(f, "{format} header line {line}: {reason}"),
             PointCloudError::Unsupported { format, what } => write!(f, "{format}: {what} is not supported"),
-            PointCloudError::MissingAxis { format, axis } => write!(f, "{format}: the points have no {axis:?} coordinate"),
-            PointCloudError::CountTooLarge { format, declared, fits } => write!(
-                f,
-                "{format}: header declares {declared} points but the data after it holds at most {fits}"
-            ),
+            PointCloudError::MissingAxis { format, axis } => {
+                write!(f, "{format}: the points have no {axis:?} coordinate")
+            }
+            PointCloudError::CountTooLarge { format, declared, fits } => {
+                write!(f, "{format}: header declares {declared} points but the data after it holds at most {fits}")
+            }
             PointCloudError::OverLimit { format, declared, max } => {
                 write!(f, "{format}: header declares {declared} points, more than the limit of {max}")
             }

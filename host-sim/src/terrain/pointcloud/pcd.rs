@@ -86,7 +86,9 @@ fn parse_header(bytes: &[u8]) -> Result<Header, PointCloudError> {
         let rest = bytes.get(pos..).unwrap_or_default();
         let len = rest.iter().position(|&b| b == b'\n').unwrap_or(rest.len());
         if rest.is_empty() {
-            return Err(if seen_key { bad_header(line + 1, "the header ends without a DATA line") } else {
+            return Err(if seen_key {
+                bad_header(line + 1, "the header ends without a DATA line")
+            } else {
                 PointCloudError::BadMagic { format: F }
             });
         }
@@ -94,7 +96,11 @@ fn parse_header(bytes: &[u8]) -> Result<Header, PointCloudError> {
         pos += len + 1;
         let text = core::str::from_utf8(rest.get(..len).unwrap_or_default());
         let Ok(text) = text else {
-            return Err(if seen_key { bad_header(line, "not ASCII text") } else { PointCloudError::BadMagic { format: F } });
+            return Err(if seen_key {
+                bad_header(line, "not ASCII text")
+            } else {
+                PointCloudError::BadMagic { format: F }
+            });
         };
         let text = text.trim();
         if text.is_empty() || text.starts_with('#') {

@@ -223,9 +223,8 @@ fn read_ascii(
             cloud.points.reserve(el.count as usize);
         }
         for point in 0..el.count {
-            let (line, raw) = lines
-                .next()
-                .ok_or(PointCloudError::Truncated { format: F, point, at: Position::Line(last_line) })?;
+            let (line, raw) =
+                lines.next().ok_or(PointCloudError::Truncated { format: F, point, at: Position::Line(last_line) })?;
             last_line = line;
             bytes_left = bytes_left.saturating_sub(raw.len() + 1);
             let bad = |reason: String| PointCloudError::BadValue { format: F, line, reason };
