@@ -21,7 +21,8 @@
 //! coordinates (NaN, the PCD convention for "no return", and infinities) are **skipped and counted** in
 //! [`PointCloud::non_finite_skipped`], not an error; a cloud left without a finite point is
 //! [`PointCloudError::Empty`]. No reader panics on any input (fuzz targets `ply`, `pcd`, `las` in
-//! `firmware/fuzz`).
+//! `firmware/fuzz`); the LAS reader gets there by catching what the `las`/`laz` crates raise on corrupt data
+//! ([`PointCloudError::DecoderPanic`]), so it relies on unwinding, as host builds do.
 //!
 //! Thinning ([`thin`]): one point per occupied voxel, the input point nearest the voxel's centre by default, the
 //! voxel edge grown until the count fits a capacity, by default the flight scan capacity
