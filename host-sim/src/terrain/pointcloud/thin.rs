@@ -185,6 +185,7 @@ mod tests {
             let opts = ThinOptions { representative: rep, ..ThinOptions::default() };
             let t = thin_to_capacity(&pts, &opts).unwrap();
             let edge = t.voxel_edge.unwrap();
+            println!("30 000 points -> {} ({rep:?}), voxel edge {edge:.4} m", t.points.len());
             assert!(t.points.len() <= FLIGHT_SCAN_CAPACITY, "{}", t.points.len());
             // the bisection keeps most of the capacity (a coarser grid than needed would keep far fewer)
             assert!(t.points.len() > FLIGHT_SCAN_CAPACITY * 3 / 4, "{rep:?}: {} points, edge {edge}", t.points.len());
