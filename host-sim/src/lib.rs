@@ -10,8 +10,8 @@
 //! [`testkit`] (the bad-input matrix, reusable over any link), [`cli`] (subcommand implementations).
 //!
 //! Worlds and sensing: [`world`] (ground truth: ledge, crater wall, height maps), [`terrain`] (GeoTIFF, Esri ASCII,
-//! NumPy, OBJ import), [`scenario`] (scenario files, TOML), [`sensor`] (range sensor), [`truth`] (the true
-//! tether), [`mapcheck`] (onboard map against ground truth).
+//! NumPy, OBJ import; PLY, PCD, LAS/LAZ point clouds thinned to the flight scan), [`scenario`] (scenario files,
+//! TOML), [`sensor`] (range sensor), [`truth`] (the true tether), [`mapcheck`] (onboard map against ground truth).
 //!
 //! Campaigns: [`campaign`] (Paton et al.'s Table I), [`mission::campaign`], [`shard`] (a campaign split over a
 //! cluster and merged back, byte for byte), [`soak`] (a long mission across the sequence-number wrap).

@@ -1,8 +1,8 @@
 //! Generates the fuzz seed corpora (`firmware/fuzz/gen_corpus.sh` runs this with `--ignored`), one directory per
 //! target: for the protocol, one wire frame of every message kind (hand-built, and every kind a recorded protocol
 //! run sends), and damaged variants; for the readers, small valid files of each format written here (a field
-//! log, the shipped scenario files, a GeoTIFF, an Esri ASCII grid, a `.npy`, an OBJ, a Moving AI map and
-//! scenario list). Also checks, in the normal run, that every protocol seed deframes and decodes and that every
+//! log, the shipped scenario files, a GeoTIFF, an Esri ASCII grid, a `.npy`, an OBJ, PLY and PCD point clouds, a
+//! Moving AI map and scenario list; the real LAS/LAZ sample of `host-sim/tests/data/pointcloud`). Also checks, in the normal run, that every protocol seed deframes and decodes and that every
 //! reader accepts its seeds (a seed the reader rejects would start the fuzzer off the valid path).
 
 use firmware::config::protocol::MAX_ENCODED_FRAME_LEN;
@@ -183,6 +183,34 @@ fn reader_seeds(protocol_log: &[u8]) -> Vec<(&'static str, String, Vec<u8>)> {
     out.push(("obj", "tetrahedron".into(), with(&[0], obj.as_bytes())));
     let obj2 = "o t\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvt 0 0\nf 1/1/1 2/1/1 -1/1/1\n";
     out.push(("obj", "slashes-relative".into(), with(&[1], obj2.as_bytes())));
+    // point clouds (two selector bytes: point limit, thinning capacity): PLY ASCII and binary (big-endian, with a
+    // list property and a face element), PCD ASCII and binary, and the real LAS/LAZ sample the readers' tests use
+    let ply_ascii = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+                     property uchar red\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+                     0 0 0 255\n1 0 0.5 0\n0 1 nan 7\n3 0 1 2\n";
+    out.push(("ply", "ascii".into(), with(&[0, 3], ply_ascii.as_bytes())));
+    let mut ply_be = b"ply\nformat binary_big_endian 1.0\nelement vertex 2\nproperty double x\nproperty list uchar int n\n\
+                       property float y\nproperty float z\nend_header\n"
+        .to_vec();
+    for (x, y, z) in [(1.0f64, 2.0f32, 3.0f32), (-4.0, 5.5, 0.25)] {
+        ply_be.extend(x.to_be_bytes().into_iter().chain([1]).chain(9i32.to_be_bytes()));
+        ply_be.extend(y.to_be_bytes().into_iter().chain(z.to_be_bytes()));
+    }
+    out.push(("ply", "binary-be-list".into(), with(&[0, 1], &ply_be)));
+    let pcd_head = |data: &str| {
+        format!("# .PCD v0.7\nVERSION 0.7\nFIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F U\nCOUNT 1 1 1 1\nWIDTH 2\n\
+                 HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA {data}\n")
+    };
+    out.push(("pcd", "ascii".into(), with(&[0, 1], format!("{}1 2 3 0\n-1 0.5 nan 255\n", pcd_head("ascii")).as_bytes())));
+    let mut pcd_bin = pcd_head("binary").into_bytes();
+    for v in [1.0f32, 2.0, 3.0, 0.0, -1.0, 0.5, 4.0, 0.0] {
+        pcd_bin.extend(v.to_le_bytes());
+    }
+    out.push(("pcd", "binary".into(), with(&[0, 1], &pcd_bin)));
+    let real = Path::new(env!("CARGO_MANIFEST_DIR")).join("../host-sim/tests/data/pointcloud");
+    for name in ["simple.las", "simple.laz"] {
+        out.push(("las", name.replace('.', "-"), with(&[0, 7], &std::fs::read(real.join(name)).unwrap())));
+    }
     // Moving AI: a small map and two problems on it, separated by 0xFF
     let map = "type octile\nheight 4\nwidth 5\nmap\n.....\n.@@..\n..T..\n.....\n";
     let scen = "version 1\n0\tsmall.map\t5\t4\t0\t0\t4\t3\t6.41421356\n0\tsmall.map\t5\t4\t0\t3\t4\t0\t6.41421356\n";
@@ -305,6 +333,11 @@ fn every_reader_accepts_its_seeds() {
             "obj" => {
                 let m = obj::parse_obj(core::str::from_utf8(&b[1..]).unwrap(), &obj::ObjOptions::METRES).expect(&what);
                 assert!(!m.triangles.is_empty(), "{what}");
+            }
+            "ply" | "pcd" | "las" => {
+                use host_sim::terrain::pointcloud::{parser_for, PointCloudOptions};
+                let c = parser_for(target).unwrap()(&b[2..], &PointCloudOptions::default()).expect(&what);
+                assert!(c.points.len() as u64 + c.non_finite_skipped >= 2, "{what}");
             }
             "movingai" => {
                 let i = b.iter().position(|&c| c == 0xFF).unwrap();

@@ -43,3 +43,81 @@ pub fn check_heightmap(h: &Heightmap) {
         }
     }
 }
+
+/// Point-cloud reader limits picked by byte `b`: the default, none, tiny and small.
+pub fn max_points(b: u8) -> u64 {
+    const LIMITS: [u64; 4] = [
+        host_sim::terrain::pointcloud::PointCloudOptions::DEFAULT_MAX_POINTS,
+        0,
+        1,
+        1000,
+    ];
+    LIMITS[usize::from(b) % LIMITS.len()]
+}
+
+/// Fuzzes a point-cloud reader (`host_sim::terrain::pointcloud`): byte 0 picks the point limit, byte 1 the
+/// thinning capacity (1 to 64), the rest is the file. An accepted cloud has at least one point, no more than the
+/// limit, every coordinate finite; thinning it keeps at most the capacity, every point an input point.
+pub fn point_cloud(data: &[u8], parse: host_sim::terrain::pointcloud::Parser) {
+    use host_sim::terrain::pointcloud::thin::{thin_to_capacity, ThinOptions};
+    tolerate_decoder_panics();
+    use host_sim::terrain::pointcloud::PointCloudOptions;
+    let Some(([limit, b], bytes)) = split::<2>(data) else {
+        return;
+    };
+    let max_points = max_points(limit);
+    let Ok(c) = parse(bytes, &PointCloudOptions { max_points }) else {
+        return;
+    };
+    assert!(!c.points.is_empty(), "empty cloud accepted");
+    assert!(
+        c.points.len() as u64 <= max_points,
+        "{} points over the limit {max_points}",
+        c.points.len()
+    );
+    assert!(
+        c.points.iter().flatten().all(|v| v.is_finite()),
+        "non-finite coordinate accepted"
+    );
+    let capacity = usize::from(b % 64) + 1;
+    let t = thin_to_capacity(
+        &c.points,
+        &ThinOptions {
+            capacity,
+            ..ThinOptions::default()
+        },
+    )
+    .expect("thinning a finite cloud to a positive capacity");
+    assert!(
+        !t.points.is_empty() && t.points.len() <= capacity,
+        "{} points for capacity {capacity}",
+        t.points.len()
+    );
+    assert!(
+        t.points.iter().all(|p| c.points.contains(p)),
+        "a thinned point is not an input point"
+    );
+}
+
+/// Source paths of the crates whose panics `host_sim::terrain::pointcloud::las::parse_las` catches and returns
+/// as `PointCloudError::DecoderPanic`: the `las` crate and the `laz` decompressor (its arithmetic decoder
+/// `debug_assert`s on corrupt data; the fuzz build has debug assertions on).
+const DECODER_CRATES: [&str; 2] = ["/las-0.", "/laz-0."];
+
+/// libFuzzer's panic hook aborts on every panic, even one the code under test catches. Replaced once by a hook
+/// that lets a panic raised inside [`DECODER_CRATES`] unwind to the reader's `catch_unwind` (the reader's
+/// documented error) and hands every other panic, ours included, to libFuzzer's hook, which aborts: a crash.
+fn tolerate_decoder_panics() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let fuzzer_hook = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            let in_decoder = info
+                .location()
+                .is_some_and(|l| DECODER_CRATES.iter().any(|c| l.file().contains(c)));
+            if !in_decoder {
+                fuzzer_hook(info);
+            }
+        }));
+    });
+}

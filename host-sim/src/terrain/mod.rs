@@ -1,6 +1,7 @@
 //! Real terrain import: digital elevation models and shape models from files (see `shared/data`).
 //!
-//! Every DEM loader returns a [`Heightmap`]; mesh loaders return a triangle mesh.
+//! Every DEM loader returns a [`Heightmap`]; mesh loaders return a triangle mesh; point-cloud loaders (PLY, PCD,
+//! LAS/LAZ) return a [`pointcloud::PointCloud`], which [`pointcloud::thin`] reduces to the flight scan capacity.
 
 pub mod asc;
 pub mod geotiff;
@@ -31,3 +32,4 @@ impl Heightmap {
 
 pub mod npy;
 pub mod obj;
+pub mod pointcloud;
