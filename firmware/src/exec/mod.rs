@@ -191,8 +191,8 @@ pub struct Executive<L, C, W, A, S> {
     goal: Option<ActiveGoal>,
     plan_tx: Option<PlanTx>,
     drive_command_id: u32,
-    /// The `command_id` of the last `Turn` / `Straight` sent (0 before any).
-    last_motion_id: u32,
+    /// The `command_id` of the last `Turn` / `Straight` sent (none since boot).
+    last_motion_id: Option<u32>,
     awaiting: Option<Awaiting>,
     last_mission: Option<(u32, MissionState, StopReason)>,
     last_host_time_us: u64,
@@ -240,7 +240,7 @@ where
             goal: None,
             plan_tx: None,
             drive_command_id: 0,
-            last_motion_id: 0,
+            last_motion_id: None,
             awaiting: None,
             last_mission: None,
             last_host_time_us: 0,
@@ -681,7 +681,7 @@ where
             LogLevel::Warn,
             format_args!("no report for drive command {}: stop", a.command_id),
         );
-        self.send_stop_of(a.command_id);
+        self.send_stop_of(Some(a.command_id));
         self.autonomy.motion_timeout(a.command_id, now);
     }
 
@@ -778,7 +778,7 @@ where
     /// Sends a `Turn` or `Straight` and awaits its report.
     fn send_motion(&mut self, motion: Motion) {
         let command_id = self.next_command_id();
-        self.last_motion_id = command_id;
+        self.last_motion_id = Some(command_id);
         self.awaiting = Some(Awaiting {
             command_id,
             motion,
@@ -790,7 +790,8 @@ where
     }
 
     /// Stops the motion awaiting its report (its report is still awaited, and the `Stop` is resent until it comes),
-    /// or, with none, sends a `Stop` of the last motion (already reported: the host does nothing with it).
+    /// or, with none, sends a `Stop` of the last motion (already reported: the host does nothing with it); before any
+    /// motion, a `Stop` naming its own command id, which names no motion (PROTOCOL.md section 5).
     fn send_stop(&mut self) {
         match self.awaiting {
             Some(mut a) => {
@@ -811,10 +812,11 @@ where
         }
     }
 
-    /// Sends a `Stop` of motion `motion_id` with nothing awaited for it.
-    fn send_stop_of(&mut self, motion_id: u32) {
+    /// Sends a `Stop` of motion `motion_id` with nothing awaited for it (`None`: no motion, the stop's own id).
+    fn send_stop_of(&mut self, motion_id: Option<u32>) {
         let command_id = self.next_command_id();
-        self.send(&Message::DriveCommand(DriveCommand { command_id, motion: Motion::Stop { motion_id } }));
+        let motion = Motion::Stop { motion_id: motion_id.unwrap_or(command_id) };
+        self.send(&Message::DriveCommand(DriveCommand { command_id, motion }));
     }
 
     fn next_command_id(&mut self) -> u32 {

@@ -558,13 +558,9 @@ fn shutdown_stops_and_safe_mode_refuses_work() {
     exchange(&mut e, &[Message::Configure(configure())]);
     let r = exchange(&mut e, &[Message::Shutdown(Shutdown)]);
     assert_eq!(r[0], Message::Ack(Ack { seq: 100 }));
-    assert!(matches!(
-        r[1],
-        Message::DriveCommand(DriveCommand {
-            motion: Motion::Stop { .. },
-            ..
-        })
-    ));
+    // v6: no motion was ever sent: the stop names its own command id (no motion)
+    assert_eq!(stops_of(&r), [(0, 0)]);
+    assert!(matches!(r[1], Message::DriveCommand(_)));
     assert_eq!(e.mode(), Mode::Safe);
     let r = exchange(
         &mut e,

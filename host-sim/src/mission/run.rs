@@ -803,10 +803,12 @@ pub struct StopCounts {
     pub stale: u64,
 }
 
-/// Does a `Stop` of `motion_id` name a motion newer than the last one taken (`None`: none since boot), i.e. one that
-/// never arrived? Command ids increase, wrapping (protocol section 5).
-fn names_an_unseen_motion(last_motion_id: Option<u32>, motion_id: u32) -> bool {
-    last_motion_id.is_none_or(|l| (motion_id.wrapping_sub(l) as i32) > 0)
+/// Does the `Stop` with command id `stop_id` name motion `motion_id` that never arrived: newer than the last motion
+/// taken (`None`: none since boot) and older than the stop itself (a motion is sent before its stop; a stop naming
+/// its own id names none)? Command ids increase, wrapping (protocol section 5).
+fn names_an_unseen_motion(last_motion_id: Option<u32>, motion_id: u32, stop_id: u32) -> bool {
+    let newer = |a: u32, b: u32| (a.wrapping_sub(b) as i32) > 0;
+    last_motion_id.is_none_or(|l| newer(motion_id, l)) && newer(stop_id, motion_id)
 }
 
 /// Horizontal distance from `p` to the polyline `pts`.
@@ -984,7 +986,7 @@ pub fn run_mission_from(
             // a stop of a motion not executing: of one that never arrived (lost on the way; a late copy is now a
             // repeat of an older id and is not taken), report it stopped with nothing done; of one already
             // reported, nothing (a late or repeated stop must not stop the next motion)
-            if names_an_unseen_motion(sim.last_motion_id, motion_id) {
+            if names_an_unseen_motion(sim.last_motion_id, motion_id, id) {
                 sim.last_motion_id = Some(motion_id);
                 sim.rep.stops.unstarted += 1;
                 sim.report_unstarted(motion_id)?;
@@ -1033,11 +1035,14 @@ mod tests {
     /// A `Stop` names a motion that never arrived when its id is newer than the last motion taken (ids wrap).
     #[test]
     fn a_stop_of_a_newer_motion_names_one_that_never_arrived() {
-        assert!(names_an_unseen_motion(None, 0));
-        assert!(names_an_unseen_motion(Some(4), 5));
-        assert!(!names_an_unseen_motion(Some(5), 5), "the last motion taken: stale once reported");
-        assert!(!names_an_unseen_motion(Some(6), 5), "an older motion: stale");
-        assert!(names_an_unseen_motion(Some(u32::MAX), 0), "across the wrap");
-        assert!(!names_an_unseen_motion(Some(0), u32::MAX), "across the wrap, older");
+        assert!(names_an_unseen_motion(None, 0, 1));
+        assert!(names_an_unseen_motion(Some(4), 5, 6));
+        assert!(!names_an_unseen_motion(Some(5), 5, 6), "the last motion taken: stale once reported");
+        assert!(!names_an_unseen_motion(Some(6), 5, 7), "an older motion: stale");
+        assert!(names_an_unseen_motion(Some(u32::MAX), 0, 1), "across the wrap");
+        assert!(!names_an_unseen_motion(Some(0), u32::MAX, 1), "across the wrap, older");
+        // a stop sent before any motion names its own id: no motion
+        assert!(!names_an_unseen_motion(None, 0, 0));
+        assert!(!names_an_unseen_motion(None, 3, 3));
     }
 }
