@@ -62,7 +62,7 @@ use crate::config::rover::{
 use crate::geom::{normalize3, Pose3, Real, Rot3, Vec3};
 use crate::map::{DistanceField, DistanceQuery};
 use crate::stability::{
-    check_stability, BodyMass, Contact, StabilityError, StabilityOutcome, StabilityProblem, TetherForce,
+    check_stability, check_stability_at_least, BodyMass, Contact, StabilityError, StabilityOutcome, StabilityProblem, TetherForce,
 };
 use nalgebra::{Matrix3, Translation3, UnitVector3};
 
@@ -649,7 +649,10 @@ fn pose_stability(
                 stability_problem(settled, bc.angle_rad, Some(&bc), last_anchor, params)
             }
         };
-        let o = check_stability(&p)?;
+        let o = match enough {
+            Some(min) => check_stability_at_least(&p, min)?,
+            None => check_stability(&p)?,
+        };
         if let (StabilityOutcome::Stable(r), Some(min)) = (&o, enough) {
             if r.margin >= min {
                 return Ok((o, config));

@@ -13,7 +13,7 @@ use clarabel::solver::{
 use firmware::config::stability::MAX_CONTACTS;
 use firmware::geom::{Real, Vec3};
 use firmware::stability::{
-    check_stability, lp::LpStatus, BodyMass, Contact, StabilityLp, StabilityOutcome, StabilityProblem, TetherForce,
+    check_stability, lp::LpStatus, simplex, BodyMass, Contact, StabilityLp, StabilityOutcome, StabilityProblem, TetherForce,
     LP_EQS, LP_INEQS, LP_VARS,
 };
 use rand_core::Rng;
@@ -120,6 +120,7 @@ fn campaign(n: usize, seed: u128) {
     let mut max_iter = 0;
     let t0 = std::time::Instant::now();
     let mut ours_time = core::time::Duration::ZERO;
+    let (mut simplex_time, mut simplex_max_err, mut simplex_max_pivots) = (core::time::Duration::ZERO, 0.0f64, 0);
     let mut case = 0usize;
     while agree_opt + ours_unknown < n {
         case += 1;
@@ -131,7 +132,24 @@ fn campaign(n: usize, seed: u128) {
             firmware::config::stability::SOLVER_TOLERANCE,
         );
         ours_time += t.elapsed();
+        let t = std::time::Instant::now();
+        let spx = simplex::solve(&lp, firmware::config::stability::SIMPLEX_MAX_PIVOTS);
+        simplex_time += t.elapsed();
         let (status, obj) = clarabel_solve(&lp, false);
+        // the simplex: an exact vertex method, so it must answer every instance clarabel answers
+        match status {
+            SolverStatus::Solved => {
+                assert_eq!(spx.status, LpStatus::Optimal, "case {case}: clarabel margin {}\n{prob:?}", -obj);
+                let err = (spx.objective - obj).abs();
+                assert!(err <= 1e-6 * (1.0 + obj.abs()), "case {case}: simplex {} clarabel {obj}\n{prob:?}", spx.objective);
+                simplex_max_err = simplex_max_err.max(err);
+                simplex_max_pivots = simplex_max_pivots.max(spx.iterations);
+            }
+            SolverStatus::PrimalInfeasible => {
+                assert_eq!(spx.status, LpStatus::Infeasible, "case {case}: clarabel infeasible\n{prob:?}");
+            }
+            _ => {}
+        }
         match status {
             SolverStatus::Solved if !matches!(ours.status, LpStatus::Optimal | LpStatus::AlmostOptimal) => {
                 // Ours ran out of budget: allowed only far inside the unstable region (huge internal forces make
@@ -190,9 +208,11 @@ fn campaign(n: usize, seed: u128) {
     println!(
         "{case} instances, {n} well-posed: {agree_opt} optimal values agree (max |diff| {max_err:.2e}, max iterations {max_iter}), \
          {clar_not_solved} without any equilibrium, {ours_unknown} deeply unstable (clarabel margin < -0.1) where ours ran out of budget (Unknown = unstable), feasibility agrees on {feas_checked} ({stable} stable), \
-         {near_boundary} within 1e-7 of the boundary skipped, {oracle_failed} where clarabel did not converge; ours {:.1} us/solve, total {:.1} s",
+         {near_boundary} within 1e-7 of the boundary skipped, {oracle_failed} where clarabel did not converge; ours {:.1} us/solve, total {:.1} s; \
+         simplex: max |diff| {simplex_max_err:.2e}, max pivots {simplex_max_pivots}, {:.1} us/solve",
         ours_time.as_secs_f64() * 1e6 / case as f64,
-        t0.elapsed().as_secs_f64()
+        t0.elapsed().as_secs_f64(),
+        simplex_time.as_secs_f64() * 1e6 / case as f64,
     );
     assert!(oracle_failed <= case / 100, "oracle failed too often: {oracle_failed}");
     assert!(ours_unknown <= n / 50, "ours ran out of budget too often: {ours_unknown}");

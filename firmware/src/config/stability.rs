@@ -9,6 +9,11 @@ pub const MAX_CONTACTS: usize = 4;
 /// out is reported as `Unknown` (treated as unstable).
 pub const SOLVER_MAX_ITERATIONS: u32 = 50;
 
+/// Exchange budget of the simplex ([`crate::stability::simplex`]), phases 1 and 2 (phase 0 adds one exchange per
+/// variable). Default 200: the margin LPs need 0-40 exchanges after phase 0 (10,000 random instances,
+/// `tests/tests/stability.rs`); running out falls back to the interior-point method.
+pub const SIMPLEX_MAX_PIVOTS: u32 = 200;
+
 /// Relative tolerance on the residuals and the duality gap. Default 1e-9 (forces are normalised by the rover's
 /// weight, so this is a nano-weight).
 pub const SOLVER_TOLERANCE: f64 = 1e-9;

@@ -76,6 +76,12 @@ pub enum LpStatus {
     BudgetExhausted,
     /// A factorisation failed or an iterate became non-finite.
     NumericalFailure,
+    /// No point satisfies the constraints (the simplex's phase 1 ended with a positive infeasibility, or an
+    /// equation reduced to `0 = b` with `b != 0`); the interior-point method never reports it.
+    Infeasible,
+    /// A feasible point whose objective is at most the target asked for (`simplex::solve_until`); not
+    /// necessarily optimal.
+    TargetReached,
 }
 
 /// The result of an LP solve.

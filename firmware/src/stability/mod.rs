@@ -69,9 +69,11 @@
 //! `config::rover`.
 
 pub mod lp;
+pub mod simplex;
 
 use crate::config::stability::{
-    MARGIN_CAP, MAX_CONTACTS, MIN_MARGIN, NORMAL_FORCE_CAP, SOLVER_MAX_ITERATIONS, SOLVER_TOLERANCE,
+    MARGIN_CAP, MAX_CONTACTS, MIN_MARGIN, NORMAL_FORCE_CAP, SIMPLEX_MAX_PIVOTS, SOLVER_MAX_ITERATIONS,
+    SOLVER_TOLERANCE,
 };
 use crate::geom::{Real, Vec3};
 use lp::{LinearProgram, LpStatus};
@@ -174,8 +176,11 @@ pub enum StabilityError {
 pub enum UnknownReason {
     /// `SOLVER_MAX_ITERATIONS` ran out.
     BudgetExhausted,
-    /// A factorisation failed or an iterate became non-finite (e.g. no equilibrium is possible at all).
+    /// A factorisation failed or an iterate became non-finite.
     NumericalFailure,
+    /// The simplex proved that no contact and tether forces balance the weight at all (eqs. 1-8 have no
+    /// solution for any margin): the pose cannot be held.
+    NoEquilibrium,
 }
 
 /// Numbers describing a solved stability problem.
@@ -354,14 +359,39 @@ impl StabilityProblem {
     }
 }
 
+/// Solve the margin LP: the simplex first; the interior-point method when the simplex runs out of exchanges or
+/// fails its residual check (an answer of "infeasible" from the simplex is final). With `at_least`, the simplex
+/// may stop at the first vertex whose margin reaches it (see [`check_stability_at_least`]).
+pub fn solve_margin_lp(lp: &StabilityLp, at_least: Option<f64>) -> lp::LpSolution<LP_VARS> {
+    let sol = simplex::solve_until(lp, SIMPLEX_MAX_PIVOTS, at_least.map(|m| -m));
+    match sol.status {
+        LpStatus::BudgetExhausted | LpStatus::NumericalFailure => lp.solve(SOLVER_MAX_ITERATIONS, SOLVER_TOLERANCE),
+        LpStatus::Optimal | LpStatus::AlmostOptimal | LpStatus::Infeasible | LpStatus::TargetReached => sol,
+    }
+}
+
 /// Decide static stability (section IV-C) with the convex margin LP of the module docs.
 pub fn check_stability(problem: &StabilityProblem) -> Result<StabilityOutcome, StabilityError> {
     let lp = problem.to_lp()?;
-    let sol = lp.solve(SOLVER_MAX_ITERATIONS, SOLVER_TOLERANCE);
+    Ok(outcome(problem, &solve_margin_lp(&lp, None)))
+}
+
+/// [`check_stability`] for callers that need only the verdict "stable with a margin of at least `min_margin`":
+/// the simplex stops at the first vertex that proves it, so a `Stable` answer's margin is then at least
+/// `min_margin` but not necessarily the largest. Every other answer is [`check_stability`]'s.
+pub fn check_stability_at_least(problem: &StabilityProblem, min_margin: f64) -> Result<StabilityOutcome, StabilityError> {
+    let lp = problem.to_lp()?;
+    // a vertex at or above both the asked margin and `MIN_MARGIN` is a `Stable` answer with at least that margin
+    Ok(outcome(problem, &solve_margin_lp(&lp, Some(min_margin.max(MIN_MARGIN)))))
+}
+
+/// The outcome of a solved margin LP.
+fn outcome(problem: &StabilityProblem, sol: &lp::LpSolution<LP_VARS>) -> StabilityOutcome {
     match sol.status {
-        LpStatus::Optimal | LpStatus::AlmostOptimal => {}
-        LpStatus::BudgetExhausted => return Ok(StabilityOutcome::Unknown(UnknownReason::BudgetExhausted)),
-        LpStatus::NumericalFailure => return Ok(StabilityOutcome::Unknown(UnknownReason::NumericalFailure)),
+        LpStatus::Optimal | LpStatus::AlmostOptimal | LpStatus::TargetReached => {}
+        LpStatus::BudgetExhausted => return StabilityOutcome::Unknown(UnknownReason::BudgetExhausted),
+        LpStatus::NumericalFailure => return StabilityOutcome::Unknown(UnknownReason::NumericalFailure),
+        LpStatus::Infeasible => return StabilityOutcome::Unknown(UnknownReason::NoEquilibrium),
     }
     let x = sol.x;
     let margin = -sol.objective;
@@ -383,7 +413,11 @@ pub fn check_stability(problem: &StabilityProblem) -> Result<StabilityOutcome, S
         tension_n: vec_get(&x, T_COL) * problem.weight(),
         iterations: sol.iterations,
     };
-    Ok(if margin >= MIN_MARGIN { StabilityOutcome::Stable(report) } else { StabilityOutcome::Unstable(report) })
+    if margin >= MIN_MARGIN {
+        StabilityOutcome::Stable(report)
+    } else {
+        StabilityOutcome::Unstable(report)
+    }
 }
 
 #[cfg(test)]

@@ -22,6 +22,8 @@
 //! | `settle_plane_30deg` | [`firmware::rover::settle`] on an exact inclined plane ([`InclinedPlane`], 30 deg) | Paton et al. IV-B |
 //! | `predict_anchors_step_lip` | [`firmware::tether::predict_anchors`] over a 4 m step ([`Step`]): the tether attaches on the lip | Paton et al. Alg. 1 |
 //! | `pose_stability_plane_30deg` | [`firmware::rover::check_pose_stability`] of the settled pose, tether to an anchor upslope | Paton et al. IV-C |
+//! | `stability_lp_interior_point` | the margin LP of that pose's inline boom (two wheel contacts, taut tether) by [`firmware::stability::lp`] (the interior-point method) | Paton et al. IV-C |
+//! | `stability_lp_simplex` | the same LP by [`firmware::stability::simplex`] (the flight solver) | Paton et al. IV-C |
 //! | `abit_wall_gap_r2` | ABIT* on [`geometric::wall_gap`] in R^2, [`ABIT_ITERATIONS`] iterations, seed [`ABIT_SEED`] | Strub & Gammell |
 //! | `team_local_plan` | [`team::local_plan_workload`] (scan, cull, hop graph, A*) | Morad et al. |
 //! | `team_dstar_replan` | [`team::dstar_workload`] (plan, move, crevasse, replan) | Morad et al. |
@@ -72,7 +74,9 @@ use firmware::plan::team::dstar_lite::{outcome_label, DStarArena, Found};
 use firmware::plan::team::leg_astar::status_label;
 use firmware::plan::team::DefaultLocalPlanner;
 use firmware::plan::SplitMix64;
-use firmware::rover::{check_pose_stability, settle, SettleOutcome};
+use firmware::config::stability::{SIMPLEX_MAX_PIVOTS, SOLVER_MAX_ITERATIONS, SOLVER_TOLERANCE};
+use firmware::rover::{boom_inline_angle, check_pose_stability, settle, stability_problem, SettleOutcome};
+use firmware::stability::simplex;
 use firmware::stability::StabilityOutcome;
 use firmware::tether::{predict_anchors, Anchor, AnchorHistory};
 
@@ -315,6 +319,27 @@ pub fn run_all(arenas: &mut Arenas<'_>, h: &mut impl Harness) {
             other => line(format_args!("{other:?}")),
         };
         h.result("pose_stability_plane_30deg", &s);
+
+        // The margin LP alone, by both solvers: the per-solve cost side by side.
+        let problem = stability_problem(&pose, boom_inline_angle(&pose, &anchor), None, Some(&anchor), &params);
+        if let Ok(lp) = problem.to_lp() {
+            let mut ipm = None;
+            h.measure("stability_lp_interior_point", &mut || {
+                ipm = Some(lp.solve(SOLVER_MAX_ITERATIONS, SOLVER_TOLERANCE))
+            });
+            let s = match &ipm {
+                Some(sol) => line(format_args!("{:?} margin={} iterations={}", sol.status, -sol.objective, sol.iterations)),
+                None => line(format_args!("not run")),
+            };
+            h.result("stability_lp_interior_point", &s);
+            let mut spx = None;
+            h.measure("stability_lp_simplex", &mut || spx = Some(simplex::solve(&lp, SIMPLEX_MAX_PIVOTS)));
+            let s = match &spx {
+                Some(sol) => line(format_args!("{:?} margin={} pivots={}", sol.status, -sol.objective, sol.iterations)),
+                None => line(format_args!("not run")),
+            };
+            h.result("stability_lp_simplex", &s);
+        }
     }
 
     // ABIT* on the wall with a gap.
@@ -515,7 +540,7 @@ mod tests {
             std::eprintln!("{n}: {s}");
         }
         let get = |n: &str| h.0.iter().find(|(k, _)| *k == n).map(|(_, s)| s.clone()).unwrap_or_default();
-        assert_eq!(h.0.len(), 8, "{:?}", h.0);
+        assert_eq!(h.0.len(), 10, "{:?}", h.0);
 
         // settle: the analytic answer, axle one wheel radius above the plane, up axis = normal
         let plane = InclinedPlane::new(PLANE_SLOPE_DEG.to_radians());
@@ -538,6 +563,15 @@ mod tests {
         let (o, _) = check_pose_stability(&plane, &p, Some(&upslope_anchor()), &params).unwrap();
         assert!(o.is_stable(), "{o:?}");
         assert!(get("pose_stability_plane_30deg").starts_with("Stable "));
+        // the margin LP alone: both solvers reach the same optimum (the interior point to its 1e-9 tolerance)
+        let margin = |name: &str| -> f64 {
+            let s = get(name);
+            s.split(' ').find_map(|w| w.strip_prefix("margin=")).and_then(|m| m.parse().ok()).unwrap_or(f64::NAN)
+        };
+        assert!(get("stability_lp_interior_point").starts_with("Optimal "), "{}", get("stability_lp_interior_point"));
+        assert!(get("stability_lp_simplex").starts_with("Optimal "), "{}", get("stability_lp_simplex"));
+        let (m_ipm, m_spx) = (margin("stability_lp_interior_point"), margin("stability_lp_simplex"));
+        assert!(m_spx > 0.0 && (m_ipm - m_spx).abs() < 1e-7, "{m_ipm} vs {m_spx}");
 
         // ABIT*: a solution through the gap, never shorter than the analytic optimum
         let s = get("abit_wall_gap_r2");

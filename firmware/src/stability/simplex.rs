@@ -1,0 +1,570 @@
+//! The stability LP by a dense primal simplex on a condensed (Tucker) tableau: the flight core's first solver for
+//! the margin LP of the module docs, with the interior-point method of [`super::lp`] as its fallback.
+//!
+//! Why a simplex here: the margin LP is small (at most [`LP_VARS`] variables, [`LP_EQS`] equations and
+//! [`LP_INEQS`] inequalities, 14 x 6 x 27 for Axel's two wheel contacts) and its optimum is a vertex, so a few
+//! dozen exchange steps on a table of a few hundred numbers replace ten to twenty interior-point iterations, each a
+//! sparse Cholesky plus refinement (Chvatal, *Linear Programming*, 1983, ch. 2-3 and 8; the condensed tableau and its
+//! exchange step: Dantzig and Thapa, *Linear Programming 1*, 1997, section 3.3).
+//!
+//! # Method
+//! Problem: minimise `c'x` subject to `A x = b`, `G x <= h`, every `x` free. Each inequality row gets a slack
+//! `g_i >= 0` (`G_i x + g_i = h_i`) and each equation an artificial `a_p >= 0`; the table holds one row per basic
+//! variable and one column per nonbasic variable, `x_B(i) + sum_j T_ij x_N(j) = rhs_i`.
+//! 1. **Compaction**: variables no constraint and no cost mentions (unused contact slots) and rows `0 <= h` with
+//!    `h >= 0` are left out; a row `0 <= h` with `h < 0` or `0 = b` with `b != 0` is infeasible at once.
+//! 2. **Phase 0**: the free variables enter the basis, first on the equations (complete pivoting: the largest
+//!    `|T|` over equation rows and free columns each time, i.e. Gaussian elimination of `A`), then on the
+//!    inequalities (largest `|T|` again). An equation left without a pivot is a dependent row: dropped if its
+//!    right-hand side is zero to `EQ_TOL`, infeasible otherwise. A free variable's row is never a ratio-test row.
+//!    The free variables' rows then leave the table's active part: they are never ratio-test rows, and each
+//!    variable is read off its row at the end from the final values of phase 0's nonbasic slacks.
+//! 3. **Phase 1** (only if a slack is negative): one artificial column `t`, `-1` in every violated row, enters on
+//!    the most violated row, which makes every row feasible; the primal simplex then minimises `t`. A positive
+//!    minimum means no equilibrium exists ([`LpStatus::Infeasible`]).
+//! 4. **Phase 2**: the primal simplex on `c'x`. Entering column: the most negative reduced cost (Dantzig); after
+//!    `DEGENERATE_RUN` degenerate exchanges in a row, Bland's rule (smallest index) until a step makes progress, so
+//!    the method cannot cycle. Leaving row: the smallest ratio, ties to the largest pivot (Bland: smallest index).
+//! 5. **Check**: the solution's residuals are computed from the original `A, b, G, h`; if an equation is off by
+//!    more than `CHECK_TOL (1 + |b|)` or an inequality by more than `CHECK_TOL (1 + |h|)`, the solve reports
+//!    [`LpStatus::NumericalFailure`] and the caller falls back to the interior-point method.
+//!
+//! Every loop is bounded: phase 0 by the number of variables, phases 1 and 2 by the pivot budget
+//! (`config::stability::SIMPLEX_MAX_PIVOTS`, default 200; [`LpStatus::BudgetExhausted`] when it runs out).
+//! Tolerances (absolute: the LP's numbers are O(1) because forces are in rover weights): `PIVOT_TOL = 1e-9`,
+//! `FEAS_TOL = 1e-10`, `OPT_TOL = 1e-11`, `EQ_TOL = 1e-9`, `CHECK_TOL = 1e-7`; `DEGENERATE_RUN = 8`.
+//! Storage: the table, `(LP_EQS + LP_INEQS) x (LP_VARS + 1)` `f64` (12.4 KiB), on the stack; no heap.
+
+use super::lp::{LpSolution, LpStatus};
+use super::{StabilityLp, LP_EQS, LP_INEQS, LP_VARS};
+use nalgebra::SVector;
+
+const ROWS: usize = LP_EQS + LP_INEQS;
+const COLS: usize = LP_VARS + 1;
+
+/// Smallest `|T|` accepted as a pivot.
+const PIVOT_TOL: f64 = 1e-9;
+/// A basic nonnegative variable above `-FEAS_TOL` counts as feasible.
+const FEAS_TOL: f64 = 1e-10;
+/// A reduced cost below `-OPT_TOL` can still improve the objective.
+const OPT_TOL: f64 = 1e-11;
+/// A dependent equation whose right-hand side is within this of zero is dropped, otherwise infeasible.
+const EQ_TOL: f64 = 1e-9;
+/// Residual check of the solution against the original data (relative to `1 + |rhs|`).
+const CHECK_TOL: f64 = 1e-7;
+/// Degenerate exchanges in a row before Bland's rule takes over.
+const DEGENERATE_RUN: u32 = 8;
+
+/// A variable of the table: an LP variable (free), the slack of an inequality, the artificial of an equation, or
+/// the phase-1 artificial.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Var {
+    X(u16),
+    Slack(u16),
+    Art(u16),
+    T,
+    /// A column or row slot not in use.
+    None,
+}
+
+impl Var {
+    /// Bland's order.
+    fn key(self) -> usize {
+        match self {
+            Var::X(j) => usize::from(j),
+            Var::Slack(i) => LP_VARS + usize::from(i),
+            Var::Art(p) => LP_VARS + LP_INEQS + usize::from(p),
+            Var::T => LP_VARS + LP_INEQS + LP_EQS,
+            Var::None => usize::MAX,
+        }
+    }
+}
+
+fn u16_of(i: usize) -> u16 {
+    u16::try_from(i).unwrap_or(u16::MAX)
+}
+
+/// The condensed tableau with its two objective rows.
+struct Tableau {
+    t: [[f64; COLS]; ROWS],
+    rhs: [f64; ROWS],
+    basic: [Var; ROWS],
+    nonbasic: [Var; COLS],
+    /// Nonbasic columns fixed at zero for good (an artificial that left the basis).
+    dead: [bool; COLS],
+    /// Phase-2 objective row: `-w + sum_j cost_j x_N(j) = cost_rhs`.
+    cost: [f64; COLS],
+    cost_rhs: f64,
+    /// Phase-1 objective row (the artificial `t`).
+    p1: [f64; COLS],
+    p1_rhs: f64,
+    nr: usize,
+    nc: usize,
+    pivots: u32,
+}
+
+/// Why a phase stopped before its optimum.
+enum Stop {
+    /// Phase 2 reached a vertex with the objective at most the target.
+    Target,
+    Budget,
+    Unbounded,
+}
+
+fn get(v: &[f64], i: usize) -> f64 {
+    v.get(i).copied().unwrap_or(0.0)
+}
+
+/// The pivot row of an exchange, divided by the pivot.
+struct PivotRow {
+    v: [f64; COLS],
+    /// Columns in use (`Tableau::nc`).
+    nc: usize,
+    k: usize,
+    inv_p: f64,
+    rhs: f64,
+}
+
+impl PivotRow {
+    /// `row -= f * pivot_row` with `f = row_k`, and `row_k = -f / p`.
+    fn apply(&self, row: &mut [f64; COLS], rhs: &mut f64) {
+        let f = get(row, self.k);
+        if f == 0.0 {
+            return;
+        }
+        if let (Some(row), Some(v)) = (row.get_mut(..self.nc), self.v.get(..self.nc)) {
+            for (a, b) in row.iter_mut().zip(v) {
+                *a -= f * b;
+            }
+        }
+        if let Some(a) = row.get_mut(self.k) {
+            *a = -f * self.inv_p;
+        }
+        *rhs -= f * self.rhs;
+    }
+}
+
+impl Tableau {
+    fn entry(&self, r: usize, k: usize) -> f64 {
+        self.t.get(r).and_then(|row| row.get(k)).copied().unwrap_or(0.0)
+    }
+
+    fn basic_of(&self, r: usize) -> Var {
+        self.basic.get(r).copied().unwrap_or(Var::None)
+    }
+
+    fn nonbasic_of(&self, k: usize) -> Var {
+        self.nonbasic.get(k).copied().unwrap_or(Var::None)
+    }
+
+    fn is_dead(&self, k: usize) -> bool {
+        self.dead.get(k).copied().unwrap_or(true)
+    }
+
+    /// Exchange the basic variable of row `r` with the nonbasic variable of column `k`.
+    fn pivot(&mut self, r: usize, k: usize) {
+        let inv_p = 1.0 / self.entry(r, k);
+        let mut prow = PivotRow { v: [0.0; COLS], nc: self.nc, k, inv_p, rhs: get(&self.rhs, r) * inv_p };
+        if let Some(row) = self.t.get_mut(r) {
+            if let (Some(v), Some(row)) = (prow.v.get_mut(..self.nc), row.get_mut(..self.nc)) {
+                for (a, b) in v.iter_mut().zip(row.iter_mut()) {
+                    *a = *b * inv_p;
+                    *b = *a;
+                }
+            }
+            // the pivot column of the other rows is set apart (`apply`): leave it out of the subtraction
+            if let Some(a) = prow.v.get_mut(k) {
+                *a = 0.0;
+            }
+            if let Some(a) = row.get_mut(k) {
+                *a = inv_p;
+            }
+        }
+        if let Some(v) = self.rhs.get_mut(r) {
+            *v = prow.rhs;
+        }
+        for (i, (row, rhs)) in self.t.iter_mut().zip(self.rhs.iter_mut()).enumerate().take(self.nr) {
+            if i != r {
+                prow.apply(row, rhs);
+            }
+        }
+        prow.apply(&mut self.cost, &mut self.cost_rhs);
+        prow.apply(&mut self.p1, &mut self.p1_rhs);
+        let leaving = self.basic_of(r);
+        let entering = self.nonbasic_of(k);
+        if let Some(b) = self.basic.get_mut(r) {
+            *b = entering;
+        }
+        if let Some(n) = self.nonbasic.get_mut(k) {
+            *n = leaving;
+        }
+        if let Some(d) = self.dead.get_mut(k) {
+            *d = matches!(leaving, Var::Art(_) | Var::T);
+        }
+        self.pivots = self.pivots.saturating_add(1);
+    }
+
+    /// Append a row (its coefficients are filled in afterwards).
+    fn push_row(&mut self, rhs: f64, var: Var) {
+        if let (Some(r), Some(b)) = (self.rhs.get_mut(self.nr), self.basic.get_mut(self.nr)) {
+            *r = rhs;
+            *b = var;
+            self.nr += 1;
+        }
+    }
+
+    /// Remove row `r` (a dependent equation), keeping the others in place order-free.
+    fn drop_row(&mut self, r: usize) {
+        let last = self.nr.saturating_sub(1);
+        if r < last {
+            self.t.swap(r, last);
+            self.rhs.swap(r, last);
+            self.basic.swap(r, last);
+        }
+        self.nr = last;
+    }
+
+    /// Is row `r` a ratio-test row (its basic variable is nonnegative)?
+    fn bounded_row(&self, r: usize) -> bool {
+        matches!(self.basic_of(r), Var::Slack(_) | Var::T)
+    }
+
+    /// The equation row and free column with the largest `|T_rk|` (complete pivoting over the equations).
+    fn best_equation_pivot(&self) -> Option<(usize, usize)> {
+        let mut free = [false; COLS];
+        for (f, v) in free.iter_mut().zip(self.nonbasic.iter()).take(self.nc) {
+            *f = matches!(v, Var::X(_));
+        }
+        let mut best = (PIVOT_TOL, None);
+        for (r, (row, b)) in self.t.iter().zip(self.basic.iter()).enumerate().take(self.nr) {
+            if !matches!(b, Var::Art(_)) {
+                continue;
+            }
+            for (k, (v, f)) in row.iter().zip(free.iter()).enumerate().take(self.nc) {
+                if *f && v.abs() > best.0 {
+                    best = (v.abs(), Some((r, k)));
+                }
+            }
+        }
+        best.1
+    }
+
+    /// The inequality row with the largest `|T_rk|` in column `k` (partial pivoting).
+    fn best_inequality_row(&self, k: usize) -> Option<usize> {
+        let mut best = (PIVOT_TOL, None);
+        for (r, (row, b)) in self.t.iter().zip(self.basic.iter()).enumerate().take(self.nr) {
+            let v = row.get(k).copied().unwrap_or(0.0).abs();
+            if matches!(b, Var::Slack(_)) && v > best.0 {
+                best = (v, Some(r));
+            }
+        }
+        best.1
+    }
+
+    /// Primal simplex on the phase-1 (`phase1`) or phase-2 objective row, from a feasible basis. Stops at an
+    /// optimum (`Ok`), when `t` leaves the basis in phase 1 (`Ok`), or with the reason.
+    fn optimise(&mut self, phase1: bool, max_pivots: u32, target: Option<f64>) -> Result<(), Stop> {
+        let mut degenerate = 0u32;
+        loop {
+            if phase1 && !self.basic.iter().take(self.nr).any(|b| *b == Var::T) {
+                return Ok(());
+            }
+            // the vertex's objective is `-cost_rhs` (all nonbasic variables at zero)
+            if matches!(target, Some(t) if -self.cost_rhs <= t) {
+                return Err(Stop::Target);
+            }
+            let bland = degenerate >= DEGENERATE_RUN;
+            // entering column
+            let obj = if phase1 { &self.p1 } else { &self.cost };
+            let mut enter: Option<usize> = None;
+            let mut best = -OPT_TOL;
+            for (k, d) in obj.iter().enumerate().take(self.nc) {
+                if self.is_dead(k) || !matches!(self.nonbasic_of(k), Var::Slack(_)) || *d >= -OPT_TOL {
+                    continue;
+                }
+                let better = match enter {
+                    None => true,
+                    Some(e) if bland => self.nonbasic_of(k).key() < self.nonbasic_of(e).key(),
+                    Some(_) => *d < best,
+                };
+                if better {
+                    best = *d;
+                    enter = Some(k);
+                }
+            }
+            let Some(k) = enter else { return Ok(()) };
+            // leaving row
+            let mut leave: Option<(usize, f64, f64)> = None;
+            for r in 0..self.nr {
+                if !self.bounded_row(r) {
+                    continue;
+                }
+                let a = self.entry(r, k);
+                if a <= PIVOT_TOL {
+                    continue;
+                }
+                let ratio = get(&self.rhs, r).max(0.0) / a;
+                let better = match leave {
+                    None => true,
+                    Some((lr, lratio, la)) => {
+                        if ratio < lratio - 1e-12 {
+                            true
+                        } else if ratio <= lratio + 1e-12 {
+                            if bland {
+                                self.basic_of(r).key() < self.basic_of(lr).key()
+                            } else {
+                                a > la
+                            }
+                        } else {
+                            false
+                        }
+                    }
+                };
+                if better {
+                    leave = Some((r, ratio, a));
+                }
+            }
+            let Some((r, ratio, _)) = leave else { return Err(Stop::Unbounded) };
+            if self.pivots >= max_pivots {
+                return Err(Stop::Budget);
+            }
+            if ratio <= FEAS_TOL {
+                degenerate = degenerate.saturating_add(1);
+            } else {
+                degenerate = 0;
+            }
+            self.pivot(r, k);
+        }
+    }
+}
+
+/// Solve the stability LP `lp` with at most `max_pivots` exchanges (see the module docs). Never panics; every
+/// non-optimal end is a status.
+pub fn solve(lp: &StabilityLp, max_pivots: u32) -> LpSolution<LP_VARS> {
+    solve_until(lp, max_pivots, None)
+}
+
+/// [`solve`], but phase 2 stops at the first vertex whose objective is at most `target`
+/// ([`LpStatus::TargetReached`]: a feasible point, checked like an optimum, not necessarily optimal). Phase 2
+/// never raises the objective, so when the optimum is above the target the answer is [`solve`]'s.
+pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> LpSolution<LP_VARS> {
+    let mut tab = Tableau {
+        t: [[0.0; COLS]; ROWS],
+        rhs: [0.0; ROWS],
+        basic: [Var::None; ROWS],
+        nonbasic: [Var::None; COLS],
+        dead: [false; COLS],
+        cost: [0.0; COLS],
+        cost_rhs: 0.0,
+        p1: [0.0; COLS],
+        p1_rhs: 0.0,
+        nr: 0,
+        nc: 0,
+        pivots: 0,
+    };
+    let fail = |status: LpStatus, pivots: u32| LpSolution {
+        status,
+        x: SVector::<f64, LP_VARS>::zeros(),
+        objective: 0.0,
+        iterations: pivots,
+    };
+    // 1. compaction: live columns and rows (the matrices are column-major: one slice chunk per variable)
+    let a_cols = lp.a.as_slice().chunks_exact(LP_EQS);
+    let g_cols = lp.g.as_slice().chunks_exact(LP_INEQS);
+    let mut col_of = [usize::MAX; LP_VARS];
+    let mut a_live = [false; LP_EQS];
+    let mut g_live = [false; LP_INEQS];
+    for (j, ((ac, gc), (c, slot))) in a_cols.clone().zip(g_cols.clone()).zip(lp.c.iter().zip(col_of.iter_mut())).enumerate() {
+        let mut live = *c != 0.0;
+        for (l, v) in a_live.iter_mut().zip(ac).chain(g_live.iter_mut().zip(gc)) {
+            if *v != 0.0 {
+                *l = true;
+                live = true;
+            }
+        }
+        if live {
+            if let (Some(n), Some(cst)) = (tab.nonbasic.get_mut(tab.nc), tab.cost.get_mut(tab.nc)) {
+                *n = Var::X(u16_of(j));
+                *cst = *c;
+            }
+            *slot = tab.nc;
+            tab.nc += 1;
+        }
+    }
+    // rows: equations (sign chosen so that the artificial starts nonnegative), then inequalities
+    let mut a_row = [(usize::MAX, 1.0); LP_EQS];
+    for (p, ((live, b), slot)) in a_live.iter().zip(lp.b.iter()).zip(a_row.iter_mut()).enumerate() {
+        if !*live {
+            if b.abs() > EQ_TOL {
+                return fail(LpStatus::Infeasible, 0);
+            }
+            continue;
+        }
+        let sign = if *b < 0.0 { -1.0 } else { 1.0 };
+        *slot = (tab.nr, sign);
+        tab.push_row(sign * b, Var::Art(u16_of(p)));
+    }
+    let mut g_row = [usize::MAX; LP_INEQS];
+    for (i, ((live, h), slot)) in g_live.iter().zip(lp.h.iter()).zip(g_row.iter_mut()).enumerate() {
+        if !*live {
+            if *h < -FEAS_TOL {
+                return fail(LpStatus::Infeasible, 0);
+            }
+            continue;
+        }
+        *slot = tab.nr;
+        tab.push_row(*h, Var::Slack(u16_of(i)));
+    }
+    for ((ac, gc), k) in a_cols.zip(g_cols).zip(col_of.iter()) {
+        for (v, (r, sign)) in ac.iter().zip(a_row.iter()) {
+            if let Some(e) = tab.t.get_mut(*r).and_then(|row| row.get_mut(*k)) {
+                *e = sign * v;
+            }
+        }
+        for (v, r) in gc.iter().zip(g_row.iter()) {
+            if let Some(e) = tab.t.get_mut(*r).and_then(|row| row.get_mut(*k)) {
+                *e = *v;
+            }
+        }
+    }
+    // 2. phase 0: free variables into the basis, equations first (complete pivoting)
+    while let Some((r, k)) = tab.best_equation_pivot() {
+        tab.pivot(r, k);
+    }
+    let mut r = 0;
+    while r < tab.nr {
+        if matches!(tab.basic_of(r), Var::Art(_)) {
+            if get(&tab.rhs, r).abs() > EQ_TOL {
+                return fail(LpStatus::Infeasible, tab.pivots);
+            }
+            tab.drop_row(r);
+        } else {
+            r += 1;
+        }
+    }
+    for k in 0..tab.nc {
+        if matches!(tab.nonbasic_of(k), Var::X(_)) {
+            if let Some(r) = tab.best_inequality_row(k) {
+                tab.pivot(r, k);
+            }
+        }
+    }
+    // a free variable left nonbasic has a zero column: with a cost the LP is unbounded
+    for k in 0..tab.nc {
+        if matches!(tab.nonbasic_of(k), Var::X(_)) && get(&tab.cost, k).abs() > OPT_TOL {
+            return fail(LpStatus::NumericalFailure, tab.pivots);
+        }
+    }
+    // The free variables' rows are never ratio-test rows: set them apart at the end of the table, out of the
+    // exchanges of phases 1 and 2, and read the variables off them at the end (in terms of phase 0's nonbasic
+    // variables, whose final values are then known).
+    let mut end = tab.nr;
+    let mut r = 0;
+    while r < end {
+        if matches!(tab.basic_of(r), Var::X(_)) {
+            end -= 1;
+            tab.t.swap(r, end);
+            tab.rhs.swap(r, end);
+            tab.basic.swap(r, end);
+        } else {
+            r += 1;
+        }
+    }
+    let frozen = end..tab.nr;
+    tab.nr = end;
+    let (labels0, nc0) = (tab.nonbasic, tab.nc);
+    let max_pivots = max_pivots.saturating_add(tab.pivots);
+    // 3. phase 1
+    let mut worst: Option<(usize, f64)> = None;
+    for r in 0..tab.nr {
+        let v = get(&tab.rhs, r);
+        if tab.bounded_row(r) && v < -FEAS_TOL && worst.is_none_or(|(_, w)| v < w) {
+            worst = Some((r, v));
+        }
+    }
+    if let Some((wr, _)) = worst {
+        let kt = tab.nc;
+        if kt >= COLS {
+            return fail(LpStatus::NumericalFailure, tab.pivots);
+        }
+        tab.nc += 1;
+        for (r, row) in tab.t.iter_mut().enumerate().take(tab.nr) {
+            let violated = matches!(tab.basic.get(r), Some(Var::Slack(_))) && get(&tab.rhs, r) < -FEAS_TOL;
+            if let Some(e) = row.get_mut(kt) {
+                *e = if violated { -1.0 } else { 0.0 };
+            }
+        }
+        if let Some(n) = tab.nonbasic.get_mut(kt) {
+            *n = Var::T;
+        }
+        if let Some(e) = tab.p1.get_mut(kt) {
+            *e = 1.0;
+        }
+        tab.pivot(wr, kt);
+        match tab.optimise(true, max_pivots, None) {
+            Ok(()) | Err(Stop::Target) => {}
+            Err(Stop::Budget) => return fail(LpStatus::BudgetExhausted, tab.pivots),
+            Err(Stop::Unbounded) => return fail(LpStatus::NumericalFailure, tab.pivots),
+        }
+        // `t` still basic: infeasible if positive, else pivot it out (or drop its row if it has no live entry)
+        if let Some(rt) = (0..tab.nr).find(|r| tab.basic_of(*r) == Var::T) {
+            if get(&tab.rhs, rt) > FEAS_TOL {
+                return fail(LpStatus::Infeasible, tab.pivots);
+            }
+            let mut best = (PIVOT_TOL, None);
+            for k in 0..tab.nc {
+                let a = tab.entry(rt, k).abs();
+                if !tab.is_dead(k) && matches!(tab.nonbasic_of(k), Var::Slack(_)) && a > best.0 {
+                    best = (a, Some(k));
+                }
+            }
+            match best.1 {
+                Some(k) => tab.pivot(rt, k),
+                None => tab.drop_row(rt),
+            }
+        }
+    }
+    // 4. phase 2
+    let status = match tab.optimise(false, max_pivots, target) {
+        Ok(()) => LpStatus::Optimal,
+        Err(Stop::Target) => LpStatus::TargetReached,
+        Err(Stop::Budget) => return fail(LpStatus::BudgetExhausted, tab.pivots),
+        Err(Stop::Unbounded) => return fail(LpStatus::NumericalFailure, tab.pivots),
+    };
+    let mut slack = [0.0; LP_INEQS];
+    for r in 0..tab.nr {
+        if let Var::Slack(i) = tab.basic_of(r) {
+            if let Some(e) = slack.get_mut(usize::from(i)) {
+                *e = get(&tab.rhs, r);
+            }
+        }
+    }
+    let mut x = SVector::<f64, LP_VARS>::zeros();
+    for r in frozen {
+        if let Var::X(j) = tab.basic_of(r) {
+            let mut v = get(&tab.rhs, r);
+            if let Some(row) = tab.t.get(r) {
+                for (a, label) in row.iter().zip(labels0.iter()).take(nc0) {
+                    if let Var::Slack(i) = label {
+                        v -= a * get(&slack, usize::from(*i));
+                    }
+                }
+            }
+            if let Some(e) = x.get_mut(usize::from(j)) {
+                *e = v;
+            }
+        }
+    }
+    // 5. check against the original data
+    let ok_eq = (lp.a * x - lp.b).iter().zip(lp.b.iter()).all(|(r, b)| r.abs() <= CHECK_TOL * (1.0 + b.abs()));
+    let ok_in = (lp.g * x - lp.h).iter().zip(lp.h.iter()).all(|(r, h)| *r <= CHECK_TOL * (1.0 + h.abs()));
+    let objective = lp.c.dot(&x);
+    if !(ok_eq && ok_in && objective.is_finite()) {
+        return fail(LpStatus::NumericalFailure, tab.pivots);
+    }
+    if status == LpStatus::TargetReached && objective > target.unwrap_or(f64::NEG_INFINITY) {
+        // read back from the rows, the vertex's objective missed the target by round-off: finish the solve
+        return solve_until(lp, max_pivots, None);
+    }
+    LpSolution { status, x, objective, iterations: tab.pivots }
+}
