@@ -568,3 +568,95 @@ pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> Lp
     }
     LpSolution { status, x, objective, iterations: tab.pivots }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn set(m: &mut StabilityLp, row: usize, coeffs: &[f64], h: f64) {
+        for (j, v) in coeffs.iter().enumerate() {
+            m.g[(row, j)] = *v;
+        }
+        m.h[row] = h;
+    }
+
+    /// Beale's example (1955), on which Dantzig's rule with the smallest-index tie-break cycles for ever, must reach
+    /// its optimum -1/20 at x = (1/25, 0, 1, 0). (It does so here even without the switch to Bland's rule: the
+    /// largest-pivot tie-break and phase 0's start avoid that cycle.)
+    #[test]
+    fn beales_cycling_example_reaches_its_optimum() {
+        let mut lp = StabilityLp::zeros();
+        lp.c[0] = -0.75;
+        lp.c[1] = 150.0;
+        lp.c[2] = -0.02;
+        lp.c[3] = 6.0;
+        set(&mut lp, 0, &[0.25, -60.0, -0.04, 9.0], 0.0);
+        set(&mut lp, 1, &[0.5, -90.0, -0.02, 3.0], 0.0);
+        set(&mut lp, 2, &[0.0, 0.0, 1.0, 0.0], 1.0);
+        for j in 0..4 {
+            lp.g[(3 + j, j)] = -1.0;
+        }
+        let sol = solve(&lp, 200);
+        assert_eq!(sol.status, LpStatus::Optimal, "{sol:?}");
+        assert!((sol.objective + 0.05).abs() < 1e-12, "{}", sol.objective);
+        for (j, want) in [0.04, 0.0, 1.0, 0.0].iter().enumerate() {
+            assert!((sol.x[j] - want).abs() < 1e-12, "x{j} = {}", sol.x[j]);
+        }
+    }
+
+    /// `x + y = 1`, `x, y >= 0`, `x >= 2`: no point; and `0 = 1` (a variable-free equation).
+    #[test]
+    fn an_infeasible_lp_is_reported_infeasible() {
+        let mut lp = StabilityLp::zeros();
+        lp.a[(0, 0)] = 1.0;
+        lp.a[(0, 1)] = 1.0;
+        lp.b[0] = 1.0;
+        lp.c[0] = 1.0;
+        set(&mut lp, 0, &[-1.0, 0.0], 0.0);
+        set(&mut lp, 1, &[0.0, -1.0], 0.0);
+        set(&mut lp, 2, &[-1.0, 0.0], -2.0);
+        assert_eq!(solve(&lp, 200).status, LpStatus::Infeasible);
+        let mut lp = StabilityLp::zeros();
+        lp.b[3] = 1.0;
+        assert_eq!(solve(&lp, 200).status, LpStatus::Infeasible);
+    }
+
+    /// max x + y s.t. x + 2y <= 4, 3x + y <= 6, x, y >= 0 (written -10x <= 0, -10y <= 0 so that phase 0 starts
+    /// at the origin): optimum 2.8 at (1.6, 1.2). With a target of -1 the solve stops early at a feasible vertex
+    /// at least that good; with a target below the optimum it solves to the optimum.
+    #[test]
+    fn solve_until_stops_at_the_first_vertex_that_meets_the_target() {
+        let mut lp = StabilityLp::zeros();
+        lp.c[0] = -1.0;
+        lp.c[1] = -1.0;
+        set(&mut lp, 0, &[1.0, 2.0], 4.0);
+        set(&mut lp, 1, &[3.0, 1.0], 6.0);
+        set(&mut lp, 2, &[-10.0, 0.0], 0.0);
+        set(&mut lp, 3, &[0.0, -10.0], 0.0);
+        let full = solve(&lp, 200);
+        assert_eq!(full.status, LpStatus::Optimal);
+        assert!((full.objective + 2.8).abs() < 1e-12 && (full.x[0] - 1.6).abs() < 1e-12 && (full.x[1] - 1.2).abs() < 1e-12);
+        let early = solve_until(&lp, 200, Some(-1.0));
+        assert_eq!(early.status, LpStatus::TargetReached, "{early:?}");
+        assert!(early.objective <= -1.0 && early.objective > full.objective - 1e-12, "{}", early.objective);
+        let (x, y) = (early.x[0], early.x[1]);
+        assert!(x >= -1e-12 && y >= -1e-12 && x + 2.0 * y <= 4.0 + 1e-12 && 3.0 * x + y <= 6.0 + 1e-12);
+        assert!(early.iterations < full.iterations);
+        let unreachable = solve_until(&lp, 200, Some(-3.0));
+        assert_eq!(unreachable.status, LpStatus::Optimal);
+        assert_eq!(unreachable.objective, full.objective);
+    }
+
+    /// A budget too small for phase 2 is reported, not a wrong optimum (the LP of the test above).
+    #[test]
+    fn budget_exhaustion_is_reported() {
+        let mut lp = StabilityLp::zeros();
+        lp.c[0] = -1.0;
+        lp.c[1] = -1.0;
+        set(&mut lp, 0, &[1.0, 2.0], 4.0);
+        set(&mut lp, 1, &[3.0, 1.0], 6.0);
+        set(&mut lp, 2, &[-10.0, 0.0], 0.0);
+        set(&mut lp, 3, &[0.0, -10.0], 0.0);
+        assert_eq!(solve(&lp, 0).status, LpStatus::BudgetExhausted);
+    }
+}
