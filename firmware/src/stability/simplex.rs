@@ -17,7 +17,7 @@
 //!    `|T|` over equation rows and free columns each time, i.e. Gaussian elimination of `A`), then on the
 //!    inequalities (largest `|T|` again). An equation left without a pivot is a dependent row: dropped if its
 //!    right-hand side is zero to `EQ_TOL`, infeasible otherwise. A free variable's row is never a ratio-test row.
-//!    The free variables' rows then leave the table's active part: they are never ratio-test rows, and each
+//!    The artificials pivoted out are then dropped from the table. The free variables' rows then leave the table's active part: they are never ratio-test rows, and each
 //!    variable is read off its row at the end from the final values of phase 0's nonbasic slacks.
 //! 3. **Phase 1** (only if a slack is negative): one artificial column `t`, `-1` in every violated row, enters on
 //!    the most violated row, which makes every row feasible; the primal simplex then minimises `t`. A positive
@@ -85,8 +85,9 @@ fn u16_of(i: usize) -> u16 {
 }
 
 /// The condensed tableau with its two objective rows.
-struct Tableau {
-    t: [[f64; COLS]; ROWS],
+struct Tableau<'a> {
+    /// Lent by [`solve_until`] (a 12 KiB table is not moved around).
+    t: &'a mut [[f64; COLS]; ROWS],
     rhs: [f64; ROWS],
     basic: [Var; ROWS],
     nonbasic: [Var; COLS],
@@ -144,7 +145,7 @@ impl PivotRow {
     }
 }
 
-impl Tableau {
+impl Tableau<'_> {
     fn entry(&self, r: usize, k: usize) -> f64 {
         self.t.get(r).and_then(|row| row.get(k)).copied().unwrap_or(0.0)
     }
@@ -211,6 +212,43 @@ impl Tableau {
             *b = var;
             self.nr += 1;
         }
+    }
+
+    /// Remove the dead columns (the artificials phase 0 pivoted out), so that later exchanges do not update them.
+    fn drop_dead_columns(&mut self) {
+        let mut keep = [0usize; COLS];
+        let mut n = 0;
+        for (k, d) in self.dead.iter().enumerate().take(self.nc) {
+            if !*d {
+                if let Some(slot) = keep.get_mut(n) {
+                    *slot = k;
+                    n += 1;
+                }
+            }
+        }
+        let keep = keep.get(..n).unwrap_or(&[]);
+        // kept columns only move left (`dst <= src`), so one forward pass is enough
+        let squeeze = |row: &mut [f64; COLS]| {
+            for (dst, src) in keep.iter().enumerate() {
+                let v = get(row, *src);
+                if let Some(e) = row.get_mut(dst) {
+                    *e = v;
+                }
+            }
+        };
+        for row in self.t.iter_mut().take(self.nr) {
+            squeeze(row);
+        }
+        squeeze(&mut self.cost);
+        squeeze(&mut self.p1);
+        for (dst, src) in keep.iter().enumerate() {
+            let v = self.nonbasic_of(*src);
+            if let Some(e) = self.nonbasic.get_mut(dst) {
+                *e = v;
+            }
+        }
+        self.dead = [false; COLS];
+        self.nc = n;
     }
 
     /// Remove row `r` (a dependent equation), keeping the others in place order-free.
@@ -348,8 +386,9 @@ pub fn solve(lp: &StabilityLp, max_pivots: u32) -> LpSolution<LP_VARS> {
 /// ([`LpStatus::TargetReached`]: a feasible point, checked like an optimum, not necessarily optimal). Phase 2
 /// never raises the objective, so when the optimum is above the target the answer is [`solve`]'s.
 pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> LpSolution<LP_VARS> {
+    let mut table = [[0.0; COLS]; ROWS];
     let mut tab = Tableau {
-        t: [[0.0; COLS]; ROWS],
+        t: &mut table,
         rhs: [0.0; ROWS],
         basic: [Var::None; ROWS],
         nonbasic: [Var::None; COLS],
@@ -374,7 +413,7 @@ pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> Lp
     let mut col_of = [usize::MAX; LP_VARS];
     let mut a_live = [false; LP_EQS];
     let mut g_live = [false; LP_INEQS];
-    for (j, ((ac, gc), (c, slot))) in a_cols.clone().zip(g_cols.clone()).zip(lp.c.iter().zip(col_of.iter_mut())).enumerate() {
+    for (j, ((ac, gc), (c, slot))) in a_cols.clone().zip(g_cols.clone()).zip(lp.c.as_slice().iter().zip(col_of.iter_mut())).enumerate() {
         let mut live = *c != 0.0;
         for (l, v) in a_live.iter_mut().zip(ac).chain(g_live.iter_mut().zip(gc)) {
             if *v != 0.0 {
@@ -393,7 +432,7 @@ pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> Lp
     }
     // rows: equations (sign chosen so that the artificial starts nonnegative), then inequalities
     let mut a_row = [(usize::MAX, 1.0); LP_EQS];
-    for (p, ((live, b), slot)) in a_live.iter().zip(lp.b.iter()).zip(a_row.iter_mut()).enumerate() {
+    for (p, ((live, b), slot)) in a_live.iter().zip(lp.b.as_slice()).zip(a_row.iter_mut()).enumerate() {
         if !*live {
             if b.abs() > EQ_TOL {
                 return fail(LpStatus::Infeasible, 0);
@@ -405,7 +444,7 @@ pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> Lp
         tab.push_row(sign * b, Var::Art(u16_of(p)));
     }
     let mut g_row = [usize::MAX; LP_INEQS];
-    for (i, ((live, h), slot)) in g_live.iter().zip(lp.h.iter()).zip(g_row.iter_mut()).enumerate() {
+    for (i, ((live, h), slot)) in g_live.iter().zip(lp.h.as_slice()).zip(g_row.iter_mut()).enumerate() {
         if !*live {
             if *h < -FEAS_TOL {
                 return fail(LpStatus::Infeasible, 0);
@@ -415,15 +454,20 @@ pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> Lp
         *slot = tab.nr;
         tab.push_row(*h, Var::Slack(u16_of(i)));
     }
+    // the table is zero: write the nonzeros (a few per row)
     for ((ac, gc), k) in a_cols.zip(g_cols).zip(col_of.iter()) {
         for (v, (r, sign)) in ac.iter().zip(a_row.iter()) {
-            if let Some(e) = tab.t.get_mut(*r).and_then(|row| row.get_mut(*k)) {
-                *e = sign * v;
+            if *v != 0.0 {
+                if let Some(e) = tab.t.get_mut(*r).and_then(|row| row.get_mut(*k)) {
+                    *e = sign * v;
+                }
             }
         }
         for (v, r) in gc.iter().zip(g_row.iter()) {
-            if let Some(e) = tab.t.get_mut(*r).and_then(|row| row.get_mut(*k)) {
-                *e = *v;
+            if *v != 0.0 {
+                if let Some(e) = tab.t.get_mut(*r).and_then(|row| row.get_mut(*k)) {
+                    *e = *v;
+                }
             }
         }
     }
@@ -442,6 +486,7 @@ pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> Lp
             r += 1;
         }
     }
+    tab.drop_dead_columns();
     for k in 0..tab.nc {
         if matches!(tab.nonbasic_of(k), Var::X(_)) {
             if let Some(r) = tab.best_inequality_row(k) {
@@ -556,8 +601,20 @@ pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> Lp
         }
     }
     // 5. check against the original data
-    let ok_eq = (lp.a * x - lp.b).iter().zip(lp.b.iter()).all(|(r, b)| r.abs() <= CHECK_TOL * (1.0 + b.abs()));
-    let ok_in = (lp.g * x - lp.h).iter().zip(lp.h.iter()).all(|(r, h)| *r <= CHECK_TOL * (1.0 + h.abs()));
+    let mut r_a = [0.0; LP_EQS];
+    let mut r_g = [0.0; LP_INEQS];
+    for (r, b) in r_a.iter_mut().zip(lp.b.as_slice()).chain(r_g.iter_mut().zip(lp.h.as_slice())) {
+        *r = -b;
+    }
+    for ((ac, gc), xj) in lp.a.as_slice().chunks_exact(LP_EQS).zip(lp.g.as_slice().chunks_exact(LP_INEQS)).zip(x.as_slice()) {
+        if *xj != 0.0 {
+            for (r, a) in r_a.iter_mut().zip(ac).chain(r_g.iter_mut().zip(gc)) {
+                *r += a * xj;
+            }
+        }
+    }
+    let ok_eq = r_a.iter().zip(lp.b.as_slice()).all(|(r, b)| r.abs() <= CHECK_TOL * (1.0 + b.abs()));
+    let ok_in = r_g.iter().zip(lp.h.as_slice()).all(|(r, h)| *r <= CHECK_TOL * (1.0 + h.abs()));
     let objective = lp.c.dot(&x);
     if !(ok_eq && ok_in && objective.is_finite()) {
         return fail(LpStatus::NumericalFailure, tab.pivots);

@@ -24,6 +24,9 @@
 //! | `pose_stability_plane_30deg` | [`firmware::rover::check_pose_stability`] of the settled pose, tether to an anchor upslope | Paton et al. IV-C |
 //! | `stability_lp_interior_point` | the margin LP of that pose's inline boom (two wheel contacts, taut tether) by [`firmware::stability::lp`] (the interior-point method) | Paton et al. IV-C |
 //! | `stability_lp_simplex` | the same LP by [`firmware::stability::simplex`] (the flight solver) | Paton et al. IV-C |
+//! | `stability_lp_batch_build` | [`lp_batch`]: building the 96 margin LPs of 48 real Axel poses (0/25/50 deg, 8 yaws, anchor up or downslope; boom inline and in contact) | Paton et al. IV-C |
+//! | `stability_lp_batch_interior_point` | building and solving them by the interior-point method | Paton et al. IV-C |
+//! | `stability_lp_batch_simplex` | building and solving them by the simplex | Paton et al. IV-C |
 //! | `abit_wall_gap_r2` | ABIT* on [`geometric::wall_gap`] in R^2, [`ABIT_ITERATIONS`] iterations, seed [`ABIT_SEED`] | Strub & Gammell |
 //! | `team_local_plan` | [`team::local_plan_workload`] (scan, cull, hop graph, A*) | Morad et al. |
 //! | `team_dstar_replan` | [`team::dstar_workload`] (plan, move, crevasse, replan) | Morad et al. |
@@ -87,6 +90,7 @@ pub mod config;
 pub mod geometric;
 pub mod ledge;
 pub mod ledge_pole;
+pub mod lp_batch;
 pub mod team;
 
 /// One workload's result in one line (at most 240 bytes; longer text is cut).
@@ -342,6 +346,18 @@ pub fn run_all(arenas: &mut Arenas<'_>, h: &mut impl Harness) {
         }
     }
 
+    // The margin LP over a batch of real poses, by both solvers.
+    let batch = lp_batch::problems();
+    for (name, pass) in [
+        ("stability_lp_batch_build", lp_batch::Pass::Build),
+        ("stability_lp_batch_interior_point", lp_batch::Pass::InteriorPoint),
+        ("stability_lp_batch_simplex", lp_batch::Pass::Simplex),
+    ] {
+        let mut r = lp_batch::BatchResult::default();
+        h.measure(name, &mut || r = lp_batch::run(&batch, pass));
+        h.result(name, &line(format_args!("problems={} optimal={} margin_sum={}", r.problems, r.optimal, r.margin_sum)));
+    }
+
     // ABIT* on the wall with a gap.
     let problem = wall_gap::<2>("wall_gap_r2");
     let pdef = ProblemDefinition {
@@ -540,7 +556,7 @@ mod tests {
             std::eprintln!("{n}: {s}");
         }
         let get = |n: &str| h.0.iter().find(|(k, _)| *k == n).map(|(_, s)| s.clone()).unwrap_or_default();
-        assert_eq!(h.0.len(), 10, "{:?}", h.0);
+        assert_eq!(h.0.len(), 13, "{:?}", h.0);
 
         // settle: the analytic answer, axle one wheel radius above the plane, up axis = normal
         let plane = InclinedPlane::new(PLANE_SLOPE_DEG.to_radians());
@@ -572,6 +588,17 @@ mod tests {
         assert!(get("stability_lp_simplex").starts_with("Optimal "), "{}", get("stability_lp_simplex"));
         let (m_ipm, m_spx) = (margin("stability_lp_interior_point"), margin("stability_lp_simplex"));
         assert!(m_spx > 0.0 && (m_ipm - m_spx).abs() < 1e-7, "{m_ipm} vs {m_spx}");
+        // the batch: every problem solved by both, the same margins (to the interior point's tolerance)
+        let batch = |name: &str| {
+            let s = get(name);
+            let f = |key: &str| s.split(' ').find_map(|w| w.strip_prefix(key)).and_then(|m| m.parse::<f64>().ok());
+            (f("problems=").unwrap_or(0.0), f("optimal=").unwrap_or(-1.0), f("margin_sum=").unwrap_or(f64::NAN))
+        };
+        let (n, _, _) = batch("stability_lp_batch_build");
+        let (n_ipm, opt_ipm, sum_ipm) = batch("stability_lp_batch_interior_point");
+        let (n_spx, opt_spx, sum_spx) = batch("stability_lp_batch_simplex");
+        assert!(n >= 60.0 && n == n_ipm && n == n_spx && opt_ipm == n && opt_spx == n, "{n} {opt_ipm} {opt_spx}");
+        assert!((sum_ipm - sum_spx).abs() < 1e-7 * n, "{sum_ipm} vs {sum_spx}");
 
         // ABIT*: a solution through the gap, never shorter than the analytic optimum
         let s = get("abit_wall_gap_r2");
