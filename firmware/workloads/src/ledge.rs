@@ -50,6 +50,12 @@ pub const POLE_CENTRE_XY: [f64; 2] = [-2.5, 0.0];
 /// A point or vector in f64, metres.
 type P = P3;
 
+/// Squared distance.
+fn dist2(a: P, b: P) -> f64 {
+    let v = sub(a, b);
+    dot(v, v)
+}
+
 /// `tan(55 deg)`.
 fn slope_tan() -> f64 {
     libm::tan(SLOPE_DEG.to_radians())
@@ -110,7 +116,7 @@ impl Face {
         let mut bd = f64::INFINITY;
         for (a, b) in edges(&self.verts) {
             let c = closest_on_segment(q, a, b);
-            let d = dist(q, c);
+            let d = dist2(q, c);
             if d < bd {
                 bd = d;
                 best = c;
@@ -231,8 +237,9 @@ impl Ledge {
     fn closest_boundary(&self, q: P) -> (P, P) {
         let mut best = ([0.0; 3], [0.0, 0.0, 1.0]);
         let mut bd = f64::INFINITY;
+        // candidates compared by squared distance: one square root per query (in `sdf`), not one per candidate
         let mut consider = |c: P, n: P| {
-            let d = dist(q, c);
+            let d = dist2(q, c);
             if d < bd {
                 bd = d;
                 best = (c, n);
