@@ -1,5 +1,9 @@
-//! The flight core's stability LP solver (`firmware::stability::lp`, Mehrotra interior point, no_std) against
-//! clarabel (host-only interior-point conic solver) on random stability problems.
+//! The flight core's two stability LP solvers (`firmware::stability::simplex`, the dense simplex that flies, and
+//! `firmware::stability::lp`, the Mehrotra interior-point fallback; both no_std) against clarabel (host-only
+//! interior-point conic solver) on random stability problems.
+//!
+//! The simplex, an exact vertex method, must answer `Optimal` on every instance clarabel solves and `Infeasible`
+//! on every instance clarabel finds primal infeasible, with the same margin tolerance as below.
 //!
 //! Stated tolerance: when clarabel solves the margin LP, ours must report `Optimal` and the optimal margins must
 //! agree within 1e-6 (1 + |margin|) (margins are fractions of the rover's weight). Feasibility: clarabel's verdict on the `s = 0` slice

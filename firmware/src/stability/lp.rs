@@ -1,4 +1,6 @@
-//! A fixed-size, sparsity-exploiting linear-program solver for the flight core: Mehrotra predictor-corrector
+//! The fallback of the stability LP (the simplex, [`super::simplex`], solves it first; this method when the
+//! simplex runs out of exchanges or fails its residual check): a fixed-size, sparsity-exploiting linear-program
+//! solver, Mehrotra predictor-corrector
 //! primal-dual interior point method (Wright, *Primal-Dual Interior-Point Methods*, SIAM 1997, ch. 10;
 //! Vandenberghe, *The CVXOPT linear and quadratic cone program solvers*, 2010, section 3 for the reduced KKT system).
 //!
@@ -43,9 +45,7 @@
 //! (relative residual and gap tolerance, `config::stability::SOLVER_TOLERANCE`, default 1e-9); internal constants
 //! `DUAL_TOL_FACTOR = 1000`, `ALMOST_FACTOR = 100`, `REFINE_SPREAD = 1e6`.
 //!
-//! Cost (stability LP, see the `stability` module docs for the measurements): the dense version (dense `G'WG`,
-//! 26 x 26 Cholesky, both directions refined, all 51 rows) took 102 M instructions on the emulated Cortex-M7 for
-//! the `pose_stability_plane_30deg` workload; this one takes 16.2 M, with the same iteration counts.
+//! Cost against the simplex, per solve on the emulated board: `host-sim/doc/board_test3.md`.
 
 use nalgebra::{Cholesky, SMatrix, SVector};
 

@@ -38,29 +38,21 @@
 //! contacts (the quantity (9) tries to keep small).
 //!
 //! # Solver
-//! [`lp`]: a Mehrotra primal-dual interior point method in `f64` over fixed-size storage, bounded by
-//! `config::stability::SOLVER_MAX_ITERATIONS` (the LP has [`LP_VARS`] variables, 6 equations and [`LP_INEQS`]
-//! inequalities). It exploits the LP's structure: unused contact slots and the moment rows of point contacts are
-//! compacted away, every friction/moment row touches only one force or moment, the contact's normal force and the
-//! margin, so `G'WG` is assembled from the nonzeros of `G` and factorised by a sparse Cholesky with almost no fill;
-//! only the corrector direction is refined, and only once `z / s` is spread over six orders of magnitude.
-//! Stack use of one solve is a few tens of KiB. `f64` is kept: the margins must agree with clarabel to
-//! `1e-6 (1 + |s|)` and the LP's `z / s` spans over 10 orders of magnitude near the optimum, beyond `f32`.
-//!
-//! Cost (the dense solver it replaced in brackets; same iteration counts, same verdicts):
-//! - Emulated Cortex-M7 (soft-float `f64`), `cargo run -p host-sim --bin tetherbot -- board bench --build`,
-//!   workload `pose_stability_plane_30deg` ([`crate::rover::check_pose_stability`], two LP solves, 9 iterations
-//!   for the chosen one): 16.2 M instructions (102.4 M), 6.3x.
-//! - Host (x86-64, criterion, `cargo bench -p host-sim --bench traversability -- stability`, measured back to back
-//!   on a loaded 2-core machine): 2-contact LP 49 us (261 us), 3-contact LP 70 us (273 us), `check_pose_stability`
-//!   143 us (537 us).
-//! - Agreement with clarabel on 10,000 random problems (`cargo test -p tests --test stability -- --ignored`):
-//!   every margin within `1e-6 (1 + |s|)` (largest absolute difference 4.8e-6; the dense solver: 4.9e-6), at most
-//!   17 iterations (dense: 23), every verdict equal.
+//! [`simplex`] first: a dense primal simplex on a condensed tableau. The LP is small (at most [`LP_VARS`]
+//! variables, [`LP_EQS`] equations and [`LP_INEQS`] inequalities, 14 x 6 x 27 for two wheel contacts) and its
+//! optimum is a vertex, so a few dozen exchanges on a table of a few hundred numbers decide it. The simplex proves
+//! "no equilibrium at all" (phase 1 ends positive: [`UnknownReason::NoEquilibrium`]) and checks every answer's
+//! residuals against the LP; when it runs out of exchanges (`config::stability::SIMPLEX_MAX_PIVOTS`) or fails that
+//! check, [`lp`], a Mehrotra primal-dual interior-point method (`SOLVER_MAX_ITERATIONS`), solves the LP instead.
+//! Callers that need only a verdict ([`check_stability_at_least`]) let the simplex stop at the first vertex with
+//! the margin they ask for. Both solvers work in `f64`: the margins must agree with clarabel to `1e-6 (1 + |s|)`.
+//! Agreement with clarabel on 10,000 random problems: `tests/tests/stability.rs`; the cost of both solvers on
+//! the board, side by side: `host-sim/doc/board_test3.md` ("The margin LP by a simplex").
 //!
 //! # Parameters (`config::stability`)
 //! - `MAX_CONTACTS = 4`: contacts per problem.
-//! - `SOLVER_MAX_ITERATIONS = 50`, `SOLVER_TOLERANCE = 1e-9`: LP budget and tolerance.
+//! - `SIMPLEX_MAX_PIVOTS = 200`: exchange budget of the simplex (phases 1 and 2).
+//! - `SOLVER_MAX_ITERATIONS = 50`, `SOLVER_TOLERANCE = 1e-9`: budget and tolerance of the interior-point fallback.
 //! - `MIN_MARGIN = 0.0`: margin needed to call a pose stable.
 //! - `MARGIN_CAP = 1.0`: upper bound of `s` (keeps the LP bounded).
 //! - `NORMAL_FORCE_CAP = 10.0`: largest normal load per contact, in rover weights.
