@@ -13,7 +13,8 @@
 //!    merged into their longer neighbour; more than three runs keep the first and last tether-free runs (rim, floor)
 //!    and make everything between one wall. No tether-demand run: [`DemError::NoTetherDemand`].
 //! 3. **Fits.** Each run's posts in the corridor get a least-squares plane `z = a + b x + c y`, fitted twice: the
-//!    second fit leaves out posts more than `step_m` off the first (rocks must not tilt the plane). Neighbouring
+//!    second fit leaves out posts more than `step_m` off the first (rocks must not tilt the plane); posts within a
+//!    post spacing of a run's ends are left out when the run is longer than 4 spacings. Neighbouring
 //!    planes less than [`MIN_FOLD_DEG`] apart are fitted as one.
 //! 4. **Fold lines.** Consecutive planes meet along [`plane_intersection`]; from here on a post belongs to the plane
 //!    between the fold lines around it (not to its profile run), so the planes join exactly. Each fold line must
@@ -26,8 +27,8 @@
 //!    outline is the unfolded corridor: 4 + 2 x (planes - 1) corners.
 //! 6. **Obstacles.** A post (within the corridor grown by the footprint) is an obstacle when it protrudes from or
 //!    is hollow against its plane by more than `step_m`, when the height range of its 3 x 3 neighbourhood's
-//!    residuals exceeds `step_m` (too rough), or when its local normal is tilted more than `max_tilt_rad` from its
-//!    plane's (too steep). 4-connected components become octagons (8-DOPs, directions k x 45 deg) around their
+//!    residuals exceeds `step_m` (too rough), or when its local normal is tilted more than `max_tilt_rad` from every
+//!    plane's (too steep; a post on a fold line carries both planes' slopes in its gradient). 4-connected components become octagons (8-DOPs, directions k x 45 deg) around their
 //!    unfolded cell corners grown by `footprint_m` (the support of the cells' hull plus the footprint in each
 //!    direction, so every obstacle cell and everything within the footprint of it is inside). Overlapping octagons
 //!    are merged (support-wise maximum); beyond [`MAX_DEM_OBSTACLES`] the closest pair is merged (bigger obstacles
@@ -573,6 +574,35 @@ fn merge_short_runs(runs: &mut HVec<Run, MAX_PROFILE_BINS>, min_len: f64) {
 }
 
 impl DemDescent {
+    /// Fold lines between consecutive planes, clipped to the corridor sides (step 4 of the module docs).
+    fn compute_folds(&mut self, s_lo: f64, s_hi: f64, hw: f64) -> Result<(), DemError> {
+        self.folds.clear();
+    let mut prev_s = [s_lo, s_lo];
+    for k in 0..self.planes.len().saturating_sub(1) {
+        let (Some(a), Some(b)) = (self.planes.get(k), self.planes.get(k + 1)) else { break };
+        let (p, l) = plane_intersection(&a.plane, &b.plane).ok_or(DemError::FoldOutsideCorridor)?;
+        let angle = libm::acos(dot(a.plane.normal, b.plane.normal).clamp(-1.0, 1.0));
+        // Where the line's ground track meets t = -hw and t = +hw.
+        let lt = l[0] * self.left[0] + l[1] * self.left[1];
+        if lt.abs() < 1e-6 {
+            return Err(DemError::FoldOutsideCorridor);
+        }
+        let mut ends = [[0.0; 3]; 2];
+        for (e, t) in ends.iter_mut().zip([-hw, hw]) {
+            let lam = (t - self.t_of([p[0], p[1]])) / lt;
+            *e = [p[0] + lam * l[0], p[1] + lam * l[1], p[2] + lam * l[2]];
+        }
+        let [er, el] = ends;
+        let ss = [self.s_of([er[0], er[1]]), self.s_of([el[0], el[1]])];
+        if ss.iter().zip(prev_s.iter()).any(|(s, ps)| !(*s > *ps && *s < s_hi)) {
+            return Err(DemError::FoldOutsideCorridor);
+        }
+        prev_s = ss;
+        let _ = self.folds.push(Fold { right: er, left: el, right_2d: Pt::default(), left_2d: Pt::default(), angle_rad: angle });
+    }
+        Ok(())
+    }
+
     fn s_of(&self, xy: [f64; 2]) -> f64 {
         (xy[0] - self.a0_xy[0]) * self.dir[0] + (xy[1] - self.a0_xy[1]) * self.dir[1]
     }
@@ -756,9 +786,12 @@ impl DemDescent {
 
         // 3. Fits (two passes), merging near-parallel neighbours.
         let fit_band = |d: &DemDescent, from: f64, to: f64| -> Result<(BandPlane, [f64; 3]), DemError> {
+            // Posts within a post spacing of a run's end carry the neighbour's slope in their gradient: left out
+            // when the run is long enough.
+            let trim = if to - from > 4.0 * res { res } else { 0.0 };
             let sel = |xy: [f64; 2]| {
                 let s = d.s_of(xy);
-                in_corridor(d, xy) && s >= from && s <= to
+                in_corridor(d, xy) && s >= from + trim && s <= to - trim
             };
             let (c1, _, _) = fit_plane(tile, a0, |_, _, xy, _| sel(xy)).ok_or(DemError::FitFailed)?;
             let off = |xy: [f64; 2], z: f64, c: &[f64; 3]| z - (c[0] + c[1] * (xy[0] - a0[0]) + c[2] * (xy[1] - a0[1]));
@@ -791,6 +824,34 @@ impl DemDescent {
             }
             bands.remove(i + 1);
         }
+
+        // 4. Fold lines clipped to the corridor sides; then each plane is refitted on the posts between its fold
+        // lines (more than two post spacings from them), and the folds found again (twice): a profile run's ends
+        // are straight across the descent, a crease need not be.
+        d.compute_folds(s_lo, s_hi, hw)?;
+        for _ in 0..2 {
+            for k in 0..d.planes.len() {
+                let Some(cur) = d.planes.get(k).copied() else { break };
+                let sel = |xy: [f64; 2], z: f64| {
+                    let q = Pt { x: xy[0], y: xy[1] };
+                    in_corridor(&d, xy)
+                        && d.region_of(xy) == k
+                        && (z - cur.height_at(xy[0], xy[1])).abs() <= params.step_m
+                        && d.folds.iter().all(|f| {
+                            let (a, b) = (Pt { x: f.right[0], y: f.right[1] }, Pt { x: f.left[0], y: f.left[1] });
+                            orient(a, b, q).abs() > 2.0 * res * a.dist(b)
+                        })
+                };
+                let Some((c, n, rms)) = fit_plane(tile, a0, |_, _, xy, z| sel(xy, z)) else { continue };
+                let nn = libm::sqrt(c[1] * c[1] + c[2] * c[2] + 1.0);
+                let plane = TerrainPlane { origin: [a0[0], a0[1], c[0]], normal: [-c[1] / nn, -c[2] / nn, 1.0 / nn], traction_mu: params.mu };
+                if let Some(p) = d.planes.get_mut(k) {
+                    *p = BandPlane { plane, class: plane.classify(), posts: n, rms_m: rms, ..cur };
+                }
+            }
+            d.compute_folds(s_lo, s_hi, hw)?;
+        }
+
         d.reference = d
             .planes
             .iter()
@@ -799,31 +860,6 @@ impl DemDescent {
             .max_by(|a, b| a.1.plane.slope_rad().total_cmp(&b.1.plane.slope_rad()))
             .map(|(i, _)| i)
             .ok_or(DemError::NoTetherDemand)?;
-
-        // 4. Fold lines clipped to the corridor sides.
-        let mut prev_s = [s_lo, s_lo];
-        for k in 0..d.planes.len().saturating_sub(1) {
-            let (Some(a), Some(b)) = (d.planes.get(k), d.planes.get(k + 1)) else { break };
-            let (p, l) = plane_intersection(&a.plane, &b.plane).ok_or(DemError::FoldOutsideCorridor)?;
-            let angle = libm::acos(dot(a.plane.normal, b.plane.normal).clamp(-1.0, 1.0));
-            // Where the line's ground track meets t = -hw and t = +hw.
-            let lt = l[0] * d.left[0] + l[1] * d.left[1];
-            if lt.abs() < 1e-6 {
-                return Err(DemError::FoldOutsideCorridor);
-            }
-            let mut ends = [[0.0; 3]; 2];
-            for (e, t) in ends.iter_mut().zip([-hw, hw]) {
-                let lam = (t - d.t_of([p[0], p[1]])) / lt;
-                *e = [p[0] + lam * l[0], p[1] + lam * l[1], p[2] + lam * l[2]];
-            }
-            let [er, el] = ends;
-            let ss = [d.s_of([er[0], er[1]]), d.s_of([el[0], el[1]])];
-            if ss.iter().zip(prev_s.iter()).any(|(s, ps)| !(*s > *ps && *s < s_hi)) {
-                return Err(DemError::FoldOutsideCorridor);
-            }
-            prev_s = ss;
-            let _ = d.folds.push(Fold { right: er, left: el, right_2d: Pt::default(), left_2d: Pt::default(), angle_rad: angle });
-        }
 
         // 5. Unfolding towards the reference plane.
         let np = d.planes.len();
@@ -912,14 +948,11 @@ impl DemDescent {
                     hi_e = hi_e.max(x);
                 }
             }
-            let k = d.region_of(xy);
-            let steep = match (tile.gradient(r, c), d.planes.get(k)) {
-                (Some((gx, gy)), Some(p)) => {
-                    let nl = libm::sqrt(gx * gx + gy * gy + 1.0);
-                    dot([-gx / nl, -gy / nl, 1.0 / nl], p.plane.normal) < cos_tilt
-                }
-                _ => false,
-            };
+            // Too steep: tilted from every plane of the descent (posts on a fold carry both planes' slopes).
+            let steep = tile.gradient(r, c).is_some_and(|(gx, gy)| {
+                let nl = libm::sqrt(gx * gx + gy * gy + 1.0);
+                d.planes.iter().all(|p| dot([-gx / nl, -gy / nl, 1.0 / nl], p.plane.normal) < cos_tilt)
+            });
             if e.abs() > params.step_m || hi_e - lo_e > params.step_m || steep {
                 *m = OBST;
                 d.blocked_posts += 1;
@@ -1165,4 +1198,203 @@ pub enum RouteError {
     Capacity,
     /// A point could not be folded back (degenerate planes).
     Geometry,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plan::homotopy::btm::Btm;
+    use crate::plan::homotopy::plan::{preplan, HomotopyParams, PlanReport, Workspace};
+    use std::boxed::Box;
+    use std::vec::Vec;
+
+    const RES: f64 = 0.2;
+    const ROWS: usize = 100;
+    const COLS: usize = 60;
+    const RIM_Y: f64 = 14.0;
+    const FLOOR_Y: f64 = 6.0;
+    const RIM_Z: f64 = 20.0;
+
+    /// Rim (flat, y > 14), a wall at `alpha` (6 < y < 14, rising with y), a flat floor (y < 6); `rock` adds a
+    /// 1 m high block over the given world box.
+    fn crater(alpha_deg: f64, rocks: &[[f64; 4]]) -> Box<HeightTile> {
+        let t = libm::tan(alpha_deg.to_radians());
+        let z = |x: f64, y: f64| {
+            let base = RIM_Z - t * (RIM_Y - y.clamp(FLOOR_Y, RIM_Y));
+            let bump = rocks.iter().any(|r| x >= r[0] && x <= r[1] && y >= r[2] && y <= r[3]);
+            base + if bump { 1.0 } else { 0.0 }
+        };
+        let mut h = Vec::new();
+        for r in 0..ROWS {
+            for c in 0..COLS {
+                h.push(z(c as f64 * RES, r as f64 * RES) as f32);
+            }
+        }
+        let mut tile = Box::new(HeightTile::new());
+        tile.load([0.0, 0.0], RES, ROWS, COLS, &h).unwrap();
+        tile
+    }
+
+    fn descent(tile: &HeightTile, a0: [f64; 2], g: [f64; 2]) -> Result<DemDescent, DemError> {
+        descent_hw(tile, a0, g, 4.0)
+    }
+    fn descent_hw(tile: &HeightTile, a0: [f64; 2], g: [f64; 2], hw: f64) -> Result<DemDescent, DemError> {
+        let p = DemParams::for_rover(&RoverParams::AXEL, 0.6, hw);
+        DemDescent::segment(tile, a0, g, &p, &mut Box::new(DemScratch::new()))
+    }
+
+    /// The three planes of a synthetic crater come back with their closed-form slopes and normals (tolerance
+    /// 0.05 deg and 1e-3 on each normal component), the fold lines at the creases (within one post spacing).
+    #[test]
+    fn synthetic_crater_segments_into_rim_wall_floor() {
+        for alpha in [45.0f64, 60.0] {
+            let d = descent(&crater(alpha, &[]), [6.0, 18.0], [6.0, 2.0]).unwrap();
+            assert_eq!(d.planes.len(), 3, "alpha {alpha}");
+            assert_eq!(d.reference, 1);
+            let want = [0.0, alpha, 0.0];
+            for (p, w) in d.planes.iter().zip(want) {
+                assert!((p.plane.slope_rad().to_degrees() - w).abs() < 0.05, "alpha {alpha}: {:?}", p.plane);
+                let a = w.to_radians();
+                let n = [0.0, -libm::sin(a), libm::cos(a)];
+                for (x, y) in p.plane.normal.iter().zip(n) {
+                    assert!((x - y).abs() < 1e-3, "{:?} vs {n:?}", p.plane.normal);
+                }
+            }
+            assert_eq!(d.planes.iter().map(|p| p.class).collect::<Vec<_>>(), [PlaneClass::TetherFree, PlaneClass::TetherDemand, PlaneClass::TetherFree]);
+            for (f, y) in d.folds.iter().zip([RIM_Y, FLOOR_Y]) {
+                assert!((f.right[1] - y).abs() < RES && (f.left[1] - y).abs() < RES, "{f:?}");
+            }
+            assert!(d.obstacles.is_empty() && d.edge_obstacles.is_empty(), "a smooth crater has no obstacles: {d:?}");
+        }
+    }
+
+    /// A straight taut tether over the rim and down the wall to the floor is one straight segment unfolded; its 3D
+    /// length on the planes is the closed-form unfolded length sqrt(dx^2 + (rim + wall / cos alpha + floor)^2), and
+    /// every point of the world polyline lies on the terrain.
+    #[test]
+    fn unfolding_makes_a_taut_tether_over_the_rim_straight() {
+        let alpha = 55.0f64;
+        let tile = crater(alpha, &[]);
+        let (a0, g) = ([4.0, 17.0], [8.0, 3.0]);
+        let d = descent_hw(&tile, a0, g, 2.0).unwrap();
+        let along = (a0[1] - RIM_Y) + (RIM_Y - FLOOR_Y) / libm::cos(alpha.to_radians()) + (FLOOR_Y - g[1]);
+        let closed = libm::hypot(g[0] - a0[0], along);
+        assert!((d.a0.dist(d.g) - closed).abs() < 1e-3, "{} vs {closed}", d.a0.dist(d.g));
+        let mut w: HVec<V3, MAX_WORLD_PATH> = HVec::new();
+        d.polyline_to_world(&[d.a0, d.g], &mut w).unwrap();
+        assert_eq!(w.len(), 4, "breaks at both fold lines: {w:?}");
+        let len: f64 = w.windows(2).map(|p| dist3(p[0], p[1])).sum();
+        assert!((len - closed).abs() < 1e-3, "{len} vs {closed}");
+        for p in w.iter() {
+            let z = tile.height_at(p[0], p[1]).unwrap();
+            assert!((p[2] - z).abs() < 0.02, "{p:?} off the terrain ({z})");
+        }
+        // The ends come back where they started.
+        assert!(dist3(w[0], [a0[0], a0[1], RIM_Z]) < 1e-6 && dist3(w[3], [g[0], g[1], RIM_Z - libm::tan(alpha.to_radians()) * 8.0]) < 1e-6);
+        // Folding back is the inverse of unfolding.
+        for xy in [[1.0, 19.0], [7.0, 10.0], [10.0, 1.0]] {
+            let p = d.unfold_xy(xy).unwrap();
+            let q = d.fold_back(p).unwrap();
+            assert!((q[0] - xy[0]).abs() < 1e-9 && (q[1] - xy[1]).abs() < 1e-9, "{xy:?} -> {q:?}");
+        }
+    }
+
+    /// Every obstacle post's cell lies inside an inflated octagon, at least the footprint away from its boundary.
+    #[test]
+    fn obstacles_are_inflated_by_the_footprint() {
+        let rocks = [[4.0, 5.0, 10.0, 11.0], [7.6, 8.0, 8.0, 8.8]];
+        let tile = crater(50.0, &rocks);
+        let d = descent(&tile, [6.0, 18.0], [6.0, 2.0]).unwrap();
+        let fp = DemParams::for_rover(&RoverParams::AXEL, 0.6, 4.0).footprint_m;
+        assert!((fp - libm::sqrt(0.5 * 0.5 + 0.35 * 0.35)).abs() < 1e-6);
+        assert!(d.blocked_posts > 0 && !d.obstacles.is_empty());
+        let all: Vec<&Octagon> = d.obstacles.iter().chain(d.edge_obstacles.iter()).collect();
+        let mut checked = 0;
+        for r in 0..ROWS {
+            for c in 0..COLS {
+                let [x, y] = tile.post_xy(r, c);
+                if !rocks.iter().any(|b| x >= b[0] && x <= b[1] && y >= b[2] && y <= b[3]) {
+                    continue;
+                }
+                for (dx, dy) in [(-0.1, -0.1), (0.1, -0.1), (0.1, 0.1), (-0.1, 0.1)] {
+                    let p = d.unfold_xy([x + dx, y + dy]).unwrap();
+                    let ok = all.iter().any(|o| {
+                        point_in_polygon(p, o, true)
+                            && polygon_edges(o).all(|(a, b)| {
+                                let t = ((p - a).dot(b - a) / (b - a).dot(b - a)).clamp(0.0, 1.0);
+                                p.dist(a + (b - a) * t) >= fp - 1e-9
+                            })
+                    });
+                    assert!(ok, "rock cell corner ({}, {}) not inside an inflated obstacle", x + dx, y + dy);
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 40, "{checked}");
+        for o in all {
+            assert!(o.len() <= MAX_OBSTACLE_VERTICES && o.len() >= 3);
+        }
+    }
+
+    /// Bad tiles are refused with their reason, and the previous tile is kept.
+    #[test]
+    fn bad_tiles_are_rejected_and_the_previous_tile_kept() {
+        let mut t = crater(50.0, &[]);
+        let before = t.height(50, 30);
+        let ok = [1.0f32; 12];
+        let mut nan = ok;
+        nan[5] = f32::NAN;
+        assert_eq!(t.load([0.0, 0.0], 0.5, 3, 4, &nan), Err(TileError::NotFinite(5)));
+        assert_eq!(t.load([0.0, 0.0], 0.0, 3, 4, &ok), Err(TileError::Resolution(0.0)));
+        assert_eq!(t.load([0.0, 0.0], 50.0, 3, 4, &ok), Err(TileError::Resolution(50.0)));
+        assert!(matches!(t.load([0.0, 0.0], f64::NAN, 3, 4, &ok), Err(TileError::Resolution(_))));
+        assert_eq!(t.load([0.0, 0.0], 0.5, 3, 5, &ok), Err(TileError::Length { expected: 15, got: 12 }));
+        assert_eq!(t.load([0.0, 0.0], 0.5, MAX_TILE_SIDE + 1, 4, &ok), Err(TileError::TooLarge { rows: MAX_TILE_SIDE + 1, cols: 4 }));
+        assert_eq!(t.load([f64::INFINITY, 0.0], 0.5, 3, 4, &ok), Err(TileError::Origin));
+        assert_eq!(t.load([0.0, 0.0], 0.5, 0, 4, &[]), Err(TileError::Empty));
+        assert_eq!(t.shape(), (ROWS, COLS));
+        assert_eq!(t.height(50, 30), before);
+        // Descents the tile cannot carry.
+        assert_eq!(descent(&t, [6.0, 18.0], [6.0, 18.0]).unwrap_err(), DemError::BadInput);
+        assert_eq!(descent(&t, [6.0, 18.0], [6.0, -5.0]).unwrap_err(), DemError::CorridorOutsideTile);
+        assert_eq!(descent(&crater(10.0, &[]), [6.0, 18.0], [6.0, 2.0]).unwrap_err(), DemError::NoTetherDemand);
+        assert_eq!(descent(&crater(50.0, &[[5.0, 7.0, 17.0, 19.0]]), [6.0, 18.0], [6.0, 2.0]).unwrap_err(), DemError::StartBlocked);
+    }
+
+    /// The rim and floor hold at any tether angle, the wall only within theta_max of upslope.
+    #[test]
+    fn hold_model_frees_the_rim_and_floor() {
+        let d = descent(&crater(55.0, &[]), [6.0, 18.0], [6.0, 2.0]).unwrap();
+        let m = d.hold_model();
+        let tmax = crate::plan::homotopy::planes::theta_max(55f64.to_radians(), 0.6);
+        let (rim, wall, floor) = (d.unfold_xy([6.0, 17.0]).unwrap(), d.unfold_xy([6.0, 10.0]).unwrap(), d.unfold_xy([6.0, 3.0]).unwrap());
+        assert_eq!(m.theta_max_at(rim), core::f64::consts::PI);
+        assert_eq!(m.theta_max_at(floor), core::f64::consts::PI);
+        assert!((m.theta_max_at(wall) - tmax).abs() < 1e-3, "{} vs {tmax}", m.theta_max_at(wall));
+    }
+
+    /// A plan on a rocky wall maps back to the world: the tether's 3D length (summed here) equals the SHP's
+    /// unfolded length, and the payout limit refuses it when it is shorter than that.
+    #[test]
+    fn world_route_length_and_payout_refusal() {
+        let tile = crater(50.0, &[[4.5, 5.5, 10.0, 11.0], [6.5, 7.5, 7.5, 8.5]]);
+        let d = descent(&tile, [6.0, 18.0], [6.0, 2.0]).unwrap();
+        let mut btm = Box::new(Btm::new());
+        d.build_btm(&mut btm).unwrap();
+        let mut ws = Box::new(Workspace::default());
+        let (mut lc, mut rep) = (HVec::new(), PlanReport::default());
+        let plan = preplan(&btm, &d.hold_model(), &HomotopyParams::default(), &mut ws, d.a0, d.g, &mut lc, &mut rep)
+            .unwrap()
+            .expect("a plan on the rocky wall");
+        let r = d.route_to_world(&tile, &plan, 100.0).unwrap();
+        let summed: f64 = r.tether.windows(2).map(|w| dist3(w[0], w[1])).sum();
+        assert!((summed - plan.shp.length()).abs() < 1e-6, "{summed} vs {}", plan.shp.length());
+        assert_eq!(r.anchors.len(), plan.anchors.len());
+        assert!(r.waypoints.len() >= plan.descent.len());
+        let too_short = 0.9 * summed;
+        assert_eq!(
+            d.route_to_world(&tile, &plan, too_short).unwrap_err(),
+            RouteError::TetherTooLong { needed_m: r.tether_length_m, max_payout_m: too_short }
+        );
+    }
 }
