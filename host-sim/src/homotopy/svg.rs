@@ -26,6 +26,10 @@ impl Svg {
         }
         Svg { body: String::new(), scale, min, max }
     }
+    /// A canvas for the box `min..max` at `scale` pixels per metre.
+    pub fn for_bounds(min: Pt, max: Pt, scale: f64) -> Svg {
+        Svg { body: String::new(), scale, min, max }
+    }
     fn xy(&self, p: Pt) -> (f64, f64) {
         (20.0 + (p.x - self.min.x) * self.scale, 20.0 + (self.max.y - p.y) * self.scale)
     }
