@@ -92,3 +92,6 @@ pub const DEFAULT_MIN_BAND_TRACKS: f64 = 2.0;
 /// Smallest angle between consecutive fitted planes that is unfolded; closer planes are fitted as one, degrees.
 /// Default 3.
 pub const MIN_FOLD_DEG: f64 = 3.0;
+/// Largest half width (posts) of the window over which a DEM post's protrusion is measured against its plane
+/// (`dem` step 6). Default 8 (17 x 17 posts).
+pub const DEM_WINDOW_MAX: usize = 8;

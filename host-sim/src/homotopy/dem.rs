@@ -19,8 +19,9 @@ use crate::terrain::geotiff::{load_geotiff, GeoTiffOptions};
 use crate::terrain::npy::{load_npy, NpyOptions};
 use crate::terrain::Heightmap;
 
-/// The common scale of the two lunar craters: 1:100 (a 3 km crater wall becomes a 30 m one; slopes unchanged).
-pub const CRATER_SCALE: f64 = 0.01;
+/// The common scale of the two lunar craters: 1:400 (Kepler's 47.7 m posts become 0.12 m, Shackleton's 1600 m posts
+/// 4 m, the tile's coarsest accepted spacing is 5 m; a 2.6 km crater wall becomes 6.5 m high; slopes unchanged).
+pub const CRATER_SCALE: f64 = 0.0025;
 
 /// A descent on a DEM.
 #[derive(Clone, Debug, PartialEq)]
@@ -171,6 +172,10 @@ pub fn plan_tile(tile: Box<HeightTile>, s: &DemScenario) -> Result<DemRun, Strin
     let params = DemParams::for_rover(&rover, s.mu, s.half_width_m);
     let mut scratch = Box::new(DemScratch::new());
     let descent = DemDescent::segment(&tile, s.a0, s.g, &params, &mut scratch).map_err(|e| format!("segmentation: {e:?}"))?;
+    descent.check_ends().map_err(|e| {
+        let planes: Vec<String> = descent.planes.iter().map(|p| format!("{:?} {:.1} deg", p.class, p.plane.slope_rad().to_degrees())).collect();
+        format!("{e:?} (planes {planes:?}, {} obstacle posts, {} obstacles, {} on the edge)", descent.blocked_posts, descent.obstacles.len(), descent.edge_obstacles.len())
+    })?;
     let mut btm = Box::new(Btm::new());
     descent.build_btm(&mut btm).map_err(|e| format!("BTM: {e:?}"))?;
     let pm = descent.hold_model();

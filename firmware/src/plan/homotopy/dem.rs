@@ -14,28 +14,30 @@
 //!    and make everything between one wall. No tether-demand run: [`DemError::NoTetherDemand`].
 //! 3. **Fits.** Each run's posts in the corridor get a least-squares plane `z = a + b x + c y`, fitted twice: the
 //!    second fit leaves out posts more than `step_m` off the first (rocks must not tilt the plane); posts within a
-//!    post spacing of a run's ends are left out when the run is longer than 4 spacings. Neighbouring
+//!    post spacing of a run's ends are left out when the run is longer than 4 spacings. When fewer than 3 posts are
+//!    that close (a coarse tile), the first fit stands. Neighbouring
 //!    planes less than [`MIN_FOLD_DEG`] apart are fitted as one.
 //! 4. **Fold lines.** Consecutive planes meet along [`plane_intersection`]; from here on a post belongs to the plane
 //!    between the fold lines around it (not to its profile run), so the planes join exactly. Each fold line must
 //!    cross both corridor sides inside the corridor, in order ([`DemError::FoldOutsideCorridor`]).
-//! 5. **Unfolding.** The reference plane is the steepest tether-demand plane; every other plane is rotated about its
+//! 5. **Unfolding.** The reference plane is the steepest plane (the wall); every other plane is rotated about its
 //!    fold line(s) into the reference plane (Rodrigues rotation taking its normal to its neighbour's, composed
 //!    towards the reference). Unfolding is an isometry of each plane, so a taut tether over the rim is a straight
 //!    segment in the unfolded frame and its 3D length is the unfolded length. The 2D frame is the reference plane's
 //!    [`TerrainPlane::to_plane_frame`] (`y` up its steepest ascent), the frame the BTM and the holding model use. The
 //!    outline is the unfolded corridor: 4 + 2 x (planes - 1) corners.
 //! 6. **Obstacles.** A post (within the corridor grown by the footprint) is an obstacle when it protrudes from or
-//!    is hollow against its plane by more than `step_m`, when the height range of its 3 x 3 neighbourhood's
-//!    residuals exceeds `step_m` (too rough), or when its local normal is tilted more than `max_tilt_rad` from every
-//!    plane's (too steep; a post on a fold line carries both planes' slopes in its gradient). 4-connected components become octagons (8-DOPs, directions k x 45 deg) around their
+//!    is hollow against its plane by more than `step_m` at the footprint's scale (its residual minus the mean
+//!    residual within 2 footprints, at most [`DEM_WINDOW_MAX`] posts: the smooth curvature a plane does not follow
+//!    is no obstacle; a rough patch shows up the same way), or when its local normal is tilted more than
+//!    `max_tilt_rad` from every plane's (too steep; a post on a fold line carries both planes' slopes). 4-connected components become octagons (8-DOPs, directions k x 45 deg) around their
 //!    unfolded cell corners grown by `footprint_m` (the support of the cells' hull plus the footprint in each
 //!    direction, so every obstacle cell and everything within the footprint of it is inside). Overlapping octagons
 //!    are merged (support-wise maximum); beyond [`MAX_DEM_OBSTACLES`] the closest pair is merged (bigger obstacles
 //!    are conservative). Octagons strictly inside the outline go to the BTM; the others are *edge obstacles* a route
 //!    must not touch (checked in [`DemDescent::route_to_world`]).
 //!
-//! [`DemDescent::hold_model`] gives the holding model on the unfolded descent (the wall's slope, the rim and floor as
+//! [`DemDescent::check_ends`] refuses a0 or g inside an inflated obstacle. [`DemDescent::hold_model`] gives the holding model on the unfolded descent (the wall's slope, the rim and floor as
 //! tether-free half-planes; a second tether-demand plane is held to the steepest one's limit, conservative);
 //! [`DemDescent::route_to_world`] maps a plan's shortest homotopic path, descent and intermediate anchors back onto
 //! the planes and the DEM (breaking segments at the fold lines) and refuses a tether longer than `max_payout_m`.
@@ -44,14 +46,14 @@
 //! caller's), `corridor_half_width_m` (the caller's), `step_m` = wheel radius (0.35 m for Axel: a wheel climbs about
 //! its radius), `max_tilt_rad` = [`DEFAULT_MAX_TILT_DEG`] (30 deg), `footprint_m` = the radius of the circle around
 //! both wheels seen from above, `sqrt((track/2)^2 + r^2)` (0.61 m for Axel), `min_band_m` =
-//! [`DEFAULT_MIN_BAND_TRACKS`] x track (2 m). Capacities in `config::homotopy`; scratch ([`DemScratch`], ~48 KiB) and
+//! [`DEFAULT_MIN_BAND_TRACKS`] x track (2 m). Capacities in `config::homotopy`; scratch ([`DemScratch`], ~112 KiB) and
 //! the tile (~64 KiB) are caller-owned.
 
 use super::geo::{orient, point_in_polygon, polygon_edges, segments_intersect, Pt, EPS};
 use super::planes::{classify_slope, plane_intersection, HoldLimit, HoldModel, PlaneClass, SoilMap, TerrainPlane};
 use super::plan::Plan;
 use crate::config::homotopy::{
-    DEFAULT_MAX_TILT_DEG, DEFAULT_MIN_BAND_TRACKS, DEM_MERGE_BUDGET, MAX_DEM_COMPONENTS, MAX_DEM_OBSTACLES,
+    DEFAULT_MAX_TILT_DEG, DEFAULT_MIN_BAND_TRACKS, DEM_MERGE_BUDGET, DEM_WINDOW_MAX, MAX_DEM_COMPONENTS, MAX_DEM_OBSTACLES,
     MAX_DEM_PLANES, MAX_OBSTACLE_VERTICES, MAX_PATH, MAX_PLANE_VERTICES, MAX_PROFILE_BINS, MAX_TILE_CELLS,
     MAX_TILE_RESOLUTION_M, MAX_TILE_SIDE, MIN_FOLD_DEG, MIN_TILE_RESOLUTION_M,
 };
@@ -240,10 +242,11 @@ pub enum DemError {
     GoalBlocked,
 }
 
-/// Caller-owned scratch for [`DemDescent::segment`] (~48 KiB).
+/// Caller-owned scratch for [`DemDescent::segment`] (~112 KiB).
 pub struct DemScratch {
     mask: [u8; MAX_TILE_CELLS],
     queue: [u16; MAX_TILE_CELLS],
+    resid: [f32; MAX_TILE_CELLS],
 }
 
 impl Default for DemScratch {
@@ -255,7 +258,7 @@ impl Default for DemScratch {
 impl DemScratch {
     /// Empty scratch.
     pub const fn new() -> Self {
-        DemScratch { mask: [0; MAX_TILE_CELLS], queue: [0; MAX_TILE_CELLS] }
+        DemScratch { mask: [0; MAX_TILE_CELLS], queue: [0; MAX_TILE_CELLS], resid: [0.0; MAX_TILE_CELLS] }
     }
 }
 
@@ -793,10 +796,11 @@ impl DemDescent {
                 let s = d.s_of(xy);
                 in_corridor(d, xy) && s >= from + trim && s <= to - trim
             };
-            let (c1, _, _) = fit_plane(tile, a0, |_, _, xy, _| sel(xy)).ok_or(DemError::FitFailed)?;
+            let first = fit_plane(tile, a0, |_, _, xy, _| sel(xy)).ok_or(DemError::FitFailed)?;
+            let c1 = first.0;
             let off = |xy: [f64; 2], z: f64, c: &[f64; 3]| z - (c[0] + c[1] * (xy[0] - a0[0]) + c[2] * (xy[1] - a0[1]));
-            let (c2, n, rms) = fit_plane(tile, a0, |_, _, xy, z| sel(xy) && off(xy, z, &c1).abs() <= params.step_m)
-                .ok_or(DemError::FitFailed)?;
+            // Too few posts within `step_m` of the first fit (a coarse tile): the first fit stands.
+            let (c2, n, rms) = fit_plane(tile, a0, |_, _, xy, z| sel(xy) && off(xy, z, &c1).abs() <= params.step_m).unwrap_or(first);
             let nn = libm::sqrt(c2[1] * c2[1] + c2[2] * c2[2] + 1.0);
             let plane = TerrainPlane { origin: [a0[0], a0[1], c2[0]], normal: [-c2[1] / nn, -c2[2] / nn, 1.0 / nn], traction_mu: params.mu };
             Ok((
@@ -852,11 +856,12 @@ impl DemDescent {
             d.compute_folds(s_lo, s_hi, hw)?;
         }
 
+        // The steepest plane: the profile found a tether-demand stretch, but a fit over a coarse band can come out
+        // gentler than `atan(mu)` (its class then says so and the holding model holds everywhere).
         d.reference = d
             .planes
             .iter()
             .enumerate()
-            .filter(|(_, p)| p.class == PlaneClass::TetherDemand)
             .max_by(|a, b| a.1.plane.slope_rad().total_cmp(&b.1.plane.slope_rad()))
             .map(|(i, _)| i)
             .ok_or(DemError::NoTetherDemand)?;
@@ -931,29 +936,34 @@ impl DemDescent {
         let cos_tilt = libm::cos(params.max_tilt_rad);
         const OBST: u8 = 1;
         const SEEN: u8 = 2;
+        for (i, e) in scratch.resid.iter_mut().enumerate().take(rows * cols) {
+            let (r, c) = (i / cols, i % cols);
+            *e = if near(&d, tile.post_xy(r, c)) { residual(&d, r, c).map_or(f32::NAN, |x| x as f32) } else { f32::NAN };
+        }
+        // Protrusion against the plane at the footprint's scale: the residual minus its mean over a window of
+        // radius 2 x footprint (at least one post, at most DEM_WINDOW_MAX posts), so the smooth curvature a plane
+        // does not follow is not an obstacle, a rock or a pit is; its edges are also rough and steep.
+        let w = ((2.0 * params.footprint_m / res).ceil() as usize).clamp(1, DEM_WINDOW_MAX);
         for (i, m) in scratch.mask.iter_mut().enumerate().take(rows * cols) {
             *m = 0;
             let (r, c) = (i / cols, i % cols);
-            let xy = tile.post_xy(r, c);
-            if !near(&d, xy) {
-                continue;
-            }
-            let Some(e) = residual(&d, r, c) else { continue };
-            let mut lo_e = e;
-            let mut hi_e = e;
-            for (dr, dc) in [(0usize, 1usize), (2, 1), (1, 0), (1, 2), (0, 0), (0, 2), (2, 0), (2, 2)] {
-                let (Some(rr), Some(cc)) = ((r + dr).checked_sub(1), (c + dc).checked_sub(1)) else { continue };
-                if let Some(x) = (rr < rows && cc < cols).then(|| residual(&d, rr, cc)).flatten() {
-                    lo_e = lo_e.min(x);
-                    hi_e = hi_e.max(x);
+            let Some(e) = scratch.resid.get(i).map(|x| f64::from(*x)).filter(|x| x.is_finite()) else { continue };
+            let (mut sum, mut n) = (0.0f64, 0u32);
+            for rr in r.saturating_sub(w)..(r + w + 1).min(rows) {
+                for cc in c.saturating_sub(w)..(c + w + 1).min(cols) {
+                    if let Some(x) = scratch.resid.get(rr * cols + cc).map(|x| f64::from(*x)).filter(|x| x.is_finite()) {
+                        sum += x;
+                        n += 1;
+                    }
                 }
             }
+            let e = e - sum / f64::from(n.max(1));
             // Too steep: tilted from every plane of the descent (posts on a fold carry both planes' slopes).
             let steep = tile.gradient(r, c).is_some_and(|(gx, gy)| {
                 let nl = libm::sqrt(gx * gx + gy * gy + 1.0);
                 d.planes.iter().all(|p| dot([-gx / nl, -gy / nl, 1.0 / nl], p.plane.normal) < cos_tilt)
             });
-            if e.abs() > params.step_m || hi_e - lo_e > params.step_m || steep {
+            if e.abs() > params.step_m || steep {
                 *m = OBST;
                 d.blocked_posts += 1;
             }
@@ -1058,14 +1068,19 @@ impl DemDescent {
             let list = if inside { &mut d.obstacles } else { &mut d.edge_obstacles };
             let _ = list.push(oct);
         }
-        let blocked = |p: Pt| d.obstacles.iter().chain(d.edge_obstacles.iter()).any(|o| point_in_polygon(p, o, false));
-        if blocked(d.a0) {
+        Ok(d)
+    }
+
+    /// a0 and g must lie outside every inflated obstacle.
+    pub fn check_ends(&self) -> Result<(), DemError> {
+        let blocked = |p: Pt| self.obstacles.iter().chain(self.edge_obstacles.iter()).any(|o| point_in_polygon(p, o, false));
+        if blocked(self.a0) {
             return Err(DemError::StartBlocked);
         }
-        if blocked(d.g) {
+        if blocked(self.g) {
             return Err(DemError::GoalBlocked);
         }
-        Ok(d)
+        Ok(())
     }
 
     /// The holding model on the unfolded descent: the reference (wall) slope, uniform soil, tether-free half-planes
@@ -1240,7 +1255,9 @@ mod tests {
     }
     fn descent_hw(tile: &HeightTile, a0: [f64; 2], g: [f64; 2], hw: f64) -> Result<DemDescent, DemError> {
         let p = DemParams::for_rover(&RoverParams::AXEL, 0.6, hw);
-        DemDescent::segment(tile, a0, g, &p, &mut Box::new(DemScratch::new()))
+        let d = DemDescent::segment(tile, a0, g, &p, &mut Box::new(DemScratch::new()))?;
+        d.check_ends()?;
+        Ok(d)
     }
 
     /// The three planes of a synthetic crater come back with their closed-form slopes and normals (tolerance
