@@ -23,6 +23,10 @@ use crate::terrain::Heightmap;
 /// 4 m, the tile's coarsest accepted spacing is 5 m; a 2.6 km crater wall becomes 6.5 m high; slopes unchanged).
 pub const CRATER_SCALE: f64 = 0.0025;
 
+/// Soil friction of every preset: 0.4, between the paper's loose sand (0.25) and compact soil (0.65) (Abad-Manterola
+/// VI); tether-demand above atan(0.4) = 21.8 deg, so the lunar walls (up to 34 and 44 deg) demand the tether.
+pub const MU: f64 = 0.4;
+
 /// A descent on a DEM.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DemScenario {
@@ -69,32 +73,50 @@ pub fn preset(name: &str) -> Option<DemScenario> {
         a0: [0.0; 2],
         g: [0.0; 2],
         half_width_m: 6.0,
-        mu: 0.6,
+        mu: MU,
         max_payout_m: 100.0,
     };
     Some(match name {
+        // The east wall of Shackleton (the crater spans ~13 posts of the polar DEM), rim -> floor, 1:400.
         "shackleton" => DemScenario {
             file: shared_terrain("lola_ldem256_south_polar_1600m.tif"),
-            window: [0.0, 0.0, 0.0],
-            stride: 1,
+            window: [577_600.0, 577_600.0, 64_000.0],
             scale: CRATER_SCALE,
+            a0: [134.0, 62.0],
+            g: [102.0, 62.0],
             ..base
         },
+        // Kepler's west wall, rim -> floor, 1:400, every 3rd post (0.36 m).
         "kepler" => DemScenario {
             file: shared_terrain("lola_kepler_crater_orthographic_47m.tif"),
             height_scale: 0.5,
-            window: [0.0, 0.0, 0.0],
-            stride: 1,
+            window: [2_000.0, 16_000.0, 12_000.0],
+            stride: 3,
             scale: CRATER_SCALE,
+            a0: [3.0, 20.0],
+            g: [22.0, 20.0],
             ..base
         },
+        // The HiRISE scarp at 1:1 (1.01 m posts): from the flat top down the wall to the south-west.
         "hirise" => DemScenario {
             file: shared_terrain("hirise_DTEEC_010228_1490_016320_1490_crop_120x70.npy"),
             npy_spacing_m: Some(1.01),
-            window: [0.0, 0.0, 0.0],
+            window: [0.0, 0.0, 1e9],
+            a0: [50.0, 102.0],
+            g: [25.0, 58.0],
+            half_width_m: 13.0,
             ..base
         },
-        "marsyard" => DemScenario { file: shared_terrain("erc_marsyard2021_hm.tif"), window: [0.0, 0.0, 0.0], ..base },
+        // The Mars Yard's hill at 1:1, every 4th post (0.38 m).
+        "marsyard" => DemScenario {
+            file: shared_terrain("erc_marsyard2021_hm.tif"),
+            window: [0.0, 0.0, 1e9],
+            stride: 4,
+            a0: [2.0, 30.0],
+            g: [12.0, 30.0],
+            half_width_m: 3.0,
+            ..base
+        },
         _ => return None,
     })
 }

@@ -160,7 +160,7 @@ pub fn report(s: &DemScenario, out: &Path) -> Result<bool, String> {
         run.btm.triangle_count()
     );
     let slope = d.planes.get(d.reference).map_or(0.0, |p| p.plane.slope_rad());
-    println!("  Axel limit on the wall: theta_max {:.1} deg ({} stability checks); point mass asin(mu cot alpha): {:.1} deg",
+    println!("  Axel limit on the wall: theta_max {:.1} deg ({} stability checks); point mass asin(mu cot alpha): {} deg",
         run.axel.theta_max_rad.to_degrees(), run.axel.checks, theta_label(&HoldLimit::PointMass, slope, s.mu));
     for r in run.runs.iter() {
         println!("  {:>10}: {} classes examined ({} chosen): {}", r.label, r.report.examined.len(), demrun::count_verdicts(&r.report, true), route_line(r));
@@ -169,7 +169,7 @@ pub fn report(s: &DemScenario, out: &Path) -> Result<bool, String> {
         }
         if let (Some(p), Some(Ok(w))) = (&r.plan, &r.route) {
             for (a, wa) in p.anchors.iter().zip(w.anchors.iter()) {
-                println!("      anchor unfolded ({:.2}, {:.2}) -> world ({:.2}, {:.2}, {:.2})", a.p.x, a.p.y, wa[0], wa[1], wa[2]);
+                println!("      anchor on obstacle {:?}: unfolded ({:.2}, {:.2}) -> world ({:.2}, {:.2}, {:.2})", a.obstacle, a.p.x, a.p.y, wa[0], wa[1], wa[2]);
             }
         }
     }
