@@ -5,7 +5,7 @@
 //! closed loop with `--hidden` of its obstacles left out of the map). Pictures go to `--out` (SVG).
 //! Exit code 0 when the run ends as the scenario expects (a plan, or the goal reached), 1 otherwise.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use firmware::plan::homotopy::classes::{enumerate_classes, outcome_label, SearchStart};
@@ -21,7 +21,7 @@ use crate::homotopy::dem::{self as demrun, DemScenario};
 use crate::homotopy::scenarios::{self, Scenario};
 use firmware::plan::homotopy::dem::HeightTile;
 use crate::homotopy::sim::{self, SimConfig, SimOutcome};
-use crate::homotopy::svg::{self, Svg};
+use crate::homotopy::svg::{self, write, Svg};
 
 /// Arguments of `homotopy`.
 #[derive(Debug, Clone, clap::Args)]
@@ -144,15 +144,8 @@ fn build(s: &Scenario) -> Result<Box<Btm>, String> {
     Ok(btm)
 }
 
-fn write(out: &PathBuf, name: &str, svg: &Svg, title: &str) -> Result<(), String> {
-    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
-    let p = out.join(name);
-    std::fs::write(&p, svg.finish(title)).map_err(|e| format!("{}: {e}", p.display()))?;
-    println!("  wrote {}", p.display());
-    Ok(())
-}
 
-fn offline(s: &Scenario, out: &PathBuf) -> Result<bool, String> {
+fn offline(s: &Scenario, out: &Path) -> Result<bool, String> {
     let btm = build(s)?;
     let mut ws = Box::new(Workspace::default());
     println!("scenario {}: {} triangles, {} obstacles", s.name, btm.triangle_count(), s.known.len());
@@ -221,7 +214,7 @@ fn offline(s: &Scenario, out: &PathBuf) -> Result<bool, String> {
     Ok(plan.is_some())
 }
 
-fn closed_loop(s: &Scenario, out: &PathBuf, seed: u64) -> Result<bool, String> {
+fn closed_loop(s: &Scenario, out: &Path, seed: u64) -> Result<bool, String> {
     let cfg = SimConfig { seed, ..SimConfig::default() };
     let r = sim::run(s, &cfg);
     println!("scenario {} closed loop (seed {seed}): {:?} after {} steps, {} replanning events, {} collisions, tether in plan class: {}",

@@ -74,6 +74,15 @@ impl Svg {
     }
 }
 
+/// Writes `svg` with `title` to `out/name` (creating `out`) and says so.
+pub fn write(out: &std::path::Path, name: &str, svg: &Svg, title: &str) -> Result<(), String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let p = out.join(name);
+    std::fs::write(&p, svg.finish(title)).map_err(|e| format!("{}: {e}", p.display()))?;
+    println!("  wrote {}", p.display());
+    Ok(())
+}
+
 /// The plane, obstacles (blue) and BTM edges (dashed).
 pub fn draw_btm(svg: &mut Svg, btm: &Btm) {
     svg.polygon(btm.plane(), "#f4efe6", "black", 1.5, 1.0);

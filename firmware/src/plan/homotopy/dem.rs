@@ -49,7 +49,7 @@
 //! [`DEFAULT_MIN_BAND_TRACKS`] x track (2 m). Capacities in `config::homotopy`; scratch ([`DemScratch`], ~112 KiB) and
 //! the tile (~64 KiB) are caller-owned.
 
-use super::geo::{orient, point_in_polygon, polygon_edges, segments_intersect, Pt, EPS};
+use super::geo::{grid_neighbours, orient, point_in_polygon, polygon_edges, segments_intersect, Pt, EPS};
 use super::planes::{classify_slope, plane_intersection, HoldLimit, HoldModel, PlaneClass, SoilMap, TerrainPlane};
 use super::plan::Plan;
 use crate::config::homotopy::{
@@ -997,13 +997,7 @@ impl DemDescent {
                         *hj = hj.max(p.dot(dop_dir(j)));
                     }
                 }
-                let nbrs = [
-                    (c > 0).then(|| i - 1),
-                    (c + 1 < cols).then(|| i + 1),
-                    (r > 0).then(|| i - cols),
-                    (r + 1 < rows).then(|| i + cols),
-                ];
-                for nb in nbrs.into_iter().flatten() {
+                for nb in grid_neighbours(i, cols, rows).into_iter().flatten() {
                     if scratch.mask.get(nb).copied() == Some(OBST) {
                         if let Some(m) = scratch.mask.get_mut(nb) {
                             *m |= SEEN;
@@ -1174,7 +1168,8 @@ impl DemDescent {
             r.anchors.push(w).map_err(|_| RouteError::Capacity)?;
         }
         r.tether_length_m = r.tether.windows(2).map(|w| if let [a, b] = w { dist3(*a, *b) } else { 0.0 }).sum();
-        if !(r.tether_length_m <= max_payout_m) {
+        // A NaN length or limit is refused too.
+        if r.tether_length_m.partial_cmp(&max_payout_m).is_none_or(|o| o == core::cmp::Ordering::Greater) {
             return Err(RouteError::TetherTooLong { needed_m: r.tether_length_m, max_payout_m });
         }
         Ok(r)
