@@ -943,7 +943,7 @@ impl DemDescent {
         // Protrusion against the plane at the footprint's scale: the residual minus its mean over a window of
         // radius 2 x footprint (at least one post, at most DEM_WINDOW_MAX posts), so the smooth curvature a plane
         // does not follow is not an obstacle, a rock or a pit is; its edges are also rough and steep.
-        let w = ((2.0 * params.footprint_m / res).ceil() as usize).clamp(1, DEM_WINDOW_MAX);
+        let w = (libm::ceil(2.0 * params.footprint_m / res) as usize).clamp(1, DEM_WINDOW_MAX);
         for (i, m) in scratch.mask.iter_mut().enumerate().take(rows * cols) {
             *m = 0;
             let (r, c) = (i / cols, i % cols);
