@@ -526,6 +526,12 @@ fn fit_plane(
     Some((coef, n, libm::sqrt(ss / n as f64)))
 }
 
+/// The plane `z = c0 + c1 (x - o.x) + c2 (y - o.y)` with an upward unit normal.
+fn plane_of(c: &[f64; 3], o: [f64; 2], mu: f64) -> TerrainPlane {
+    let nn = libm::sqrt(c[1] * c[1] + c[2] * c[2] + 1.0);
+    TerrainPlane { origin: [o[0], o[1], c[0]], normal: [-c[1] / nn, -c[2] / nn, 1.0 / nn], traction_mu: mu }
+}
+
 /// One run of the along-descent profile.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Run {
@@ -801,8 +807,7 @@ impl DemDescent {
             let off = |xy: [f64; 2], z: f64, c: &[f64; 3]| z - (c[0] + c[1] * (xy[0] - a0[0]) + c[2] * (xy[1] - a0[1]));
             // Too few posts within `step_m` of the first fit (a coarse tile): the first fit stands.
             let (c2, n, rms) = fit_plane(tile, a0, |_, _, xy, z| sel(xy) && off(xy, z, &c1).abs() <= params.step_m).unwrap_or(first);
-            let nn = libm::sqrt(c2[1] * c2[1] + c2[2] * c2[2] + 1.0);
-            let plane = TerrainPlane { origin: [a0[0], a0[1], c2[0]], normal: [-c2[1] / nn, -c2[2] / nn, 1.0 / nn], traction_mu: params.mu };
+            let plane = plane_of(&c2, a0, params.mu);
             Ok((
                 BandPlane { plane, class: plane.classify(), s_range: (from, to), posts: n, rms_m: rms, unfold: Rigid::ID },
                 c2,
@@ -847,8 +852,7 @@ impl DemDescent {
                         })
                 };
                 let Some((c, n, rms)) = fit_plane(tile, a0, |_, _, xy, z| sel(xy, z)) else { continue };
-                let nn = libm::sqrt(c[1] * c[1] + c[2] * c[2] + 1.0);
-                let plane = TerrainPlane { origin: [a0[0], a0[1], c[0]], normal: [-c[1] / nn, -c[2] / nn, 1.0 / nn], traction_mu: params.mu };
+                let plane = plane_of(&c, a0, params.mu);
                 if let Some(p) = d.planes.get_mut(k) {
                     *p = BandPlane { plane, class: plane.classify(), posts: n, rms_m: rms, ..cur };
                 }
