@@ -52,3 +52,46 @@ pub const DEFAULT_DESCENT_CLEARANCE_M: f64 = 0.15;
 /// Default of `HomotopyParams::descent_sample_m`: spacing of the holding checks along the descent, metres.
 /// Default 0.2 (finer than the controllable-set grid's 0.28 m cells on a 20 m plane).
 pub const DEFAULT_DESCENT_SAMPLE_M: f64 = 0.2;
+
+/// Axel holding limit ([`crate::plan::homotopy::axel`]): distance of the test anchor on the plane, m. Default 20
+/// (the tether is then within 3 degrees of the plane from the 1 m boom).
+pub const AXEL_ANCHOR_DISTANCE_M: f64 = 20.0;
+/// Axel holding limit: scan step of the tether angle, degrees. Default 2.5.
+pub const AXEL_THETA_STEP_DEG: f64 = 2.5;
+/// Axel holding limit: scan steps (72 x 2.5 deg = 180 deg). Default 72.
+pub const AXEL_THETA_STEPS: usize = 72;
+/// Axel holding limit: bisections of the last scan interval (2.5 deg / 64 = 0.04 deg). Default 6.
+pub const AXEL_BISECTIONS: usize = 6;
+
+/// Largest height tile side, posts ([`crate::plan::homotopy::dem`]). Default 128 (a 128 x 128 f32 tile is 64 KiB).
+pub const MAX_TILE_SIDE: usize = 128;
+/// Largest height tile, posts. Default [`MAX_TILE_SIDE`]^2 = 16 384.
+pub const MAX_TILE_CELLS: usize = MAX_TILE_SIDE * MAX_TILE_SIDE;
+/// Smallest accepted post spacing, m. Default 0.02 (finer than any rover-scale DEM we use: Mars Yard 0.094 m).
+pub const MIN_TILE_RESOLUTION_M: f64 = 0.02;
+/// Largest accepted post spacing, m. Default 5.0 (coarser posts cannot resolve a rover-sized obstacle).
+pub const MAX_TILE_RESOLUTION_M: f64 = 5.0;
+/// Most planes along one descent (tether-free rim, tether-demand wall, tether-free floor). Default 3: the unfolded
+/// outline then has 4 + 2 x 2 = 8 corners, [`MAX_PLANE_VERTICES`].
+pub const MAX_DEM_PLANES: usize = 3;
+/// Most along-descent bins of the profile used for segmentation. Default 256 (the diagonal of a full tile is 182).
+pub const MAX_PROFILE_BINS: usize = 256;
+/// Most obstacle components kept before merging (a full list merges a new component into its nearest). Default 64.
+pub const MAX_DEM_COMPONENTS: usize = 64;
+/// Most obstacles handed to the BTM from a DEM: what its vertex arena holds next to the outline. Default
+/// (160 - 8) / 8 = 19.
+pub const MAX_DEM_OBSTACLES: usize = (MAX_VERTICES - MAX_PLANE_VERTICES) / MAX_OBSTACLE_VERTICES;
+/// Obstacle merge rounds (pairwise overlap merges and reductions to [`MAX_DEM_OBSTACLES`]). Default 256.
+pub const DEM_MERGE_BUDGET: usize = 256;
+/// Default of `DemParams::max_tilt_rad`: a post whose local normal is tilted more than this from its plane's normal
+/// is an obstacle, degrees. Default 30 (a 30 deg lip on a plane the rover is held on tips the two-wheeled body).
+pub const DEFAULT_MAX_TILT_DEG: f64 = 30.0;
+/// Default of `DemParams::min_band_m` as a multiple of the rover's track: a plane band shorter than this along the
+/// descent is merged into its neighbour. Default 2 (a 2 m band for Axel's 1 m track).
+pub const DEFAULT_MIN_BAND_TRACKS: f64 = 2.0;
+/// Smallest angle between consecutive fitted planes that is unfolded; closer planes are fitted as one, degrees.
+/// Default 3.
+pub const MIN_FOLD_DEG: f64 = 3.0;
+/// Largest half width (posts) of the window over which a DEM post's protrusion is measured against its plane
+/// (`dem` step 6). Default 8 (17 x 17 posts).
+pub const DEM_WINDOW_MAX: usize = 8;

@@ -454,10 +454,7 @@ pub fn run_all(arenas: &mut Arenas<'_>, h: &mut impl Harness) {
     };
     h.result("homotopy_btm_build_c", &s);
     if matches!(built, Some(Ok(_))) {
-        let model = HoldModel {
-            slope_rad: scenario_c::SLOPE_DEG.to_radians(),
-            soil: SoilMap::uniform(scenario_c::MU),
-        };
+        let model = HoldModel::point_mass(scenario_c::SLOPE_DEG.to_radians(), SoilMap::uniform(scenario_c::MU));
         let ws = &mut *arenas.homotopy;
         let mut constraints = heapless::Vec::new();
         let mut rep = PlanReport::default();

@@ -5,7 +5,7 @@
 //! closed loop with `--hidden` of its obstacles left out of the map). Pictures go to `--out` (SVG).
 //! Exit code 0 when the run ends as the scenario expects (a plan, or the goal reached), 1 otherwise.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use firmware::plan::homotopy::classes::{enumerate_classes, outcome_label, SearchStart};
@@ -17,14 +17,16 @@ use firmware::plan::homotopy::plan::{feasibility_check, preplan, PlanReport, Hom
 use firmware::plan::homotopy::sleeve::{anchors, shortest_homotopic_path};
 use rand_core::SeedableRng;
 
+use crate::homotopy::dem::{self as demrun, DemScenario};
 use crate::homotopy::scenarios::{self, Scenario};
+use firmware::plan::homotopy::dem::HeightTile;
 use crate::homotopy::sim::{self, SimConfig, SimOutcome};
-use crate::homotopy::svg::{self, Svg};
+use crate::homotopy::svg::{self, write, Svg};
 
 /// Arguments of `homotopy`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct HomotopyArgs {
-    /// Scenario: b, c, c-online, random.
+    /// Scenario: b, c, c-online, random, dem.
     pub scenario: String,
     /// Directory for the SVG pictures.
     #[arg(long, default_value = "homotopy-out")]
@@ -38,9 +40,101 @@ pub struct HomotopyArgs {
     /// Obstacles of the random field missing from the rover's map.
     #[arg(long, default_value_t = 3)]
     pub hidden: usize,
-    /// Soil friction coefficient of the random field (default 0.91: theta_max = 50 deg at alpha = 50 deg).
+    /// Soil friction coefficient of the random field (default 0.91: theta_max = 50 deg at alpha = 50 deg), or of a
+    /// DEM descent (default: the preset's).
     #[arg(long)]
     pub mu: Option<f64>,
+    /// DEM descent (scenario `dem`): a preset (shackleton, kepler, hirise, marsyard) whose fields the options
+    /// below override.
+    #[arg(long)]
+    pub preset: Option<String>,
+    /// DEM descent: the DEM file (GeoTIFF, or .npy with --npy-spacing).
+    #[arg(long)]
+    pub dem: Option<PathBuf>,
+    /// DEM descent: post spacing of a .npy DEM (m).
+    #[arg(long)]
+    pub npy_spacing: Option<f64>,
+    /// DEM descent: window "x0,y0,side" in DEM metres (before scaling).
+    #[arg(long)]
+    pub window: Option<String>,
+    /// DEM descent: take every N-th post.
+    #[arg(long)]
+    pub stride: Option<usize>,
+    /// DEM descent: scale to rover scale (horizontal and vertical alike, so slopes are kept).
+    #[arg(long)]
+    pub scale: Option<f64>,
+    /// DEM descent: root anchor "x,y" in tile metres (after scaling).
+    #[arg(long)]
+    pub a0: Option<String>,
+    /// DEM descent: goal "x,y" in tile metres.
+    #[arg(long)]
+    pub goal: Option<String>,
+    /// DEM descent: corridor half width (m).
+    #[arg(long)]
+    pub half_width: Option<f64>,
+    /// DEM descent: tether payout limit (m).
+    #[arg(long)]
+    pub max_payout: Option<f64>,
+    /// DEM descent: print the tile's slope map instead of planning.
+    #[arg(long)]
+    pub survey: bool,
+}
+
+fn floats<const N: usize>(s: &str, what: &str) -> Result<[f64; N], String> {
+    let v: Vec<f64> = s.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|e| format!("{what}: {e}"))?;
+    v.try_into().map_err(|_| format!("{what}: expected {N} comma-separated numbers"))
+}
+
+fn dem_scenario(a: &HomotopyArgs) -> Result<DemScenario, String> {
+    let mut s = match (&a.preset, &a.dem) {
+        (Some(p), _) => demrun::preset(p).ok_or_else(|| format!("unknown preset {p:?}: shackleton, kepler, hirise, marsyard"))?,
+        (None, Some(_)) => demrun::preset("marsyard").ok_or("no base preset")?,
+        (None, None) => return Err("scenario dem needs --preset or --dem".into()),
+    };
+    if let Some(f) = &a.dem {
+        s.file = f.clone();
+        s.name = f.file_stem().map_or("dem".into(), |x| x.to_string_lossy().into_owned());
+        s.npy_spacing_m = a.npy_spacing;
+    }
+    if let Some(w) = &a.window {
+        s.window = floats::<3>(w, "--window")?;
+    }
+    if let Some(v) = &a.a0 {
+        s.a0 = floats::<2>(v, "--a0")?;
+    }
+    if let Some(v) = &a.goal {
+        s.g = floats::<2>(v, "--goal")?;
+    }
+    s.stride = a.stride.unwrap_or(s.stride);
+    s.scale = a.scale.unwrap_or(s.scale);
+    s.half_width_m = a.half_width.unwrap_or(s.half_width_m);
+    s.mu = a.mu.unwrap_or(s.mu);
+    s.max_payout_m = a.max_payout.unwrap_or(s.max_payout_m);
+    Ok(s)
+}
+
+/// A character slope map of the window (north up): ' ' < 15 deg, '.' < atan(mu), ':' < 45, '#' < 60, '@' steeper.
+fn survey(s: &DemScenario) -> Result<bool, String> {
+    let hm = demrun::load_dem(s)?;
+    println!("{}: {} x {} posts at {:.3} m", s.file.display(), hm.width, hm.height, hm.spacing_m);
+    let (h, rows, cols, res) = demrun::cut_window(&hm, s.window, s.stride, s.scale);
+    println!("window {:?} stride {} scale {}: tile {rows} x {cols} at {res:.3} m ({:.1} x {:.1} m)", s.window, s.stride, s.scale, cols as f64 * res, rows as f64 * res);
+    let mut tile = Box::new(HeightTile::new());
+    tile.load([0.0, 0.0], res, rows, cols, &h).map_err(|e| format!("tile refused: {e:?}"))?;
+    let step = (rows.max(cols) / 64).max(1);
+    let demand = s.mu.atan().to_degrees();
+    for r in (0..rows).rev().step_by(step) {
+        let mut line = format!("{:7.1} ", r as f64 * res);
+        for c in (0..cols).step_by(step) {
+            let (gx, gy) = tile.gradient(r, c).unwrap_or((0.0, 0.0));
+            let a = gx.hypot(gy).atan().to_degrees();
+            line.push(if a < 15.0 { ' ' } else if a < demand { '.' } else if a < 45.0 { ':' } else if a < 60.0 { '#' } else { '@' });
+        }
+        println!("{line}");
+    }
+    println!("        x from 0 to {:.1} m, one character per {:.2} m; z from {:.1} to {:.1} m", cols as f64 * res, step as f64 * res,
+        h.iter().copied().fold(f32::MAX, f32::min), h.iter().copied().fold(f32::MIN, f32::max));
+    Ok(true)
 }
 
 fn build(s: &Scenario) -> Result<Box<Btm>, String> {
@@ -50,15 +144,8 @@ fn build(s: &Scenario) -> Result<Box<Btm>, String> {
     Ok(btm)
 }
 
-fn write(out: &PathBuf, name: &str, svg: &Svg, title: &str) -> Result<(), String> {
-    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
-    let p = out.join(name);
-    std::fs::write(&p, svg.finish(title)).map_err(|e| format!("{}: {e}", p.display()))?;
-    println!("  wrote {}", p.display());
-    Ok(())
-}
 
-fn offline(s: &Scenario, out: &PathBuf) -> Result<bool, String> {
+fn offline(s: &Scenario, out: &Path) -> Result<bool, String> {
     let btm = build(s)?;
     let mut ws = Box::new(Workspace::default());
     println!("scenario {}: {} triangles, {} obstacles", s.name, btm.triangle_count(), s.known.len());
@@ -127,7 +214,7 @@ fn offline(s: &Scenario, out: &PathBuf) -> Result<bool, String> {
     Ok(plan.is_some())
 }
 
-fn closed_loop(s: &Scenario, out: &PathBuf, seed: u64) -> Result<bool, String> {
+fn closed_loop(s: &Scenario, out: &Path, seed: u64) -> Result<bool, String> {
     let cfg = SimConfig { seed, ..SimConfig::default() };
     let r = sim::run(s, &cfg);
     println!("scenario {} closed loop (seed {seed}): {:?} after {} steps, {} replanning events, {} collisions, tether in plan class: {}",
@@ -176,7 +263,12 @@ pub fn main(a: &HomotopyArgs) -> ExitCode {
             }
             closed_loop(&s, &a.out, a.seed)
         }
-        other => return super::fail(format!("unknown scenario {other:?}: use b, c, c-online or random")),
+        "dem" => match dem_scenario(a) {
+            Ok(s) if a.survey => survey(&s),
+            Ok(s) => crate::homotopy::dem_report::report(&s, &a.out),
+            Err(e) => Err(e),
+        },
+        other => return super::fail(format!("unknown scenario {other:?}: use b, c, c-online, random or dem")),
     };
     match res {
         Ok(true) => ExitCode::SUCCESS,

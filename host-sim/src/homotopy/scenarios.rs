@@ -50,10 +50,10 @@ pub fn scenario_b() -> Scenario {
         truth: vec![o1, o2],
         a0: pt(4.0, 19.5),
         g: pt(12.0, 1.5),
-        model: HoldModel {
-            slope_rad: deg(45.0),
-            soil: SoilMap { line_point: pt(0.0, 6.0), line_dir: pt(1.0, 0.0), mu_left: 0.65, mu_right: 0.25 },
-        },
+        model: HoldModel::point_mass(
+            deg(45.0),
+            SoilMap { line_point: pt(0.0, 6.0), line_dir: pt(1.0, 0.0), mu_left: 0.65, mu_right: 0.25 },
+        ),
     }
 }
 
@@ -68,7 +68,7 @@ pub fn scenario_c() -> Scenario {
         truth: vec![o1, o2],
         a0: pt(8.0, 19.5),
         g: pt(12.0, 1.5),
-        model: HoldModel { slope_rad: deg(50.0), soil: SoilMap::uniform(0.91) },
+        model: HoldModel::point_mass(deg(50.0), SoilMap::uniform(0.91)),
     }
 }
 
@@ -130,6 +130,6 @@ pub fn random_field<R: rand_core::Rng>(rng: &mut R, n: usize, size: f64) -> Scen
         truth: obstacles,
         a0,
         g,
-        model: HoldModel { slope_rad: deg(50.0), soil: SoilMap::uniform(0.91) },
+        model: HoldModel::point_mass(deg(50.0), SoilMap::uniform(0.91)),
     }
 }

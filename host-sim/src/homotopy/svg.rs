@@ -26,6 +26,10 @@ impl Svg {
         }
         Svg { body: String::new(), scale, min, max }
     }
+    /// A canvas for the box `min..max` at `scale` pixels per metre.
+    pub fn for_bounds(min: Pt, max: Pt, scale: f64) -> Svg {
+        Svg { body: String::new(), scale, min, max }
+    }
     fn xy(&self, p: Pt) -> (f64, f64) {
         (20.0 + (p.x - self.min.x) * self.scale, 20.0 + (self.max.y - p.y) * self.scale)
     }
@@ -68,6 +72,15 @@ impl Svg {
             h - 12.0
         )
     }
+}
+
+/// Writes `svg` with `title` to `out/name` (creating `out`) and says so.
+pub fn write(out: &std::path::Path, name: &str, svg: &Svg, title: &str) -> Result<(), String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let p = out.join(name);
+    std::fs::write(&p, svg.finish(title)).map_err(|e| format!("{}: {e}", p.display()))?;
+    println!("  wrote {}", p.display());
+    Ok(())
 }
 
 /// The plane, obstacles (blue) and BTM edges (dashed).

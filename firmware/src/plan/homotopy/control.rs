@@ -12,7 +12,7 @@
 //! (default 72 x 72) over the plane's bounding box; 4-connected; cell centres are tested.
 
 use super::btm::Btm;
-use super::geo::{orient_sign, Pt};
+use super::geo::{grid_neighbours, orient_sign, Pt};
 use super::planes::HoldModel;
 use crate::config::homotopy::CONTROL_GRID;
 
@@ -112,14 +112,7 @@ impl ControlGrid {
             let Some(&c) = self.queue.get(head) else { break };
             head += 1;
             let c = usize::from(c);
-            let (cx, cy) = (c % CONTROL_GRID, c / CONTROL_GRID);
-            let nbrs = [
-                (cx > 0).then(|| c - 1),
-                (cx + 1 < CONTROL_GRID).then(|| c + 1),
-                (cy > 0).then(|| c - CONTROL_GRID),
-                (cy + 1 < CONTROL_GRID).then(|| c + CONTROL_GRID),
-            ];
-            for nb in nbrs.into_iter().flatten() {
+            for nb in grid_neighbours(c, CONTROL_GRID, CONTROL_GRID).into_iter().flatten() {
                 if self.contains(nb) {
                     continue;
                 }

@@ -244,3 +244,14 @@ pub fn ear_clip(v: &[Pt], out: &mut [[u8; 3]]) -> usize {
     }
     written
 }
+
+/// The 4-neighbours of cell `i` of a row-major `cols` x `rows` grid (left, right, down, up), `None` off the grid.
+pub fn grid_neighbours(i: usize, cols: usize, rows: usize) -> [Option<usize>; 4] {
+    let (c, r) = (i % cols.max(1), i / cols.max(1));
+    [
+        (c > 0).then(|| i - 1),
+        (c + 1 < cols).then(|| i + 1),
+        (r > 0).then(|| i - cols),
+        (r + 1 < rows).then(|| i + cols),
+    ]
+}

@@ -8,7 +8,9 @@
 //! tether) by the funnel algorithm and its intermediate anchors ([`sleeve`]); controllable sets decide passability
 //! ([`control`]); Alg. 2 (ascent feasibility) and Alg. 1 (pre-planning, ascent first then a descent in the same
 //! sleeve) are in [`plan`]; Alg. 3 (online replanning with local retriangulation) in [`online`]. The terrain model
-//! (plane classification, soil regions, `theta_max = asin(mu cot alpha)`) is [`planes`].
+//! (plane classification, soil regions, `theta_max = asin(mu cot alpha)`) is [`planes`]. Planes, fold lines,
+//! unfolding and inflated obstacles from a DEM tile, and routes back in the world frame, are [`dem`]; Axel's holding
+//! limit from the core's stability check (next to the point-mass baseline) is [`axel`].
 //!
 //! Numbers are `f64` inside (complex logarithms of L-values and orientation tests need the headroom; see
 //! [`lvalue`]). All storage is fixed-size (capacities in [`crate::config::homotopy`]); the big pieces
@@ -18,9 +20,11 @@
 //! Deviation from the brief: capacities are plain consts rather than const generics (one consistent set sized for
 //! the papers' problems; change them in `config::homotopy`).
 
+pub mod axel;
 pub mod classes;
 pub mod btm;
 pub mod control;
+pub mod dem;
 pub mod geo;
 pub mod lvalue;
 pub mod online;
@@ -35,4 +39,5 @@ pub use lvalue::{polyline_lvalue, LValue};
 pub use online::{MapChange, OnlineAction, OnlinePlanner};
 pub use plan::{feasibility_check, preplan, Feasibility, Plan, HomotopyParams, Workspace};
 pub use sleeve::{anchors, shortest_homotopic_path, Anchor, Path, Sleeve};
-pub use planes::{theta_max, HoldModel, SoilMap};
+pub use planes::{theta_max, HoldLimit, HoldModel, SoilMap};
+pub use dem::{DemDescent, DemError, DemParams, DemScratch, HeightTile, RouteError, TileError, WorldRoute};

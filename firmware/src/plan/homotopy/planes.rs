@@ -133,19 +133,56 @@ impl SoilMap {
     }
 }
 
-/// The point-mass holding model on one tether-demand plane (Abad-Manterola VI).
+/// Which robot the holding condition is for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum HoldLimit {
+    /// The paper's point mass with Coulomb friction: `theta_max = asin(mu cot alpha)` (Abad-Manterola VI).
+    PointMass,
+    /// A rover whose largest holding angle per soil region was found by the core's static-stability check
+    /// ([`super::axel::axel_hold_limit`]): `theta_max` left and right of the soil line, rad. A negative value means
+    /// the rover holds at no tether angle there.
+    Measured {
+        /// `theta_max` left of the soil line (rad).
+        left_rad: f64,
+        /// `theta_max` right of (or on) the soil line (rad).
+        right_rad: f64,
+    },
+}
+
+/// The holding model on one tether-demand plane (Abad-Manterola VI), optionally with tether-free zones (the rim and
+/// floor of an unfolded DEM descent, [`super::dem`]) where the wheels hold alone.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HoldModel {
     /// Plane inclination alpha (rad).
     pub slope_rad: f64,
     /// Soil regions.
     pub soil: SoilMap,
+    /// Point mass (the paper's baseline) or a measured rover limit.
+    pub limit: HoldLimit,
+    /// Tether-free half-planes: a point strictly left of the directed line `a -> b` holds at any tether angle.
+    pub tether_free: [Option<(Pt, Pt)>; 2],
 }
 
 impl HoldModel {
+    /// The paper's point-mass model on one plane (no tether-free zones).
+    pub const fn point_mass(slope_rad: f64, soil: SoilMap) -> Self {
+        HoldModel { slope_rad, soil, limit: HoldLimit::PointMass, tether_free: [None, None] }
+    }
     /// `theta_max` at `p`.
     pub fn theta_max_at(&self, p: Pt) -> f64 {
-        theta_max(self.slope_rad, self.soil.mu_at(p))
+        if self.tether_free.iter().flatten().any(|(a, b)| orient(*a, *b, p) > 0.0) {
+            return core::f64::consts::PI;
+        }
+        match self.limit {
+            HoldLimit::PointMass => theta_max(self.slope_rad, self.soil.mu_at(p)),
+            HoldLimit::Measured { left_rad, right_rad } => {
+                if orient(self.soil.line_point, self.soil.line_point + self.soil.line_dir, p) > 0.0 {
+                    left_rad
+                } else {
+                    right_rad
+                }
+            }
+        }
     }
     /// True when a point mass at `robot` holds position on a taut tether to `anchor`: the angle between the upslope
     /// direction `+y` and the tether segment robot->anchor is at most `theta_max` (any angle if the soil alone holds).
