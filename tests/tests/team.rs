@@ -66,7 +66,7 @@ fn check_hops(r: &SimReport, h_max: f64, r_max: f64) {
 fn mission(world: &str, fail: Option<(usize, usize)>, seed: u64, grip_slips: bool) -> (SimReport, [f64; 3], f64, f64, f64) {
     let (surf, start, mut cfg, _, _) = team_scenario(world, &data(""), fail, seed).unwrap();
     if !grip_slips {
-        cfg.grip = GripModel::never_slips();
+        cfg.grip = GripModel::never_slips(cfg.params.h_max as f64);
     }
     let r = simulate(surf.as_ref(), &start, &cfg, &mut team_rng(seed)).unwrap();
     (r, cfg.goal, cfg.params.h_max as f64, cfg.params.r_max as f64, cfg.goal_tol)
@@ -108,7 +108,8 @@ fn crevasse_reroute_of_fig_12_in_closed_loop() {
     let (r, _, h, rm, _) = mission("crevasse", None, 1, false);
     check_hops(&r, h, rm);
     assert_eq!(r.routes.0, vec![(1, 1), (1, 2), (1, 3)], "the first route goes straight south");
-    assert_eq!(r.walls, vec![((1, 2), (1, 3))]);
+    let trace: Vec<String> = r.hops.iter().map(|x| format!("r{} k{} ({:.0},{:.0})->({:.0},{:.0}) hub ({:.0},{:.0})", x.round, x.robot, x.from[0], x.from[1], x.to[0], x.to[1], x.hub[0], x.hub[1])).collect();
+    assert_eq!(r.walls, vec![((1, 2), (1, 3))], "{:?}\n{}", r.stats, trace.join("\n"));
     assert_eq!(r.visited, vec![(1, 1), (1, 2), (2, 2), (2, 3), (1, 3)]);
     assert_eq!(r.outcome, Some(MissionOutcome::GoalReached), "{:?}", r.stats);
     assert!(r.reached);
@@ -121,7 +122,7 @@ fn crevasse_reroute_of_fig_12_in_closed_loop() {
 #[test]
 fn blocked_goal_is_reported_as_not_reached() {
     let (surf, start, mut cfg, _, _) = team_scenario("crevasse", &data(""), None, 1).unwrap();
-    cfg.grip = GripModel::never_slips();
+    cfg.grip = GripModel::never_slips(cfg.params.h_max as f64);
     // the same crevasse world, but the team may not go round (columns 2.. are off the map too)
     cfg.blocked.extend((0..5).flat_map(|y| (2..5).map(move |x| (x, y))));
     let r = simulate(surf.as_ref(), &start, &cfg, &mut team_rng(1)).unwrap();

@@ -134,6 +134,10 @@ pub struct MissionParams {
     /// (one round without progress can be a hub held back by a laggard; two is a crossing the local planners
     /// cannot make — the crevasse of Fig. 12).
     pub stall_rounds: u16,
+    /// Rounds in a row without progress in the goal's scene before the mission gives up
+    /// (`Blocked(GoalUnreachable)`). Default 6: there is no other route to try there, so giving up is final and
+    /// waits longer than a wall does; near the goal the hub's steps shrink as the robots reach their slots.
+    pub goal_stall_rounds: u16,
     /// Progress that counts, as a fraction of h_max: the hub must get this much closer to the next scene's
     /// waypoint in a round. Default 0.1 (1 m with 10 m hops).
     pub progress_fraction: Real,
@@ -149,6 +153,7 @@ impl MissionParams {
         max_hops: 2000,
         dstar_budget: 20_000,
         stall_rounds: 2,
+        goal_stall_rounds: 6,
         progress_fraction: 0.1,
         waypoint_radius_fraction: 0.25,
     };

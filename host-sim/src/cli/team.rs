@@ -77,6 +77,9 @@ pub struct TeamArgs {
     /// Run this many seeds from `--seed` on and print a campaign summary.
     #[arg(long, default_value_t = 1)]
     pub seeds: u64,
+    /// Grips never slip (the grip model's slip probability set to 0; isolates the route from node losses).
+    #[arg(long)]
+    pub no_slip: bool,
 }
 
 /// The scenario set-up shared by the CLI, the tests and the benchmark: (surface, start, config, view, background).
@@ -224,7 +227,10 @@ pub fn team(args: &TeamArgs) -> Result<bool, String> {
     let (mut reached, mut hops, mut walls, mut lost, mut violations, mut runs) = (0usize, Vec::new(), 0usize, 0usize, 0usize, 0usize);
     let (mut plan_times, mut round_times) = (Vec::new(), Vec::new());
     for seed in args.seed..args.seed + args.seeds.max(1) {
-        let (surf, start, cfg, view, bg) = team_scenario(&args.world, &args.data, fail, seed)?;
+        let (surf, start, mut cfg, view, bg) = team_scenario(&args.world, &args.data, fail, seed)?;
+        if args.no_slip {
+            cfg.grip = crate::team::grip::GripModel::never_slips(cfg.params.h_max as f64);
+        }
         let mut rng = team_rng(seed);
         let t = Instant::now();
         let rep = crate::team::simulate(surf.as_ref(), &start, &cfg, &mut rng).map_err(|e| e.to_string())?;

@@ -46,12 +46,18 @@ impl GripModel {
     }
 
     /// A model whose grip never slips (for tests that need the whole team).
-    pub fn never_slips() -> Self {
-        Self { radius: 1.0, p_min: 0.0, p_max: 0.0, q_good: 0.5, q_bad: 1.0 }
+    pub fn never_slips(h_max: f64) -> Self {
+        Self { radius: 0.1 * h_max, p_min: 0.0, p_max: 0.0, q_good: 0.5, q_bad: 1.0 }
     }
 
     /// The quality q of a grip at `p` (0 = a perfect plane fully under the footprint).
     pub fn quality(&self, surface: &dyn Surface, p: P3) -> f64 {
+        self.footprint(surface, p).0
+    }
+
+    /// The quality q of a grip at `p` and the normal of the plane fitted to the footprint (the robot's attitude
+    /// when it grips there; the surface normal at `p` when fewer than 3 rays hit).
+    pub fn footprint(&self, surface: &dyn Surface, p: P3) -> (f64, P3) {
         let n = surface.normal_near(p);
         let a = unit(if n[2].abs() < 0.9 { cross(n, [0.0, 0.0, 1.0]) } else { cross(n, [1.0, 0.0, 0.0]) });
         let b = cross(n, a);
@@ -69,7 +75,7 @@ impl GripModel {
         }
         let missing = 1.0 - hits.len() as f64 / (k * k) as f64;
         if hits.len() < 3 {
-            return missing + 1.0;
+            return (missing + 1.0, n);
         }
         let m = hits.iter().fold([0.0; 3], |acc, h| add(acc, *h));
         let m = scale(m, 1.0 / hits.len() as f64);
@@ -79,8 +85,12 @@ impl GripModel {
             let v = nalgebra::Vector3::new(d[0], d[1], d[2]);
             c += v * v.transpose();
         }
-        let lmin = c.symmetric_eigenvalues().min().max(0.0);
-        (lmin / hits.len() as f64).sqrt() / r + missing
+        let eig = c.symmetric_eigen();
+        let (k_min, lmin) = eig.eigenvalues.iter().enumerate().fold((0, f64::MAX), |b, (k, &l)| if l < b.1 { (k, l) } else { b });
+        let e = eig.eigenvectors.column(k_min);
+        let fit = [e[0], e[1], e[2]];
+        let fit = if firmware::geom::p3::dot(fit, n) < 0.0 { scale(fit, -1.0) } else { fit };
+        ((lmin.max(0.0) / hits.len() as f64).sqrt() / r + missing, unit(fit))
     }
 
     /// Slip probability for quality `q`.

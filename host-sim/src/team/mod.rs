@@ -3,7 +3,8 @@
 //! ([`firmware::plan::team::mission`]: D* Lite over a grid of scenes, bounded-leg A* per hop, walls, node loss)
 //! gives the commands; [`simulate`] executes them on the true surface and answers with reports:
 //!
-//! - **Scan**: range rays from the robot's *true* grip point (0.3 m above it along the true normal), with noise.
+//! - **Scan**: range rays from the robot's *true* grip point (0.3 m above it along the normal of the true ground
+//!   under its footprint, [`grip::GripModel::footprint`]: its attitude), with noise.
 //! - **Hop**: the robot lands within `landing_error` of the commanded anchor (seeded, uniform in the true tangent
 //!   plane), projected on the true surface along the scene normal; then its grip may slip with the probability of
 //!   [`grip::GripModel`] (from the true surface around the grip point), which is a grip failure: the tether is cut.
@@ -256,7 +257,8 @@ pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig,
                     mission.step(Report::Lost { robot: m, cause: LossCause::TetherCut })
                 } else {
                     let pos = truth.pos[m];
-                    let n_true = surface.normal_near(pos);
+                    // the robot's attitude: the plane of the ground under its footprint
+                    let n_true = cfg.grip.footprint(surface, pos).1;
                     let sensor = add(pos, scale(n_true, cfg.sensor.height));
                     let pts: Vec<Vec3> = dirs
                         .iter()
@@ -433,8 +435,8 @@ pub fn scene_grid(hub: P3, goal: P3, up: P3, cell: f64, margin: u32) -> SceneGri
 }
 
 /// The paper's crevasse (Fig. 12) in a true world: gently undulating ground, 150 x 150 m at 1 m posts, and a
-/// 40 m deep crevasse for y in (82, 98), x < 68 — between scenes (1,2) and (1,3) of a 30 m grid, ending inside
-/// scene (2,2)'s column so the crossing (2,2) -> (2,3) is open. A robot with 10 m hops and 15 m tethers cannot
+/// 40 m deep crevasse for y in (82, 98), x < 68 — across the border (y = 90) between scenes (1,2) and (1,3) of a
+/// 30 m grid, ending inside scene (2,2)'s column so the crossing (2,2) -> (2,3) is open. A robot with 10 m hops and 15 m tethers cannot
 /// cross 16 m of nothing.
 pub fn crevasse_world() -> surface::HeightSurface {
     let n = 151;

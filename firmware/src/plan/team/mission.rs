@@ -22,10 +22,11 @@
 //! and the goal's heights when the scan does not reach it). A crossing the local planners cannot make — the hub
 //! does not get `progress_fraction * h_max` closer to the waypoint for `stall_rounds` rounds in a row — becomes a
 //! wall between the two cells and D* Lite replans incrementally; no route left is
-//! [`MissionOutcome::Blocked`]. A robot lost (tether cut, grip failure) leaves the team; the others continue.
+//! [`MissionOutcome::Blocked`] (`NoRoute`; in the goal's scene, `goal_stall_rounds` rounds without progress are
+//! `GoalUnreachable`). A robot lost (tether cut, grip failure) leaves the team; the others continue.
 //!
 //! Parameters ([`MissionParams`], defaults): `max_rounds` 200, `max_hops` 2000, `dstar_budget` 20 000 expansions,
-//! `stall_rounds` 2, `progress_fraction` 0.1, `waypoint_radius_fraction` 0.25; the local planner's
+//! `stall_rounds` 2, `goal_stall_rounds` 6, `progress_fraction` 0.1, `waypoint_radius_fraction` 0.25; the local planner's
 //! [`TeamParams`] (h_max 10 m, r_max 15 m, landing_margin 0.5 m, ...). Capacities: [`MISSION_MAX_WALLS`] (64)
 //! walls and [`MISSION_MAX_ROUTE`] (256) route cells recorded.
 
@@ -555,11 +556,13 @@ impl<'a, const N: usize, const P: usize, const V: usize, const E: usize> TeamMis
             return None;
         }
         self.stall = self.stall.saturating_add(1);
-        if self.stall < self.mp.stall_rounds {
+        let next = self.next_cell();
+        let limit = if next.is_some() { self.mp.stall_rounds } else { self.mp.goal_stall_rounds };
+        if self.stall < limit {
             return None;
         }
         self.stall = 0;
-        let Some(next) = self.next_cell() else {
+        let Some(next) = next else {
             return Some(MissionOutcome::Blocked(Blocked::GoalUnreachable));
         };
         // the local planners cannot cross from `here` to `next`: a wall for D* Lite
