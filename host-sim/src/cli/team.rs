@@ -90,6 +90,45 @@ fn centroid(p: &[[f64; 3]; 4]) -> [f64; 3] {
     [s[0] / 4.0, s[1] / 4.0, s[2] / 4.0]
 }
 
+/// The DEM posts of a height surface (the picture's background).
+fn dem_background(surf: &crate::team::surface::HeightSurface) -> Vec<[f64; 3]> {
+    let hm = &surf.hm;
+    (0..hm.height)
+        .flat_map(|y| (0..hm.width).map(move |x| (x, y)))
+        .filter_map(|(x, y)| hm.get(x, y).map(|z| [x as f64 * hm.spacing_m, y as f64 * hm.spacing_m, z]))
+        .collect()
+}
+
+/// The rock-wall scale of Fig. 15 (10 m hops, 15 m tethers, 1 m landing margin, 0.3 m landing error, 8 m goal
+/// tolerance) over `grid`, with a sensor of `range` metres and `max_rounds` rounds.
+#[allow(clippy::too_many_arguments)]
+fn hop10_config(
+    grid: firmware::plan::team::mission::SceneGrid,
+    blocked: Vec<(i64, i64)>,
+    range: f64,
+    max_rounds: u32,
+    goal: [f64; 3],
+    fail: Option<(usize, usize)>,
+    seed: u64,
+) -> crate::team::SimConfig {
+    use crate::team::{grip::GripModel, RangeSensor, SimConfig};
+    use firmware::config::team::{MissionParams, TeamParams};
+    let params = TeamParams { landing_margin: 1.0, ..TeamParams::DEFAULT };
+    SimConfig {
+        params,
+        mission: MissionParams { max_rounds, ..MissionParams::DEFAULT },
+        grid,
+        blocked,
+        sensor: RangeSensor { rays: 3000, range, noise: 0.03, height: 0.3 },
+        goal,
+        goal_tol: 8.0,
+        landing_error: 0.3,
+        grip: GripModel::for_hop(params.h_max as f64),
+        fail,
+        seed,
+    }
+}
+
 /// Build a named team scenario: `cliff`, `itokawa`, `bennu` or `crevasse`.
 pub fn team_scenario(world: &str, data: &std::path::Path, fail: Option<(usize, usize)>, seed: u64) -> Result<TeamScenario, String> {
     use crate::team::grip::GripModel;
@@ -117,24 +156,9 @@ pub fn team_scenario(world: &str, data: &std::path::Path, fail: Option<(usize, u
             let center = surf.point(lo.1, lo.2).ok_or("no start point")?;
             let goal = surf.point(hi.1, hi.2).ok_or("no goal point")?;
             let start = x_start(&surf, center, [center[0], center[1], center[2] - 1000.0], 6.0).ok_or("cannot place the team")?;
-            let bg: Vec<[f64; 3]> = (0..surf.hm.height)
-                .flat_map(|y| (0..surf.hm.width).map(move |x| (x, y)))
-                .filter_map(|(x, y)| surf.hm.get(x, y).map(|z| [x as f64 * surf.hm.spacing_m, y as f64 * surf.hm.spacing_m, z]))
-                .collect();
-            let params = TeamParams { landing_margin: 1.0, ..TeamParams::DEFAULT };
-            let cfg = SimConfig {
-                params,
-                mission: MissionParams { max_rounds: 120, ..MissionParams::DEFAULT },
-                grid: scene_grid(centroid(&start), goal, [0.0, 0.0, 1.0], 20.0, 2),
-                blocked: Vec::new(),
-                sensor: RangeSensor { rays: 3000, range: 25.0, noise: 0.03, height: 0.3 },
-                goal,
-                goal_tol: 8.0,
-                landing_error: 0.3,
-                grip: GripModel::for_hop(params.h_max as f64),
-                fail,
-                seed,
-            };
+            let bg = dem_background(&surf);
+            let grid = scene_grid(centroid(&start), goal, [0.0, 0.0, 1.0], 20.0, 2);
+            let cfg = hop10_config(grid, Vec::new(), 25.0, 120, goal, fail, seed);
             Ok((Box::new(surf), start, cfg, [0.0, 0.0, 1.0], bg))
         }
         "itokawa" | "bennu" => {
@@ -174,25 +198,10 @@ pub fn team_scenario(world: &str, data: &std::path::Path, fail: Option<(usize, u
             let center = surf.point(45.0, 45.0).ok_or("no start point")?;
             let goal = surf.point(45.0, 105.0).ok_or("no goal point")?;
             let start = x_start(&surf, center, [45.0, 45.0, -1000.0], 6.0).ok_or("cannot place the team")?;
-            let params = TeamParams { landing_margin: 1.0, ..TeamParams::DEFAULT };
-            let bg: Vec<[f64; 3]> = (0..surf.hm.height)
-                .flat_map(|y| (0..surf.hm.width).map(move |x| (x, y)))
-                .filter_map(|(x, y)| surf.hm.get(x, y).map(|z| [x as f64, y as f64, z]))
-                .collect();
-            let cfg = SimConfig {
-                params,
-                mission: MissionParams { max_rounds: 100, ..MissionParams::DEFAULT },
-                // the paper's 1-based scene indices: column 0 is off its map (blocked)
-                grid: SceneGrid { origin: Vec3::zeros(), u: Vec3::x(), v: Vec3::y(), cell: 30.0, width: 5, height: 5 },
-                blocked: (0..5).map(|y| (0, y)).collect(),
-                sensor: RangeSensor { rays: 3000, range: 22.0, noise: 0.03, height: 0.3 },
-                goal,
-                goal_tol: 8.0,
-                landing_error: 0.3,
-                grip: GripModel::for_hop(params.h_max as f64),
-                fail,
-                seed,
-            };
+            let bg = dem_background(&surf);
+            // the paper's 1-based scene indices: column 0 is off its map (blocked)
+            let grid = SceneGrid { origin: Vec3::zeros(), u: Vec3::x(), v: Vec3::y(), cell: 30.0, width: 5, height: 5 };
+            let cfg = hop10_config(grid, (0..5).map(|y| (0, y)).collect(), 22.0, 100, goal, fail, seed);
             Ok((Box::new(surf), start, cfg, [0.0, 0.0, 1.0], bg))
         }
         other => Err(format!("unknown world {other:?} (cliff, itokawa, bennu, crevasse)")),

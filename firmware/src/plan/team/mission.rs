@@ -719,14 +719,18 @@ mod tests {
         assert_eq!(m.visited().last(), Some(&(6, 0)));
     }
 
+    /// The team of [`start`] on an 8 x 2 grid of 20 m scenes, goal 120 m east.
+    fn eastward<'a>(arena: &'a mut DStarArena<64>, planner: &'a mut Planner) -> TeamMission<'a, 4, 4096, 512, 32768> {
+        let goal = Vec3::new(130.0, 10.0, 0.0);
+        TeamMission::new(grid(8, 2, 20.0), goal, 5.0, start(), TeamParams::DEFAULT, MissionParams::DEFAULT, arena.storage(), planner)
+            .unwrap()
+    }
+
     #[test]
     fn blocked_goal_is_reported_and_not_reached() {
         let mut arena: Box<DStarArena<64>> = Box::default();
         let mut planner: Box<Planner> = Box::default();
-        let g = grid(8, 2, 20.0);
-        let goal = Vec3::new(130.0, 10.0, 0.0);
-        let mut m = TeamMission::new(g, goal, 5.0, start(), TeamParams::DEFAULT, MissionParams::DEFAULT, arena.storage(), &mut planner)
-            .unwrap();
+        let mut m = eastward(&mut arena, &mut planner);
         // a column of impassable scenes between the team and the goal
         m.block_cell((3, 0)).unwrap();
         m.block_cell((3, 1)).unwrap();
@@ -738,10 +742,7 @@ mod tests {
     fn node_loss_keeps_the_others_going_and_all_lost_ends_the_mission() {
         let mut arena: Box<DStarArena<64>> = Box::default();
         let mut planner: Box<Planner> = Box::default();
-        let g = grid(8, 2, 20.0);
-        let goal = Vec3::new(130.0, 10.0, 0.0);
-        let mut m = TeamMission::new(g, goal, 5.0, start(), TeamParams::DEFAULT, MissionParams::DEFAULT, arena.storage(), &mut planner)
-            .unwrap();
+        let mut m = eastward(&mut arena, &mut planner);
         assert_eq!(m.begin(), Command::Scan { robot: 0 });
         // a landing nobody asked for is ignored
         assert_eq!(m.step(Report::Landed { robot: 2, pos: Vec3::zeros() }), Command::Scan { robot: 0 });
