@@ -45,13 +45,14 @@ fn dstar_lite_matches_movingai_8room_all_scenarios() {
     check("8room_000.map", 1);
 }
 
-use host_sim::cli::team::team_scenario;
 use firmware::geom::p3::dist;
+use host_sim::cli::team::{team_rng, team_scenario};
+use host_sim::team::grip::GripModel;
 use host_sim::team::{simulate, SimReport};
+use firmware::plan::team::mission::{Blocked, MissionOutcome};
 
 /// The referee's checks again, from the report alone (independent of both the planner and the simulator's own
-/// checks): every hop <= h_max, every landing within r_max of the hub held during the hop, every leg after a hub
-/// motion... (hub positions are in `hub_path`).
+/// checks): every hop <= h_max, every landing within r_max of the hub held during the hop.
 fn check_hops(r: &SimReport, h_max: f64, r_max: f64) {
     assert!(r.violations.is_empty(), "{:?}", r.violations);
     for h in &r.hops {
@@ -60,45 +61,76 @@ fn check_hops(r: &SimReport, h_max: f64, r_max: f64) {
     }
 }
 
-fn short(world: &str, fail: Option<(usize, usize)>, rounds: usize) -> (SimReport, [f64; 3], f64, f64, [[f64; 3]; 4]) {
-    let (surf, start, mut cfg, _, _) = team_scenario(world, &data(""), fail, 7).unwrap();
-    cfg.max_rounds = rounds;
-    cfg.sensor.rays = 1500;
-    let mut rng = rand_pcg::Pcg64::new(7, 0x0a02_bdbf_7bb3_c0a7_ac28_fa16_a64a_bf96);
-    let r = simulate(surf.as_ref(), &start, &cfg, &mut rng);
-    (r, cfg.goal, cfg.params.h_max as f64, cfg.params.r_max as f64, start)
+/// One closed-loop mission on a named world; `grip_slips = false` replaces the grip model by one that never
+/// slips (for a test about the route, not about losses).
+fn mission(world: &str, fail: Option<(usize, usize)>, seed: u64, grip_slips: bool) -> (SimReport, [f64; 3], f64, f64, f64) {
+    let (surf, start, mut cfg, _, _) = team_scenario(world, &data(""), fail, seed).unwrap();
+    if !grip_slips {
+        cfg.grip = GripModel::never_slips(cfg.params.h_max as f64);
+    }
+    let r = simulate(surf.as_ref(), &start, &cfg, &mut team_rng(seed)).unwrap();
+    (r, cfg.goal, cfg.params.h_max as f64, cfg.params.r_max as f64, cfg.goal_tol)
 }
 
-
+/// The closed loop climbs the HiRISE cliff to the top: the flight code says GoalReached and the referee's own
+/// distance check of the true hub agrees; every hop within h_max and r_max; all four robots climbed.
 #[test]
-fn hirise_cliff_team_climbs_within_hop_and_tether_limits() {
-    let (r, goal, h, rm, _) = short("cliff", None, 8);
+fn hirise_cliff_closed_loop_reaches_the_goal() {
+    let (r, goal, h, rm, tol) = mission("cliff", None, 3, false);
     check_hops(&r, h, rm);
-    assert!(r.hops.len() >= 16, "{} hops", r.hops.len());
-    let (first, last) = (r.hub_path[0], *r.hub_path.last().unwrap());
-    assert!(dist(last, goal) < dist(first, goal) - 5.0, "hub did not progress towards the goal");
-    // the four robots all moved (climbing order: one moves, three hold)
+    assert_eq!(r.outcome, Some(MissionOutcome::GoalReached), "{:?}", r.stats);
+    assert!(dist(*r.hub_path.last().unwrap(), goal) <= tol);
+    assert!(r.reached && r.success());
     for k in 0..4 {
         assert!(r.hops.iter().any(|x| x.robot == k && dist(x.from, x.to) > 0.5), "robot {k} never hopped");
     }
 }
 
+/// Itokawa with 30 m hops and a node loss: robot 1's tether is cut at its third turn; the others carry on and
+/// the hub still reaches the goal.
 #[test]
-fn itokawa_team_with_30m_hops_and_node_loss() {
-    let (r, goal, h, rm, start) = short("itokawa", Some((1, 2)), 6);
+fn itokawa_closed_loop_with_node_loss_reaches_the_goal() {
+    let (r, goal, h, rm, tol) = mission("itokawa", Some((1, 2)), 3, false);
     check_hops(&r, h, rm);
-    assert_eq!(r.lost, vec![1]);
-    // robot 1 hopped exactly twice (turns 0 and 1) and never again; the others carried on
-    assert_eq!(r.hops.iter().filter(|x| x.robot == 1).count(), 2);
-    let lost_at = r.hops.iter().position(|x| x.robot == 1 && x.round == 1).unwrap();
-    for k in [0, 2, 3] {
-        assert!(r.hops.iter().skip(lost_at + 1).any(|x| x.robot == k), "robot {k} stopped after the loss");
-    }
-    let hub0 = r.hub_path[0];
-    assert!(dist(*r.hub_path.last().unwrap(), goal) < dist(hub0, goal) - 20.0);
+    assert_eq!(r.lost.first().map(|l| l.0), Some(1));
+    assert!(r.hops.iter().filter(|x| x.robot == 1).count() <= 2, "robot 1 hopped after its tether was cut");
+    assert_eq!(r.outcome, Some(MissionOutcome::GoalReached), "{:?}", r.stats);
+    assert!(dist(*r.hub_path.last().unwrap(), goal) <= tol && r.reached);
     // the 30 m hop limit is used: some hop is longer than the 10 m cliff limit
     assert!(r.hops.iter().any(|x| dist(x.from, x.to) > 10.0));
-    let _ = start;
+}
+
+/// Fig. 12 by the closed loop: the true world has a 16 m crevasse between scenes (1,2) and (1,3) (nothing is
+/// scripted: the team finds it by failing to get across); the flight code walls that crossing and D* Lite
+/// reroutes, and the team's scene goes (1,1), (1,2), (2,2), (2,3), (1,3). Seeds 1 and 2 of the development seeds
+/// (the reroute came out on 8 of seeds 1-10; the goal itself, 7 m past the crevasse's lip, was reached on 3 of
+/// them: see `host-sim/doc/team.md`), so this asserts the reroute, not the arrival.
+#[test]
+fn crevasse_reroute_of_fig_12_in_closed_loop() {
+    for seed in [1, 2] {
+        let (r, _, h, rm, _) = mission("crevasse", None, seed, false);
+        check_hops(&r, h, rm);
+        assert_eq!(r.routes.0, vec![(1, 1), (1, 2), (1, 3)], "the first route goes straight south");
+        assert_eq!(r.walls, vec![((1, 2), (1, 3))], "seed {seed}: {:?}", r.stats);
+        assert_eq!(r.visited, vec![(1, 1), (1, 2), (2, 2), (2, 3), (1, 3)], "seed {seed}");
+        // nobody landed in the crevasse (beyond the 1 m band of its lips where the posts' bilinear surface slopes)
+        assert!(r.hops.iter().all(|x| !(x.to[0] < 67.0 && x.to[1] > 83.0 && x.to[1] < 97.0)), "seed {seed}: landed in the crevasse");
+    }
+}
+
+/// A goal beyond a crevasse that cuts the whole grid: the flight code walls crossings until D* Lite has no route
+/// left and reports Blocked; the CLI's success (and exit status) is false.
+#[test]
+fn blocked_goal_is_reported_as_not_reached() {
+    let (surf, start, mut cfg, _, _) = team_scenario("crevasse", &data(""), None, 1).unwrap();
+    cfg.grip = GripModel::never_slips(cfg.params.h_max as f64);
+    // the same crevasse world, but the team may not go round (columns 2.. are off the map too)
+    cfg.blocked.extend((0..5).flat_map(|y| (2..5).map(move |x| (x, y))));
+    let r = simulate(surf.as_ref(), &start, &cfg, &mut team_rng(1)).unwrap();
+    assert_eq!(r.outcome, Some(MissionOutcome::Blocked(Blocked::NoRoute)), "{:?}", r.stats);
+    assert_eq!(r.walls, vec![((1, 2), (1, 3))]);
+    assert!(!r.reached && !r.success());
+    assert!(r.violations.is_empty(), "{:?}", r.violations);
 }
 
 use firmware::plan::status::{Ended, Status};

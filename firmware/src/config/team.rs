@@ -112,3 +112,55 @@ impl Default for TeamParams {
         Self::DEFAULT
     }
 }
+
+/// Walls (blocked crossings between two scenes) the team mission records for its report
+/// (`plan::team::mission`). Default 64: more walls than that are still given to D* Lite (its grid holds them),
+/// only the record is full.
+pub const MISSION_MAX_WALLS: usize = 64;
+
+/// Cells of the D* Lite route the team mission records (the cells its start moved through). Default 256.
+pub const MISSION_MAX_ROUTE: usize = 256;
+
+/// Budgets and thresholds of the team mission (`plan::team::mission`, Morad et al. sections V-A.6 and V-A.7).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MissionParams {
+    /// Rounds (every attached robot has had its turn, then the hub moves) before `BudgetExhausted`. Default 200.
+    pub max_rounds: u32,
+    /// Hops commanded before `BudgetExhausted`. Default 2000.
+    pub max_hops: u32,
+    /// D* Lite expansions per (re)plan. Default 20 000 (a 64 x 64 grid of scenes needs at most 4096 per plan).
+    pub dstar_budget: u32,
+    /// Rounds in a row without progress towards the next scene before the crossing becomes a wall. Default 2
+    /// (one round without progress can be a hub held back by a laggard; two is a crossing the local planners
+    /// cannot make — the crevasse of Fig. 12).
+    pub stall_rounds: u16,
+    /// Rounds in a row without progress in the goal's scene before the mission gives up
+    /// (`Blocked(GoalUnreachable)`). Default 6: there is no other route to try there, so giving up is final and
+    /// waits longer than a wall does; near the goal the hub's steps shrink as the robots reach their slots.
+    pub goal_stall_rounds: u16,
+    /// Progress that counts, as a fraction of h_max: the hub must get this much closer to the next scene's
+    /// waypoint in a round. Default 0.1 (1 m with 10 m hops).
+    pub progress_fraction: Real,
+    /// Radius of the scan points averaged for a waypoint's height over the scene plane, as a fraction of the
+    /// scene (cell) size. Default 0.25.
+    pub waypoint_radius_fraction: Real,
+}
+
+impl MissionParams {
+    /// The defaults documented on each field.
+    pub const DEFAULT: MissionParams = MissionParams {
+        max_rounds: 200,
+        max_hops: 2000,
+        dstar_budget: 20_000,
+        stall_rounds: 2,
+        goal_stall_rounds: 6,
+        progress_fraction: 0.1,
+        waypoint_radius_fraction: 0.25,
+    };
+}
+
+impl Default for MissionParams {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}

@@ -1,27 +1,37 @@
-//! Simulation of a tethered climbing team (Morad et al.; scenario D): four robots gripping a real steep surface,
-//! tethered to a hub, each with a range sensor; each robot in turn scans, runs the flight planner
-//! ([`firmware::plan::team::LocalPlanner`], bounded-leg A*) and hops to the first anchor of its plan.
+//! Closed-loop simulation of a tethered climbing team (Morad et al.; scenario D): four robots gripping a real
+//! steep surface, tethered to a hub, each with a range sensor. The flight code's team mission
+//! ([`firmware::plan::team::mission`]: D* Lite over a grid of scenes, bounded-leg A* per hop, walls, node loss)
+//! gives the commands; [`simulate`] executes them on the true surface and answers with reports:
 //!
-//! The simulator is the referee: it lands the robot on the *true* surface (ray cast along the scene normal
-//! through the planned anchor) and checks, with its own code, every hop against h_max (hop length) and r_max (the
-//! landing point's distance to the hub, which the gripped robots hold still during the hop), and every leg against
-//! r_max after each hub motion. Violations are recorded, never corrected. A scripted gripper failure cuts a
-//! robot's tether (node loss); the others continue.
+//! - **Scan**: range rays from the robot's *true* grip point (0.3 m above it along the normal of the true ground
+//!   under its footprint, [`grip::GripModel::footprint`]: its attitude), with noise.
+//! - **Hop**: the robot lands within `landing_error` of the commanded anchor (seeded, uniform in the true tangent
+//!   plane), projected on the true surface along the scene normal; then its grip may slip with the probability of
+//!   [`grip::GripModel`] (from the true surface around the grip point), which is a grip failure: the tether is cut.
+//! - **Hub**: the winches put the hub where commanded.
+//! - A scripted node failure (`fail`) cuts a robot's tether at its n-th turn; the others continue.
+//!
+//! The simulator is also the referee: with its own code it checks every hop against h_max (hop length) and r_max
+//! (the landing point's distance to the true hub, held still during the hop), and every attached leg against
+//! r_max after each hub motion. Violations are recorded, never corrected. Whether the goal was reached is the
+//! referee's own distance check of the true hub, reported beside the flight code's outcome.
 //!
 //! Worlds: [`cliff_from_hirise`] (the steepest part of the HiRISE crop, scaled into a cliff) and
 //! [`itokawa`] (the Hayabusa shape model, metres; 30 m hops as in Fig. 16). Pictures: [`svg`].
 
+pub mod grip;
 pub mod svg;
 pub mod surface;
 
-use firmware::config::team::TeamParams;
-use firmware::geom::{Real, Vec3};
-use firmware::plan::status::Status;
-use firmware::plan::team::leg_astar::AStarStatus;
-use firmware::plan::team::formation::Team;
-use firmware::plan::team::DefaultLocalPlanner;
-use rand_core::Rng;
+use crate::movingai::OwnedDStarStorage;
+use firmware::config::team::{MissionParams, TeamParams};
 use firmware::geom::p3::{add, cross, dist, from_vec3, scale, sub, to_vec3};
+use firmware::geom::{Real, Vec3};
+use firmware::plan::team::dstar_lite::PathOutcome;
+use firmware::plan::team::mission::{Cell, Command, DefaultTeamMission, LossCause, MissionError, MissionOutcome, MissionStats, Report, SceneGrid};
+use firmware::plan::team::DefaultLocalPlanner;
+use grip::GripModel;
+use rand_core::Rng;
 use surface::{unit, Surface, P3};
 
 /// Range sensor: `rays` directions spread over the sphere (Fibonacci lattice), range, Gaussian-ish noise.
@@ -58,15 +68,24 @@ impl RangeSensor {
 pub struct SimConfig {
     /// Planner parameters (h_max, r_max, ...).
     pub params: TeamParams,
+    /// Mission budgets and thresholds (rounds, hops, walls).
+    pub mission: MissionParams,
+    /// The grid of scenes the flight code plans over.
+    pub grid: SceneGrid,
+    /// Scenes known beforehand to be impassable (blocked for D* Lite before the start).
+    pub blocked: Vec<Cell>,
     /// The sensor.
     pub sensor: RangeSensor,
     /// Team goal (hub goal), metres.
     pub goal: P3,
     /// The run succeeds when the hub is within this of the goal.
     pub goal_tol: f64,
-    /// Rounds budget.
-    pub max_rounds: usize,
-    /// Scripted node failure: (robot, its turn number counted from 0) at which its gripper fails.
+    /// Landing error: the robot lands uniformly within this radius (metres) of the commanded anchor, in the true
+    /// tangent plane there, then on the true surface.
+    pub landing_error: f64,
+    /// Grip-slip model (probability from the true surface around the grip point).
+    pub grip: GripModel,
+    /// Scripted node failure: (robot, its turn number counted from 0) at which its tether is cut.
     pub fail: Option<(usize, usize)>,
     /// Noise seed.
     pub seed: u64,
@@ -77,18 +96,20 @@ pub struct SimConfig {
 pub struct HopRecord {
     /// Robot.
     pub robot: usize,
-    /// Round.
+    /// Round (hub motions so far).
     pub round: usize,
     /// Where it took off.
     pub from: P3,
     /// Where it gripped (true surface).
     pub to: P3,
+    /// The anchor the flight code commanded.
+    pub commanded: P3,
     /// Hub during the hop.
     pub hub: P3,
-    /// Planner status.
-    pub status: AStarStatus,
-    /// Planning time, seconds (host).
-    pub plan_s: f64,
+    /// Grip quality q of the landing point (see [`grip`]).
+    pub grip_q: f64,
+    /// The grip slipped (robot lost).
+    pub slipped: bool,
 }
 
 /// What happened.
@@ -96,145 +117,244 @@ pub struct HopRecord {
 pub struct SimReport {
     /// World name.
     pub world: String,
+    /// The flight code's final outcome (`None`: the simulator's step budget ended first).
+    pub outcome: Option<MissionOutcome>,
     /// Executed hops.
     pub hops: Vec<HopRecord>,
-    /// Robot paths (anchor points, start first), per robot.
+    /// Robot paths (grip points, start first), per robot.
     pub paths: Vec<Vec<P3>>,
-    /// Hub positions after each round.
+    /// Hub positions after each round, start first.
     pub hub_path: Vec<P3>,
     /// Constraint violations the referee found (empty = every hop respected h_max and r_max).
     pub violations: Vec<String>,
-    /// Robots whose tether was cut.
-    pub lost: Vec<usize>,
-    /// Rounds run.
+    /// Robots lost, in order, with the cause.
+    pub lost: Vec<(usize, LossCause)>,
+    /// Rounds run (hub motions).
     pub rounds: usize,
-    /// Hub reached the goal.
+    /// The referee's verdict: the true hub is within `goal_tol` of the goal at the end.
     pub reached: bool,
-    /// The first plan's graph (vertices, edges as index pairs) and the four first paths, for pictures.
+    /// The grid of scenes.
+    pub grid: Option<SceneGrid>,
+    /// Walls the flight code added (cell pairs).
+    pub walls: Vec<(Cell, Cell)>,
+    /// The cells the team's scene moved through.
+    pub visited: Vec<Cell>,
+    /// D* Lite's route at the start and at the end.
+    pub routes: (Vec<Cell>, Vec<Cell>),
+    /// Robot 0's first hop graph (vertices, edges as index pairs), for pictures.
     pub first_graph: (Vec<P3>, Vec<(usize, usize)>),
-    /// The first plan of each robot (anchor points).
-    pub first_plans: Vec<Vec<P3>>,
-    /// Local plan times, seconds.
+    /// Host time of each scan report's handling (local plan of one robot and its checks), seconds.
     pub plan_times: Vec<f64>,
+    /// Host time of each hub report's handling (end of round: progress, walls, D* Lite replan), seconds.
+    pub round_times: Vec<f64>,
+    /// The flight code's counters.
+    pub stats: MissionStats,
 }
 
-/// Run the team from `start` (one grip point per robot) to `cfg.goal` on `surface`.
-pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig, rng: &mut R) -> SimReport {
+impl SimReport {
+    /// Goal reached by the flight code's account and the referee's, with no violation.
+    pub fn success(&self) -> bool {
+        self.reached && self.outcome == Some(MissionOutcome::GoalReached) && self.violations.is_empty()
+    }
+}
+
+/// Why a run could not start.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SimError {
+    /// The flight code rejected the set-up (grid, goal outside it, ...).
+    Mission(MissionError),
+}
+
+impl core::fmt::Display for SimError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            SimError::Mission(e) => write!(f, "the flight code rejected the mission: {e:?}"),
+        }
+    }
+}
+
+fn uniform<R: Rng>(rng: &mut R) -> f64 {
+    rng.next_u32() as f64 / (u32::MAX as f64 + 1.0)
+}
+
+/// The simulator's true state of the team.
+struct Truth {
+    pos: [P3; 4],
+    attached: [bool; 4],
+    hub: P3,
+}
+
+/// The referee: the simulator's own checks of the true positions against h_max and r_max (never corrects).
+struct Referee {
+    h_max: f64,
+    r_max: f64,
+}
+
+impl Referee {
+    const TOL: f64 = 1e-4;
+
+    fn hop(&self, rep: &mut SimReport, m: usize, from: P3, to: P3, hub: P3) {
+        let hop = dist(from, to);
+        if hop > self.h_max + Self::TOL {
+            rep.violations.push(format!("robot {m} round {}: hop {hop:.3} m > h_max {}", rep.rounds, self.h_max));
+        }
+        let leg = dist(to, hub);
+        if leg > self.r_max + Self::TOL {
+            rep.violations.push(format!("robot {m} round {}: landing {leg:.3} m from the hub > r_max {}", rep.rounds, self.r_max));
+        }
+    }
+
+    fn legs(&self, rep: &mut SimReport, t: &Truth) {
+        for k in 0..4 {
+            let l = dist(t.pos[k], t.hub);
+            if t.attached[k] && l > self.r_max + Self::TOL {
+                rep.violations.push(format!("round {}: robot {k} leg {l:.3} m > r_max {}", rep.rounds, self.r_max));
+            }
+        }
+    }
+}
+
+/// Run the team mission from `start` (one grip point per robot) to `cfg.goal` on `surface`: the flight code
+/// ([`DefaultTeamMission`]) commands, the simulator executes on the true surface and reports back.
+pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig, rng: &mut R) -> Result<SimReport, SimError> {
     let params = cfg.params;
-    let mut team: Team<4> = Team::new(start.map(to_vec3));
+    let mut storage = OwnedDStarStorage::new((cfg.grid.width * cfg.grid.height) as usize);
     let mut planner: Box<DefaultLocalPlanner> = Box::default();
+    let mut mission = DefaultTeamMission::new(
+        cfg.grid,
+        to_vec3(cfg.goal),
+        cfg.goal_tol as Real,
+        start.map(to_vec3),
+        params,
+        cfg.mission,
+        storage.storage(),
+        &mut planner,
+    )
+    .map_err(SimError::Mission)?;
+    for &c in &cfg.blocked {
+        mission.block_cell(c).map_err(SimError::Mission)?;
+    }
+    let referee = Referee { h_max: params.h_max as f64, r_max: params.r_max as f64 };
     let dirs = cfg.sensor.directions();
-    let mut rep = SimReport { world: surface.name().to_string(), ..Default::default() };
+    let mut rep = SimReport { world: surface.name().to_string(), grid: Some(cfg.grid), ..Default::default() };
+    let mut truth = Truth { pos: *start, attached: [true; 4], hub: from_vec3(&mission.team().hub) };
     rep.paths = start.iter().map(|p| vec![*p]).collect();
-    rep.hub_path.push(from_vec3(&team.hub));
+    rep.hub_path.push(truth.hub);
     let mut turns = [0usize; 4];
-    let mut stalled = 0usize;
-    let mut moved_this_round = false;
-    let mut round = 0usize;
-    let max_turns = cfg.max_rounds * 4 + 4;
-    for _ in 0..max_turns {
-        let Some((m, new_round)) = team.next_mover() else { break };
-        if new_round && !(round == 0 && rep.hops.is_empty() && turns.iter().all(|&t| t == 0)) {
-            // end of the previous round: hub motion, then the referee checks every leg
-            team.hub_motion(params.r_max);
-            rep.hub_path.push(from_vec3(&team.hub));
-            for (k, r) in team.robots.iter().enumerate() {
-                let l = dist(from_vec3(&r.pos), from_vec3(&team.hub));
-                if r.attached && l > params.r_max as f64 + 1e-4 {
-                    rep.violations.push(format!("round {round}: robot {k} leg {l:.3} m > r_max {}", params.r_max));
-                }
-            }
-            if dist(from_vec3(&team.hub), cfg.goal) <= cfg.goal_tol {
-                rep.reached = true;
-                break;
-            }
-            stalled = if moved_this_round { 0 } else { stalled + 1 };
-            if stalled >= 2 {
-                break;
-            }
-            moved_this_round = false;
-            round += 1;
-            if round >= cfg.max_rounds {
-                break;
-            }
-        }
-        let turn = turns[m];
-        turns[m] += 1;
-        if cfg.fail == Some((m, turn)) {
-            team.cut_tether(m);
-            rep.lost.push(m);
-            continue;
-        }
-        let pos = from_vec3(&team.robots[m].pos);
-        let n_true = surface.normal_near(pos);
-        let sensor = add(pos, scale(n_true, cfg.sensor.height));
-        let hits = surface.scan(sensor, &dirs, cfg.sensor.range);
-        let mut pts = Vec::with_capacity(hits.len());
-        for (d, h) in dirs.iter().zip(hits) {
-            if let Some(t) = h {
-                let e = (rng.next_u32() as f64 / u32::MAX as f64 * 2.0 - 1.0) * cfg.sensor.noise;
-                pts.push(to_vec3(add(sensor, scale(*d, t + e))));
-            }
-        }
-        let leg = team.leg(m).unwrap_or_else(Vec3::zeros);
-        let goal = team.slot_goal(m, &to_vec3(cfg.goal));
-        let t0 = std::time::Instant::now();
-        let plan = planner.plan(&pts, &to_vec3(n_true), &team.robots[m].pos, &leg, &goal, 0.5 * cfg.goal_tol as Real, &params);
-        let dt = t0.elapsed().as_secs_f64();
-        rep.plan_times.push(dt);
-        let plan = match plan {
-            Ok(p) => p,
-            Err(_) => continue,
-        };
-        if rep.first_plans.len() < 4 && turn == 0 {
-            rep.first_plans.push(plan.hops.iter().map(from_vec3).collect());
-            if m == 0 {
-                let g = &planner.graph;
-                let verts: Vec<P3> = g.vertices[..g.n_vertices].iter().map(|v| from_vec3(&v.pos)).collect();
-                let mut edges = Vec::new();
-                for a in 0..g.n_vertices {
-                    for e in g.out_edges(a) {
-                        edges.push((a, e.to as usize));
+    let mut cmd = mission.begin();
+    rep.routes.0 = route(&mission);
+    // every command is answered once; the flight code's budgets end the mission long before this bound
+    let max_steps = 4 * (cfg.mission.max_hops as usize + 5 * cfg.mission.max_rounds as usize + 10);
+    for _ in 0..max_steps {
+        cmd = match cmd {
+            Command::Done(_) => break,
+            Command::Scan { robot: m } => {
+                let turn = turns[m];
+                turns[m] += 1;
+                if cfg.fail == Some((m, turn)) {
+                    truth.attached[m] = false;
+                    rep.lost.push((m, LossCause::TetherCut));
+                    mission.step(Report::Lost { robot: m, cause: LossCause::TetherCut })
+                } else {
+                    let pos = truth.pos[m];
+                    // the robot's attitude: the plane of the ground under its footprint
+                    let n_true = cfg.grip.footprint(surface, pos).1;
+                    let sensor = add(pos, scale(n_true, cfg.sensor.height));
+                    let pts: Vec<Vec3> = dirs
+                        .iter()
+                        .zip(surface.scan(sensor, &dirs, cfg.sensor.range))
+                        .filter_map(|(d, h)| h.map(|t| (d, t)))
+                        .map(|(d, t)| to_vec3(add(sensor, scale(*d, t + (2.0 * uniform(rng) - 1.0) * cfg.sensor.noise))))
+                        .collect();
+                    let t0 = std::time::Instant::now();
+                    let c = mission.step(Report::Scan { robot: m, pos: to_vec3(pos), up: to_vec3(n_true), hub: to_vec3(truth.hub), points: &pts });
+                    rep.plan_times.push(t0.elapsed().as_secs_f64());
+                    if m == 0 && rep.first_graph.0.is_empty() {
+                        rep.first_graph = graph_of(mission.planner());
                     }
+                    c
                 }
-                rep.first_graph = (verts, edges);
             }
-        }
-        if !matches!(plan.status, Status::Exact(()) | Status::Approximate(_)) {
-            continue;
-        }
-        let Some(target) = plan.hops.get(1) else { continue };
-        // land on the true surface: cast along the scene normal through the planned anchor
-        let n = from_vec3(&planner.scene.frame.n);
-        let tp = from_vec3(target);
-        let o = add(tp, scale(n, 3.0));
-        let landing = surface
-            .raycast(o, scale(n, -1.0), 6.0)
-            .map(|t| add(o, scale(n, -t)))
-            .or_else(|| surface.raycast(tp, n, 3.0).map(|t| add(tp, scale(n, t))));
-        let Some(to) = landing else { continue };
-        let hub = from_vec3(&team.hub);
-        // the referee's checks (independent of the planner)
-        let hop = dist(pos, to);
-        if hop > params.h_max as f64 + 1e-4 {
-            rep.violations.push(format!("robot {m} round {round}: hop {hop:.3} m > h_max {}", params.h_max));
-        }
-        let legl = dist(to, hub);
-        if legl > params.r_max as f64 + 1e-4 {
-            rep.violations.push(format!("robot {m} round {round}: landing {legl:.3} m from hub > r_max {}", params.r_max));
-        }
-        team.hop(m, to_vec3(to));
-        rep.paths[m].push(to);
-        rep.hops.push(HopRecord { robot: m, round, from: pos, to, hub, status: plan.status, plan_s: dt });
-        if hop > 1e-3 {
-            moved_this_round = true;
+            Command::Hop { robot: m, target } => {
+                let from = truth.pos[m];
+                let commanded = from_vec3(&target);
+                let n_scene = from_vec3(&mission.planner().scene.frame.n);
+                let to = land(surface, commanded, n_scene, cfg.landing_error, rng).unwrap_or(from);
+                referee.hop(&mut rep, m, from, to, truth.hub);
+                let grip_q = cfg.grip.quality(surface, to);
+                let slipped = uniform(rng) < cfg.grip.p_slip(grip_q);
+                rep.hops.push(HopRecord { robot: m, round: rep.rounds, from, to, commanded, hub: truth.hub, grip_q, slipped });
+                if slipped {
+                    truth.attached[m] = false;
+                    rep.lost.push((m, LossCause::GripFailure));
+                    mission.step(Report::Lost { robot: m, cause: LossCause::GripFailure })
+                } else {
+                    truth.pos[m] = to;
+                    rep.paths[m].push(to);
+                    mission.step(Report::Landed { robot: m, pos: to_vec3(to) })
+                }
+            }
+            Command::MoveHub { to } => {
+                // the winches put the hub where it is commanded; the referee checks every attached leg
+                truth.hub = from_vec3(&to);
+                rep.rounds += 1;
+                referee.legs(&mut rep, &truth);
+                rep.hub_path.push(truth.hub);
+                let t0 = std::time::Instant::now();
+                let c = mission.step(Report::HubAt { pos: to });
+                rep.round_times.push(t0.elapsed().as_secs_f64());
+                c
+            }
+        };
+    }
+    rep.outcome = mission.outcome();
+    rep.reached = dist(truth.hub, cfg.goal) <= cfg.goal_tol;
+    rep.walls = mission.walls().to_vec();
+    rep.visited = mission.visited().to_vec();
+    rep.routes.1 = route(&mission);
+    rep.stats = mission.stats();
+    Ok(rep)
+}
+
+fn route(m: &DefaultTeamMission<'_>) -> Vec<Cell> {
+    let mut buf = vec![(0i64, 0i64); (m.grid().width * m.grid().height) as usize + 1];
+    match m.route(&mut buf) {
+        Ok(PathOutcome::Complete(n)) | Ok(PathOutcome::BufferFull(n)) => buf.truncate(n),
+        _ => buf.clear(),
+    }
+    buf
+}
+
+fn graph_of(p: &DefaultLocalPlanner) -> (Vec<P3>, Vec<(usize, usize)>) {
+    let g = &p.graph;
+    let verts: Vec<P3> = g.vertices[..g.n_vertices].iter().map(|v| from_vec3(&v.pos)).collect();
+    let mut edges = Vec::new();
+    for a in 0..g.n_vertices {
+        for e in g.out_edges(a) {
+            edges.push((a, e.to as usize));
         }
     }
-    rep.rounds = round + 1;
-    if !rep.reached && dist(from_vec3(&team.hub), cfg.goal) <= cfg.goal_tol {
-        rep.reached = true;
+    (verts, edges)
+}
+
+/// Where a hop commanded to `target` really grips: a uniform error within `err` metres in the true tangent plane,
+/// then onto the true surface along the scene normal `n` (or along the true normal when that misses).
+fn land<R: Rng>(surface: &dyn Surface, target: P3, n: P3, err: f64, rng: &mut R) -> Option<P3> {
+    let nt = surface.normal_near(target);
+    let a = unit(if nt[2].abs() < 0.9 { cross(nt, [0.0, 0.0, 1.0]) } else { cross(nt, [1.0, 0.0, 0.0]) });
+    let b = cross(nt, a);
+    let (r, th) = (err * uniform(rng).sqrt(), 2.0 * core::f64::consts::PI * uniform(rng));
+    let aim = add(target, add(scale(a, r * th.cos()), scale(b, r * th.sin())));
+    for dir in [n, nt] {
+        let o = add(aim, scale(dir, 3.0));
+        if let Some(t) = surface.raycast(o, scale(dir, -1.0), 6.0) {
+            return Some(add(o, scale(dir, -t)));
+        }
+        if let Some(t) = surface.raycast(aim, dir, 3.0) {
+            return Some(add(aim, scale(dir, t)));
+        }
     }
-    rep
+    None
 }
 
 /// The steepest `win` x `win` window of the HiRISE crop, horizontal spacing times `h_scale` and heights times
@@ -286,11 +406,49 @@ pub fn cliff_from_hirise(path: &std::path::Path, win: usize, h_scale: f64, z_sca
     Ok((surface::HeightSurface::new("hirise-cliff", out), ss / n.max(1.0)))
 }
 
+/// An asteroid shape model (OBJ in kilometres, as the shared Itokawa and Bennu models) in metres.
+pub fn asteroid(path: &std::path::Path, name: &str) -> Result<surface::MeshSurface, String> {
+    use crate::terrain::obj::{load_obj, ObjOptions};
+    let m = load_obj(path, &ObjOptions::KILOMETRES).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(surface::MeshSurface::new(name, m))
+}
+
 /// Itokawa in metres.
 pub fn itokawa(path: &std::path::Path) -> Result<surface::MeshSurface, String> {
-    use crate::terrain::obj::{load_obj, ObjOptions};
-    let m = load_obj(path, &ObjOptions::KILOMETRES).map_err(|e| e.to_string())?;
-    Ok(surface::MeshSurface::new("itokawa", m))
+    asteroid(path, "itokawa")
+}
+
+/// A grid of scenes of `cell` metres for a mission from `hub` to `goal`, on the plane through `hub`
+/// perpendicular to `up`: columns along the direction to the goal, `margin` cells around the start and the goal
+/// on every side (the team's hub starts in cell (margin, margin)).
+pub fn scene_grid(hub: P3, goal: P3, up: P3, cell: f64, margin: u32) -> SceneGrid {
+    let n = unit(up);
+    let d = sub(goal, hub);
+    let along = sub(d, scale(n, firmware::geom::p3::dot(d, n)));
+    let u = unit(if firmware::geom::p3::norm(along) > 1e-9 { along } else { cross(n, [0.0, 1.0, 0.0]) });
+    let v = cross(n, u);
+    let length = firmware::geom::p3::norm(along);
+    let m = margin as f64;
+    let origin = sub(hub, add(scale(u, (m + 0.5) * cell), scale(v, (m + 0.5) * cell)));
+    let width = (length / cell + 0.5).ceil() as u32 + 2 * margin + 1;
+    SceneGrid { origin: to_vec3(origin), u: to_vec3(u), v: to_vec3(v), cell: cell as Real, width, height: 2 * margin + 1 }
+}
+
+/// The paper's crevasse (Fig. 12) in a true world: gently undulating ground, 150 x 150 m at 1 m posts, and a
+/// 40 m deep crevasse for y in (82, 98), x < 68 — across the border (y = 90) between scenes (1,2) and (1,3) of a
+/// 30 m grid, ending inside scene (2,2)'s column so the crossing (2,2) -> (2,3) is open. A robot with 10 m hops and 15 m tethers cannot
+/// cross 16 m of nothing.
+pub fn crevasse_world() -> surface::HeightSurface {
+    let n = 151;
+    let ground = |x: f64, y: f64| -> f64 {
+        if y > 82.0 && y < 98.0 && x < 68.0 {
+            -40.0
+        } else {
+            0.4 * (x / 3.0).sin() * (y / 4.0).cos()
+        }
+    };
+    let heights = (0..n * n).map(|i| Some(ground((i % n) as f64, (i / n) as f64))).collect();
+    surface::HeightSurface::new("crevasse", crate::terrain::Heightmap { width: n, height: n, spacing_m: 1.0, heights_m: heights })
 }
 
 /// Four grip points in an "x" of half-diagonal `r` around the surface point under `center` (height field: along

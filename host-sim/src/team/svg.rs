@@ -1,11 +1,26 @@
-//! Pictures like Morad et al. Figs. 15-16: the terrain (shaded by height along the view direction), the first
-//! hop graph of robot 1 (yellow vertices and edges), the four robots' paths (blue, black, brown, purple) and the
-//! hub's path (red), projected on the plane perpendicular to `view`.
+//! Pictures like Morad et al. Figs. 12, 15-16: the terrain (shaded by height along the view direction), the grid of
+//! scenes (thin grey), D* Lite's route at the start (dashed green) and at the end (cyan), the walls the team found
+//! (thick red, across the blocked crossing), the first hop graph of robot 1 (yellow vertices and edges), the four
+//! robots' hops (blue, black, brown, purple; a cross where a grip slipped), the hub's path (red dashed) and the
+//! final tethers (white), projected on the plane perpendicular to `view`.
 
 use super::surface::{unit, P3};
 use firmware::geom::p3::{cross, dot, sub};
 use super::SimReport;
 use core::fmt::Write as _;
+use firmware::geom::p3::from_vec3;
+use firmware::geom::Real;
+use firmware::plan::team::mission::{Cell, SceneGrid};
+
+/// A point of the scene plane at the start hub's height.
+fn grid_point(g: &SceneGrid, a: f64, b: f64, h: f64) -> P3 {
+    from_vec3(&g.point(a as Real, b as Real, h as Real))
+}
+
+fn cell_centre(g: &SceneGrid, c: Cell, h: f64) -> P3 {
+    let (a, b) = g.centre(c);
+    grid_point(g, a as f64, b as f64, h)
+}
 
 const COLOURS: [&str; 4] = ["#1f4fff", "#000000", "#8b4513", "#800080"];
 
@@ -19,7 +34,11 @@ pub fn render(rep: &SimReport, view: P3, background: &[P3]) -> String {
         let d = sub(p, origin);
         (dot(d, a), dot(d, b), dot(d, n))
     };
+    let h0 = rep.grid.map(|g| g.height_of(&firmware::geom::p3::to_vec3(origin)) as f64).unwrap_or(0.0);
     let mut pts: Vec<(f64, f64)> = rep.paths.iter().flatten().map(|&p| proj(p)).map(|(x, y, _)| (x, y)).collect();
+    if let Some(g) = &rep.grid {
+        pts.extend(rep.routes.0.iter().chain(&rep.routes.1).map(|&c| proj(cell_centre(g, c, h0))).map(|(x, y, _)| (x, y)));
+    }
     pts.extend(rep.first_graph.0.iter().map(|&p| proj(p)).map(|(x, y, _)| (x, y)));
     let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
     for (x, y) in &pts {
@@ -53,6 +72,34 @@ pub fn render(rep: &SimReport, view: P3, background: &[P3]) -> String {
         let g = (40.0 + 200.0 * t) as u8;
         let _ = writeln!(out, r#"<rect x="{:.1}" y="{:.1}" width="{dot_r:.1}" height="{dot_r:.1}" fill="rgb({g},{g},{g})"/>"#, sx(*x), sy(*y));
     }
+    let line = |out: &mut String, p: P3, q: P3, style: &str| {
+        let (p, q) = (proj(p), proj(q));
+        let _ = writeln!(out, r#"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" {style}/>"#, sx(p.0), sy(p.1), sx(q.0), sy(q.1));
+    };
+    if let Some(g) = &rep.grid {
+        let (w, h, c) = (g.width as f64, g.height as f64, g.cell as f64);
+        for i in 0..=g.width {
+            let a = i as f64 * c;
+            line(&mut out, grid_point(g, a, 0.0, h0), grid_point(g, a, h * c, h0), r##"stroke="#888" stroke-width="0.8""##);
+        }
+        for j in 0..=g.height {
+            let b = j as f64 * c;
+            line(&mut out, grid_point(g, 0.0, b, h0), grid_point(g, w * c, b, h0), r##"stroke="#888" stroke-width="0.8""##);
+        }
+        for (route, style) in [(&rep.routes.0, r##"stroke="#3c3" stroke-width="3" stroke-dasharray="10,6""##), (&rep.routes.1, r##"stroke="cyan" stroke-width="3""##)] {
+            for pair in route.windows(2) {
+                line(&mut out, cell_centre(g, pair[0], h0), cell_centre(g, pair[1], h0), style);
+            }
+        }
+        for &(a, b) in &rep.walls {
+            let (pa, pb) = (g.centre(a), g.centre(b));
+            let (ma, mb) = (0.5 * (pa.0 + pb.0) as f64, 0.5 * (pa.1 + pb.1) as f64);
+            let (da, db) = ((pb.0 - pa.0) as f64, (pb.1 - pa.1) as f64);
+            let l = da.hypot(db).max(1e-9);
+            let (qa, qb) = (-db / l * 0.5 * c, da / l * 0.5 * c);
+            line(&mut out, grid_point(g, ma - qa, mb - qb, h0), grid_point(g, ma + qa, mb + qb, h0), r##"stroke="red" stroke-width="6""##);
+        }
+    }
     let (verts, edges) = &rep.first_graph;
     for &(i, j) in edges {
         if let (Some(&p), Some(&q)) = (verts.get(i), verts.get(j)) {
@@ -74,13 +121,28 @@ pub fn render(rep: &SimReport, view: P3, background: &[P3]) -> String {
         }
     }
     let _ = writeln!(out, r#"<polyline points="{}" fill="none" stroke="red" stroke-width="1.5" stroke-dasharray="6,3"/>"#, poly(&rep.hub_path));
+    for h in rep.hops.iter().filter(|h| h.slipped) {
+        let p = proj(h.to);
+        let _ = writeln!(out, r#"<text x="{:.1}" y="{:.1}" fill="red" font-size="18" text-anchor="middle">x</text>"#, sx(p.0), sy(p.1) + 6.0);
+    }
+    if let Some(&hub) = rep.hub_path.last() {
+        let lost: Vec<usize> = rep.lost.iter().map(|l| l.0).collect();
+        for (k, path) in rep.paths.iter().enumerate().filter(|(k, _)| !lost.contains(k)) {
+            if let Some(&p) = path.last() {
+                let _ = k;
+                line(&mut out, hub, p, r#"stroke="white" stroke-width="1.2""#);
+            }
+        }
+    }
     let _ = writeln!(
         out,
-        r#"<text x="10" y="20" fill="white" font-family="sans-serif" font-size="14">{}: {} hops, {} rounds, lost {:?}, reached {}, violations {}</text>"#,
+        r#"<text x="10" y="20" fill="white" font-family="sans-serif" font-size="14">{}: {}, {} hops, {} rounds, {} walls, lost {:?}, reached {}, violations {}</text>"#,
         rep.world,
+        rep.outcome.map(|o| o.label()).unwrap_or("none"),
         rep.hops.len(),
         rep.rounds,
-        rep.lost,
+        rep.walls.len(),
+        rep.lost.iter().map(|l| l.0).collect::<Vec<_>>(),
         rep.reached,
         rep.violations.len()
     );

@@ -13,7 +13,8 @@
 //!
 //! [`LocalPlanner`] chains 1-5 over one fixed arena. [`formation`] holds the team: climbing order, hub motion,
 //! node loss. [`dstar_lite`] is the global planner over a grid of scenes (a local failure between two cells
-//! becomes a wall; D* Lite replans incrementally — the crevasse of Fig. 12).
+//! becomes a wall; D* Lite replans incrementally — the crevasse of Fig. 12). [`mission`] is the hub's flight
+//! computer running all of it as one step-wise state machine (scan / hop / hub commands in, reports out).
 //!
 //! Parameters: [`TeamParams`] (every field documented with its default); capacities in [`crate::config::team`].
 //! Every loop is bounded by a capacity or a budget; a full arena or exhausted budget is a typed outcome.
@@ -23,6 +24,7 @@ pub mod cull;
 pub mod dstar_lite;
 pub mod formation;
 pub mod graph;
+pub mod mission;
 pub mod scene;
 pub mod score;
 
