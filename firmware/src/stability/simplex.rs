@@ -80,6 +80,12 @@ impl Var {
     }
 }
 
+/// The `LP_VARS` columns of a column-major matrix with `rows` rows (as `chunks_exact`, whose length division is
+/// a panic path the flight build refuses).
+fn columns(m: &[f64], rows: usize) -> impl Iterator<Item = &[f64]> {
+    (0..LP_VARS).map(move |j| m.get(j * rows..(j + 1) * rows).unwrap_or(&[]))
+}
+
 fn u16_of(i: usize) -> u16 {
     u16::try_from(i).unwrap_or(u16::MAX)
 }
@@ -251,13 +257,20 @@ impl Tableau<'_> {
         self.nc = n;
     }
 
+    /// Exchange rows `a` and `b` (table, right-hand side, basic variable); nothing when either is out of range.
+    fn swap_rows(&mut self, a: usize, b: usize) {
+        if a < ROWS && b < ROWS {
+            self.t.swap(a, b);
+            self.rhs.swap(a, b);
+            self.basic.swap(a, b);
+        }
+    }
+
     /// Remove row `r` (a dependent equation), keeping the others in place order-free.
     fn drop_row(&mut self, r: usize) {
         let last = self.nr.saturating_sub(1);
         if r < last {
-            self.t.swap(r, last);
-            self.rhs.swap(r, last);
-            self.basic.swap(r, last);
+            self.swap_rows(r, last);
         }
         self.nr = last;
     }
@@ -408,12 +421,12 @@ pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> Lp
         iterations: pivots,
     };
     // 1. compaction: live columns and rows (the matrices are column-major: one slice chunk per variable)
-    let a_cols = lp.a.as_slice().chunks_exact(LP_EQS);
-    let g_cols = lp.g.as_slice().chunks_exact(LP_INEQS);
+    let a_cols = || columns(lp.a.as_slice(), LP_EQS);
+    let g_cols = || columns(lp.g.as_slice(), LP_INEQS);
     let mut col_of = [usize::MAX; LP_VARS];
     let mut a_live = [false; LP_EQS];
     let mut g_live = [false; LP_INEQS];
-    for (j, ((ac, gc), (c, slot))) in a_cols.clone().zip(g_cols.clone()).zip(lp.c.as_slice().iter().zip(col_of.iter_mut())).enumerate() {
+    for (j, ((ac, gc), (c, slot))) in a_cols().zip(g_cols()).zip(lp.c.as_slice().iter().zip(col_of.iter_mut())).enumerate() {
         let mut live = *c != 0.0;
         for (l, v) in a_live.iter_mut().zip(ac).chain(g_live.iter_mut().zip(gc)) {
             if *v != 0.0 {
@@ -455,7 +468,7 @@ pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> Lp
         tab.push_row(*h, Var::Slack(u16_of(i)));
     }
     // the table is zero: write the nonzeros (a few per row)
-    for ((ac, gc), k) in a_cols.zip(g_cols).zip(col_of.iter()) {
+    for ((ac, gc), k) in a_cols().zip(g_cols()).zip(col_of.iter()) {
         for (v, (r, sign)) in ac.iter().zip(a_row.iter()) {
             if *v != 0.0 {
                 if let Some(e) = tab.t.get_mut(*r).and_then(|row| row.get_mut(*k)) {
@@ -508,9 +521,7 @@ pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> Lp
     while r < end {
         if matches!(tab.basic_of(r), Var::X(_)) {
             end -= 1;
-            tab.t.swap(r, end);
-            tab.rhs.swap(r, end);
-            tab.basic.swap(r, end);
+            tab.swap_rows(r, end);
         } else {
             r += 1;
         }
@@ -606,7 +617,7 @@ pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> Lp
     for (r, b) in r_a.iter_mut().zip(lp.b.as_slice()).chain(r_g.iter_mut().zip(lp.h.as_slice())) {
         *r = -b;
     }
-    for ((ac, gc), xj) in lp.a.as_slice().chunks_exact(LP_EQS).zip(lp.g.as_slice().chunks_exact(LP_INEQS)).zip(x.as_slice()) {
+    for ((ac, gc), xj) in columns(lp.a.as_slice(), LP_EQS).zip(columns(lp.g.as_slice(), LP_INEQS)).zip(x.as_slice()) {
         if *xj != 0.0 {
             for (r, a) in r_a.iter_mut().zip(ac).chain(r_g.iter_mut().zip(gc)) {
                 *r += a * xj;
