@@ -690,10 +690,8 @@ mod tests {
     }
 
     /// max x + y s.t. x + 2y <= 4, 3x + y <= 6, x, y >= 0 (written -10x <= 0, -10y <= 0 so that phase 0 starts
-    /// at the origin): optimum 2.8 at (1.6, 1.2). With a target of -1 the solve stops early at a feasible vertex
-    /// at least that good; with a target below the optimum it solves to the optimum.
-    #[test]
-    fn solve_until_stops_at_the_first_vertex_that_meets_the_target() {
+    /// at the origin): optimum 2.8 at (1.6, 1.2).
+    fn two_variable_lp() -> StabilityLp {
         let mut lp = StabilityLp::zeros();
         lp.c[0] = -1.0;
         lp.c[1] = -1.0;
@@ -701,6 +699,14 @@ mod tests {
         set(&mut lp, 1, &[3.0, 1.0], 6.0);
         set(&mut lp, 2, &[-10.0, 0.0], 0.0);
         set(&mut lp, 3, &[0.0, -10.0], 0.0);
+        lp
+    }
+
+    /// [`two_variable_lp`]: with a target of -1 the solve stops early at a feasible vertex
+    /// at least that good; with a target below the optimum it solves to the optimum.
+    #[test]
+    fn solve_until_stops_at_the_first_vertex_that_meets_the_target() {
+        let lp = two_variable_lp();
         let full = solve(&lp, 200);
         assert_eq!(full.status, LpStatus::Optimal);
         assert!((full.objective + 2.8).abs() < 1e-12 && (full.x[0] - 1.6).abs() < 1e-12 && (full.x[1] - 1.2).abs() < 1e-12);
@@ -715,16 +721,9 @@ mod tests {
         assert_eq!(unreachable.objective, full.objective);
     }
 
-    /// A budget too small for phase 2 is reported, not a wrong optimum (the LP of the test above).
+    /// A budget too small for phase 2 is reported, not a wrong optimum.
     #[test]
     fn budget_exhaustion_is_reported() {
-        let mut lp = StabilityLp::zeros();
-        lp.c[0] = -1.0;
-        lp.c[1] = -1.0;
-        set(&mut lp, 0, &[1.0, 2.0], 4.0);
-        set(&mut lp, 1, &[3.0, 1.0], 6.0);
-        set(&mut lp, 2, &[-10.0, 0.0], 0.0);
-        set(&mut lp, 3, &[0.0, -10.0], 0.0);
-        assert_eq!(solve(&lp, 0).status, LpStatus::BudgetExhausted);
+        assert_eq!(solve(&two_variable_lp(), 0).status, LpStatus::BudgetExhausted);
     }
 }
