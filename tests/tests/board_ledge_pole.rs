@@ -164,7 +164,7 @@ fn compare_with_campaign_inner(iterations: u32) -> LedgePoleOutcome {
     // The workload, with the board's capacities.
     let mut storage: Box<LedgePoleStorage> = Box::default();
     let LedgePoleStorage { arena, path } = &mut *storage;
-    let w = plan_ledge_pole(&field, arena, path, iterations, spec.first_seed).unwrap();
+    let w = plan_ledge_pole(&field, arena, path, iterations, spec.first_seed, None).unwrap();
     eprintln!("{}", ledge_pole::summary(&Ok(w)));
     assert_same_trial(&on_world, &w);
     assert_same_trial(&on_fixture, &w);
@@ -183,6 +183,43 @@ fn workload_trial_equals_the_campaign_trial_short() {
     let w = compare_with_campaign(120);
     assert_eq!(w.counters.iterations, 120);
     assert!(w.stats.stability_checks > 0 && w.counters.edges_evaluated > 0, "{w:?}");
+}
+
+/// A clock that advances by one on every read.
+struct ReadCounter(core::cell::Cell<u64>);
+
+impl firmware::plan::tethered::PhaseClock for ReadCounter {
+    fn ticks(&self) -> u64 {
+        let t = self.0.get() + 1;
+        self.0.set(t);
+        t
+    }
+}
+
+/// The board's per-phase profile (`tetherbot board bench --workload tethered_test3`): timing the phases does not
+/// change the trial, and the phases see the work. With a clock that advances once per read, each distance-field
+/// query reads it twice back to back, so the query ticks equal the query count; the settle phase contains queries
+/// and the other phases, which do not nest, add up to less than the whole run.
+#[test]
+fn the_phase_clock_times_the_trial_without_changing_it() {
+    on_big_stack(|| {
+        let field = Ledge::with_pole();
+        let mut storage: Box<LedgePoleStorage> = Box::default();
+        let LedgePoleStorage { arena, path } = &mut *storage;
+        let plain = plan_ledge_pole(&field, arena, path, 30, 1, None).unwrap();
+        let clock = ReadCounter(core::cell::Cell::new(0));
+        let mut storage: Box<LedgePoleStorage> = Box::default();
+        let LedgePoleStorage { arena, path } = &mut *storage;
+        let timed = plan_ledge_pole(&field, arena, path, 30, 1, Some(&clock)).unwrap();
+        assert_eq!(ledge_pole::summary(&Ok(plain)), ledge_pole::summary(&Ok(timed)));
+        assert_eq!(plain.phases.space, firmware::plan::tethered::PhaseTicks::default(), "no clock, no ticks");
+        assert_eq!((plain.phases.field_ticks, timed.phases.field_queries), (0, plain.phases.field_queries));
+        let p = timed.phases;
+        assert_eq!(p.field_ticks, p.field_queries, "{p:?}");
+        assert!(p.space.settle > u64::from(timed.stats.settles), "{p:?}");
+        assert!(p.space.stability > 0 && p.space.anchors > 0, "{p:?}");
+        assert!(p.space.settle + p.space.stability + p.space.anchors < clock.0.get(), "{p:?}");
+    });
 }
 
 /// The full Table I budget (750 iterations).
@@ -209,7 +246,7 @@ fn arena_high_water_inner() {
     let mut path: Box<heapless::Vec<(RoverState, AnchorHistory), 256>> = Box::default();
     let (mut nodes, mut queue, mut memo, mut plen) = (0, 0, 0, 0);
     for seed in 1..=seeds {
-        let w = plan_ledge_pole(&field, &mut arena, &mut path, ledge_pole::ITERATIONS, seed).unwrap();
+        let w = plan_ledge_pole(&field, &mut arena, &mut path, ledge_pole::ITERATIONS, seed, None).unwrap();
         eprintln!("seed {seed}: {}", ledge_pole::summary(&Ok(w)));
         nodes = nodes.max(w.arena.nodes);
         queue = queue.max(w.arena.queue);

@@ -33,8 +33,8 @@ use firmware::map::DistanceField;
 use firmware::plan::abit::{AbitArena, AbitParams, AbitStar, ArenaUse, PathError};
 use firmware::plan::space::{Budget, Counters, GoalState, Planner, ProblemDefinition, Termination};
 use firmware::plan::tethered::{
-    MotionStats, PlanBounds, RoverState, TetherMotionValidator, TetherObjective, TetherSpace, TetherSpaceParams,
-    TetherValidity,
+    MotionStats, PhaseClock, PhaseTicks, PlanBounds, RoverState, TetherMotionValidator, TetherObjective, TetherSpace,
+    TetherSpaceParams, TetherValidity,
 };
 use firmware::tether::{Anchor, AnchorHistory};
 
@@ -42,7 +42,7 @@ use crate::config::{
     LEDGE_POLE_EDGE_MEMO_CAPACITY, LEDGE_POLE_EDGE_QUEUE_CAPACITY, LEDGE_POLE_NODE_CAPACITY, LEDGE_POLE_PATH_CAPACITY,
 };
 use crate::ledge::Ledge;
-use crate::{Harness, Summary};
+use crate::{Harness, Summary, TimedField};
 
 /// Iterations of the workload (Paton et al. Table I: 750).
 pub const ITERATIONS: u32 = 750;
@@ -177,6 +177,17 @@ pub enum LedgePoleError {
     GoalDoesNotSettle,
 }
 
+/// Where a trial's time went (clock ticks; 0 without a clock) and how many distance-field queries it made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Phases {
+    /// The space's phases.
+    pub space: PhaseTicks,
+    /// Distance-field queries (counted with or without a clock).
+    pub field_queries: u64,
+    /// Ticks in distance-field queries.
+    pub field_ticks: u64,
+}
+
 /// The outcome of one trial.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LedgePoleOutcome {
@@ -192,6 +203,9 @@ pub struct LedgePoleOutcome {
     pub arena: ArenaUse,
     /// Work of the space: settles, stability LPs, anchor predictions, motion failures.
     pub stats: MotionStats,
+    /// Clock ticks per phase (all 0 without a clock): the space's settle, stability and anchor phases, and every
+    /// distance-field query (inside those phases and elsewhere).
+    pub phases: Phases,
     /// States of the written path (0 when none; see `path_error`).
     pub path_states: usize,
     /// Anchors of the path's final history (root included).
@@ -202,15 +216,23 @@ pub struct LedgePoleOutcome {
 
 /// Plans the ledge-with-pole problem (test 3) on `field` with `iterations` iterations and planner seed `seed`, in `arena`; the best path is
 /// written to `path`. Mirrors host-sim's `campaign::run_trial`.
+/// With a `clock`, each phase is timed ([`Phases`]; the board's bench lends SysTick); the trial is the same with
+/// or without it.
 pub fn plan_ledge_pole<D: DistanceField, const NV: usize, const NQ: usize, const NM: usize, const NP: usize>(
     field: &D,
     arena: &mut AbitArena<RoverState, AnchorHistory, NV, NQ, NM>,
     path: &mut heapless::Vec<(RoverState, AnchorHistory), NP>,
     iterations: u32,
     seed: u64,
+    clock: Option<&dyn PhaseClock>,
 ) -> Result<LedgePoleOutcome, LedgePoleError> {
-    let mut space = TetherSpace::new(field, bounds(), RoverParams::AXEL, TetherSpaceParams::DEFAULT)
+    let field = TimedField::new(field, clock);
+    let space = TetherSpace::new(&field, bounds(), RoverParams::AXEL, TetherSpaceParams::DEFAULT)
         .map_err(|(f, r)| LedgePoleError::Space(f, r))?;
+    let mut space = match clock {
+        Some(c) => space.with_phase_clock(c),
+        None => space,
+    };
     let yaw = START_YAW_DEG.to_radians() as Real;
     let start = space
         .settle_state(START[0] as Real, START[1] as Real, yaw)
@@ -237,6 +259,7 @@ pub fn plan_ledge_pole<D: DistanceField, const NV: usize, const NQ: usize, const
         termination: report.termination,
         arena: arena_use,
         stats: space.stats(),
+        phases: Phases { space: space.phase_ticks(), field_queries: field.queries(), field_ticks: field.ticks() },
         path_states: if found { path.len() } else { 0 },
         final_anchors: if found { path.last().map_or(0, |(_, h)| h.len()) } else { 0 },
         path_error: written.err(),
@@ -278,10 +301,27 @@ pub const NAME: &str = "tethered_test3";
 
 /// Runs the workload (`iterations` iterations, seed [`SEED`]) on the exact ledge + pole world, timed by
 /// `h`, and reports its summary as [`NAME`].
-pub fn run_ledge_pole(storage: &mut LedgePoleStorage, iterations: u32, h: &mut impl Harness) {
+/// With a `clock` the phases are timed and reported to `h` as well ([`Harness::phases`]).
+pub fn run_ledge_pole(
+    storage: &mut LedgePoleStorage,
+    iterations: u32,
+    h: &mut impl Harness,
+    clock: Option<&dyn PhaseClock>,
+) {
     let field = Ledge::with_pole();
     let mut out = Err(LedgePoleError::StartDoesNotSettle);
     let LedgePoleStorage { arena, path } = storage;
-    h.measure(NAME, &mut || out = plan_ledge_pole(&field, arena, path, iterations, SEED));
+    h.measure(NAME, &mut || out = plan_ledge_pole(&field, arena, path, iterations, SEED, clock));
     h.result(NAME, &summary(&out));
+    if let Ok(o) = &out {
+        let p = o.phases;
+        let mut s = Summary::new();
+        // Fits: six numbers and their names.
+        let _ = write!(
+            s,
+            "settle_ticks={} stability_ticks={} anchors_ticks={} field_ticks={} field_queries={}",
+            p.space.settle, p.space.stability, p.space.anchors, p.field_ticks, p.field_queries
+        );
+        h.phases(NAME, &s);
+    }
 }

@@ -76,6 +76,7 @@ use firmware::plan::status::Status;
 use firmware::plan::team::dstar_lite::{outcome_label, DStarArena, Found};
 use firmware::plan::team::leg_astar::status_label;
 use firmware::plan::team::DefaultLocalPlanner;
+use firmware::plan::tethered::PhaseClock;
 use firmware::plan::SplitMix64;
 use firmware::config::stability::{SIMPLEX_MAX_PIVOTS, SOLVER_MAX_ITERATIONS, SOLVER_TOLERANCE};
 use firmware::rover::{boom_inline_angle, check_pose_stability, settle, stability_problem, SettleOutcome};
@@ -196,6 +197,46 @@ pub trait Harness {
     fn measure(&mut self, name: &'static str, work: &mut dyn FnMut());
     /// The outcome of workload `name`.
     fn result(&mut self, name: &'static str, summary: &str);
+    /// Where workload `name`'s time went, phase by phase (only workloads given a clock report it). Default: dropped.
+    fn phases(&mut self, _name: &'static str, _phases: &str) {}
+}
+
+/// A distance field that counts its queries and, with a clock, the ticks spent in them (the per-phase profile of
+/// a workload: `ledge_pole::Phases`). The answers are the wrapped field's.
+pub struct TimedField<'a, D> {
+    inner: &'a D,
+    clock: Option<&'a dyn PhaseClock>,
+    queries: core::cell::Cell<u64>,
+    ticks: core::cell::Cell<u64>,
+}
+
+impl<'a, D: DistanceField> TimedField<'a, D> {
+    /// Wraps `inner`; timed when `clock` is given.
+    pub fn new(inner: &'a D, clock: Option<&'a dyn PhaseClock>) -> Self {
+        Self { inner, clock, queries: core::cell::Cell::new(0), ticks: core::cell::Cell::new(0) }
+    }
+    /// Queries so far.
+    pub fn queries(&self) -> u64 {
+        self.queries.get()
+    }
+    /// Ticks spent in queries so far (0 without a clock).
+    pub fn ticks(&self) -> u64 {
+        self.ticks.get()
+    }
+}
+
+impl<D: DistanceField> DistanceField for TimedField<'_, D> {
+    fn query(&self, p: &Vec3) -> DistanceQuery {
+        self.queries.set(self.queries.get().saturating_add(1));
+        let Some(c) = self.clock else { return self.inner.query(p) };
+        let t0 = c.ticks();
+        let q = self.inner.query(p);
+        self.ticks.set(self.ticks.get().saturating_add(c.ticks().saturating_sub(t0)));
+        q
+    }
+    fn lipschitz_bound(&self) -> Option<Real> {
+        self.inner.lipschitz_bound()
+    }
 }
 
 fn line(args: core::fmt::Arguments<'_>) -> Summary {

@@ -290,6 +290,9 @@ fn bench_workload_cmd(
         per("lps"),
         per("edges"),
     );
+    if let Some(phases) = text.lines().find_map(|l| l.strip_prefix(&format!("bench: phases name={name} "))) {
+        print_phases(phases, ins);
+    }
     println!(
         "wall time: board {:.1} s (QEMU, this machine), host twin {:.2} s",
         wall.as_secs_f64(),
@@ -305,6 +308,39 @@ fn bench_workload_cmd(
         return Err(format!("{name} differs between the board and the host").into());
     }
     Ok(())
+}
+
+/// The board's per-phase profile of the test-3 workload (`bench: phases` line: SysTick ticks per phase, and the
+/// distance-field queries), as instructions and shares of the workload's `total`.
+fn print_phases(line: &str, total: u64) {
+    let get = |k: &str| {
+        line.split_whitespace()
+            .find_map(|w| w.strip_prefix(k)?.strip_prefix('=')?.parse::<u64>().ok())
+            .unwrap_or(0)
+    };
+    let ins = |k: &str| get(k).saturating_mul(report::INSTRUCTIONS_PER_TICK);
+    let share = |n: u64| if total > 0 { 100.0 * n as f64 / total as f64 } else { 0.0 };
+    let (settle, stability, anchors) = (ins("settle_ticks"), ins("stability_ticks"), ins("anchors_ticks"));
+    let (field, queries) = (ins("field_ticks"), get("field_queries"));
+    println!(
+        "phases on the board (SysTick under -icount: {} instructions per tick; each phase includes the \
+         distance-field queries made inside it):",
+        report::INSTRUCTIONS_PER_TICK
+    );
+    for (what, n) in [
+        ("settle", settle),
+        ("stability (margin LPs)", stability),
+        ("anchor prediction (Alg. 1)", anchors),
+        ("the rest (ABIT*: sampling, queues, graph; phase timer reads)", total.saturating_sub(settle + stability + anchors)),
+    ] {
+        println!("  {what:<62} {n:>15} instructions {:>5.1} %", share(n));
+    }
+    println!(
+        "  {:<62} {field:>15} instructions {:>5.1} % ({queries} queries, {} per query)",
+        "of which distance-field queries (all phases)",
+        share(field),
+        field / queries.max(1)
+    );
 }
 
 /// `board` entry point.

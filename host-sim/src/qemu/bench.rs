@@ -52,7 +52,7 @@ pub fn host_ledge_pole_summary(iterations: u32) -> Result<(String, String), Stri
         .spawn(move || {
             let mut storage: Box<LedgePoleStorage> = Box::default();
             let mut h = Collect(Vec::new());
-            run_ledge_pole(&mut storage, iterations, &mut h);
+            run_ledge_pole(&mut storage, iterations, &mut h, None);
             h.0.into_iter().next().unwrap_or_default()
         })
         .map_err(|e| format!("cannot start the host twin: {e}"))?

@@ -152,6 +152,10 @@ pub fn format_sections(sections: &[Section]) -> String {
     s
 }
 
+/// Instructions per SysTick tick under `-icount shift=0` (1 ns per instruction, 25 MHz core clock: the board's
+/// `clock::INSTRUCTIONS_PER_TICK`).
+pub const INSTRUCTIONS_PER_TICK: u64 = 40;
+
 /// One workload's cost on target.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct BenchResult {

@@ -73,6 +73,20 @@ fn ticks_of(wraps: u64, current: u32) -> u64 {
         .saturating_add(u64::from(RELOAD.saturating_sub(current)))
 }
 
+/// The benchmarks' phase clock (`firmware::plan::tethered::PhaseClock`): the same ticks as
+/// [`SysTickClock::ticks`], read through shared references (the planner's space times its phases with it).
+/// SysTick must already run (a [`SysTickClock`] started it).
+#[cfg(feature = "bench")]
+pub struct PhaseTickClock;
+
+#[cfg(feature = "bench")]
+impl firmware::plan::tethered::PhaseClock for PhaseTickClock {
+    fn ticks(&self) -> u64 {
+        let (wraps, current) = wraps_and_current();
+        ticks_of(wraps, current)
+    }
+}
+
 /// The monotonic clock: SysTick plus the wrap count.
 pub struct SysTickClock {
     syst: SYST,

@@ -98,6 +98,7 @@
 mod motion;
 mod objective;
 mod params;
+mod phases;
 mod space;
 #[cfg(test)]
 mod tests;
@@ -105,6 +106,7 @@ mod tests;
 pub use motion::{tether_bend, tether_pull_anchor, MotionFailure, MotionPlan, MotionPoint, TetherMotionValidator};
 pub use objective::TetherObjective;
 pub use params::{PlanBounds, TetherSpaceParams};
+pub use phases::{PhaseClock, PhaseTicks};
 pub use space::{
     fall_line_theta, settle_at, surface_point, wraps, MotionStats, RoverState, SettleFailure, StartEscape,
     TetherSpace, TetherValidity,

@@ -10,6 +10,7 @@ use crate::rover::{check_pose_stability, check_pose_stability_at_least, SettledP
 use crate::stability::StabilityOutcome;
 use crate::tether::{AnchorHistory, TetherError};
 
+use super::phases::Phase;
 use super::{RoverState, SettleFailure, TetherSpace, TetherSpaceParams};
 
 impl<D: DistanceField> TetherSpace<'_, D> {
@@ -18,7 +19,7 @@ impl<D: DistanceField> TetherSpace<'_, D> {
     pub fn stable_with(&self, st: &SettledPose, history: &AnchorHistory) -> Result<f64, MotionFailure> {
         self.count(|s| s.stability_checks += 1);
         let pull = tether_pull_anchor(st, history, &self.rover);
-        match check_pose_stability(self.map, st, pull.as_ref(), &self.rover) {
+        match self.timed(Phase::Stability, || check_pose_stability(self.map, st, pull.as_ref(), &self.rover)) {
             Ok((StabilityOutcome::Stable(r), _)) if r.margin >= self.params.min_stability_margin => Ok(r.margin),
             Ok((StabilityOutcome::Unknown(_), _)) => Err(MotionFailure::Unknown),
             _ => Err(MotionFailure::Unstable),
@@ -31,7 +32,7 @@ impl<D: DistanceField> TetherSpace<'_, D> {
         self.count(|s| s.stability_checks += 1);
         let pull = tether_pull_anchor(st, history, &self.rover);
         let min = self.params.min_stability_margin;
-        match check_pose_stability_at_least(self.map, st, pull.as_ref(), &self.rover, min) {
+        match self.timed(Phase::Stability, || check_pose_stability_at_least(self.map, st, pull.as_ref(), &self.rover, min)) {
             Ok((StabilityOutcome::Stable(r), _)) if r.margin >= min => Ok(()),
             Ok((StabilityOutcome::Unknown(_), _)) => Err(MotionFailure::Unknown),
             _ => Err(MotionFailure::Unstable),

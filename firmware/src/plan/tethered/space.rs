@@ -17,6 +17,7 @@ use crate::plan::space::{uniform01, CatchSample, StateSpace, StateValidityChecke
 use crate::rover::{settle, SettleOutcome, SettledPose};
 use crate::tether::{predict_anchors, tether_touches, AnchorHistory, PredictStats, TetherError};
 
+use super::phases::{Phase, PhaseClock, PhaseTicks};
 use super::{PlanBounds, TetherSpaceParams};
 
 /// A settled rover state (see the module docs).
@@ -260,6 +261,8 @@ pub struct TetherSpace<'m, D> {
     pub(super) params: TetherSpaceParams,
     pub(super) stats: Cell<MotionStats>,
     pub(super) escape: Option<StartEscape>,
+    pub(super) clock: Option<&'m dyn PhaseClock>,
+    pub(super) phases: Cell<PhaseTicks>,
 }
 
 /// Where a state may settle with the rover's own body clearance instead of the space's, and, if the start needed
@@ -293,7 +296,36 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
             return Err(("bounds", "must be a finite box with min < max on every axis"));
         }
         params.validate()?;
-        Ok(Self { map, bounds, rover, params, stats: Cell::new(MotionStats::default()), escape: None })
+        Ok(Self {
+            map,
+            bounds,
+            rover,
+            params,
+            stats: Cell::new(MotionStats::default()),
+            escape: None,
+            clock: None,
+            phases: Cell::new(PhaseTicks::default()),
+        })
+    }
+    /// The same space timing its phases on `clock` ([`PhaseTicks`]; benchmarks only).
+    pub fn with_phase_clock(mut self, clock: &'m dyn PhaseClock) -> Self {
+        self.clock = Some(clock);
+        self
+    }
+    /// Clock ticks spent per phase so far (all 0 without a [`PhaseClock`]).
+    pub fn phase_ticks(&self) -> PhaseTicks {
+        self.phases.get()
+    }
+    /// Runs `work`, adding its ticks to `phase` when a clock is lent.
+    pub(super) fn timed<R>(&self, phase: Phase, work: impl FnOnce() -> R) -> R {
+        let Some(clock) = self.clock else { return work() };
+        let t0 = clock.ticks();
+        let r = work();
+        let dt = clock.ticks().saturating_sub(t0);
+        let mut p = self.phases.get();
+        p.add(phase, dt);
+        self.phases.set(p);
+        r
     }
     /// The same space where a state within `escape.radius_m` of the start that collides with the space's body
     /// clearance settles with the rover's own ([`StartEscape`]).
@@ -329,23 +361,25 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
     /// Anchor prediction (Alg. 1) from `a0` at `x0` to `x1`, through unobserved space as free when
     /// `tether_through_unobserved` is set.
     pub fn predict(&self, a0: &AnchorHistory, x0: &Vec3, x1: &Vec3, out: &mut AnchorHistory) -> Result<PredictStats, TetherError> {
-        if self.params.tether_through_unobserved {
-            predict_anchors(&UnobservedAsFree(self.map), a0, x0, x1, out)
-        } else {
-            predict_anchors(self.map, a0, x0, x1, out)
-        }
+        self.timed(Phase::Anchors, || {
+            if self.params.tether_through_unobserved {
+                predict_anchors(&UnobservedAsFree(self.map), a0, x0, x1, out)
+            } else {
+                predict_anchors(self.map, a0, x0, x1, out)
+            }
+        })
     }
     /// Settle a state at the surface under `(x, y)` (counted).
     pub fn settle_state(&self, x: Real, y: Real, theta: Real) -> Result<RoverState, SettleFailure> {
         self.count(|s| s.settles += 1);
-        match (settle_at(self.map, &self.bounds, &self.rover, x, y, theta), self.escape) {
+        self.timed(Phase::Settle, || match (settle_at(self.map, &self.bounds, &self.rover, x, y, theta), self.escape) {
             (Err(SettleFailure::Collision | SettleFailure::SteepContact), Some(e))
                 if libm::hypotf(x - e.x, y - e.y) <= e.radius_m =>
             {
                 settle_checked(self.map, &self.bounds, &e.rover, x, y, theta, !e.steep_ok)
             }
             (r, _) => r,
-        }
+        })
     }
     /// A goal state: settled at `(x, y)` when inside the bounds (at the first yaw that settles), an off-map goal at
     /// `point` otherwise.

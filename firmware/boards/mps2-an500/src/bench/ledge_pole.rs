@@ -1,7 +1,9 @@
 //! The opt-in ledge-with-pole planning workload on target (boot words `tetherbot.mode=bench
 //! tetherbot.workload=tethered_test3 [tetherbot.iterations=N]`): `workloads::ledge_pole::run_ledge_pole`, Paton et
-//! al. Table I test 3, timed by [`super::measure::measure`] over its ABIT* iterations. First it prints the storage's
-//! size: `bench: test3_storage_bytes=<B> arena_bytes=<A> path_bytes=<P>`.
+//! al. Table I test 3, timed by [`super::measure::measure`] over its ABIT* iterations, its phases (settle,
+//! stability, anchors, distance-field queries) timed on [`PhaseTickClock`] and printed as `bench: phases
+//! name=tethered_test3 settle_ticks=...`. First it prints the storage's size: `bench: test3_storage_bytes=<B>
+//! arena_bytes=<A> path_bytes=<P>`.
 //!
 //! The storage (~1.5 MB) is in SRAM's `.uninit` (NOLOAD, not zeroed at boot; zeroed when taken,
 //! `UninitSlot::take_zeroed`), because the flight map's blocks leave under 1 MiB of `.psram`.
@@ -9,7 +11,7 @@
 use workloads::ledge_pole::{LedgePoleArena, LedgePolePath, LedgePoleStorage};
 
 use super::measure::Board;
-use crate::clock::SysTickClock;
+use crate::clock::{PhaseTickClock, SysTickClock};
 use crate::storage::{UninitSlot, ZeroIsEmpty};
 
 // SAFETY: `LedgePoleStorage` is an ABIT* arena (four `heapless::Vec`s) and a `heapless::Vec` path: all-zero bytes
@@ -38,5 +40,6 @@ pub fn run(clock: &mut SysTickClock, iterations: u32) {
             clock,
             iterations: iterations.max(1),
         },
+        Some(&PhaseTickClock),
     );
 }

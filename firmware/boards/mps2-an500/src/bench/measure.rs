@@ -34,6 +34,9 @@ impl Harness for Board<'_> {
     fn measure(&mut self, name: &'static str, work: &mut dyn FnMut()) {
         measure(self.clock, name, self.iterations, work);
     }
+    fn phases(&mut self, name: &'static str, phases: &str) {
+        host_println!("bench: phases name={} {}", name, phases);
+    }
     fn result(&mut self, name: &'static str, summary: &str) {
         host_println!("bench: result name={} summary={}", name, summary);
         host_println!(
