@@ -98,3 +98,28 @@ fn a_dem_pose_is_placed_like_the_analytic_one() {
     let (a, b) = (judge(&dem).axle_at(pose).expect("dem"), judge(&ledge).axle_at(pose).expect("analytic"));
     assert!((a[2] - b[2]).abs() < 1e-6, "{a:?} vs {b:?}");
 }
+
+/// The pose's heading is the rolling direction's, as the flight software's (`RoverState::heading`): on the
+/// ledge's 55-degree face a rover headed 10 and 40 degrees off the fall line stands with its axle in the face
+/// (both wheels on it) and perpendicular to the rolling direction that has that horizontal heading. The face's
+/// normal is the closed form `(sin 55, 0, cos 55)`. (The judge once kept the rover's x axis horizontal instead,
+/// which on the face turned the axle 11 degrees away from the planner's pose at 10 degrees off the fall line.)
+#[test]
+fn a_heading_across_the_face_is_the_rolling_direction() {
+    let w = LedgeWorld::new();
+    let j = judge(&w);
+    let a = 55f64.to_radians();
+    let n = [a.sin(), 0.0, a.cos()];
+    for off_deg in [10.0f64, -40.0, 170.0] {
+        let yaw = off_deg.to_radians();
+        let pl = j.place(GroundPose { x: 1.4, y: 0.0, yaw }, [-6.4, 0.0, 6.35], BoomSetting::Inline).expect("placed");
+        let ax = pl.axle_dir;
+        let in_face = ax[0] * n[0] + ax[1] * n[1] + ax[2] * n[2];
+        assert!(in_face.abs() < 0.01, "{off_deg} deg: axle {ax:?} leaves the face ({in_face})");
+        // rolling direction = axle x n
+        let f = [ax[1] * n[2] - ax[2] * n[1], ax[2] * n[0] - ax[0] * n[2], ax[0] * n[1] - ax[1] * n[0]];
+        let heading = f[1].atan2(f[0]);
+        let err = (heading - yaw + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+        assert!(err.abs() < 0.5f64.to_radians(), "{off_deg} deg: rolling heading {} deg", heading.to_degrees());
+    }
+}
