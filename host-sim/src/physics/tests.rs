@@ -119,7 +119,7 @@ fn a_heading_across_the_face_is_the_rolling_direction() {
         // rolling direction = axle x n
         let f = [ax[1] * n[2] - ax[2] * n[1], ax[2] * n[0] - ax[0] * n[2], ax[0] * n[1] - ax[1] * n[0]];
         let heading = f[1].atan2(f[0]);
-        let err = (heading - yaw + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+        let err = (heading - yaw + core::f64::consts::PI).rem_euclid(core::f64::consts::TAU) - core::f64::consts::PI;
         assert!(err.abs() < 0.5f64.to_radians(), "{off_deg} deg: rolling heading {} deg", heading.to_degrees());
     }
 }
