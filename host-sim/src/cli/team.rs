@@ -58,6 +58,8 @@ pub fn movingai(args: &MovingaiArgs) -> Result<bool, String> {
 /// bounded-leg A* per hop; the simulator's true surface, landing errors, grip slips and referee) and draw it.
 #[derive(Debug, clap::Args)]
 pub struct TeamArgs {
+    /// A team scenario file (TOML; schema in `host-sim/doc/team.md`, "Scenario files"). Without it, `--world`.
+    pub scenario: Option<PathBuf>,
     /// World: `cliff` (HiRISE crop scaled into a cliff, 10 m hops), `itokawa` or `bennu` (shape models, 30 m
     /// hops), `crevasse` (the paper's Fig. 12 crevasse in a true world).
     #[arg(long, default_value = "cliff")]
@@ -71,12 +73,13 @@ pub struct TeamArgs {
     /// Scripted node loss `ROBOT:TURN` (0-based), e.g. `2:3`.
     #[arg(long)]
     pub fail: Option<String>,
-    /// Seed (sensor noise, landing errors, grip slips).
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Run this many seeds from `--seed` on and print a campaign summary.
-    #[arg(long, default_value_t = 1)]
-    pub seeds: u64,
+    /// Seed (sensor noise, landing errors, grip slips). Default 1, or the scenario file's `seeds.first`.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Run this many seeds from `--seed` on and print a campaign summary. Default 1, or the scenario file's
+    /// `seeds.count`.
+    #[arg(long)]
+    pub seeds: Option<u64>,
     /// Grips never slip (the grip model's slip probability set to 0; isolates the route from node losses).
     #[arg(long)]
     pub no_slip: bool,
@@ -232,11 +235,22 @@ pub fn team(args: &TeamArgs) -> Result<bool, String> {
             Some((a.parse().map_err(|_| "bad robot")?, b.parse().map_err(|_| "bad turn")?))
         }
     };
+    let file = args.scenario.as_deref().map(crate::team::scenario::load).transpose()?;
+    let (first, count) = file.as_ref().map(|f| f.seeds()).unwrap_or((1, 1));
+    let (seed0, nseeds) = (args.seed.unwrap_or(first), args.seeds.unwrap_or(count).max(1));
+    let label = file.as_ref().map(|f| f.file.name.clone()).unwrap_or_else(|| args.world.clone());
     let mut all_ok = true;
     let (mut reached, mut hops, mut walls, mut lost, mut violations, mut runs) = (0usize, Vec::new(), 0usize, 0usize, 0usize, 0usize);
     let (mut plan_times, mut round_times) = (Vec::new(), Vec::new());
-    for seed in args.seed..args.seed + args.seeds.max(1) {
-        let (surf, start, mut cfg, view, bg) = team_scenario(&args.world, &args.data, fail, seed)?;
+    for seed in seed0..seed0 + nseeds {
+        let (surf, start, mut cfg, view, bg) = match &file {
+            Some(f) => {
+                let mut s = f.build(&args.data, seed)?;
+                s.2.fail = fail;
+                s
+            }
+            None => team_scenario(&args.world, &args.data, fail, seed)?,
+        };
         if args.no_slip {
             cfg.grip = crate::team::grip::GripModel::never_slips(cfg.params.h_max as f64);
         }
@@ -271,7 +285,7 @@ pub fn team(args: &TeamArgs) -> Result<bool, String> {
             max * 1e3,
             secs
         );
-        if seed == args.seed {
+        if seed == seed0 {
             if let Some(p) = &args.svg {
                 std::fs::write(p, crate::team::svg::render(&rep, view, &bg)).map_err(|e| format!("{}: {e}", p.display()))?;
                 println!("picture: {}", p.display());
@@ -296,9 +310,9 @@ pub fn team(args: &TeamArgs) -> Result<bool, String> {
         let rmax = round_times.last().copied().unwrap_or(0.0);
         println!(
             "campaign {} seeds {}..={}: reached {reached}/{runs}, hops mean {mean_hops:.1} median {med_hops:.0}, walls {walls}, robots lost {lost}, violations {violations}, local plan median {:.1} ms max {:.1} ms ({} plans), end of round median {:.3} ms max {:.3} ms",
-            args.world,
-            args.seed,
-            args.seed + runs as u64 - 1,
+            label,
+            seed0,
+            seed0 + runs as u64 - 1,
             pmed * 1e3,
             pmax * 1e3,
             plan_times.len(),

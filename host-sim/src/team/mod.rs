@@ -20,6 +20,7 @@
 //! [`itokawa`] (the Hayabusa shape model, metres; 30 m hops as in Fig. 16). Pictures: [`svg`].
 
 pub mod grip;
+pub mod scenario;
 pub mod svg;
 pub mod surface;
 
