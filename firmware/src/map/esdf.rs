@@ -119,12 +119,7 @@ impl Ring<'_> {
         if self.len >= cap || s >= (1usize << (32 - LOCAL_BITS)) {
             return false;
         }
-        // head < cap and len < cap: one conditional subtraction wraps (no division on the hot path).
-        let mut j = self.head + self.len;
-        if j >= cap {
-            j -= cap;
-        }
-        let Some(e) = self.buf.get_mut(j) else { return false };
+        let Some(e) = self.buf.get_mut((self.head + self.len) % cap) else { return false };
         *e = ((s as u32) << LOCAL_BITS) | i as u32;
         self.len += 1;
         true
@@ -135,10 +130,7 @@ impl Ring<'_> {
             return None;
         }
         let e = *self.buf.get(self.head)?;
-        self.head += 1;
-        if self.head >= self.buf.len() {
-            self.head = 0;
-        }
+        self.head = (self.head + 1) % self.buf.len().max(1);
         self.len -= 1;
         Some(((e >> LOCAL_BITS) as usize, (e & ((1 << LOCAL_BITS) - 1)) as usize))
     }
