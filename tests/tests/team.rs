@@ -379,7 +379,7 @@ fn crevasse_closed_loop_reaches_the_goal_past_the_far_lip() {
 }
 
 fn scenario_file(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios").join(name)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios/team").join(name)
 }
 
 /// `tetherbot team SCENARIO.toml` on a real scanned point cloud (laspy's simple.las, read by the LAS reader,
