@@ -20,6 +20,8 @@
 //! [`itokawa`] (the Hayabusa shape model, metres; 30 m hops as in Fig. 16). Pictures: [`svg`].
 
 pub mod grip;
+// Scenario files build the named worlds through the CLI's set-ups (feature `sim`, like the CLI).
+#[cfg(feature = "sim")]
 pub mod scenario;
 pub mod svg;
 pub mod surface;
