@@ -5,7 +5,7 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use firmware::geom::{Real, Vec3};
 use firmware::plan::team::DefaultLocalPlanner;
-use host_sim::cli::team::team_scenario;
+use host_sim::team::worlds::team_scenario;
 use host_sim::movingai::{load_map, load_scen, run_scenarios};
 use firmware::geom::p3::{add, scale};
 use std::path::PathBuf;

@@ -46,7 +46,7 @@ fn dstar_lite_matches_movingai_8room_all_scenarios() {
 }
 
 use firmware::geom::p3::dist;
-use host_sim::cli::team::{team_rng, team_scenario};
+use host_sim::team::worlds::{team_rng, team_scenario};
 use host_sim::team::grip::GripModel;
 use host_sim::team::{simulate, SimReport};
 use firmware::plan::team::mission::{Blocked, MissionOutcome};

@@ -20,11 +20,10 @@
 //! [`itokawa`] (the Hayabusa shape model, metres; 30 m hops as in Fig. 16). Pictures: [`svg`].
 
 pub mod grip;
-// Scenario files build the named worlds through the CLI's set-ups (feature `sim`, like the CLI).
-#[cfg(feature = "sim")]
 pub mod scenario;
 pub mod svg;
 pub mod surface;
+pub mod worlds;
 
 use crate::movingai::OwnedDStarStorage;
 use firmware::config::team::{MissionParams, TeamParams};

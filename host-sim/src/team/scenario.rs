@@ -8,7 +8,7 @@
 
 use super::surface::{unit, HeightSurface, MeshSurface, Surface, P3};
 use super::{x_start, RangeSensor, SimConfig};
-use crate::cli::team::TeamScenario;
+use super::worlds::{centroid, team_scenario, TeamScenario};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
@@ -278,11 +278,6 @@ pub fn load(path: &Path) -> Result<LoadedScenario, String> {
     parse(&text, path)
 }
 
-fn centroid(p: &[P3; 4]) -> P3 {
-    let s = p.iter().fold([0.0; 3], |a, q| [a[0] + q[0], a[1] + q[1], a[2] + q[2]]);
-    [s[0] / 4.0, s[1] / 4.0, s[2] / 4.0]
-}
-
 /// A point cloud resampled to a height grid of `spacing` metres: each post takes the inverse-distance-weighted
 /// height of the cloud's points within 3 posts of it; posts with none take the mean of their known neighbours
 /// (grown for at most 16 passes; past that, no data).
@@ -370,7 +365,7 @@ impl LoadedScenario {
         let t = &self.file.team;
         let mut out = if w.source == "builtin" {
             let b = w.builtin.as_deref().unwrap_or("cliff");
-            crate::cli::team::team_scenario(b, data, None, seed)?
+            team_scenario(b, data, None, seed)?
         } else {
             self.build_from_file(seed)?
         };
