@@ -9,10 +9,16 @@
 //! agree within 1e-6 (1 + |margin|) (margins are fractions of the rover's weight). Feasibility: clarabel's verdict on the `s = 0` slice
 //! (eqs. 1-8 alone: solved = stable, infeasible = unstable) must match the sign of our margin, except within 1e-7
 //! of the boundary.
+//!
+//! The LP's friction octagon against Coulomb's cone, by a second-order-cone problem built here from the contacts,
+//! masses and tether alone (not from the LP): a pose the LP calls stable must hold with the cone `|lambda_t| <=
+//! mu lambda_z`, and a pose that holds with the cone shrunk to `cos(pi/8) mu` (inside the octagon) must not be
+//! called unstable by the LP.
 
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
-    DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus, SupportedConeT, ZeroConeT,
+    DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SecondOrderConeT, SolverStatus, SupportedConeT,
+    ZeroConeT,
 };
 use firmware::config::stability::MAX_CONTACTS;
 use firmware::geom::{Real, Vec3};
@@ -238,6 +244,141 @@ fn lp_solver_agrees_with_clarabel_on_10000_random_instances() {
 }
 
 
+
+/// Eqs. 1-8 with Coulomb's friction cone (`|lambda_t| <= mu_scale mu lambda_z`) instead of the LP's octagon, the
+/// same moment box, load cap and tension bounds, as a second-order-cone feasibility problem for clarabel, built
+/// from the problem's contacts, masses and tether in the world frame. `None`: clarabel did not decide.
+fn cone_feasible(prob: &StabilityProblem, mu_scale: f64) -> Option<bool> {
+    use nalgebra::Vector3;
+    let v = |a: Vec3| Vector3::new(f64::from(a.x), f64::from(a.y), f64::from(a.z));
+    let g = v(prob.gravity);
+    let w: f64 = prob.masses.iter().map(|m| f64::from(m.mass_kg)).sum::<f64>() * g.norm();
+    let k = prob.contacts.len();
+    let nv = 6 * k + 1; // per contact force f and moment m (world frame, in rover weights), then the tension
+    let t_col = 6 * k;
+    let mut zero: Vec<(Vec<(usize, f64)>, f64)> = Vec::new();
+    let mut nonneg: Vec<(Vec<(usize, f64)>, f64)> = Vec::new();
+    let mut soc: Vec<[(Vec<(usize, f64)>, f64); 3]> = Vec::new();
+    // force and moment balance about the origin: sum f + T d = -sum m g / W; sum (p x f + m) + T (e x d) = ...
+    let weight_force: Vector3<f64> = prob.masses.iter().map(|m| g * f64::from(m.mass_kg)).sum::<Vector3<f64>>() / w;
+    let weight_moment: Vector3<f64> = prob.masses.iter().map(|m| v(m.com).cross(&(g * f64::from(m.mass_kg)))).sum::<Vector3<f64>>() / w;
+    let (d, e, tmax) = match prob.tether {
+        TetherForce::Taut { exit, direction, max_tension_n } => (v(direction).normalize(), v(exit), f64::from(max_tension_n) / w),
+        TetherForce::Slack => (Vector3::zeros(), Vector3::zeros(), 0.0),
+    };
+    for axis in 0..3 {
+        let mut force = Vec::new();
+        let mut moment = Vec::new();
+        for (i, c) in prob.contacts.iter().enumerate() {
+            let p = v(c.position);
+            force.push((6 * i + axis, 1.0));
+            for j in 0..3 {
+                // (p x f)_axis = sum_j [p]x[axis][j] f_j
+                let mut unit = Vector3::zeros();
+                unit[j] = 1.0;
+                moment.push((6 * i + j, p.cross(&unit)[axis]));
+            }
+            moment.push((6 * i + 3 + axis, 1.0));
+        }
+        force.push((t_col, d[axis]));
+        moment.push((t_col, e.cross(&d)[axis]));
+        zero.push((force, -weight_force[axis]));
+        zero.push((moment, -weight_moment[axis]));
+    }
+    for (i, c) in prob.contacts.iter().enumerate() {
+        let n = v(c.normal).normalize();
+        let xt = v(c.tangent);
+        let x = (xt - n * n.dot(&xt)).normalize();
+        let y = n.cross(&x);
+        let on = |col: usize, a: Vector3<f64>, s: f64| (0..3).map(|j| (col + j, s * a[j])).collect::<Vec<_>>();
+        let mu = mu_scale * f64::from(c.mu);
+        // s = b - A x in the cone: (mu n.f, x.f, y.f) with n.f >= |(x.f, y.f)|
+        soc.push([(on(6 * i, n, -mu), 0.0), (on(6 * i, x, -1.0), 0.0), (on(6 * i, y, -1.0), 0.0)]);
+        nonneg.push((on(6 * i, n, 1.0), f64::from(firmware::config::stability::NORMAL_FORCE_CAP)));
+        let mu_m = f64::from(c.mu_m);
+        for axis in [x, y, n] {
+            if mu_m > 0.0 {
+                for sign in [1.0, -1.0] {
+                    let mut row = on(6 * i + 3, axis, sign);
+                    row.extend(on(6 * i, n, -mu_m));
+                    nonneg.push((row, 0.0));
+                }
+            } else {
+                zero.push((on(6 * i + 3, axis, 1.0), 0.0));
+            }
+        }
+    }
+    nonneg.push((vec![(t_col, -1.0)], 0.0));
+    nonneg.push((vec![(t_col, 1.0)], tmax));
+    let mut rows: Vec<(Vec<(usize, f64)>, f64)> = Vec::new();
+    rows.extend(zero.iter().cloned());
+    rows.extend(nonneg.iter().cloned());
+    for c in &soc {
+        rows.extend(c.iter().cloned());
+    }
+    let mut dense = vec![vec![0.0f64; rows.len()]; nv];
+    for (r, (row, _)) in rows.iter().enumerate() {
+        for &(col, val) in row {
+            dense[col][r] += val;
+        }
+    }
+    let (mut colptr, mut rowval, mut nzval) = (vec![0usize], Vec::new(), Vec::new());
+    for col in &dense {
+        for (r, &val) in col.iter().enumerate() {
+            if val != 0.0 {
+                rowval.push(r);
+                nzval.push(val);
+            }
+        }
+        colptr.push(rowval.len());
+    }
+    let a = CscMatrix::new(rows.len(), nv, colptr, rowval, nzval);
+    let b: Vec<f64> = rows.iter().map(|(_, b)| *b).collect();
+    let mut cones: Vec<SupportedConeT<f64>> = vec![ZeroConeT(zero.len()), NonnegativeConeT(nonneg.len())];
+    cones.extend(soc.iter().map(|_| SecondOrderConeT(3)));
+    let settings = DefaultSettingsBuilder::default().verbose(false).max_iter(200).build().expect("settings");
+    let p = CscMatrix::<f64>::zeros((nv, nv));
+    let mut solver = DefaultSolver::new(&p, &vec![0.0; nv], &a, &b, &cones, settings).expect("clarabel setup");
+    solver.solve();
+    match solver.solution.status {
+        SolverStatus::Solved => Some(true),
+        SolverStatus::PrimalInfeasible => Some(false),
+        _ => None,
+    }
+}
+
+/// The friction octagon is inscribed in Coulomb's cone (see the module docs): on random problems, every pose the
+/// LP calls stable holds with the cone, and every pose that holds with the cone shrunk by cos(pi/8) is stable for
+/// the LP. Poses within 1e-6 of the LP's boundary are skipped (the oracles' tolerances).
+#[test]
+fn friction_octagon_lies_between_the_cone_and_the_cone_shrunk_by_cos_pi_8() {
+    let mut r = Pcg64::new(0x5eed_0003, 0xa02_bdbf_7bb3_c0a7);
+    let inset = (core::f64::consts::PI / 8.0).cos();
+    let (mut stable, mut inner_holds, mut between, mut undecided) = (0, 0, 0, 0);
+    for case in 0..3000 {
+        let prob = random_problem(&mut r);
+        let Some(margin) = margin_of(&prob) else { continue };
+        if margin.abs() < 1e-6 {
+            continue;
+        }
+        let (Some(outer), Some(inner)) = (cone_feasible(&prob, 1.0), cone_feasible(&prob, inset)) else {
+            undecided += 1;
+            continue;
+        };
+        if margin > 0.0 {
+            assert!(outer, "case {case}: the LP says stable (margin {margin}) but Coulomb's cone has no equilibrium\n{prob:?}");
+            stable += 1;
+        }
+        if inner {
+            assert!(margin > 0.0, "case {case}: holds with the cone shrunk by cos(pi/8) but the LP's margin is {margin}\n{prob:?}");
+            inner_holds += 1;
+        }
+        between += usize::from(outer && margin < 0.0);
+    }
+    println!("{stable} LP-stable (all hold with the cone), {inner_holds} hold with the shrunk cone (all LP-stable), {between} hold with the cone but not the octagon, {undecided} undecided");
+    assert!(stable > 300 && inner_holds > 300, "too few decided cases: {stable} / {inner_holds}");
+    assert!(undecided < 30, "clarabel undecided on {undecided} cases");
+}
 
 fn margin_of(prob: &StabilityProblem) -> Option<f64> {
     check_stability(prob).ok().and_then(|o| o.margin())

@@ -44,7 +44,7 @@ pub struct RoverParams {
     pub body_mass_kg: f32,
     /// Mass 2: the boom, at half its length. Default 10 kg (assumption).
     pub boom_mass_kg: f32,
-    /// Wheel-terrain friction pyramid coefficient. Default 0.6 (assumption: compact regolith, grousers).
+    /// Wheel-terrain friction coefficient (Coulomb cone; the stability LP inscribes an octagon). Default 0.6 (assumption: compact regolith, grousers).
     pub wheel_mu: f32,
     /// Wheel contact-patch moment coefficient (Paton eqs. 4-6), metres. Default 0.05 m (assumption: half the
     /// spacing of a grouser pair).

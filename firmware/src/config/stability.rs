@@ -19,7 +19,7 @@ pub const SIMPLEX_MAX_PIVOTS: u32 = 200;
 pub const SOLVER_TOLERANCE: f64 = 1e-9;
 
 /// Smallest friction margin (fraction of the rover's weight, see the `stability` module docs) at which a pose
-/// counts as stable. Default 0.0: exactly at the boundary of the friction pyramids; raise it for a safety buffer
+/// counts as stable. Default 0.0: exactly at the boundary of the friction octagons; raise it for a safety buffer
 /// against uncertain friction.
 pub const MIN_MARGIN: f64 = 0.0;
 

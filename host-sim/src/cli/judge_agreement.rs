@@ -47,6 +47,10 @@ pub struct JudgeAgreementArgs {
     /// Write every pose's verdicts here (JSON).
     #[arg(long, short)]
     pub out: Option<PathBuf>,
+    /// Print how both judges saw these poses (indices in the sampled order, e.g. `--explain 12,40`): the planner's
+    /// settled wheel contacts, its stability answer and boom, and each physics boom setting's placement and motion.
+    #[arg(long, value_delimiter = ',')]
+    pub explain: Vec<usize>,
 }
 
 /// The planner's verdict on a pose.
@@ -145,6 +149,49 @@ fn planner_verdict<D: DistanceField>(space: &TetherSpace<'_, D>, x: f64, y: f64,
     }
 }
 
+/// `--explain`: both judges' view of one pose, printed.
+fn explain<D: DistanceField>(
+    index: usize,
+    space: &TetherSpace<'_, D>,
+    map: &D,
+    rover: &RoverParams,
+    judge: &PhysicsJudge,
+    sample: (f64, f64, f64),
+    pose: GroundPose,
+    hist: &AnchorHistory,
+    anchor: Option<[f64; 3]>,
+) {
+    let f = |v: firmware::geom::Vec3| format!("({:.3}, {:.3}, {:.3})", v.x, v.y, v.z);
+    println!("pose {index}: sample ({:.3}, {:.3}, yaw {:.3}); physics pose ({:.3}, {:.3}, heading {:.3})", sample.0, sample.1, sample.2, pose.x, pose.y, pose.yaw);
+    println!("  anchor history: {}", hist.as_slice().iter().map(|a| f(a.point)).collect::<Vec<_>>().join(" -> "));
+    match space.settle_state(sample.0 as Real, sample.1 as Real, sample.2 as Real) {
+        Err(e) => println!("  planner: no settle ({e:?})"),
+        Ok(s) => {
+            let st = &s.settled;
+            println!("  planner axle {} heading {:.3} roll {:.3}", f(st.pose.translation.vector), s.heading(), st.roll_rad);
+            for (w, name) in st.wheels.iter().zip(["left", "right"]) {
+                let slope = libm::acosf(w.normal.z.clamp(-1.0, 1.0)).to_degrees();
+                println!("  planner {name} wheel contact {} normal {} ({slope:.1} deg) gap {:.4}", f(w.point), f(w.normal), w.gap_m);
+            }
+            let pull = firmware::plan::tethered::tether_pull_anchor(st, hist, rover);
+            let r = firmware::rover::check_pose_stability(map, st, pull.as_ref(), rover);
+            println!("  planner pull anchor {:?}: {r:?}", pull.map(f));
+        }
+    }
+    let Some(anchor) = anchor else {
+        println!("  physics: no true tether");
+        return;
+    };
+    for boom in crate::physics::BOOM_SETTINGS {
+        let v = judge.hold_with(pose, &TetherSpec { anchor, free_length_m: None }, boom);
+        print!("  physics {boom:?}: {:?} slide {:.3} m tilt {:.2} deg end speed {:.4} m/s", v.outcome, v.slide_m, v.tilt_deg, v.end_speed_mps);
+        if let Some(p) = v.placement {
+            print!("; axle ({:.3}, {:.3}, {:.3}) axle dir ({:.3}, {:.3}, {:.3}) boom {:.1} deg tip ({:.3}, {:.3}, {:.3})", p.axle[0], p.axle[1], p.axle[2], p.axle_dir[0], p.axle_dir[1], p.axle_dir[2], p.boom_angle.to_degrees(), p.tip[0], p.tip[1], p.tip[2]);
+        }
+        println!();
+    }
+}
+
 /// Run the study.
 pub fn run(a: &JudgeAgreementArgs) -> Result<Agreement, String> {
     let file = crate::cli::campaign::scenario_file(&a.scenario);
@@ -218,6 +265,9 @@ pub fn run(a: &JudgeAgreementArgs) -> Result<Agreement, String> {
         }
         let (m, _, _) = planner_verdict(&on_map, x, y, yaw, &hist);
         let (e, _, margin) = planner_verdict(&on_truth, x, y, yaw, &hist);
+        if a.explain.contains(&out.poses.len()) {
+            explain(out.poses.len(), &on_truth, &truth, &rover, &judge, (x, y, yaw), pose, &hist, tether.as_ref().map(|t| t.last_anchor(&edges)));
+        }
         out.map.add(m, physics);
         out.exact.add(e, physics);
         out.poses.push(PoseRecord { sample: [x, y, yaw], map: m, exact: e, exact_margin: margin, physics, slide_m: slide });
