@@ -206,6 +206,7 @@
 mod mission;
 pub mod retained;
 mod planning;
+mod tile;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
@@ -226,7 +227,7 @@ use crate::map::{Block, Map, MapError};
 use crate::plan::tethered::{PlanBounds, RoverState};
 use crate::protocol::{
     Configure, GoalRequest, MapStatus, MissionStatus, Motion, MotionReport, PlanState, PlannerChoice, Pose,
-    TetherReading,
+    TetherReading, TileHeader,
 };
 use crate::tether::AnchorHistory;
 
@@ -291,6 +292,11 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
     pub fn integrate_scan(&mut self, scan: &Scan<'_>, now: Instant) {
         self.scan_part(scan, now);
         self.scan_complete(scan, now);
+    }
+
+    /// The terrain tile in use for the homotopy planner (protocol v7), if one was uploaded.
+    pub fn terrain_tile(&self) -> Option<&crate::plan::homotopy::dem::HeightTile> {
+        self.storage.borrow().tile.current()
     }
 
     /// Counters of on-board planning.
@@ -420,6 +426,34 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
         }
         count_up(&mut status.scans_integrated, 1);
         self.status = status;
+    }
+
+    fn tile_part(&mut self, header: &TileHeader, offset: usize, heights: &[f32], _now: Instant) {
+        if let Some(old) = self.storage.borrow_mut().tile.part(header, offset, heights) {
+            count_up(&mut self.status.tiles_abandoned, 1);
+            log::warn!("tile {old} abandoned incomplete; the tile in use is kept");
+        }
+    }
+
+    fn tile_complete(&mut self, header: &TileHeader, _now: Instant) -> Result<(), Refused> {
+        match self.storage.borrow_mut().tile.complete(header) {
+            Ok(()) => {
+                count_up(&mut self.status.tiles_loaded, 1);
+                self.status.tile_id = header.tile_id;
+                log::info!(
+                    "tile {}: {} x {} posts at {} m loaded for the homotopy planner",
+                    header.tile_id,
+                    header.rows,
+                    header.cols,
+                    header.resolution_m
+                );
+                Ok(())
+            }
+            Err(e) => {
+                log::warn!("tile {} refused ({e:?}); the tile in use is kept", header.tile_id);
+                Err(Refused)
+            }
+        }
     }
 
     fn goal(&mut self, goal: &GoalRequest, now: Instant) -> PlanState {

@@ -50,6 +50,8 @@ pub struct NavPlanStorage {
     /// The anchor history of the start state (the mission's tracked history when replanning mid-mission); empty =
     /// the root anchor alone.
     pub(crate) start_history: AnchorHistory,
+    /// The terrain tile in use and the one being uploaded (`nav::tile`, 128 KiB).
+    pub(crate) tile: super::tile::TileStorage,
 }
 
 impl NavPlanStorage {
@@ -62,6 +64,7 @@ impl NavPlanStorage {
             suspended: heapless::Vec::new(),
             rng_state: 0,
             start_history: AnchorHistory::empty(),
+            tile: super::tile::TileStorage::new(),
         }
     }
     /// Bytes of the storage (for the board's memory report).

@@ -107,9 +107,10 @@ impl Default for HeightTile {
 }
 
 impl HeightTile {
-    /// An empty tile (0 x 0).
+    /// An empty tile (0 x 0; spacing 0: no post to look up). All zero bytes, so a `static` holding one stays in
+    /// `.bss`.
     pub const fn new() -> Self {
-        HeightTile { origin: [0.0; 2], resolution_m: 1.0, rows: 0, cols: 0, heights: [0.0; MAX_TILE_CELLS] }
+        HeightTile { origin: [0.0; 2], resolution_m: 0.0, rows: 0, cols: 0, heights: [0.0; MAX_TILE_CELLS] }
     }
     /// Replaces the tile after checking every input; on error the previous tile is intact.
     pub fn load(&mut self, origin: [f64; 2], resolution_m: f64, rows: usize, cols: usize, heights: &[f32]) -> Result<(), TileError> {
