@@ -203,6 +203,7 @@
 //! `host-sim/doc/nav.md` has the on-target storage and stack figures and how the navigator came to its design.
 //!
 
+mod homotopy;
 mod mission;
 pub mod retained;
 mod planning;
@@ -210,8 +211,11 @@ mod tile;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
+mod homotopy_tests;
+#[cfg(test)]
 mod mission_tests;
 
+pub use homotopy::{GlobalPlanStorage, HomotopyStats, HomotopyStorage, NoGlobalPlanner};
 pub use mission::{BodyPose, Mission, MissionCounters};
 pub use planning::{segment_motions, GoalRefusal, NavArena, NavPlanStats, NavPlanStorage};
 
@@ -226,7 +230,7 @@ use crate::geom::Vec3;
 use crate::map::{Block, Map, MapError};
 use crate::plan::tethered::{PlanBounds, RoverState};
 use crate::protocol::{
-    Configure, GoalRequest, MapStatus, MissionStatus, Motion, MotionReport, PlanState, PlannerChoice, Pose,
+    Configure, GoalRequest, MapStatus, MissionStatus, Motion, MotionReport, PlanState, PlannerChoice, Point3, Pose,
     TetherReading, TileHeader,
 };
 use crate::tether::AnchorHistory;
@@ -234,7 +238,7 @@ use crate::tether::AnchorHistory;
 use planning::{PlanSetup, Problem};
 
 /// The executive's autonomy: builds the onboard map from scans and plans goals on it (see the module docs).
-pub struct Navigator<B, I, P> {
+pub struct Navigator<B, I, P, H = NoGlobalPlanner> {
     cfg: MapConfig,
     blocks: B,
     index: I,
@@ -252,10 +256,16 @@ pub struct Navigator<B, I, P> {
     scan_in: Option<(u32, bool)>,
     /// The last checkpoint written to the retained block (`retained`), to write only what changed.
     retained_last: Option<retained::TetherCheckpoint>,
+    /// The homotopy goal being planned or driven (`nav::homotopy`).
+    homotopy: Option<homotopy::HomotopyGoal>,
+    hstats: HomotopyStats,
+    /// The global planner's storage (`nav::homotopy`), if lent.
+    global: H,
 }
 
 impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> Navigator<B, I, P> {
-    /// A navigator over lent map and planning storage, which are cleared. Errors as [`Map::from_slices`].
+    /// A navigator over lent map and planning storage, which are cleared, without the global planner (homotopy
+    /// goals are `PlannerUnavailable`; lend its storage with [`Self::with_homotopy`]). Errors as [`Map::from_slices`].
     pub fn new(cfg: MapConfig, mut blocks: B, mut index: I, mut storage: P) -> Result<Self, MapError> {
         let capacity = Map::from_slices(cfg, blocks.borrow_mut(), index.borrow_mut())?.blocks_capacity();
         let status = MapStatus {
@@ -279,8 +289,38 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
             replan_pending: false,
             scan_in: None,
             retained_last: None,
+            homotopy: None,
+            hstats: HomotopyStats::default(),
+            global: NoGlobalPlanner,
         })
     }
+
+    /// The same navigator with the global planner's storage lent (`PlannerChoice::Homotopy` goals are planned).
+    pub fn with_homotopy<H: GlobalPlanStorage>(self, global: H) -> Navigator<B, I, P, H> {
+        Navigator {
+            cfg: self.cfg,
+            blocks: self.blocks,
+            index: self.index,
+            used: self.used,
+            status: self.status,
+            storage: self.storage,
+            setup: self.setup,
+            pose: self.pose,
+            problem: self.problem,
+            next_motion: self.next_motion,
+            stats: self.stats,
+            mission: self.mission,
+            replan_pending: self.replan_pending,
+            scan_in: self.scan_in,
+            retained_last: self.retained_last,
+            homotopy: self.homotopy,
+            hstats: self.hstats,
+            global,
+        }
+    }
+}
+
+impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H: GlobalPlanStorage> Navigator<B, I, P, H> {
 
     /// The onboard map (a view over the navigator's storage), for planners, tests and pictures.
     pub fn map(&mut self) -> Option<Map<'_>> {
@@ -297,6 +337,26 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
     /// The terrain tile in use for the homotopy planner (protocol v7), if one was uploaded.
     pub fn terrain_tile(&self) -> Option<&crate::plan::homotopy::dem::HeightTile> {
         self.storage.borrow().tile.current()
+    }
+
+    /// Counters of homotopy goals.
+    pub fn homotopy_stats(&self) -> HomotopyStats {
+        self.hstats
+    }
+
+    /// The leg goals of the homotopy route being driven (world frame; empty before the first route).
+    pub fn homotopy_legs(&self) -> &[[f32; 3]] {
+        self.global.global_ref().map_or(&[], |g| g.legs.as_slice())
+    }
+
+    /// The homotopy route being driven (world frame), if one was planned.
+    pub fn homotopy_route(&self) -> Option<&crate::plan::homotopy::dem::WorldRoute> {
+        self.global.global_ref().and_then(|g| g.route.as_ref())
+    }
+
+    /// Which leg of the homotopy route is driven (0-based), while a homotopy goal is.
+    pub fn homotopy_leg(&self) -> Option<usize> {
+        self.homotopy.filter(|h| h.phase == homotopy::Phase::Legs).map(|h| h.leg)
     }
 
     /// Counters of on-board planning.
@@ -326,6 +386,62 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         log::warn!("nav: goal refused: {}", why.reason());
         PlanState::InvalidInput
     }
+
+    /// A `GoalRequest` for `PlannerChoice::Homotopy`: checked here, planned by `plan_step` in phases.
+    fn goal_homotopy(&mut self, goal: &GoalRequest) -> PlanState {
+        self.replan_pending = false;
+        if self.global.global_ref().is_none() {
+            return PlanState::PlannerUnavailable;
+        }
+        let why = if self.setup.is_none() {
+            Some(GoalRefusal::NotConfigured)
+        } else if self.start_pose().is_none() {
+            Some(GoalRefusal::NoPose)
+        } else if self.storage.borrow().tile.current().is_none() {
+            Some(GoalRefusal::NoTile)
+        } else {
+            None
+        };
+        if let Some(why) = why {
+            self.mission_goal(goal, false);
+            return self.refuse(why);
+        }
+        self.homotopy = Some(homotopy::HomotopyGoal { goal: *goal, phase: homotopy::Phase::Segment, leg: 0, leg_active: false });
+        self.stats.goals_accepted = self.stats.goals_accepted.saturating_add(1);
+        self.mission_goal(goal, true);
+        PlanState::Accepted
+    }
+
+    /// One phase of a homotopy goal's global plan (`nav::homotopy`).
+    fn homotopy_plan_step(&mut self, mut h: homotopy::HomotopyGoal, plan: &mut PlanBuffer) -> PlanProgress {
+        let refused = |nav: &mut Self, why| {
+            nav.homotopy = None;
+            nav.refuse(why);
+            nav.mission_planned(PlanState::InvalidInput);
+            PlanProgress::Finished { state: PlanState::InvalidInput, iterations: 0, best_cost: None }
+        };
+        let Some(setup) = self.setup else { return refused(self, GoalRefusal::NotConfigured) };
+        let start = self.start_pose();
+        let outcome = {
+            let Some(global) = self.global.global() else { return refused(self, GoalRefusal::NoTile) };
+            let Some(tile) = self.storage.borrow().tile.current() else { return refused(self, GoalRefusal::NoTile) };
+            homotopy::phase_step(&mut h, tile, global, &setup, start.as_ref())
+        };
+        self.homotopy = Some(h);
+        match outcome {
+            homotopy::PhaseOutcome::Continue => PlanProgress::Searching { iterations: 0, best_cost: None },
+            homotopy::PhaseOutcome::Planned { cost, classes } => {
+                let root = Point3::new(setup.root.x, setup.root.y, setup.root.z);
+                if let Some(g) = self.global.global_ref() {
+                    homotopy::route_waypoints(g, root, plan);
+                }
+                self.hstats.routes = self.hstats.routes.saturating_add(1);
+                self.mission_planned(PlanState::ExactSolution);
+                PlanProgress::Finished { state: PlanState::ExactSolution, iterations: classes, best_cost: Some(cost) }
+            }
+            homotopy::PhaseOutcome::Refused(why) => refused(self, why),
+        }
+    }
 }
 
 /// Adds `n` to a telemetry counter, saturating at `u32::MAX` (a counter never wraps back to small values).
@@ -333,7 +449,9 @@ fn count_up(counter: &mut u32, n: u32) {
     *counter = counter.saturating_add(n);
 }
 
-impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> Autonomy for Navigator<B, I, P> {
+impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H: GlobalPlanStorage> Autonomy
+    for Navigator<B, I, P, H>
+{
     fn configure(&mut self, cfg: &Configure) -> Result<(), Refused> {
         if let Some(settings) = cfg.map {
             let map_cfg = MapConfig::from(settings);
@@ -465,8 +583,11 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
         self.problem = None;
         self.next_motion = 0;
         planning::clear_plan(&mut self.storage);
-        if goal.planner != PlannerChoice::Abit {
-            return PlanState::PlannerUnavailable;
+        self.homotopy = None;
+        match goal.planner {
+            PlannerChoice::Abit => {}
+            PlannerChoice::Homotopy => return self.goal_homotopy(goal),
+            PlannerChoice::Team => return PlanState::PlannerUnavailable,
         }
         self.replan_pending = false;
         let Some(setup) = self.setup else {
@@ -498,6 +619,9 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
     }
 
     fn plan_step(&mut self, now: Instant, iterations: u32, plan: &mut PlanBuffer) -> PlanProgress {
+        if let Some(h) = self.homotopy.filter(|h| h.phase != homotopy::Phase::Legs) {
+            return self.homotopy_plan_step(h, plan);
+        }
         let Some(mut problem) = self.problem else {
             return PlanProgress::Finished { state: PlanState::NoGoal, iterations: 0, best_cost: None };
         };
@@ -526,6 +650,9 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
     }
 
     fn drive_step(&mut self, now: Instant) -> DriveStep {
+        if let Some(step) = self.mission_start_leg(now) {
+            return step;
+        }
         self.mission_drive(now)
     }
 

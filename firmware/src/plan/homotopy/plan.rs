@@ -51,9 +51,16 @@ pub struct Workspace {
     pub classes: HVec<HomotopyClass, MAX_CLASSES>,
 }
 
+impl Workspace {
+    /// Empty (const: a flight computer keeps it in a `static`).
+    pub const fn new() -> Self {
+        Workspace { search: SearchArena::new(), grid: ControlGrid::new(), classes: HVec::new() }
+    }
+}
+
 impl Default for Workspace {
     fn default() -> Self {
-        Workspace { search: SearchArena::new(), grid: ControlGrid::new(), classes: HVec::new() }
+        Self::new()
     }
 }
 
