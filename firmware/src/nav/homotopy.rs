@@ -267,9 +267,13 @@ fn cut_legs(
     legs: &mut heapless::Vec<[f32; 3], HOMOTOPY_MAX_LEGS>,
 ) -> bool {
     legs.clear();
-    let pts = route.waypoints.iter().map(|w| [w[0] as f32, w[1] as f32, w[2] as f32]).chain(core::iter::once(goal));
-    let mut last = from.or_else(|| route.waypoints.first().map(|w| [w[0] as f32, w[1] as f32, w[2] as f32]));
-    let n = route.waypoints.len().saturating_add(1);
+    let wp = |w: &[f64; 3]| [w[0] as f32, w[1] as f32, w[2] as f32];
+    // the route starts at the root anchor; the rover may already be down it: the legs start after the route segment
+    // nearest to the rover (horizontally), never back up the route
+    let skip = from.map_or(0, |f| nearest_segment(route, f).saturating_add(1));
+    let pts = route.waypoints.iter().skip(skip).map(wp).chain(core::iter::once(goal));
+    let mut last = from.or_else(|| route.waypoints.first().map(wp));
+    let n = route.waypoints.len().saturating_sub(skip).saturating_add(1);
     for (i, p) in pts.enumerate() {
         let is_goal = i + 1 == n;
         let Some(l) = last else {
@@ -296,6 +300,24 @@ fn cut_legs(
         *l = goal;
     }
     !legs.is_empty()
+}
+
+/// Index of the route segment `waypoints[k] -> waypoints[k + 1]` horizontally nearest to `p` (0 for a route of
+/// fewer than two points).
+fn nearest_segment(route: &WorldRoute, p: [f32; 3]) -> usize {
+    let mut best = (f32::INFINITY, 0usize);
+    for (k, w) in route.waypoints.windows(2).enumerate() {
+        let [a, b] = w else { continue };
+        let (ax, ay, bx, by) = (a[0] as f32, a[1] as f32, b[0] as f32, b[1] as f32);
+        let (dx, dy) = (bx - ax, by - ay);
+        let l2 = dx * dx + dy * dy;
+        let t = if l2 > 0.0 { (((p[0] - ax) * dx + (p[1] - ay) * dy) / l2).clamp(0.0, 1.0) } else { 0.0 };
+        let d = libm::hypotf(ax + t * dx - p[0], ay + t * dy - p[1]);
+        if d < best.0 {
+            best = (d, k);
+        }
+    }
+    best.1
 }
 
 /// The route as plan waypoints (the leg goals, each facing the next, with the root and the anchors the route

@@ -36,8 +36,43 @@
 //!
 //! Refusals are `InvalidInput` with a [`GoalRefusal`] reason, logged and counted ([`NavPlanStats::refusals`]): no
 //! `Configure`, no scan yet, an empty map, a map without an observed surface block, a start or an on-map goal that
-//! does not settle. Another planner choice
-//! is answered `PlannerUnavailable`.
+//! does not settle. `PlannerChoice::Team` is answered `PlannerUnavailable`, and so is `Homotopy` on a navigator
+//! without the global planner's storage ([`Navigator::new`]; [`Navigator::with_homotopy`] lends it).
+//!
+//! ## Terrain tiles and homotopy goals (protocol v7; issue 20 item 4; `nav/tile.rs`, `nav/homotopy.rs`)
+//! Abad-Manterola et al. (III-VI) and Tanner et al. (II) choose the homotopy class and the intermediate anchors of a
+//! long descent on an orbital DEM; the settled path is Paton et al.'s local problem. On board:
+//! - **Tile upload**: `TileChunk`s (in order, checked by the executive's `TileAssembler`) are staged
+//!   ([`Autonomy::tile_part`]); the last one swaps the staged tile in if `HeightTile::load` accepts it whole
+//!   ([`Autonomy::tile_complete`]). A rejected, abandoned or refused upload leaves the tile in use and any route
+//!   planned on it intact. `MapStatus.tiles_loaded`, `tile_id`, `tiles_abandoned`. Limits: 128 x 128 posts
+//!   (`MAX_TILE_SIDE`; 64 KiB of `f32`), spacing 0.02 .. 5 m; staging and tile 128 KiB of [`NavPlanStorage`].
+//! - **Global route** (a `GoalRequest` for `PlannerChoice::Homotopy`, checked at once: a `Configure`, a pose and a
+//!   tile, else `InvalidInput` with `NotConfigured` / `NoPose` / `NoTile`), in three `plan_step` calls, one phase
+//!   each: (1) `DemDescent::segment` of the tile from `Configure.tether.root_anchor` to the goal (corridor half
+//!   width `HOMOTOPY_CORRIDOR_HALF_WIDTH_M` 6 m, soil friction `Configure.rover.friction_coefficient`, the rest
+//!   `DemParams::for_rover` of the configured rover), `check_ends`, `build_btm`; (2) Axel's holding limit on the
+//!   wall (`axel_model`); (3) Alg. 1 (`preplan`) with Axel's model and `route_to_world` with
+//!   `Configure.tether.max_payout_m`. Refusals are `InvalidInput`, counted and logged like the others:
+//!   `DescentNotSegmented` (the log names the `DemError`), `NoRoute`, `PayoutExceeded`, `RouteRefused`. The route is
+//!   reported as the goal's first `PlanStatus` (`ExactSolution`, `iterations` = classes examined, `best_cost` = the
+//!   tether's 3D length) and `Plan`: the **leg goals** (each facing the next; anchors: the root and the anchors the
+//!   route expects; margin 0, not evaluated on the tile).
+//! - **Legs**: the route's waypoints after the route segment nearest to the rover (never back up the route),
+//!   skipping those within `HOMOTOPY_LEG_MIN_M` (1 m) of the previous leg goal and splitting stretches longer than
+//!   `HOMOTOPY_LEG_MAX_M` (5 m); the last leg's goal is the request's position and tolerance, the others'
+//!   tolerance `HOMOTOPY_LEG_TOLERANCE_M` (0.5 m); at most `HOMOTOPY_MAX_LEGS` (32). Each leg is a tethered ABIT*
+//!   goal set up by the same `set_up` as a replan, from the tracked pose and anchor history (the mission's), when the
+//!   first drive step after the route (or after the previous leg's arrival) finds no leg active: the executive goes
+//!   to `Planning` and a new `PlanStatus` / `Plan` follows. Arriving within a leg's tolerance starts the next leg
+//!   (the mission stays `Driving`); only the last leg's arrival is `Arrived`. Replans, stalls and the replan limit
+//!   work per leg (a leg is not counted as a replan). At each leg's start the tracked anchors (after the root) are
+//!   compared with the route's expected anchors: one farther than `HOMOTOPY_ANCHOR_AGREEMENT_M` (1 m) from every
+//!   expected anchor is logged and counted ([`HomotopyStats::anchor_disagreements`]).
+//! - **Not done**: global replanning (Tanner et al. Alg. 3, `plan::homotopy::online`) when a leg finds no path: a
+//!   leg that ends without a solution ends the mission as any goal does (`NoSolution` / `ReplanLimit`).
+//! - Storage: [`HomotopyStorage`] (~0.66 MiB: BTM 240 KiB, A* workspace 292 KiB, segmentation scratch 112 KiB, the
+//!   descent, the route and the legs), lent once like the rest (host: a `Box`; board: a static in SRAM `.data`).
 //!
 //! [`Autonomy::plan_step`] runs at most `iterations` new ABIT* iterations, and stops earlier (after at least one)
 //! once `MOTION_CHECKS_PER_STEP` new motion checks were computed, or after a step that drew `DRAWS_PER_STEP` more

@@ -45,12 +45,15 @@ impl TileStorage {
             self.staged.clear();
             return abandoned;
         }
-        let Some(dst) = self.staging.get_mut(offset..offset.saturating_add(heights.len())) else {
+        let end = offset.checked_add(heights.len());
+        let Some(dst) = end.and_then(|end| self.staging.get_mut(offset..end)) else {
             self.staged.clear();
             return abandoned;
         };
-        dst.copy_from_slice(heights);
-        *got = offset.saturating_add(heights.len());
+        for (d, h) in dst.iter_mut().zip(heights) {
+            *d = *h;
+        }
+        *got = end.unwrap_or(offset);
         abandoned
     }
 
