@@ -152,102 +152,127 @@ pub(crate) fn phase_step(
     let a0 = [f64::from(setup.root.x), f64::from(setup.root.y)];
     let g = [f64::from(h.goal.position.x), f64::from(h.goal.position.y)];
     match h.phase {
-        Phase::Segment => {
-            let params =
-                DemParams::for_rover(&setup.rover, f64::from(setup.rover.wheel_mu), HOMOTOPY_CORRIDOR_HALF_WIDTH_M);
-            let descent = match DemDescent::segment(tile, a0, g, &params, &mut store.scratch) {
-                Ok(d) => d,
-                Err(e) => return refuse_dem(e),
-            };
-            if let Err(e) = descent.check_ends() {
-                return refuse_dem(e);
-            }
-            if let Err(e) = descent.build_btm(&mut store.btm) {
-                log::warn!("homotopy: BTM of the descent not built: {e:?}");
-                return PhaseOutcome::Refused(GoalRefusal::NoRoute);
-            }
-            log::info!(
-                "homotopy: {} planes, {} obstacles ({} on the edge), {} BTM triangles",
-                descent.planes.len(),
-                descent.obstacles.len(),
-                descent.edge_obstacles.len(),
-                store.btm.triangle_count()
-            );
-            store.model = Some(descent.hold_model());
-            store.descent = Some(descent);
-            h.phase = Phase::Hold;
-            PhaseOutcome::Continue
-        }
-        Phase::Hold => {
-            let Some(pm) = store.model else { return PhaseOutcome::Refused(GoalRefusal::NoRoute) };
-            let (ax, limits) = axel_model(&pm, &setup.rover);
-            log::info!(
-                "homotopy: Axel holds within {} deg of upslope on the wall ({} stability checks)",
-                limits[0].theta_max_rad.to_degrees(),
-                limits[0].checks
-            );
-            store.model = Some(ax);
-            h.phase = Phase::Route;
-            PhaseOutcome::Continue
-        }
-        Phase::Route => {
-            let (Some(descent), Some(model)) = (store.descent.as_ref(), store.model) else {
-                return PhaseOutcome::Refused(GoalRefusal::NoRoute);
-            };
-            let (mut lc, mut report) = (heapless::Vec::new(), PlanReport::default());
-            let plan = preplan(
-                &store.btm,
-                &model,
-                &HomotopyParams::default(),
-                &mut store.ws,
-                descent.a0,
-                descent.g,
-                &mut lc,
-                &mut report,
-            );
-            let classes = u32::try_from(report.examined.len()).unwrap_or(u32::MAX);
-            let plan = match plan {
-                Ok(Some(p)) => p,
-                Ok(None) => {
-                    log::warn!("homotopy: no class passes Alg. 2 ({classes} examined)");
-                    return PhaseOutcome::Refused(GoalRefusal::NoRoute);
-                }
-                Err(e) => {
-                    log::warn!("homotopy: Alg. 1 failed: {e:?}");
-                    return PhaseOutcome::Refused(GoalRefusal::NoRoute);
-                }
-            };
-            let route = match descent.route_to_world(tile, &plan, f64::from(setup.max_payout_m)) {
-                Ok(r) => r,
-                Err(RouteError::TetherTooLong { needed_m, max_payout_m }) => {
-                    log::warn!("homotopy: the route needs {needed_m} m of tether, the spool has {max_payout_m} m");
-                    return PhaseOutcome::Refused(GoalRefusal::PayoutExceeded);
-                }
-                Err(e) => {
-                    log::warn!("homotopy: the route cannot be mapped to the world: {e:?}");
-                    return PhaseOutcome::Refused(GoalRefusal::RouteRefused);
-                }
-            };
-            let goal = [h.goal.position.x, h.goal.position.y, h.goal.position.z];
-            let from = start.map(|p| [p.position.x, p.position.y, p.position.z]);
-            if !cut_legs(&route, from, goal, &mut store.legs) {
-                log::warn!("homotopy: the route needs more than {HOMOTOPY_MAX_LEGS} legs");
-                return PhaseOutcome::Refused(GoalRefusal::RouteRefused);
-            }
-            let cost = route.tether_length_m as f32;
-            log::info!(
-                "homotopy: route of {} legs, tether {cost} m, {} intermediate anchors",
-                store.legs.len(),
-                route.anchors.len()
-            );
-            store.route = Some(route);
-            h.phase = Phase::Legs;
-            h.leg = 0;
-            h.leg_active = false;
-            PhaseOutcome::Planned { cost, classes }
-        }
+        Phase::Segment => segment_phase(h, tile, store, setup, a0, g),
+        Phase::Hold => hold_phase(h, store, setup),
+        Phase::Route => route_phase(h, tile, store, setup, start),
         Phase::Legs => PhaseOutcome::Continue,
     }
+}
+
+// One function per phase, never inlined into each other: each phase's locals (the descent, the A* report, the
+// route) live in its own frame, so the deepest stack is the largest phase's, not their sum.
+
+#[inline(never)]
+fn segment_phase(
+    h: &mut HomotopyGoal,
+    tile: &HeightTile,
+    store: &mut HomotopyStorage,
+    setup: &PlanSetup,
+    a0: [f64; 2],
+    g: [f64; 2],
+) -> PhaseOutcome {
+    let params =
+        DemParams::for_rover(&setup.rover, f64::from(setup.rover.wheel_mu), HOMOTOPY_CORRIDOR_HALF_WIDTH_M);
+    let descent = match DemDescent::segment(tile, a0, g, &params, &mut store.scratch) {
+        Ok(d) => d,
+        Err(e) => return refuse_dem(e),
+    };
+    if let Err(e) = descent.check_ends() {
+        return refuse_dem(e);
+    }
+    if let Err(e) = descent.build_btm(&mut store.btm) {
+        log::warn!("homotopy: BTM of the descent not built: {e:?}");
+        return PhaseOutcome::Refused(GoalRefusal::NoRoute);
+    }
+    log::info!(
+        "homotopy: {} planes, {} obstacles ({} on the edge), {} BTM triangles",
+        descent.planes.len(),
+        descent.obstacles.len(),
+        descent.edge_obstacles.len(),
+        store.btm.triangle_count()
+    );
+    store.model = Some(descent.hold_model());
+    store.descent = Some(descent);
+    h.phase = Phase::Hold;
+    PhaseOutcome::Continue
+}
+
+#[inline(never)]
+fn hold_phase(h: &mut HomotopyGoal, store: &mut HomotopyStorage, setup: &PlanSetup) -> PhaseOutcome {
+    let Some(pm) = store.model else { return PhaseOutcome::Refused(GoalRefusal::NoRoute) };
+    let (ax, limits) = axel_model(&pm, &setup.rover);
+    log::info!(
+        "homotopy: Axel holds within {} deg of upslope on the wall ({} stability checks)",
+        limits[0].theta_max_rad.to_degrees(),
+        limits[0].checks
+    );
+    store.model = Some(ax);
+    h.phase = Phase::Route;
+    PhaseOutcome::Continue
+}
+
+#[inline(never)]
+fn route_phase(
+    h: &mut HomotopyGoal,
+    tile: &HeightTile,
+    store: &mut HomotopyStorage,
+    setup: &PlanSetup,
+    start: Option<&Pose>,
+) -> PhaseOutcome {
+    let (Some(descent), Some(model)) = (store.descent.as_ref(), store.model) else {
+        return PhaseOutcome::Refused(GoalRefusal::NoRoute);
+    };
+    let (mut lc, mut report) = (heapless::Vec::new(), PlanReport::default());
+    let plan = preplan(
+        &store.btm,
+        &model,
+        &HomotopyParams::default(),
+        &mut store.ws,
+        descent.a0,
+        descent.g,
+        &mut lc,
+        &mut report,
+    );
+    let classes = u32::try_from(report.examined.len()).unwrap_or(u32::MAX);
+    let plan = match plan {
+        Ok(Some(p)) => p,
+        Ok(None) => {
+            log::warn!("homotopy: no class passes Alg. 2 ({classes} examined)");
+            return PhaseOutcome::Refused(GoalRefusal::NoRoute);
+        }
+        Err(e) => {
+            log::warn!("homotopy: Alg. 1 failed: {e:?}");
+            return PhaseOutcome::Refused(GoalRefusal::NoRoute);
+        }
+    };
+    let route = match descent.route_to_world(tile, &plan, f64::from(setup.max_payout_m)) {
+        Ok(r) => r,
+        Err(RouteError::TetherTooLong { needed_m, max_payout_m }) => {
+            log::warn!("homotopy: the route needs {needed_m} m of tether, the spool has {max_payout_m} m");
+            return PhaseOutcome::Refused(GoalRefusal::PayoutExceeded);
+        }
+        Err(e) => {
+            log::warn!("homotopy: the route cannot be mapped to the world: {e:?}");
+            return PhaseOutcome::Refused(GoalRefusal::RouteRefused);
+        }
+    };
+    let goal = [h.goal.position.x, h.goal.position.y, h.goal.position.z];
+    let from = start.map(|p| [p.position.x, p.position.y, p.position.z]);
+    if !cut_legs(&route, from, goal, &mut store.legs) {
+        log::warn!("homotopy: the route needs more than {HOMOTOPY_MAX_LEGS} legs");
+        return PhaseOutcome::Refused(GoalRefusal::RouteRefused);
+    }
+    let cost = route.tether_length_m as f32;
+    log::info!(
+        "homotopy: route of {} legs, tether {cost} m, {} intermediate anchors",
+        store.legs.len(),
+        route.anchors.len()
+    );
+    store.route = Some(route);
+    h.phase = Phase::Legs;
+    h.leg = 0;
+    h.leg_active = false;
+    PhaseOutcome::Planned { cost, classes }
 }
 
 fn refuse_dem(e: DemError) -> PhaseOutcome {

@@ -53,9 +53,10 @@ static MAP_BLOCKS: Lent<[Block; FLIGHT_BLOCKS]> = Lent::new([Block::ZEROED; FLIG
 #[link_section = ".psram"]
 static MAP_INDEX: Lent<[u32; FLIGHT_INDEX]> = Lent::new([0; FLIGHT_INDEX]);
 
-/// The navigator's planning storage (the ABIT* arena, the suspended search, the best path; `NavPlanStorage::bytes()`,
-/// ~1 MiB) in SRAM `.bss`: the PSRAM is nearly full with the map's pool and the bench's arenas. Its empty state is
-/// all zero bytes (empty `heapless` vectors), which the runtime's `.bss` zeroing provides.
+/// The navigator's planning storage (the ABIT* arena, the suspended search, the best path, the terrain tile and its
+/// staging copy; `NavPlanStorage::bytes()`, ~1.1 MiB) in SRAM: the PSRAM is nearly full with the map's pool and the
+/// bench's arenas. Measured on the panic-never flight build of 2026-12-04 (`llvm-nm -S`): 1 163 336 B, in `.data`
+/// (its empty state has 8 non-zero bytes, two 0xFFFFFFFF words, so it is not a `.bss` value).
 static NAV_PLAN: Lent<NavPlanStorage> = Lent::new(NavPlanStorage::new());
 
 /// The global planner's storage (homotopy goals on an uploaded tile, `HomotopyStorage`, ~0.66 MiB) in SRAM: its
