@@ -83,3 +83,9 @@ pub const HOMOTOPY_LEG_TOLERANCE_M: f32 = 0.5;
 /// A tracked anchor farther than this from every anchor the route expects is logged as a disagreement between the
 /// onboard map and the tile, metres. Default 1.0 m (the footprint inflation of the tile's obstacles is 0.61 m).
 pub const HOMOTOPY_ANCHOR_AGREEMENT_M: f32 = 1.0;
+/// Global replans of one homotopy goal (Tanner et al. Alg. 3 on board: a leg without a path blocks its goal region
+/// in the BTM and the route is planned again). Default 3 (each moves the route off one more blocked region).
+pub const HOMOTOPY_MAX_GLOBAL_REPLANS: u32 = 3;
+/// Radius of the obstacle a failed leg adds round its goal in the unfolded BTM, metres. Default 1.0 m (Axel's
+/// footprint radius 0.61 m, as the tile's obstacles are inflated, plus the leg tolerance's scale).
+pub const HOMOTOPY_BLOCK_RADIUS_M: f64 = 1.0;

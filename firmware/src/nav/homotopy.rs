@@ -129,6 +129,11 @@ pub struct HomotopyStats {
     /// Tracked anchors farther than `HOMOTOPY_ANCHOR_AGREEMENT_M` from every anchor the route expects, counted
     /// at each leg's start.
     pub anchor_disagreements: u32,
+    /// Global replans (Alg. 3): a leg's ABIT* found no path (the onboard map contradicts the tile there), its goal
+    /// region became an obstacle of the BTM and the route was planned again. The only reason counted so far.
+    pub global_replans: u32,
+    /// Global replans that found no route (the mission then stops `NoSolution`).
+    pub global_replan_failures: u32,
 }
 
 /// The outcome of one planning phase.
@@ -273,6 +278,36 @@ fn route_phase(
     h.leg = 0;
     h.leg_active = false;
     PhaseOutcome::Planned { cost, classes }
+}
+
+/// Tanner et al. Alg. 3 on board (reduced): the leg to `blocked` found no path on the onboard map, so the tile was
+/// wrong there. A regular octagon of radius `HOMOTOPY_BLOCK_RADIUS_M` round it (unfolded) is added to the BTM (a
+/// local update, Tanner Lemma 1) and the route planned again from the root anchor with Alg. 1; the legs then start
+/// after the route segment nearest to the rover. The tether the rover already paid out is not a constraint of the
+/// new plan (Alg. 3's plan from the tether's end is not done).
+pub(crate) fn replan_around(
+    h: &mut HomotopyGoal,
+    tile: &HeightTile,
+    store: &mut HomotopyStorage,
+    setup: &PlanSetup,
+    start: Option<&Pose>,
+    blocked: [f32; 2],
+) -> PhaseOutcome {
+    let Some(c) = store.descent.as_ref().and_then(|d| d.unfold_xy([f64::from(blocked[0]), f64::from(blocked[1])])) else {
+        return PhaseOutcome::Refused(GoalRefusal::NoRoute);
+    };
+    let r = crate::config::nav::HOMOTOPY_BLOCK_RADIUS_M;
+    let mut corners: heapless::Vec<crate::plan::homotopy::geo::Pt, 8> = heapless::Vec::new();
+    for k in 0..8 {
+        let a = (2 * k + 1) as f64 * core::f64::consts::FRAC_PI_8;
+        let _ = corners.push(crate::plan::homotopy::geo::pt(c.x + r * libm::cos(a), c.y + r * libm::sin(a)));
+    }
+    if let Err(e) = store.btm.add_obstacle(&corners) {
+        log::warn!("homotopy: the blocked region at ({}, {}) cannot join the BTM: {e:?}", blocked[0], blocked[1]);
+        return PhaseOutcome::Refused(GoalRefusal::NoRoute);
+    }
+    h.phase = Phase::Route;
+    route_phase(h, tile, store, setup, start)
 }
 
 fn refuse_dem(e: DemError) -> PhaseOutcome {

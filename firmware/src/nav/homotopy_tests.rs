@@ -222,3 +222,34 @@ fn a_bad_upload_keeps_the_tile_and_the_route() {
     assert_eq!(nav.homotopy_legs(), &legs[..]);
     assert_eq!(nav.homotopy_route().unwrap().tether_length_m, route_len);
 }
+
+/// Tanner et al. Alg. 3 on board (reduced): a leg whose ABIT* finds no path blocks its goal region in the BTM and
+/// the route is planned again, reported like the first (a new `Plan` of leg goals, none inside the blocked region),
+/// counted; the next drive step sets up the new route's first leg. The last leg is never blocked (it is the goal).
+#[test]
+fn a_leg_without_a_path_blocks_its_region_and_the_route_is_planned_again() {
+    let mut nav = nav();
+    nav.configure(&configure(50.0)).unwrap();
+    upload(&mut nav, 1, &crater_z).unwrap();
+    scan_rim(&mut nav);
+    nav.goal(&goal(8.0, 3.0), Instant::from_micros(0));
+    run(&mut nav, 10);
+    assert_eq!(nav.drive_step(Instant::from_micros(10)), DriveStep::Replan);
+    let blocked = nav.homotopy_legs()[0];
+    let before = nav.homotopy_route().unwrap().tether_length_m;
+    let mut plan = PlanBuffer::new();
+    let p = nav.homotopy_leg_failed(PlanState::NoSolutionWithinBudget, &mut plan).expect("a global replan");
+    let PlanProgress::Finished { state: PlanState::ExactSolution, best_cost: Some(cost), .. } = p else { panic!("{p:?}") };
+    assert_eq!(nav.homotopy_stats().global_replans, 1);
+    assert!(f64::from(cost) >= before - 1e-3, "a detour is not shorter: {cost} vs {before}");
+    assert_eq!(plan.len(), nav.homotopy_legs().len());
+    for l in nav.homotopy_legs() {
+        let d = libm::hypotf(l[0] - blocked[0], l[1] - blocked[1]);
+        assert!(d >= 0.9, "leg goal {l:?} inside the blocked region round {blocked:?} ({d} m)");
+    }
+    assert_eq!(nav.homotopy_leg(), Some(0));
+    assert_eq!(nav.drive_step(Instant::from_micros(20)), DriveStep::Replan, "the new route's first leg is set up");
+    // a solved leg, or any failure of the last leg, is no global replan
+    assert!(nav.homotopy_leg_failed(PlanState::ExactSolution, &mut plan).is_none());
+    assert_eq!(nav.homotopy_stats().global_replans, 1);
+}

@@ -452,6 +452,12 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
                 self.mission.recheck_left = 0;
                 return;
             }
+            if h.phase == super::homotopy::Phase::Legs && !h.leg_active && h.leg < legs {
+                // a leg is due (a new route): the mission's goal is still the old leg's, so this is no arrival
+                self.mission.state = MissionState::Driving;
+                self.mission.recheck_left = 0;
+                return;
+            }
         }
         self.mission.state = MissionState::Arrived;
     }
@@ -500,7 +506,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
 
     /// How much nearer the goal the last state of the stored plan is than its start (axle to goal position),
     /// metres; negative infinity without a plan.
-    fn approximate_progress_m(&mut self) -> Real {
+    pub(super) fn approximate_progress_m(&mut self) -> Real {
         let Some(goal) = self.mission.goal else { return Real::NEG_INFINITY };
         let g = Vec3::new(goal.position.x, goal.position.y, goal.position.z);
         let path = planning::path(&mut self.storage);

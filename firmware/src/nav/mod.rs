@@ -69,8 +69,15 @@
 //!   work per leg (a leg is not counted as a replan). At each leg's start the tracked anchors (after the root) are
 //!   compared with the route's expected anchors: one farther than `HOMOTOPY_ANCHOR_AGREEMENT_M` (1 m) from every
 //!   expected anchor is logged and counted ([`HomotopyStats::anchor_disagreements`]).
-//! - **Not done**: global replanning (Tanner et al. Alg. 3, `plan::homotopy::online`) when a leg finds no path: a
-//!   leg that ends without a solution ends the mission as any goal does (`NoSolution` / `ReplanLimit`).
+//! - **Global replanning** (Tanner et al. Alg. 3, reduced): a leg other than the last whose ABIT* ends without a plan
+//!   the mission would drive (`NoSolutionWithinBudget`, or an approximate plan not allowed or short of
+//!   `MIN_APPROXIMATE_PROGRESS_M`) means the onboard map contradicts the tile there: a regular octagon of radius
+//!   `HOMOTOPY_BLOCK_RADIUS_M` (1 m) round the leg's goal joins the BTM (a local update) and the route is planned
+//!   again from the root anchor (Alg. 1), reported as a new route (`ExactSolution` and its `Plan`), its legs from
+//!   the rover on; at most `HOMOTOPY_MAX_GLOBAL_REPLANS` (3) per goal, counted with their one reason
+//!   ([`HomotopyStats::global_replans`], `global_replan_failures`) and logged. Not done: Alg. 3's plan from the
+//!   tether already paid out (the new route starts at the root, the legs at the rover; the tracked anchors are only
+//!   compared), and the last leg's failure (its goal is the request's) ends the mission like any goal's.
 //! - Storage: [`HomotopyStorage`] (~0.66 MiB: BTM 240 KiB, A* workspace 292 KiB, segmentation scratch 112 KiB, the
 //!   descent, the route and the legs), lent once like the rest (host: a `Box`; board: a static in SRAM `.data`).
 //!
@@ -447,6 +454,59 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
         PlanState::Accepted
     }
 
+    /// A homotopy leg's ABIT* ended without a path the mission would drive (none, or an approximate one it may not
+    /// drive): the global replan (`homotopy::replan_around`), reported like the first route. `None`: not a homotopy
+    /// leg, the last leg, the replan budget spent, or no new route (the mission stops as for any goal).
+    fn homotopy_leg_failed(&mut self, state: PlanState, plan: &mut PlanBuffer) -> Option<PlanProgress> {
+        let mut h = self.homotopy.filter(|h| h.phase == homotopy::Phase::Legs && h.leg_active)?;
+        let failed = match state {
+            PlanState::NoSolutionWithinBudget => true,
+            // the mission drives an approximate plan only when allowed and it makes progress (`mission_planned`)
+            PlanState::ApproximateSolution => {
+                !(h.goal.allow_approximate
+                    && self.approximate_progress_m() >= crate::config::mission::MIN_APPROXIMATE_PROGRESS_M)
+            }
+            _ => false,
+        };
+        let legs = self.global.global_ref().map_or(0, |g| g.legs.len());
+        if !failed || h.leg + 1 >= legs || self.hstats.global_replans >= crate::config::nav::HOMOTOPY_MAX_GLOBAL_REPLANS {
+            return None;
+        }
+        let setup = self.setup?;
+        let start = self.start_pose();
+        let blocked = self.global.global_ref().and_then(|g| g.legs.get(h.leg)).map(|p| [p[0], p[1]])?;
+        self.hstats.global_replans = self.hstats.global_replans.saturating_add(1);
+        log::warn!(
+            "homotopy: leg {} to ({}, {}) found no path ({state:?}): the onboard map contradicts the tile; global replan {}",
+            h.leg + 1,
+            blocked[0],
+            blocked[1],
+            self.hstats.global_replans
+        );
+        let outcome = {
+            let global = self.global.global()?;
+            let tile = self.storage.borrow().tile.current()?;
+            homotopy::replan_around(&mut h, tile, global, &setup, start.as_ref(), blocked)
+        };
+        match outcome {
+            homotopy::PhaseOutcome::Planned { cost, classes } => {
+                self.homotopy = Some(h);
+                let root = Point3::new(setup.root.x, setup.root.y, setup.root.z);
+                if let Some(g) = self.global.global_ref() {
+                    homotopy::route_waypoints(g, root, plan);
+                }
+                self.hstats.routes = self.hstats.routes.saturating_add(1);
+                self.mission_planned(PlanState::ExactSolution);
+                Some(PlanProgress::Finished { state: PlanState::ExactSolution, iterations: classes, best_cost: Some(cost) })
+            }
+            _ => {
+                self.hstats.global_replan_failures = self.hstats.global_replan_failures.saturating_add(1);
+                log::warn!("homotopy: the global replan found no route");
+                None
+            }
+        }
+    }
+
     /// One phase of a homotopy goal's global plan (`nav::homotopy`).
     fn homotopy_plan_step(&mut self, mut h: homotopy::HomotopyGoal, plan: &mut PlanBuffer) -> PlanProgress {
         let refused = |nav: &mut Self, why| {
@@ -673,6 +733,9 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
         };
         self.problem = Some(problem);
         if let PlanProgress::Finished { state, .. } = progress {
+            if let Some(p) = self.homotopy_leg_failed(state, plan) {
+                return p;
+            }
             self.mission_planned(state);
         }
         progress

@@ -34,7 +34,7 @@ pub fn tile_heights(world: &dyn World, spec: &TileSpec) -> Vec<f32> {
         for c in 0..cols {
             let x = spec.origin[0] + f64::from(c) * spec.resolution_m;
             let y = spec.origin[1] + f64::from(r) * spec.resolution_m;
-            h.push(world.height_at(x as Real, y as Real).map_or(f32::NAN, |z| z as f32));
+            h.push(world.height_at(x as Real, y as Real).unwrap_or(f32::NAN));
         }
     }
     h
