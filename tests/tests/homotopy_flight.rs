@@ -65,7 +65,7 @@ fn a_homotopy_goal_on_the_hirise_scarp_is_planned_on_the_tile_and_driven_leg_by_
 }
 
 fn chunks(tile_id: u32, rows: u16, cols: u16, resolution_m: f64, h: impl Fn(usize) -> f32) -> Vec<TileChunk> {
-    let spec = TileSpec { origin: [-5.0, -5.0], resolution_m, posts: [cols, rows], friction: None };
+    let spec = TileSpec { origin: [-5.0, -5.0], resolution_m, posts: [cols, rows] };
     let heights: Vec<f32> = (0..usize::from(rows) * usize::from(cols)).map(h).collect();
     tile_chunks(tile_id, &spec, &heights)
 }

@@ -19,10 +19,6 @@ pub struct TileSpec {
     pub resolution_m: f64,
     /// Posts along x and along y (each 1 ..= 128).
     pub posts: [u16; 2],
-    /// The rover's friction coefficient sent in `Configure` (the flight software classifies the tile's slopes with
-    /// it: tether-demand above `atan(mu)`), when not the scripted default 0.7.
-    #[serde(default)]
-    pub friction: Option<f64>,
 }
 
 /// The tile's heights, row-major from the smallest y; a post the world has no height for is NaN (the flight software

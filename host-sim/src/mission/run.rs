@@ -319,7 +319,7 @@ pub fn mission_configure(sc: &Scenario, opts: &MissionOptions) -> Configure {
         payout_tolerance_m: m.payout_tolerance_m.map_or(d.payout_tolerance_m, |v| v as f32),
         min_margin_n: m.min_margin_n.map_or(d.min_margin_n, |v| v as f32),
     };
-    if let Some(mu) = m.homotopy.and_then(|h| h.friction) {
+    if let Some(mu) = m.friction {
         c.rover.friction_coefficient = mu as f32;
     }
     // The scenario's map configuration (checked when the mission's link was made; `mission_link`).
