@@ -131,6 +131,7 @@ pub fn message_json(m: &Message) -> serde_json::Value {
         Message::Log(b) => serde_json::to_value(b),
         Message::MotionReport(b) => serde_json::to_value(b),
         Message::GoalCancel(b) => serde_json::to_value(b),
+        Message::TileChunk(b) => serde_json::to_value(b),
         Message::MissionStatus(b) => serde_json::to_value(b),
     };
     body.unwrap_or(serde_json::Value::Null)

@@ -165,6 +165,9 @@ fn one_of_every_kind() -> Vec<Message> {
                 voxels_dropped: 30,
                 pool_errors: 31,
                 esdf_budget_exhausted: 32,
+                tiles_loaded: 45,
+                tile_id: 46,
+                tiles_abandoned: 47,
             },
             seq_gaps: 36,
             seq_late: 37,
@@ -185,6 +188,18 @@ fn one_of_every_kind() -> Vec<Message> {
             pose: Pose::IDENTITY,
         }),
         Message::GoalCancel(GoalCancel { goal_id: 4 }),
+        Message::TileChunk(TileChunk {
+            tile_id: 3,
+            chunk_index: 63,
+            chunk_count: 64,
+            origin_x_m: -12.5,
+            origin_y_m: 40.0,
+            resolution_m: 0.36,
+            rows: 128,
+            cols: 128,
+            // a full chunk: the largest frame of the kind
+            heights: (0..256).map(|i| i as f32 * 0.25 - 7.0).collect(),
+        }),
         Message::MissionStatus(MissionStatus {
             goal_id: 4,
             state: MissionState::Driving,
@@ -258,8 +273,8 @@ fn every_kind_round_trips_through_frame_and_deframe() {
 #[test]
 fn kind_codes_are_exactly_the_documented_ones() {
     let documented = [
-        0x01u8, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08, 0x09, 0x81, 0x82, 0x83, 0x84, 0x85, 0x86,
-        0x87, 0x88,
+        0x01u8, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08, 0x09, 0x0A, 0x81, 0x82, 0x83, 0x84, 0x85,
+        0x86, 0x87, 0x88,
     ];
     for b in 0..=255u8 {
         assert_eq!(

@@ -63,3 +63,29 @@ pub const BOOM_MASS_FRACTION: f32 = 0.2;
 /// clearance and, if the start needed it, a steep wheel contact (`plan::tethered::StartEscape`, `nav::planning`). Default 2: the start is less than one voxel into the extra clearance, so a motion leaves it
 /// within the zone when it heads up to 60 degrees off the direction straight away from the obstacle.
 pub const START_ESCAPE_VOXELS: Real = 2.0;
+
+/// Half width of the descent corridor the navigator segments from an uploaded tile for a `PlannerChoice::Homotopy`
+/// goal (`DemParams::corridor_half_width_m`), metres. Default 6.0 m (the host presets' default: ten Axel tracks
+/// either side of the root-anchor-to-goal line).
+pub const HOMOTOPY_CORRIDOR_HALF_WIDTH_M: f64 = 6.0;
+/// Longest leg of a homotopy route driven by one tethered ABIT* plan, metres: a longer stretch of the route is cut
+/// into legs of at most this length. Default 5.0 m (ABIT*'s planning window is the start-goal box grown by
+/// `PLAN_WINDOW_MARGIN_M`; beyond a few metres the onboard map ahead is mostly unobserved).
+pub const HOMOTOPY_LEG_MAX_M: f32 = 5.0;
+/// Route waypoints nearer than this to the previous leg goal are skipped, metres. Default 1.0 m (two wheel
+/// diameters: the route's fold-line breaks are metres apart, the descent's bends closer).
+pub const HOMOTOPY_LEG_MIN_M: f32 = 1.0;
+/// Legs of one homotopy route. Default 32 (160 m of route at `HOMOTOPY_LEG_MAX_M`).
+pub const HOMOTOPY_MAX_LEGS: usize = 32;
+/// Goal tolerance of an intermediate leg, metres (the final leg uses the goal request's). Default 0.5 m (the
+/// mission's default goal tolerance scale: the next leg starts from wherever the rover settled).
+pub const HOMOTOPY_LEG_TOLERANCE_M: f32 = 0.5;
+/// A tracked anchor farther than this from every anchor the route expects is logged as a disagreement between the
+/// onboard map and the tile, metres. Default 1.0 m (the footprint inflation of the tile's obstacles is 0.61 m).
+pub const HOMOTOPY_ANCHOR_AGREEMENT_M: f32 = 1.0;
+/// Global replans of one homotopy goal (Tanner et al. Alg. 3 on board: a leg without a path blocks its goal region
+/// in the BTM and the route is planned again). Default 3 (each moves the route off one more blocked region).
+pub const HOMOTOPY_MAX_GLOBAL_REPLANS: u32 = 3;
+/// Radius of the obstacle a failed leg adds round its goal in the unfolded BTM, metres. Default 1.0 m (Axel's
+/// footprint radius 0.61 m, as the tile's obstacles are inflated, plus the leg tolerance's scale).
+pub const HOMOTOPY_BLOCK_RADIUS_M: f64 = 1.0;

@@ -2,7 +2,7 @@
 //!
 //! | const | default | reason |
 //! |---|---|---|
-//! | [`PROTOCOL_VERSION`] | 6 | first byte of every frame; a receiver rejects any other value (v2: the closed-loop mission messages; v3: `Configure.map`; v4: sequence and cycle accounting in `Telemetry`, `Nack(DuplicateFrame)`; v5: resent requests answered without acting again, drive commands resent; v6: a `Stop` names the motion it stops and is resent) |
+//! | [`PROTOCOL_VERSION`] | 7 | first byte of every frame; a receiver rejects any other value (v2: the closed-loop mission messages; v3: `Configure.map`; v4: sequence and cycle accounting in `Telemetry`, `Nack(DuplicateFrame)`; v5: resent requests answered without acting again, drive commands resent; v6: a `Stop` names the motion it stops and is resent; v7: `TileChunk`, the terrain-tile upload, its `Nack` reasons and `MapStatus` tile counters) |
 //! | [`HEADER_LEN`] | 6 | version u8, kind u8, sequence u32 little-endian |
 //! | [`CRC_LEN`] | 4 | CRC-32 (ISO-HDLC, the Ethernet/zlib CRC) over header and body, little-endian |
 //! | [`MAX_FRAME_LEN`] | 2048 | largest decoded frame (header + body + CRC): a full sensor chunk plus margin; small enough for a UART DMA buffer |
@@ -11,6 +11,8 @@
 //! | [`MAX_POINTS_PER_CHUNK`] | 128 | 128 x 12 bytes = 1536 bytes of points per frame, with room for the pose and header |
 //! | [`MAX_CHUNKS_PER_SCAN`] | 64 | a scan of up to 8192 points; bounds the reassembly bookkeeping |
 //! | [`SCAN_POINTS_CAPACITY`] | 8192 | reassembly buffer (points), lent by the caller: 96 KiB |
+//! | [`MAX_HEIGHTS_PER_TILE_CHUNK`] | 256 | 256 x 4 bytes = 1024 bytes of heights per `TileChunk` frame, with room for the header fields |
+//! | [`MAX_CHUNKS_PER_TILE`] | 64 | `MAX_TILE_CELLS` (128 x 128 posts, `config::homotopy`) / 256: a full tile; bounds the tile bookkeeping |
 //! | [`MAX_ANCHORS_PER_WAYPOINT`] | 8 | anchor history carried with each plan waypoint (Paton et al. IV-B: a bounded stack) |
 //! | [`MAX_WAYPOINTS_PER_PLAN_FRAME`] | 12 | waypoints per `Plan` frame (12 x 129 bytes at most fits a frame); longer plans go in parts |
 //! | [`MAX_LOG_TEXT`] | 120 | bytes of text in one forwarded `Log` record; longer text is cut |
@@ -18,7 +20,7 @@
 //! | [`MIN_TELEMETRY_PERIOD_MS`] | 100 | telemetry rate limit: a `Configure` asking for periodic telemetry faster than 10 Hz is rejected |
 
 /// The protocol version this build speaks (first byte of every frame).
-pub const PROTOCOL_VERSION: u8 = 6;
+pub const PROTOCOL_VERSION: u8 = 7;
 /// Header length in bytes: version (u8), kind (u8), sequence number (u32 LE).
 pub const HEADER_LEN: usize = 6;
 /// Trailer length in bytes: CRC-32 (ISO-HDLC) little-endian.
@@ -37,6 +39,10 @@ pub const MAX_POINTS_PER_CHUNK: usize = 128;
 pub const MAX_CHUNKS_PER_SCAN: u16 = 64;
 /// Points the scan reassembly buffer holds (lent by the caller).
 pub const SCAN_POINTS_CAPACITY: usize = MAX_POINTS_PER_CHUNK * MAX_CHUNKS_PER_SCAN as usize;
+/// Most heights in one `TileChunk` (v7).
+pub const MAX_HEIGHTS_PER_TILE_CHUNK: usize = 256;
+/// Most chunks in one terrain tile (v7): a full tile of `MAX_TILE_CELLS` posts.
+pub const MAX_CHUNKS_PER_TILE: u16 = (crate::config::homotopy::MAX_TILE_CELLS / MAX_HEIGHTS_PER_TILE_CHUNK) as u16;
 /// Anchor points carried with each plan waypoint.
 pub const MAX_ANCHORS_PER_WAYPOINT: usize = 8;
 /// Waypoints in one `Plan` frame.
@@ -57,3 +63,8 @@ const _: () = assert!(
     MAX_WAYPOINTS_PER_PLAN_FRAME * (28 + 1 + 12 * MAX_ANCHORS_PER_WAYPOINT + 4) + 16
         <= MAX_BODY_LEN
 );
+// A full tile chunk (ids and counts <= 17 bytes, origin and spacing 12, rows and cols <= 6, heights 4 each, length
+// prefix <= 3) must fit one body; a full tile needs exactly `MAX_CHUNKS_PER_TILE` chunks.
+const _: () = assert!(MAX_HEIGHTS_PER_TILE_CHUNK * 4 + 17 + 12 + 6 + 3 <= MAX_BODY_LEN);
+const _: () = assert!(MAX_CHUNKS_PER_TILE as usize * MAX_HEIGHTS_PER_TILE_CHUNK == crate::config::homotopy::MAX_TILE_CELLS);
+const _: () = assert!(MAX_CHUNKS_PER_TILE as u32 <= u64::BITS);

@@ -8,7 +8,8 @@
 //!
 //! The calls, all with the time passed in and each bounded by its caller's budget: [`Autonomy::configure`] on
 //! `Configure`; [`Autonomy::tether_reading`] and [`Autonomy::scan`] for each reading and each reassembled scan
-//! (Paton et al. IV, TSDF -> ESDF); [`Autonomy::goal`] validates and sets up a goal request;
+//! (Paton et al. IV, TSDF -> ESDF); [`Autonomy::tile_part`] and [`Autonomy::tile_complete`] for each accepted chunk
+//! of a terrain tile and its completion (v7, the homotopy planner's orbital DEM patch); [`Autonomy::goal`] validates and sets up a goal request;
 //! [`Autonomy::plan_step`] runs at most `PLANNER_ITERATIONS_PER_STEP` iterations per step (OMPL's
 //! `solve(termination)` split into steps) and fills the [`PlanBuffer`] when it finishes;
 //! [`Autonomy::next_motion`] hands out the motion primitives to drive; [`Autonomy::abort`] on `Shutdown`;
@@ -28,7 +29,7 @@ use crate::config::exec::PLAN_WAYPOINTS_CAPACITY;
 use crate::config::tether::RETAINED_BYTES;
 use crate::protocol::{
     Configure, GoalRequest, MapStatus, MissionStatus, Motion, MotionReport, PlanState, Point3, Pose,
-    TetherReading, Waypoint,
+    TetherReading, TileHeader, Waypoint,
 };
 
 /// A complete, reassembled range scan, lent to [`Autonomy::scan`] for the duration of the call.
@@ -99,6 +100,15 @@ pub trait Autonomy {
     /// A complete scan: every chunk of it has been passed to [`Self::scan_part`]; `scan.points` holds them all.
     /// A scan abandoned incomplete (a new scan started first) gets no call: its parts stay delivered.
     fn scan_complete(&mut self, _scan: &Scan<'_>, _now: Instant) {}
+    /// One accepted chunk of a terrain tile (v7): `heights` are the tile's posts `offset..` (row-major); chunks come
+    /// in order and chunk 0 starts a tile (abandoning one in progress). The tile must be staged, not used, until
+    /// [`Self::tile_complete`]: an upload that never completes leaves the tile in use as it was.
+    fn tile_part(&mut self, _header: &TileHeader, _offset: usize, _heights: &[f32], _now: Instant) {}
+    /// The tile's last chunk arrived: swap the staged tile in if it is valid. `Err` -> `Nack(Refused)`, the tile in
+    /// use and its plan unchanged. Default: the tile is dropped (no planner uses it).
+    fn tile_complete(&mut self, _header: &TileHeader, _now: Instant) -> Result<(), Refused> {
+        Ok(())
+    }
     /// A goal request (Idle / Mapping, configured). Return `Accepted` to start planning (the executive then calls
     /// [`Self::plan_step`] every step), or a final state (`InvalidInput`, `PlannerUnavailable`) to refuse it.
     fn goal(&mut self, _goal: &GoalRequest, _now: Instant) -> PlanState {

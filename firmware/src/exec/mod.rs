@@ -88,7 +88,7 @@ use crate::config::protocol::{HEADER_LEN, MAX_WAYPOINTS_PER_PLAN_FRAME};
 use crate::protocol::{
     self, Ack, Configure, Deframer, Direction, DriveCommand, Frame, GoalCancel, GoalRequest, Log,
     LogLevel, Message, MissionState, Mode, Motion, MotionReport, Nack, NackReason, Plan, PlanState,
-    PlanStatus, Point3, ScanAssembler, SensorChunk, StopReason,
+    PlanStatus, Point3, ScanAssembler, SensorChunk, StopReason, TileAssembler, TileChunk,
 };
 
 impl Mode {
@@ -182,6 +182,7 @@ pub struct Executive<L, C, W, A, S> {
     config: Option<Configure>,
     deframer: Deframer,
     assembler: ScanAssembler,
+    tiles: TileAssembler,
     rx: [u8; RX_STAGING_LEN],
     rx_start: usize,
     rx_end: usize,
@@ -231,6 +232,7 @@ where
             config: None,
             deframer: Deframer::new(),
             assembler: ScanAssembler::new(),
+            tiles: TileAssembler::new(),
             rx: [0; RX_STAGING_LEN],
             rx_start: 0,
             rx_end: 0,
@@ -411,6 +413,7 @@ where
                 Ok(Reply::None)
             }
             Message::SensorChunk(chunk) => self.on_chunk(chunk),
+            Message::TileChunk(chunk) => self.on_tile_chunk(chunk),
             Message::TetherReading(r) => {
                 if self.mode == Mode::Safe {
                     return Err(NackReason::NotAllowedInMode);
@@ -484,6 +487,29 @@ where
         }
         if self.mode == Mode::Idle {
             self.set_mode(Mode::Mapping);
+        }
+        Ok(Reply::None)
+    }
+
+    /// A terrain-tile chunk (v7): order and shape checked by the [`TileAssembler`] (a rejection changes nothing),
+    /// then staged by the autonomy; the last chunk swaps the tile in. Any mode but `Safe`, configured or not (the
+    /// tile is the ground's, not the rover's).
+    fn on_tile_chunk(&mut self, chunk: &TileChunk) -> Result<Reply, NackReason> {
+        if self.mode == Mode::Safe {
+            return Err(NackReason::NotAllowedInMode);
+        }
+        let accepted = self.tiles.accept(chunk)?;
+        if let Some(old) = accepted.abandoned {
+            self.note(LogLevel::Warn, format_args!("tile {old} abandoned incomplete"));
+        }
+        self.autonomy.tile_part(&accepted.header, accepted.offset, &chunk.heights, self.now);
+        if accepted.complete {
+            let id = accepted.header.tile_id;
+            if self.autonomy.tile_complete(&accepted.header, self.now).is_err() {
+                self.note(LogLevel::Warn, format_args!("tile {id} refused; the tile in use is kept"));
+                return Err(NackReason::Refused);
+            }
+            self.note(LogLevel::Info, format_args!("tile {id} complete"));
         }
         Ok(Reply::None)
     }

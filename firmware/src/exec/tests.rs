@@ -859,3 +859,144 @@ fn a_drive_command_without_its_report_is_sent_again_unchanged() {
     assert_eq!(e.telemetry().drive_resends, 2);
     assert_eq!(e.telemetry().motion_report_timeouts, 0);
 }
+
+/// The chunks of a `rows x cols` tile whose post `i` (row-major) has height `h(i)`.
+fn tile_chunks(tile_id: u32, rows: u16, cols: u16, resolution_m: f32, h: impl Fn(usize) -> f32) -> StdVec<TileChunk> {
+    use crate::config::protocol::MAX_HEIGHTS_PER_TILE_CHUNK;
+    let cells = usize::from(rows) * usize::from(cols);
+    let count = cells.div_ceil(MAX_HEIGHTS_PER_TILE_CHUNK) as u16;
+    (0..count)
+        .map(|idx| {
+            let start = usize::from(idx) * MAX_HEIGHTS_PER_TILE_CHUNK;
+            let mut heights = heapless::Vec::new();
+            for i in start..cells.min(start + MAX_HEIGHTS_PER_TILE_CHUNK) {
+                heights.push(h(i)).unwrap();
+            }
+            TileChunk {
+                tile_id,
+                chunk_index: idx,
+                chunk_count: count,
+                origin_x_m: -1.0,
+                origin_y_m: -2.0,
+                resolution_m,
+                rows,
+                cols,
+                heights,
+            }
+        })
+        .collect()
+}
+
+type TestNav = crate::nav::Navigator<StdVec<crate::map::Block>, StdVec<u32>, Box<crate::nav::NavPlanStorage>>;
+
+fn nav_exec() -> Exec<TestNav> {
+    let nav = crate::nav::Navigator::new(
+        crate::config::map::MapConfig::with_voxel_size(0.1),
+        std::vec![crate::map::Block::EMPTY; 64],
+        std::vec![0u32; 128],
+        Box::<crate::nav::NavPlanStorage>::default(),
+    )
+    .unwrap();
+    exec(nav)
+}
+
+fn nacks(r: &[Message]) -> StdVec<NackReason> {
+    r.iter().filter_map(|m| if let Message::Nack(n) = m { Some(n.reason) } else { None }).collect()
+}
+
+fn telemetry_of(r: &[Message]) -> Telemetry {
+    r.iter().rev().find_map(|m| if let Message::Telemetry(t) = m { Some(*t) } else { None }).unwrap()
+}
+
+/// Protocol v7: a tile in chunks is swapped in whole once its last chunk arrived; every bad upload (NaN heights, a
+/// spacing out of range, chunks out of order, duplicated or of another tile, a tile larger than the limit) is refused
+/// with its own reason, counted in `Telemetry.frames_rejected`, and leaves the tile in use as it was.
+#[test]
+fn a_tile_is_swapped_in_only_whole_and_valid_and_every_bad_upload_keeps_the_previous_one() {
+    let mut e = nav_exec();
+    let good = |i: usize| 0.01 * i as f32;
+    // 20 x 30 posts: 3 chunks; before the last one the navigator has no tile
+    let chunks = tile_chunks(1, 20, 30, 0.5, good);
+    let first: StdVec<Message> = chunks[..2].iter().cloned().map(Message::TileChunk).collect();
+    let r = exchange_from(&mut e, 0, &first);
+    assert!(nacks(&r).is_empty(), "{r:?}");
+    assert!(e.autonomy().terrain_tile().is_none());
+    let r = exchange_from(&mut e, 2, &[Message::TileChunk(chunks[2].clone()), Message::TelemetryRequest(TelemetryRequest)]);
+    assert!(nacks(&r).is_empty(), "{r:?}");
+    let t = telemetry_of(&r);
+    assert_eq!((t.map.tiles_loaded, t.map.tile_id), (1, 1));
+    let check_tile = |e: &Exec<TestNav>| {
+        let tile = e.autonomy().terrain_tile().unwrap();
+        assert_eq!(tile.shape(), (20, 30));
+        assert_eq!(tile.resolution_m(), 0.5);
+        assert_eq!(tile.post_xy(0, 0), [-1.0, -2.0]);
+        assert_eq!(tile.height(19, 29), Some(f64::from(good(19 * 30 + 29))));
+        assert_eq!(tile.height(3, 4), Some(f64::from(good(3 * 30 + 4))));
+    };
+    check_tile(&e);
+
+    let mut seq = 10;
+    let mut send = |e: &mut Exec<TestNav>, msgs: StdVec<TileChunk>| {
+        let mut msgs: StdVec<Message> = msgs.into_iter().map(Message::TileChunk).collect();
+        msgs.push(Message::TelemetryRequest(TelemetryRequest));
+        let r = exchange_from(e, seq, &msgs);
+        seq += msgs.len() as u32;
+        (nacks(&r), telemetry_of(&r))
+    };
+    // NaN heights in the second chunk of tile 2: refused there; the rest cannot complete it
+    let mut nan = tile_chunks(2, 20, 30, 0.5, |i| 1.0 + i as f32);
+    nan[1].heights[7] = f32::NAN;
+    let (n, t) = send(&mut e, nan.clone());
+    assert_eq!(n, [NackReason::NonFinite, NackReason::OutOfOrderChunk]);
+    assert_eq!(t.frames_rejected[NackReason::NonFinite.index()], 1);
+    let mut inf = tile_chunks(3, 20, 30, 0.5, |i| 1.0 + i as f32);
+    inf[0].heights[0] = f32::INFINITY;
+    let (n, _) = send(&mut e, inf);
+    assert_eq!(n, [NackReason::NonFinite, NackReason::TileMismatch, NackReason::TileMismatch]);
+    // a spacing out of range, either way
+    for res in [10.0, 0.001] {
+        let (n, _) = send(&mut e, tile_chunks(4, 20, 30, res, good));
+        assert_eq!(n, [NackReason::TileResolution; 3]);
+    }
+    // out of order: chunk 2 before chunk 1
+    let ooo = tile_chunks(5, 20, 30, 0.5, good);
+    let (n, t) = send(&mut e, std::vec![ooo[0].clone(), ooo[2].clone()]);
+    assert_eq!(n, [NackReason::OutOfOrderChunk]);
+    assert_eq!(t.frames_rejected[NackReason::OutOfOrderChunk.index()], 2);
+    // duplicated: chunk 1 twice (tile 5 still in progress)
+    let (n, _) = send(&mut e, std::vec![ooo[1].clone(), ooo[1].clone()]);
+    assert_eq!(n, [NackReason::DuplicateChunk]);
+    // another tile's chunk in the middle of tile 5
+    let other = tile_chunks(6, 20, 30, 0.5, good);
+    let (n, t) = send(&mut e, std::vec![other[2].clone()]);
+    assert_eq!(n, [NackReason::TileMismatch]);
+    assert_eq!(t.map.tiles_loaded, 1);
+    // larger than the limit
+    let (n, t) = send(&mut e, tile_chunks(7, 129, 10, 0.5, good));
+    assert!(n.iter().all(|r| *r == NackReason::TileTooLarge) && n.len() == 6, "{n:?}");
+    assert_eq!(t.frames_rejected[NackReason::TileTooLarge.index()], 6);
+    // the tile in use is tile 1, unchanged; tile 5 (3 chunks: two arrived) was never completed
+    assert_eq!((t.map.tiles_loaded, t.map.tile_id), (1, 1));
+    check_tile(&e);
+    // a chunk 0 of another tile abandons tile 5 (counted: the second, after tile 2 that tile 5 abandoned), and the
+    // new tile completes
+    let (n, t) = send(&mut e, tile_chunks(8, 10, 10, 2.0, |_| 3.0));
+    assert!(n.is_empty(), "{n:?}");
+    assert_eq!((t.map.tiles_loaded, t.map.tile_id, t.map.tiles_abandoned), (2, 8, 2));
+    assert_eq!(e.autonomy().terrain_tile().unwrap().shape(), (10, 10));
+}
+
+/// Without a map and planner (`NoAutonomy`) tiles are reassembled and dropped, with the same checks; in `Safe` mode
+/// tiles are refused.
+#[test]
+fn tiles_are_checked_without_a_navigator_and_refused_in_safe_mode() {
+    let mut e = exec(NoAutonomy);
+    let chunks: StdVec<Message> = tile_chunks(1, 4, 4, 1.0, |_| 0.0).into_iter().map(Message::TileChunk).collect();
+    let r = exchange_from(&mut e, 0, &chunks);
+    assert!(nacks(&r).is_empty());
+    let r = exchange_from(&mut e, 1, &[Message::Shutdown(Shutdown)]);
+    assert!(nacks(&r).is_empty());
+    let chunks: StdVec<Message> = tile_chunks(2, 4, 4, 1.0, |_| 0.0).into_iter().map(Message::TileChunk).collect();
+    let r = exchange_from(&mut e, 2, &chunks);
+    assert_eq!(nacks(&r), [NackReason::NotAllowedInMode]);
+}

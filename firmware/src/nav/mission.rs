@@ -372,7 +372,9 @@ fn segment_offset(a: &Vec3, b: &Vec3, p: &Vec3) -> (Real, Real, Real, Real) {
     (libm::sqrtf(cx * cx + cy * cy), lat, along, len)
 }
 
-impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> Navigator<B, I, P> {
+impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H: super::GlobalPlanStorage>
+    Navigator<B, I, P, H>
+{
     /// The mission (state, counters, tracked tether), for tests and pictures.
     pub fn mission(&self) -> &Mission {
         &self.mission
@@ -433,13 +435,78 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
             _ => m.stop(StopReason::NoSolution),
         }
         if self.mission.state == MissionState::Driving && self.arrived() {
-            self.mission.state = MissionState::Arrived;
+            self.mission_arrived();
         }
+    }
+
+    /// The tracked pose is within the mission goal's tolerance: `Arrived`, or, at the goal of a homotopy route's
+    /// intermediate leg, on to the next leg (the mission keeps driving; the next drive step sets the leg up).
+    fn mission_arrived(&mut self) {
+        let legs = self.global.global_ref().map_or(0, |g| g.legs.len());
+        if let Some(h) = self.homotopy.as_mut() {
+            if h.phase == super::homotopy::Phase::Legs && h.leg_active && h.leg + 1 < legs {
+                log::info!("homotopy: leg {} of {legs} reached", h.leg + 1);
+                h.leg += 1;
+                h.leg_active = false;
+                self.mission.state = MissionState::Driving;
+                self.mission.recheck_left = 0;
+                return;
+            }
+            if h.phase == super::homotopy::Phase::Legs && !h.leg_active && h.leg < legs {
+                // a leg is due (a new route): the mission's goal is still the old leg's, so this is no arrival
+                self.mission.state = MissionState::Driving;
+                self.mission.recheck_left = 0;
+                return;
+            }
+        }
+        self.mission.state = MissionState::Arrived;
+    }
+
+    /// A homotopy route's next leg, when one is due (module docs of `nav`): the mission's goal becomes the leg's, the
+    /// tracked anchors are compared with the route's, and tethered ABIT* is set up from the tracked pose and
+    /// history. `None`: no leg to start (the mission drives on as usual).
+    pub(super) fn mission_start_leg(&mut self, now: Instant) -> Option<DriveStep> {
+        let mut h = self.homotopy?;
+        if h.phase != super::homotopy::Phase::Legs || h.leg_active {
+            return None;
+        }
+        if !matches!(self.mission.state, MissionState::Driving | MissionState::Verifying) || self.mission.in_flight.is_some() {
+            return None;
+        }
+        let (leg, legs, disagreements) = {
+            let g = self.global.global_ref()?;
+            let leg = g.legs.get(h.leg).copied()?;
+            (leg, g.legs.len(), super::homotopy::anchor_disagreements(g, &self.mission.tracked))
+        };
+        let last = h.leg + 1 == legs;
+        let goal = GoalRequest {
+            position: Point3::new(leg[0], leg[1], leg[2]),
+            tolerance_m: if last { h.goal.tolerance_m } else { crate::config::nav::HOMOTOPY_LEG_TOLERANCE_M },
+            planner: crate::protocol::PlannerChoice::Abit,
+            ..h.goal
+        };
+        h.leg_active = true;
+        self.homotopy = Some(h);
+        self.hstats.legs_started = self.hstats.legs_started.saturating_add(1);
+        self.hstats.anchor_disagreements = self.hstats.anchor_disagreements.saturating_add(disagreements);
+        log::info!("homotopy: leg {} of {legs} to ({}, {}, {})", h.leg + 1, leg[0], leg[1], leg[2]);
+        let m = &mut self.mission;
+        m.goal = Some(goal);
+        m.progress_mark_m = f32::INFINITY;
+        m.replans_stuck = 0;
+        m.recheck_left = 0;
+        m.state = MissionState::Driving;
+        if self.arrived() {
+            // already within the leg's tolerance: on to the next one at the next step
+            self.mission_arrived();
+            return Some(DriveStep::Wait);
+        }
+        Some(self.plan_from_here(now))
     }
 
     /// How much nearer the goal the last state of the stored plan is than its start (axle to goal position),
     /// metres; negative infinity without a plan.
-    fn approximate_progress_m(&mut self) -> Real {
+    pub(super) fn approximate_progress_m(&mut self) -> Real {
         let Some(goal) = self.mission.goal else { return Real::NEG_INFINITY };
         let g = Vec3::new(goal.position.x, goal.position.y, goal.position.z);
         let path = planning::path(&mut self.storage);
@@ -678,7 +745,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         }
         self.update_cross_track();
         if matches!(self.mission.state, MissionState::Driving | MissionState::Verifying) && self.arrived() {
-            self.mission.state = MissionState::Arrived;
+            self.mission_arrived();
         }
     }
 
@@ -794,8 +861,13 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
             }
             None => {
                 if self.arrived() {
-                    self.mission.state = MissionState::Arrived;
-                    DriveStep::Finished
+                    self.mission_arrived();
+                    if self.mission.state == MissionState::Arrived {
+                        DriveStep::Finished
+                    } else {
+                        // a homotopy leg's goal: the next step sets the next leg up
+                        DriveStep::Wait
+                    }
                 } else {
                     // the end of an exact plan short of the goal, or of an approximate one (driven up to its last
                     // safe state and no farther): plan again from here on the map the drive has grown
@@ -966,6 +1038,13 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         }
         m.replans = m.replans.saturating_add(1);
         m.replans_stuck = m.replans_stuck.saturating_add(1);
+        self.plan_from_here(now)
+    }
+
+    /// Sets up tethered ABIT* from the tracked pose and anchor history to the mission's goal (a replan, or a homotopy
+    /// route's next leg).
+    fn plan_from_here(&mut self, now: Instant) -> DriveStep {
+        let m = &mut self.mission;
         let (Some(goal), Some(setup)) = (m.goal, self.setup) else {
             m.stop(StopReason::GoalRefused);
             return DriveStep::Finished;

@@ -36,8 +36,50 @@
 //!
 //! Refusals are `InvalidInput` with a [`GoalRefusal`] reason, logged and counted ([`NavPlanStats::refusals`]): no
 //! `Configure`, no scan yet, an empty map, a map without an observed surface block, a start or an on-map goal that
-//! does not settle. Another planner choice
-//! is answered `PlannerUnavailable`.
+//! does not settle. `PlannerChoice::Team` is answered `PlannerUnavailable`, and so is `Homotopy` on a navigator
+//! without the global planner's storage ([`Navigator::new`]; [`Navigator::with_homotopy`] lends it).
+//!
+//! ## Terrain tiles and homotopy goals (protocol v7; issue 20 item 4; `nav/tile.rs`, `nav/homotopy.rs`)
+//! Abad-Manterola et al. (III-VI) and Tanner et al. (II) choose the homotopy class and the intermediate anchors of a
+//! long descent on an orbital DEM; the settled path is Paton et al.'s local problem. On board:
+//! - **Tile upload**: `TileChunk`s (in order, checked by the executive's `TileAssembler`) are staged
+//!   ([`Autonomy::tile_part`]); the last one swaps the staged tile in if `HeightTile::load` accepts it whole
+//!   ([`Autonomy::tile_complete`]). A rejected, abandoned or refused upload leaves the tile in use and any route
+//!   planned on it intact. `MapStatus.tiles_loaded`, `tile_id`, `tiles_abandoned`. Limits: 128 x 128 posts
+//!   (`MAX_TILE_SIDE`; 64 KiB of `f32`), spacing 0.02 .. 5 m; staging and tile 128 KiB of [`NavPlanStorage`].
+//! - **Global route** (a `GoalRequest` for `PlannerChoice::Homotopy`, checked at once: a `Configure`, a pose and a
+//!   tile, else `InvalidInput` with `NotConfigured` / `NoPose` / `NoTile`), in three `plan_step` calls, one phase
+//!   each: (1) `DemDescent::segment` of the tile from `Configure.tether.root_anchor` to the goal (corridor half
+//!   width `HOMOTOPY_CORRIDOR_HALF_WIDTH_M` 6 m, soil friction `Configure.rover.friction_coefficient`, the rest
+//!   `DemParams::for_rover` of the configured rover), `check_ends`, `build_btm`; (2) Axel's holding limit on the
+//!   wall (`axel_model`); (3) Alg. 1 (`preplan`) with Axel's model and `route_to_world` with
+//!   `Configure.tether.max_payout_m`. Refusals are `InvalidInput`, counted and logged like the others:
+//!   `DescentNotSegmented` (the log names the `DemError`), `NoRoute`, `PayoutExceeded`, `RouteRefused`. The route is
+//!   reported as the goal's first `PlanStatus` (`ExactSolution`, `iterations` = classes examined, `best_cost` = the
+//!   tether's 3D length) and `Plan`: the **leg goals** (each facing the next; anchors: the root and the anchors the
+//!   route expects; margin 0, not evaluated on the tile).
+//! - **Legs**: the route's waypoints after the route segment nearest to the rover (never back up the route),
+//!   skipping those within `HOMOTOPY_LEG_MIN_M` (1 m) of the previous leg goal and splitting stretches longer than
+//!   `HOMOTOPY_LEG_MAX_M` (5 m); the last leg's goal is the request's position and tolerance, the others'
+//!   tolerance `HOMOTOPY_LEG_TOLERANCE_M` (0.5 m); at most `HOMOTOPY_MAX_LEGS` (32). Each leg is a tethered ABIT*
+//!   goal set up by the same `set_up` as a replan, from the tracked pose and anchor history (the mission's), when the
+//!   first drive step after the route (or after the previous leg's arrival) finds no leg active: the executive goes
+//!   to `Planning` and a new `PlanStatus` / `Plan` follows. Arriving within a leg's tolerance starts the next leg
+//!   (the mission stays `Driving`); only the last leg's arrival is `Arrived`. Replans, stalls and the replan limit
+//!   work per leg (a leg is not counted as a replan). At each leg's start the tracked anchors (after the root) are
+//!   compared with the route's expected anchors: one farther than `HOMOTOPY_ANCHOR_AGREEMENT_M` (1 m) from every
+//!   expected anchor is logged and counted ([`HomotopyStats::anchor_disagreements`]).
+//! - **Global replanning** (Tanner et al. Alg. 3, reduced): a leg other than the last whose ABIT* ends without a plan
+//!   the mission would drive (`NoSolutionWithinBudget`, or an approximate plan not allowed or short of
+//!   `MIN_APPROXIMATE_PROGRESS_M`) means the onboard map contradicts the tile there: a regular octagon of radius
+//!   `HOMOTOPY_BLOCK_RADIUS_M` (1 m) round the leg's goal joins the BTM (a local update) and the route is planned
+//!   again from the root anchor (Alg. 1), reported as a new route (`ExactSolution` and its `Plan`), its legs from
+//!   the rover on; at most `HOMOTOPY_MAX_GLOBAL_REPLANS` (3) per goal, counted with their one reason
+//!   ([`HomotopyStats::global_replans`], `global_replan_failures`) and logged. Not done: Alg. 3's plan from the
+//!   tether already paid out (the new route starts at the root, the legs at the rover; the tracked anchors are only
+//!   compared), and the last leg's failure (its goal is the request's) ends the mission like any goal's.
+//! - Storage: [`HomotopyStorage`] (~0.66 MiB: BTM 240 KiB, A* workspace 292 KiB, segmentation scratch 112 KiB, the
+//!   descent, the route and the legs), lent once like the rest (host: a `Box`; board: a static in SRAM `.data`).
 //!
 //! [`Autonomy::plan_step`] runs at most `iterations` new ABIT* iterations, and stops earlier (after at least one)
 //! once `MOTION_CHECKS_PER_STEP` new motion checks were computed, or after a step that drew `DRAWS_PER_STEP` more
@@ -203,14 +245,19 @@
 //! `host-sim/doc/nav.md` has the on-target storage and stack figures and how the navigator came to its design.
 //!
 
+mod homotopy;
 mod mission;
 pub mod retained;
 mod planning;
+mod tile;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
+mod homotopy_tests;
+#[cfg(test)]
 mod mission_tests;
 
+pub use homotopy::{GlobalPlanStorage, HomotopyStats, HomotopyStorage, NoGlobalPlanner};
 pub use mission::{BodyPose, Mission, MissionCounters};
 pub use planning::{segment_motions, GoalRefusal, NavArena, NavPlanStats, NavPlanStorage};
 
@@ -225,15 +272,15 @@ use crate::geom::Vec3;
 use crate::map::{Block, Map, MapError};
 use crate::plan::tethered::{PlanBounds, RoverState};
 use crate::protocol::{
-    Configure, GoalRequest, MapStatus, MissionStatus, Motion, MotionReport, PlanState, PlannerChoice, Pose,
-    TetherReading,
+    Configure, GoalRequest, MapStatus, MissionStatus, Motion, MotionReport, PlanState, PlannerChoice, Point3, Pose,
+    TetherReading, TileHeader,
 };
 use crate::tether::AnchorHistory;
 
 use planning::{PlanSetup, Problem};
 
 /// The executive's autonomy: builds the onboard map from scans and plans goals on it (see the module docs).
-pub struct Navigator<B, I, P> {
+pub struct Navigator<B, I, P, H = NoGlobalPlanner> {
     cfg: MapConfig,
     blocks: B,
     index: I,
@@ -251,10 +298,16 @@ pub struct Navigator<B, I, P> {
     scan_in: Option<(u32, bool)>,
     /// The last checkpoint written to the retained block (`retained`), to write only what changed.
     retained_last: Option<retained::TetherCheckpoint>,
+    /// The homotopy goal being planned or driven (`nav::homotopy`).
+    homotopy: Option<homotopy::HomotopyGoal>,
+    hstats: HomotopyStats,
+    /// The global planner's storage (`nav::homotopy`), if lent.
+    global: H,
 }
 
 impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> Navigator<B, I, P> {
-    /// A navigator over lent map and planning storage, which are cleared. Errors as [`Map::from_slices`].
+    /// A navigator over lent map and planning storage, which are cleared, without the global planner (homotopy
+    /// goals are `PlannerUnavailable`; lend its storage with [`Self::with_homotopy`]). Errors as [`Map::from_slices`].
     pub fn new(cfg: MapConfig, mut blocks: B, mut index: I, mut storage: P) -> Result<Self, MapError> {
         let capacity = Map::from_slices(cfg, blocks.borrow_mut(), index.borrow_mut())?.blocks_capacity();
         let status = MapStatus {
@@ -278,8 +331,38 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
             replan_pending: false,
             scan_in: None,
             retained_last: None,
+            homotopy: None,
+            hstats: HomotopyStats::default(),
+            global: NoGlobalPlanner,
         })
     }
+
+    /// The same navigator with the global planner's storage lent (`PlannerChoice::Homotopy` goals are planned).
+    pub fn with_homotopy<H: GlobalPlanStorage>(self, global: H) -> Navigator<B, I, P, H> {
+        Navigator {
+            cfg: self.cfg,
+            blocks: self.blocks,
+            index: self.index,
+            used: self.used,
+            status: self.status,
+            storage: self.storage,
+            setup: self.setup,
+            pose: self.pose,
+            problem: self.problem,
+            next_motion: self.next_motion,
+            stats: self.stats,
+            mission: self.mission,
+            replan_pending: self.replan_pending,
+            scan_in: self.scan_in,
+            retained_last: self.retained_last,
+            homotopy: self.homotopy,
+            hstats: self.hstats,
+            global,
+        }
+    }
+}
+
+impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H: GlobalPlanStorage> Navigator<B, I, P, H> {
 
     /// The onboard map (a view over the navigator's storage), for planners, tests and pictures.
     pub fn map(&mut self) -> Option<Map<'_>> {
@@ -291,6 +374,31 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
     pub fn integrate_scan(&mut self, scan: &Scan<'_>, now: Instant) {
         self.scan_part(scan, now);
         self.scan_complete(scan, now);
+    }
+
+    /// The terrain tile in use for the homotopy planner (protocol v7), if one was uploaded.
+    pub fn terrain_tile(&self) -> Option<&crate::plan::homotopy::dem::HeightTile> {
+        self.storage.borrow().tile.current()
+    }
+
+    /// Counters of homotopy goals.
+    pub fn homotopy_stats(&self) -> HomotopyStats {
+        self.hstats
+    }
+
+    /// The leg goals of the homotopy route being driven (world frame; empty before the first route).
+    pub fn homotopy_legs(&self) -> &[[f32; 3]] {
+        self.global.global_ref().map_or(&[], |g| g.legs.as_slice())
+    }
+
+    /// The homotopy route being driven (world frame), if one was planned.
+    pub fn homotopy_route(&self) -> Option<&crate::plan::homotopy::dem::WorldRoute> {
+        self.global.global_ref().and_then(|g| g.route.as_ref())
+    }
+
+    /// Which leg of the homotopy route is driven (0-based), while a homotopy goal is.
+    pub fn homotopy_leg(&self) -> Option<usize> {
+        self.homotopy.filter(|h| h.phase == homotopy::Phase::Legs).map(|h| h.leg)
     }
 
     /// Counters of on-board planning.
@@ -320,6 +428,115 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> N
         log::warn!("nav: goal refused: {}", why.reason());
         PlanState::InvalidInput
     }
+
+    /// A `GoalRequest` for `PlannerChoice::Homotopy`: checked here, planned by `plan_step` in phases.
+    fn goal_homotopy(&mut self, goal: &GoalRequest) -> PlanState {
+        self.replan_pending = false;
+        if self.global.global_ref().is_none() {
+            return PlanState::PlannerUnavailable;
+        }
+        let why = if self.setup.is_none() {
+            Some(GoalRefusal::NotConfigured)
+        } else if self.start_pose().is_none() {
+            Some(GoalRefusal::NoPose)
+        } else if self.storage.borrow().tile.current().is_none() {
+            Some(GoalRefusal::NoTile)
+        } else {
+            None
+        };
+        if let Some(why) = why {
+            self.mission_goal(goal, false);
+            return self.refuse(why);
+        }
+        self.homotopy = Some(homotopy::HomotopyGoal { goal: *goal, phase: homotopy::Phase::Segment, leg: 0, leg_active: false });
+        self.stats.goals_accepted = self.stats.goals_accepted.saturating_add(1);
+        self.mission_goal(goal, true);
+        PlanState::Accepted
+    }
+
+    /// A homotopy leg's ABIT* ended without a path the mission would drive (none, or an approximate one it may not
+    /// drive): the global replan (`homotopy::replan_around`), reported like the first route. `None`: not a homotopy
+    /// leg, the last leg, the replan budget spent, or no new route (the mission stops as for any goal).
+    fn homotopy_leg_failed(&mut self, state: PlanState, plan: &mut PlanBuffer) -> Option<PlanProgress> {
+        let mut h = self.homotopy.filter(|h| h.phase == homotopy::Phase::Legs && h.leg_active)?;
+        let failed = match state {
+            PlanState::NoSolutionWithinBudget => true,
+            // the mission drives an approximate plan only when allowed and it makes progress (`mission_planned`)
+            PlanState::ApproximateSolution => {
+                !(h.goal.allow_approximate
+                    && self.approximate_progress_m() >= crate::config::mission::MIN_APPROXIMATE_PROGRESS_M)
+            }
+            _ => false,
+        };
+        let legs = self.global.global_ref().map_or(0, |g| g.legs.len());
+        if !failed || h.leg + 1 >= legs || self.hstats.global_replans >= crate::config::nav::HOMOTOPY_MAX_GLOBAL_REPLANS {
+            return None;
+        }
+        let setup = self.setup?;
+        let start = self.start_pose();
+        let blocked = self.global.global_ref().and_then(|g| g.legs.get(h.leg)).map(|p| [p[0], p[1]])?;
+        self.hstats.global_replans = self.hstats.global_replans.saturating_add(1);
+        log::warn!(
+            "homotopy: leg {} to ({}, {}) found no path ({state:?}): the onboard map contradicts the tile; global replan {}",
+            h.leg + 1,
+            blocked[0],
+            blocked[1],
+            self.hstats.global_replans
+        );
+        let outcome = {
+            let global = self.global.global()?;
+            let tile = self.storage.borrow().tile.current()?;
+            homotopy::replan_around(&mut h, tile, global, &setup, start.as_ref(), blocked)
+        };
+        match outcome {
+            homotopy::PhaseOutcome::Planned { cost, classes } => {
+                self.homotopy = Some(h);
+                let root = Point3::new(setup.root.x, setup.root.y, setup.root.z);
+                if let Some(g) = self.global.global_ref() {
+                    homotopy::route_waypoints(g, root, plan);
+                }
+                self.hstats.routes = self.hstats.routes.saturating_add(1);
+                self.mission_planned(PlanState::ExactSolution);
+                Some(PlanProgress::Finished { state: PlanState::ExactSolution, iterations: classes, best_cost: Some(cost) })
+            }
+            _ => {
+                self.hstats.global_replan_failures = self.hstats.global_replan_failures.saturating_add(1);
+                log::warn!("homotopy: the global replan found no route");
+                None
+            }
+        }
+    }
+
+    /// One phase of a homotopy goal's global plan (`nav::homotopy`).
+    fn homotopy_plan_step(&mut self, mut h: homotopy::HomotopyGoal, plan: &mut PlanBuffer) -> PlanProgress {
+        let refused = |nav: &mut Self, why| {
+            nav.homotopy = None;
+            nav.refuse(why);
+            nav.mission_planned(PlanState::InvalidInput);
+            PlanProgress::Finished { state: PlanState::InvalidInput, iterations: 0, best_cost: None }
+        };
+        let Some(setup) = self.setup else { return refused(self, GoalRefusal::NotConfigured) };
+        let start = self.start_pose();
+        let outcome = {
+            let Some(global) = self.global.global() else { return refused(self, GoalRefusal::NoTile) };
+            let Some(tile) = self.storage.borrow().tile.current() else { return refused(self, GoalRefusal::NoTile) };
+            homotopy::phase_step(&mut h, tile, global, &setup, start.as_ref())
+        };
+        self.homotopy = Some(h);
+        match outcome {
+            homotopy::PhaseOutcome::Continue => PlanProgress::Searching { iterations: 0, best_cost: None },
+            homotopy::PhaseOutcome::Planned { cost, classes } => {
+                let root = Point3::new(setup.root.x, setup.root.y, setup.root.z);
+                if let Some(g) = self.global.global_ref() {
+                    homotopy::route_waypoints(g, root, plan);
+                }
+                self.hstats.routes = self.hstats.routes.saturating_add(1);
+                self.mission_planned(PlanState::ExactSolution);
+                PlanProgress::Finished { state: PlanState::ExactSolution, iterations: classes, best_cost: Some(cost) }
+            }
+            homotopy::PhaseOutcome::Refused(why) => refused(self, why),
+        }
+    }
 }
 
 /// Adds `n` to a telemetry counter, saturating at `u32::MAX` (a counter never wraps back to small values).
@@ -327,7 +544,9 @@ fn count_up(counter: &mut u32, n: u32) {
     *counter = counter.saturating_add(n);
 }
 
-impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> Autonomy for Navigator<B, I, P> {
+impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H: GlobalPlanStorage> Autonomy
+    for Navigator<B, I, P, H>
+{
     fn configure(&mut self, cfg: &Configure) -> Result<(), Refused> {
         if let Some(settings) = cfg.map {
             let map_cfg = MapConfig::from(settings);
@@ -422,6 +641,34 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
         self.status = status;
     }
 
+    fn tile_part(&mut self, header: &TileHeader, offset: usize, heights: &[f32], _now: Instant) {
+        if let Some(old) = self.storage.borrow_mut().tile.part(header, offset, heights) {
+            count_up(&mut self.status.tiles_abandoned, 1);
+            log::warn!("tile {old} abandoned incomplete; the tile in use is kept");
+        }
+    }
+
+    fn tile_complete(&mut self, header: &TileHeader, _now: Instant) -> Result<(), Refused> {
+        match self.storage.borrow_mut().tile.complete(header) {
+            Ok(()) => {
+                count_up(&mut self.status.tiles_loaded, 1);
+                self.status.tile_id = header.tile_id;
+                log::info!(
+                    "tile {}: {} x {} posts at {} m loaded for the homotopy planner",
+                    header.tile_id,
+                    header.rows,
+                    header.cols,
+                    header.resolution_m
+                );
+                Ok(())
+            }
+            Err(e) => {
+                log::warn!("tile {} refused ({e:?}); the tile in use is kept", header.tile_id);
+                Err(Refused)
+            }
+        }
+    }
+
     fn goal(&mut self, goal: &GoalRequest, now: Instant) -> PlanState {
         if self.mission.tether_state_lost() {
             // the mission stays Safe (TetherStateLost): planning needs the anchor history the reset lost
@@ -431,8 +678,11 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
         self.problem = None;
         self.next_motion = 0;
         planning::clear_plan(&mut self.storage);
-        if goal.planner != PlannerChoice::Abit {
-            return PlanState::PlannerUnavailable;
+        self.homotopy = None;
+        match goal.planner {
+            PlannerChoice::Abit => {}
+            PlannerChoice::Homotopy => return self.goal_homotopy(goal),
+            PlannerChoice::Team => return PlanState::PlannerUnavailable,
         }
         self.replan_pending = false;
         let Some(setup) = self.setup else {
@@ -464,6 +714,9 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
     }
 
     fn plan_step(&mut self, now: Instant, iterations: u32, plan: &mut PlanBuffer) -> PlanProgress {
+        if let Some(h) = self.homotopy.filter(|h| h.phase != homotopy::Phase::Legs) {
+            return self.homotopy_plan_step(h, plan);
+        }
         let Some(mut problem) = self.problem else {
             return PlanProgress::Finished { state: PlanState::NoGoal, iterations: 0, best_cost: None };
         };
@@ -480,6 +733,9 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
         };
         self.problem = Some(problem);
         if let PlanProgress::Finished { state, .. } = progress {
+            if let Some(p) = self.homotopy_leg_failed(state, plan) {
+                return p;
+            }
             self.mission_planned(state);
         }
         progress
@@ -492,6 +748,9 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>> A
     }
 
     fn drive_step(&mut self, now: Instant) -> DriveStep {
+        if let Some(step) = self.mission_start_leg(now) {
+            return step;
+        }
         self.mission_drive(now)
     }
 

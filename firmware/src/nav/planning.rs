@@ -35,7 +35,7 @@ pub type NavArena = AbitArena<
 >;
 
 /// The navigator's planning storage, lent like the map's (a `Box` on the host, a `static` on the board). Its empty
-/// state is all zero bytes (empty `heapless` vectors), so the board keeps it in `.bss`.
+/// state is all zero bytes (empty `heapless` vectors, an empty tile), so the board keeps it in `.bss`.
 pub struct NavPlanStorage {
     /// The ABIT* arena (nodes, edge queue, ABIT*'s own edge memo).
     pub arena: NavArena,
@@ -50,6 +50,8 @@ pub struct NavPlanStorage {
     /// The anchor history of the start state (the mission's tracked history when replanning mid-mission); empty =
     /// the root anchor alone.
     pub(crate) start_history: AnchorHistory,
+    /// The terrain tile in use and the one being uploaded (`nav::tile`, 128 KiB).
+    pub(crate) tile: super::tile::TileStorage,
 }
 
 impl NavPlanStorage {
@@ -62,6 +64,7 @@ impl NavPlanStorage {
             suspended: heapless::Vec::new(),
             rng_state: 0,
             start_history: AnchorHistory::empty(),
+            tile: super::tile::TileStorage::new(),
         }
     }
     /// Bytes of the storage (for the board's memory report).
@@ -94,11 +97,23 @@ pub enum GoalRefusal {
     GoalNotSettled,
     /// The planner rejected the problem (a parameter or the arena); see the log.
     PlannerRejected,
+    /// A homotopy goal with no terrain tile uploaded (protocol v7 `TileChunk`).
+    NoTile,
+    /// The tile's descent from the root anchor to the goal could not be segmented into planes (the log names the
+    /// `DemError`: corridor outside the tile, no tether-demand stretch, a blocked end, ...).
+    DescentNotSegmented,
+    /// No homotopy class of the descent is feasible for Axel (Alg. 1 found no route), or the BTM was not built.
+    NoRoute,
+    /// The route needs more tether than `Configure.tether.max_payout_m`.
+    PayoutExceeded,
+    /// The route touches an obstacle on the corridor's edge, cannot be folded back onto the tile, or needs more
+    /// legs than `HOMOTOPY_MAX_LEGS`.
+    RouteRefused,
 }
 
 impl GoalRefusal {
     /// Number of reasons.
-    pub const COUNT: usize = 7;
+    pub const COUNT: usize = 12;
     /// A sentence a person can act on.
     pub fn reason(self) -> &'static str {
         match self {
@@ -109,6 +124,13 @@ impl GoalRefusal {
             Self::StartNotSettled => "the rover does not settle on the map at its pose (ground under it unobserved?)",
             Self::GoalNotSettled => "the goal is inside the mapped area but the rover does not settle there",
             Self::PlannerRejected => "the planner rejected the problem (parameters or arena)",
+            Self::NoTile => "homotopy goal without a terrain tile: upload one (TileChunk) first",
+            Self::DescentNotSegmented => {
+                "the tile's descent from the root anchor to the goal was not segmented (see the log): move the goal or upload a tile covering the corridor"
+            }
+            Self::NoRoute => "no homotopy route on the tile is feasible for the rover: move the goal or the root anchor",
+            Self::PayoutExceeded => "the homotopy route needs more tether than max_payout_m: move the goal or use a longer tether",
+            Self::RouteRefused => "the homotopy route touches the corridor's edge obstacles or has too many legs (see the log)",
         }
     }
 }

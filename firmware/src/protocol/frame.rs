@@ -216,7 +216,8 @@ fn varint(b: &[u8], at: &mut usize) -> Option<usize> {
 /// kinds with variable-length fields can say yes).
 fn sequence_over_capacity(kind: MessageKind, b: &[u8]) -> bool {
     use crate::config::protocol::{
-        MAX_ANCHORS_PER_WAYPOINT, MAX_LOG_TEXT, MAX_POINTS_PER_CHUNK, MAX_WAYPOINTS_PER_PLAN_FRAME,
+        MAX_ANCHORS_PER_WAYPOINT, MAX_HEIGHTS_PER_TILE_CHUNK, MAX_LOG_TEXT, MAX_POINTS_PER_CHUNK,
+        MAX_WAYPOINTS_PER_PLAN_FRAME,
     };
     const POSE_LEN: usize = 28;
     let mut at = 0;
@@ -228,6 +229,16 @@ fn sequence_over_capacity(kind: MessageKind, b: &[u8]) -> bool {
                 varint(b, at)?;
                 *at += POSE_LEN;
                 Some(varint(b, at)? > MAX_POINTS_PER_CHUNK)
+            }
+            MessageKind::TileChunk => {
+                // tile id, chunk index, chunk count; origin x, y and spacing (3 x f32); rows, cols
+                varint(b, at)?;
+                varint(b, at)?;
+                varint(b, at)?;
+                *at += 12;
+                varint(b, at)?;
+                varint(b, at)?;
+                Some(varint(b, at)? > MAX_HEIGHTS_PER_TILE_CHUNK)
             }
             MessageKind::Log => {
                 varint(b, at)?;
@@ -275,6 +286,7 @@ pub fn decode<T: AsRef<[u8]>>(frame: &Frame<T>) -> Result<(Header, Message), Dec
         MessageKind::TelemetryRequest => Message::TelemetryRequest(body(kind, b)?),
         MessageKind::MotionReport => Message::MotionReport(body(kind, b)?),
         MessageKind::GoalCancel => Message::GoalCancel(body(kind, b)?),
+        MessageKind::TileChunk => Message::TileChunk(body(kind, b)?),
         MessageKind::Ack => Message::Ack(body(kind, b)?),
         MessageKind::Nack => Message::Nack(body(kind, b)?),
         MessageKind::PlanStatus => Message::PlanStatus(body(kind, b)?),

@@ -16,9 +16,10 @@ use serde::{Deserialize, Serialize};
 use crate::config::map::MapConfig;
 use crate::config::mission as mission_cfg;
 use crate::config::protocol::{
-    MAX_ANCHORS_PER_WAYPOINT, MAX_LOG_TEXT, MAX_POINTS_PER_CHUNK, MAX_WAYPOINTS_PER_PLAN_FRAME,
-    MIN_TELEMETRY_PERIOD_MS, QUATERNION_NORM_TOLERANCE,
+    MAX_ANCHORS_PER_WAYPOINT, MAX_HEIGHTS_PER_TILE_CHUNK, MAX_LOG_TEXT, MAX_POINTS_PER_CHUNK,
+    MAX_WAYPOINTS_PER_PLAN_FRAME, MIN_TELEMETRY_PERIOD_MS, QUATERNION_NORM_TOLERANCE,
 };
+use crate::config::homotopy::{MAX_TILE_RESOLUTION_M, MAX_TILE_SIDE, MIN_TILE_RESOLUTION_M};
 
 /// Who sends a message kind.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -51,6 +52,8 @@ pub enum MessageKind {
     MotionReport = 0x08,
     /// [`GoalCancel`] (host -> flight, v2).
     GoalCancel = 0x09,
+    /// [`TileChunk`] (host -> flight, v7).
+    TileChunk = 0x0A,
     /// [`Ack`] (flight -> host).
     Ack = 0x81,
     /// [`Nack`] (flight -> host).
@@ -71,7 +74,7 @@ pub enum MessageKind {
 
 impl MessageKind {
     /// Every kind, in code order.
-    pub const ALL: [MessageKind; 17] = [
+    pub const ALL: [MessageKind; 18] = [
         Self::TimeTick,
         Self::SensorChunk,
         Self::TetherReading,
@@ -81,6 +84,7 @@ impl MessageKind {
         Self::TelemetryRequest,
         Self::MotionReport,
         Self::GoalCancel,
+        Self::TileChunk,
         Self::Ack,
         Self::Nack,
         Self::PlanStatus,
@@ -200,6 +204,34 @@ pub struct SensorChunk {
     pub sensor_pose: Pose,
     /// Returns in the sensor frame, metres.
     pub points: Vec<Point3, MAX_POINTS_PER_CHUNK>,
+}
+
+/// Host -> flight: one chunk of a terrain tile (v7): an orbital DEM patch for the homotopy planner
+/// (`crate::plan::homotopy::dem::HeightTile`). Posts at `origin + (col, row) x resolution_m` (world x/y, metres), row 0
+/// at the smallest y; heights in row-major order, chunk `i` carrying posts `i * MAX_HEIGHTS_PER_TILE_CHUNK ..`, every
+/// chunk full but the last. Chunks of a tile share `tile_id`, `chunk_count`, the origin, the spacing and the shape,
+/// and must arrive in order `0..chunk_count`; chunk 0 starts a tile (abandoning one in progress). The tile replaces
+/// the navigator's only when complete and valid.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TileChunk {
+    /// Identifies the tile.
+    pub tile_id: u32,
+    /// Index of this chunk, `0..chunk_count`.
+    pub chunk_index: u16,
+    /// Number of chunks: `ceil(rows * cols / MAX_HEIGHTS_PER_TILE_CHUNK)`.
+    pub chunk_count: u16,
+    /// World x of post (0, 0), metres.
+    pub origin_x_m: f32,
+    /// World y of post (0, 0), metres.
+    pub origin_y_m: f32,
+    /// Post spacing, metres, within `[MIN_TILE_RESOLUTION_M, MAX_TILE_RESOLUTION_M]` (0.02 .. 5 m).
+    pub resolution_m: f32,
+    /// Posts along y, `1..=MAX_TILE_SIDE` (128).
+    pub rows: u16,
+    /// Posts along x, `1..=MAX_TILE_SIDE` (128).
+    pub cols: u16,
+    /// Heights (world z, metres) of this chunk's posts, row-major.
+    pub heights: Vec<f32, MAX_HEIGHTS_PER_TILE_CHUNK>,
 }
 
 /// Host -> flight: one tether-encoder reading.
@@ -501,10 +533,21 @@ pub enum NackReason {
     /// The same frame (sequence number and CRC) as one of the last `SEQ_HISTORY_LEN` accepted: a duplicate on the
     /// link, not acted on twice (v4).
     DuplicateFrame,
+    /// A `TileChunk` with more than `MAX_TILE_SIDE` (128) posts on a side: cut or resample the DEM patch (v7).
+    TileTooLarge,
+    /// A `TileChunk` whose post spacing is outside `MIN_TILE_RESOLUTION_M..=MAX_TILE_RESOLUTION_M` (0.02 .. 5 m):
+    /// resample the DEM patch (v7).
+    TileResolution,
+    /// A `TileChunk` (not chunk 0) of another tile than the one in progress, or with another origin, spacing,
+    /// shape or chunk count than its chunk 0, or with no tile in progress: resend the tile from chunk 0 (v7).
+    TileMismatch,
+    /// A `TileChunk` whose height count is not what its index requires (`MAX_HEIGHTS_PER_TILE_CHUNK`, the last
+    /// chunk the rest), or whose chunk count does not match its shape: fix the uploader (v7).
+    TileChunkLength,
 }
 
 /// Number of [`NackReason`] values (the length of the rejection counters).
-pub const NACK_REASON_COUNT: usize = 26;
+pub const NACK_REASON_COUNT: usize = 30;
 
 impl NackReason {
     /// Every reason, in wire order.
@@ -535,6 +578,10 @@ impl NackReason {
         Self::UnknownCommand,
         Self::UnknownGoal,
         Self::DuplicateFrame,
+        Self::TileTooLarge,
+        Self::TileResolution,
+        Self::TileMismatch,
+        Self::TileChunkLength,
     ];
 
     /// Index into rejection counters (equals the wire value).
@@ -817,6 +864,12 @@ pub struct MapStatus {
     pub pool_errors: u32,
     /// ESDF updates that ran out of their sweep budget (the next update continues).
     pub esdf_budget_exhausted: u32,
+    /// Terrain tiles uploaded complete and swapped in for the homotopy planner (v7).
+    pub tiles_loaded: u32,
+    /// The id of the tile in use (0 before the first).
+    pub tile_id: u32,
+    /// Tile uploads abandoned incomplete (a chunk 0 started another) (v7).
+    pub tiles_abandoned: u32,
 }
 
 /// Largest use of each bounded resource since boot.
@@ -945,6 +998,7 @@ pub enum Message {
     TelemetryRequest(TelemetryRequest),
     MotionReport(MotionReport),
     GoalCancel(GoalCancel),
+    TileChunk(TileChunk),
     Ack(Ack),
     Nack(Nack),
     PlanStatus(PlanStatus),
@@ -964,6 +1018,10 @@ pub enum Invalid {
     NotUnitQuaternion,
     /// A value is outside its range.
     OutOfRange,
+    /// A terrain tile has more posts on a side than `MAX_TILE_SIDE`.
+    TileTooLarge,
+    /// A terrain tile's post spacing is outside its range.
+    TileResolution,
 }
 
 impl From<Invalid> for NackReason {
@@ -972,6 +1030,8 @@ impl From<Invalid> for NackReason {
             Invalid::NonFinite => NackReason::NonFinite,
             Invalid::NotUnitQuaternion => NackReason::NotUnitQuaternion,
             Invalid::OutOfRange => NackReason::OutOfRange,
+            Invalid::TileTooLarge => NackReason::TileTooLarge,
+            Invalid::TileResolution => NackReason::TileResolution,
         }
     }
 }
@@ -1039,6 +1099,26 @@ impl Validate for SensorChunk {
     fn validate(&self) -> Result<(), Invalid> {
         self.sensor_pose.validate()?;
         self.points.iter().try_for_each(Validate::validate)
+    }
+}
+
+impl Validate for TileChunk {
+    /// Checks the georeference, the spacing, the shape and the heights. Chunk order, counts and lengths are checked
+    /// by the tile reassembly (`reassembly::TileAssembler`, their own reasons).
+    fn validate(&self) -> Result<(), Invalid> {
+        finite(self.origin_x_m)?;
+        finite(self.origin_y_m)?;
+        finite(self.resolution_m)?;
+        if !(MIN_TILE_RESOLUTION_M..=MAX_TILE_RESOLUTION_M).contains(&f64::from(self.resolution_m)) {
+            return Err(Invalid::TileResolution);
+        }
+        if self.rows == 0 || self.cols == 0 {
+            return Err(Invalid::OutOfRange);
+        }
+        if usize::from(self.rows) > MAX_TILE_SIDE || usize::from(self.cols) > MAX_TILE_SIDE {
+            return Err(Invalid::TileTooLarge);
+        }
+        self.heights.iter().try_for_each(|h| finite(*h))
     }
 }
 
@@ -1172,6 +1252,7 @@ impl Validate for Message {
     fn validate(&self) -> Result<(), Invalid> {
         match self {
             Message::SensorChunk(m) => m.validate(),
+            Message::TileChunk(m) => m.validate(),
             Message::TetherReading(m) => m.validate(),
             Message::GoalRequest(m) => m.validate(),
             Message::Configure(m) => m.validate(),
@@ -1205,6 +1286,7 @@ impl Message {
             Message::TelemetryRequest(_) => MessageKind::TelemetryRequest,
             Message::MotionReport(_) => MessageKind::MotionReport,
             Message::GoalCancel(_) => MessageKind::GoalCancel,
+            Message::TileChunk(_) => MessageKind::TileChunk,
             Message::Ack(_) => MessageKind::Ack,
             Message::Nack(_) => MessageKind::Nack,
             Message::PlanStatus(_) => MessageKind::PlanStatus,
@@ -1228,6 +1310,7 @@ impl Message {
             Message::TelemetryRequest(m) => postcard::to_slice(m, buf),
             Message::MotionReport(m) => postcard::to_slice(m, buf),
             Message::GoalCancel(m) => postcard::to_slice(m, buf),
+            Message::TileChunk(m) => postcard::to_slice(m, buf),
             Message::Ack(m) => postcard::to_slice(m, buf),
             Message::Nack(m) => postcard::to_slice(m, buf),
             Message::PlanStatus(m) => postcard::to_slice(m, buf),

@@ -9,7 +9,8 @@
 //!   [`decode`] / [`decode_frame`].
 //! - [`cobs`]: byte stuffing, so `0x00` delimits frames.
 //! - [`deframer`]: the incremental [`Deframer`] (any byte split, resynchronises after garbage or oversize).
-//! - [`reassembly`]: the bounded [`ScanAssembler`] for chunked sensor scans.
+//! - [`reassembly`]: the bounded [`ScanAssembler`] for chunked sensor scans and the [`TileAssembler`] for chunked
+//!   terrain tiles (v7).
 //!
 //! Errors are narrow per layer ([`DeframeError`], [`FrameError`], [`DecodeError`], [`ChunkError`]) and each maps
 //! to one [`NackReason`], the value the flight software reports back and counts.
@@ -30,7 +31,9 @@ pub use frame::{
     Header, CRC,
 };
 pub use message::*;
-pub use reassembly::{ChunkAccepted, ChunkError, CompleteScan, ScanAssembler};
+pub use reassembly::{
+    ChunkAccepted, ChunkError, CompleteScan, ScanAssembler, TileAccepted, TileAssembler, TileChunkError, TileHeader,
+};
 
 impl From<DeframeError> for NackReason {
     fn from(e: DeframeError) -> Self {

@@ -8,8 +8,8 @@
 //! newer scan while another is incomplete abandons the old scan (counted as [`ChunkAccepted::abandoned`]); a chunk
 //! of an older scan (a late retransmission) is refused, so it can never abandon the scan in progress.
 
-use super::message::{Point3, Pose, SensorChunk};
-use crate::config::protocol::MAX_CHUNKS_PER_SCAN;
+use super::message::{Point3, Pose, SensorChunk, TileChunk};
+use crate::config::protocol::{MAX_CHUNKS_PER_SCAN, MAX_CHUNKS_PER_TILE, MAX_HEIGHTS_PER_TILE_CHUNK};
 
 const _: () = assert!(MAX_CHUNKS_PER_SCAN as u32 <= u64::BITS);
 
@@ -184,6 +184,153 @@ impl ScanAssembler {
     }
 }
 
+/// Why a terrain-tile chunk was rejected (v7).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TileChunkError {
+    /// `chunk_index >= chunk_count`.
+    IndexOutOfRange,
+    /// `chunk_count` is 0 or above `MAX_CHUNKS_PER_TILE`.
+    TooManyChunks,
+    /// The chunk count does not match the shape, or the heights do not match the chunk's index.
+    ChunkLength,
+    /// Already received (the tile in progress, or the last completed tile).
+    Duplicate,
+    /// A chunk ahead of the next expected one (a chunk is missing).
+    OutOfOrder,
+    /// A chunk of another tile than the one in progress, another header than its chunk 0, or no tile in progress.
+    Mismatch,
+}
+
+impl From<TileChunkError> for super::NackReason {
+    fn from(e: TileChunkError) -> Self {
+        use super::NackReason as R;
+        match e {
+            TileChunkError::IndexOutOfRange => R::ChunkIndexOutOfRange,
+            TileChunkError::TooManyChunks => R::TooManyChunks,
+            TileChunkError::ChunkLength => R::TileChunkLength,
+            TileChunkError::Duplicate => R::DuplicateChunk,
+            TileChunkError::OutOfOrder => R::OutOfOrderChunk,
+            TileChunkError::Mismatch => R::TileMismatch,
+        }
+    }
+}
+
+/// What every chunk of a tile shares.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TileHeader {
+    /// Tile id.
+    pub tile_id: u32,
+    /// World x, y of post (0, 0), metres.
+    pub origin: [f32; 2],
+    /// Post spacing, metres.
+    pub resolution_m: f32,
+    /// Posts along y.
+    pub rows: u16,
+    /// Posts along x.
+    pub cols: u16,
+    /// Chunks in the tile.
+    pub chunk_count: u16,
+}
+
+impl TileHeader {
+    /// The header of a chunk.
+    pub fn of(c: &TileChunk) -> Self {
+        TileHeader {
+            tile_id: c.tile_id,
+            origin: [c.origin_x_m, c.origin_y_m],
+            resolution_m: c.resolution_m,
+            rows: c.rows,
+            cols: c.cols,
+            chunk_count: c.chunk_count,
+        }
+    }
+    /// Posts in the tile.
+    pub fn cells(&self) -> usize {
+        usize::from(self.rows) * usize::from(self.cols)
+    }
+}
+
+/// A tile chunk was taken: its heights go to `offset..` of the staging tile (row-major post index).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TileAccepted {
+    /// The tile's header.
+    pub header: TileHeader,
+    /// Post index of the chunk's first height.
+    pub offset: usize,
+    /// A tile in progress that this chunk 0 abandoned.
+    pub abandoned: Option<u32>,
+    /// This chunk completed the tile.
+    pub complete: bool,
+}
+
+/// Reassembly state of terrain tiles (v7). Unlike scans, tile chunks arrive strictly in order (a tile is staged
+/// row-major and swapped in whole; an uplink that lost a chunk resends from it, and a chunk 0 starts over), so the
+/// state is the next expected index. Every check happens before any state changes.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct TileAssembler {
+    current: Option<(TileHeader, u16)>,
+    last_completed: Option<u32>,
+}
+
+impl TileAssembler {
+    /// No tile in progress.
+    pub const fn new() -> Self {
+        Self { current: None, last_completed: None }
+    }
+
+    /// `(tile_id, chunks received, chunk_count)` of the tile in progress.
+    pub fn progress(&self) -> Option<(u32, u16, u16)> {
+        self.current.map(|(h, next)| (h.tile_id, next, h.chunk_count))
+    }
+
+    /// Takes one validated chunk (`TileChunk::validate` passed). Errors leave `self` unchanged.
+    pub fn accept(&mut self, c: &TileChunk) -> Result<TileAccepted, TileChunkError> {
+        if c.chunk_count == 0 || c.chunk_count > MAX_CHUNKS_PER_TILE {
+            return Err(TileChunkError::TooManyChunks);
+        }
+        let header = TileHeader::of(c);
+        let cells = header.cells();
+        if usize::from(c.chunk_count) != cells.div_ceil(MAX_HEIGHTS_PER_TILE_CHUNK) {
+            return Err(TileChunkError::ChunkLength);
+        }
+        if c.chunk_index >= c.chunk_count {
+            return Err(TileChunkError::IndexOutOfRange);
+        }
+        let offset = usize::from(c.chunk_index) * MAX_HEIGHTS_PER_TILE_CHUNK;
+        let expected = cells.saturating_sub(offset).min(MAX_HEIGHTS_PER_TILE_CHUNK);
+        if c.heights.len() != expected {
+            return Err(TileChunkError::ChunkLength);
+        }
+        let abandoned = match self.current {
+            Some((h, next)) if h.tile_id == c.tile_id => {
+                if h != header {
+                    return Err(TileChunkError::Mismatch);
+                }
+                if c.chunk_index < next {
+                    return Err(TileChunkError::Duplicate);
+                }
+                if c.chunk_index > next {
+                    return Err(TileChunkError::OutOfOrder);
+                }
+                None
+            }
+            _ if self.last_completed == Some(c.tile_id) => return Err(TileChunkError::Duplicate),
+            Some((h, _)) if c.chunk_index == 0 => Some(h.tile_id),
+            None if c.chunk_index == 0 => None,
+            _ => return Err(TileChunkError::Mismatch),
+        };
+        let next = c.chunk_index.saturating_add(1);
+        let complete = next == c.chunk_count;
+        if complete {
+            self.current = None;
+            self.last_completed = Some(c.tile_id);
+        } else {
+            self.current = Some((header, next));
+        }
+        Ok(TileAccepted { header, offset, abandoned, complete })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -309,6 +456,102 @@ mod tests {
         for idx in (0..MAX_CHUNKS_PER_SCAN).rev() {
             let r = a.accept(&chunk(1, idx, MAX_CHUNKS_PER_SCAN, 1), &mut buf).unwrap();
             assert_eq!(r.complete.is_some(), idx == 0);
+        }
+    }
+
+    fn tile(id: u32, idx: u16, rows: u16, cols: u16) -> TileChunk {
+        let cells = usize::from(rows) * usize::from(cols);
+        let count = cells.div_ceil(MAX_HEIGHTS_PER_TILE_CHUNK) as u16;
+        let start = usize::from(idx) * MAX_HEIGHTS_PER_TILE_CHUNK;
+        let mut heights = Vec::new();
+        for i in start..cells.min(start + MAX_HEIGHTS_PER_TILE_CHUNK) {
+            heights.push(i as f32).unwrap();
+        }
+        TileChunk {
+            tile_id: id,
+            chunk_index: idx,
+            chunk_count: count,
+            origin_x_m: 1.0,
+            origin_y_m: 2.0,
+            resolution_m: 0.5,
+            rows,
+            cols,
+            heights,
+        }
+    }
+
+    #[test]
+    fn a_tile_in_order_completes_with_its_offsets() {
+        let mut a = TileAssembler::new();
+        // 20 x 30 = 600 posts: chunks of 256, 256, 88
+        for idx in 0..3u16 {
+            let r = a.accept(&tile(7, idx, 20, 30)).unwrap();
+            assert_eq!(r.offset, usize::from(idx) * MAX_HEIGHTS_PER_TILE_CHUNK);
+            assert_eq!(r.complete, idx == 2);
+            assert_eq!(r.abandoned, None);
+        }
+        assert_eq!(a.progress(), None);
+    }
+
+    #[test]
+    fn every_bad_tile_chunk_has_its_reason_and_changes_nothing() {
+        let mut a = TileAssembler::new();
+        a.accept(&tile(3, 0, 20, 30)).unwrap();
+        a.accept(&tile(3, 1, 20, 30)).unwrap();
+        let before = a;
+        let mut short = tile(3, 2, 20, 30);
+        short.heights.pop();
+        let mut count = tile(3, 2, 20, 30);
+        count.chunk_count = 4;
+        let mut zero = tile(3, 2, 20, 30);
+        zero.chunk_count = 0;
+        let mut moved = tile(3, 2, 20, 30);
+        moved.origin_x_m = 5.0;
+        let mut index = tile(3, 2, 20, 30);
+        index.chunk_index = 3;
+        let cases = [
+            (tile(3, 1, 20, 30), TileChunkError::Duplicate),
+            (tile(3, 0, 20, 30), TileChunkError::Duplicate),
+            (tile(4, 2, 20, 30), TileChunkError::Mismatch),
+            (moved, TileChunkError::Mismatch),
+            (short, TileChunkError::ChunkLength),
+            (count, TileChunkError::ChunkLength),
+            (zero, TileChunkError::TooManyChunks),
+            (index, TileChunkError::IndexOutOfRange),
+        ];
+        for (c, e) in cases {
+            assert_eq!(a.accept(&c), Err(e), "{c:?}");
+            assert_eq!(a, before);
+        }
+        // chunk 2 of 3 is next: a gap (chunk 1 of a 4-chunk tile of the same id would mismatch) is out of order
+        let mut big = TileAssembler::new();
+        big.accept(&tile(5, 0, 40, 30)).unwrap();
+        let before = big;
+        assert_eq!(big.accept(&tile(5, 2, 40, 30)), Err(TileChunkError::OutOfOrder));
+        assert_eq!(big, before);
+        // completed: its chunks again are duplicates, a chunk k > 0 of no tile in progress a mismatch
+        a.accept(&tile(3, 2, 20, 30)).unwrap();
+        assert_eq!(a.accept(&tile(3, 2, 20, 30)), Err(TileChunkError::Duplicate));
+        assert_eq!(a.accept(&tile(3, 0, 20, 30)), Err(TileChunkError::Duplicate));
+        assert_eq!(a.accept(&tile(9, 1, 20, 30)), Err(TileChunkError::Mismatch));
+    }
+
+    #[test]
+    fn a_chunk_0_of_another_tile_abandons_the_one_in_progress() {
+        let mut a = TileAssembler::new();
+        a.accept(&tile(1, 0, 20, 30)).unwrap();
+        let r = a.accept(&tile(2, 0, 20, 30)).unwrap();
+        assert_eq!(r.abandoned, Some(1));
+        assert_eq!(a.progress(), Some((2, 1, 3)));
+    }
+
+    #[test]
+    fn the_largest_tile_takes_the_largest_chunk_count() {
+        let side = crate::config::homotopy::MAX_TILE_SIDE as u16;
+        let mut a = TileAssembler::new();
+        for idx in 0..MAX_CHUNKS_PER_TILE {
+            let r = a.accept(&tile(1, idx, side, side)).unwrap();
+            assert_eq!(r.complete, idx + 1 == MAX_CHUNKS_PER_TILE);
         }
     }
 }

@@ -32,7 +32,7 @@ fn spec_example_time_tick() {
     let mut raw = [0u8; 64];
     let n = build_raw(
         Header {
-            version: 6,
+            version: 7,
             kind: 1,
             seq: 1,
         },
@@ -141,7 +141,7 @@ fn header_errors_and_nonfinite_values() {
         Err(NackReason::Truncated)
     );
     let mut raw = [0u8; 64];
-    for version in [0u8, 1, 2, 3, 4, 5, 7, 0xFF] {
+    for version in [0u8, 1, 2, 3, 4, 5, 6, 8, 0xFF] {
         let n = build_raw(
             Header {
                 version,
@@ -300,7 +300,7 @@ fn round_trip(m: &Message) -> Message {
     let (n, ev) = d.push(&w);
     assert_eq!(n, w.len());
     let (h, back) = decode_frame(ev.unwrap().unwrap()).unwrap();
-    assert_eq!(h.version, 6);
+    assert_eq!(h.version, 7);
     assert_eq!(h.kind, m.kind() as u8);
     back
 }
@@ -363,7 +363,10 @@ fn v2_messages_round_trip() {
     assert_eq!(MessageKind::from_u8(0x88), Some(MessageKind::MissionStatus));
     assert_eq!(MessageKind::MotionReport.direction(), Direction::HostToFlight);
     assert_eq!(MessageKind::MissionStatus.direction(), Direction::FlightToHost);
-    assert_eq!(MessageKind::from_u8(0x0A), None);
+    // v7's tile chunk is the next host kind; the one after it is none
+    assert_eq!(MessageKind::from_u8(0x0A), Some(MessageKind::TileChunk));
+    assert_eq!(MessageKind::TileChunk.direction(), Direction::HostToFlight);
+    assert_eq!(MessageKind::from_u8(0x0B), None);
     assert_eq!(MessageKind::from_u8(0x89), None);
 }
 
@@ -391,9 +394,16 @@ fn spec_examples_v2() {
     let mut d = Deframer::new();
     let (_, ev) = d.push(&w);
     assert_eq!(ev.unwrap().unwrap(), &frame[..]);
-    // real version-1 to -5 frames (the earlier documents' example) are a wrong version, not a CRC or kind
+    // real version-1 to -6 frames (the earlier documents' example) are a wrong version, not a CRC or kind
     // error
-    for old in ["example-v1-time-tick-frame", "example-v2-time-tick-frame", "example-v3-time-tick-frame", "example-v4-time-tick-frame", "example-v5-time-tick-frame"] {
+    for old in [
+        "example-v1-time-tick-frame",
+        "example-v2-time-tick-frame",
+        "example-v3-time-tick-frame",
+        "example-v4-time-tick-frame",
+        "example-v5-time-tick-frame",
+        "example-v6-time-tick-frame",
+    ] {
         assert_eq!(decode_frame(&spec_bytes(old)).map(|_| ()), Err(NackReason::WrongVersion));
     }
 }
@@ -404,6 +414,46 @@ fn spec_example_v6_stop() {
     let stop = Message::DriveCommand(DriveCommand { command_id: 5, motion: Motion::Stop { motion_id: 4 } });
     assert_eq!(wire(4, &stop), spec_bytes("example-stop-wire"));
     assert_eq!(round_trip(&stop), stop);
+}
+
+/// v7: a terrain-tile chunk, byte for byte as the spec derives it, and its bad values' reasons.
+#[test]
+fn spec_example_v7_tile_chunk() {
+    let mut heights = heapless::Vec::new();
+    heights.extend_from_slice(&[0.5, 1.5]).unwrap();
+    let tile = TileChunk {
+        tile_id: 1,
+        chunk_index: 0,
+        chunk_count: 1,
+        origin_x_m: -2.0,
+        origin_y_m: 3.0,
+        resolution_m: 0.5,
+        rows: 1,
+        cols: 2,
+        heights,
+    };
+    let m = Message::TileChunk(tile.clone());
+    assert_eq!(wire(5, &m), spec_bytes("example-tile-chunk-wire"));
+    assert_eq!(round_trip(&m), m);
+    let bad = |f: &dyn Fn(&mut TileChunk)| {
+        let mut t = tile.clone();
+        f(&mut t);
+        t.validate()
+    };
+    assert_eq!(bad(&|t| t.heights[1] = f32::NAN), Err(Invalid::NonFinite));
+    assert_eq!(bad(&|t| t.origin_y_m = f32::INFINITY), Err(Invalid::NonFinite));
+    assert_eq!(bad(&|t| t.resolution_m = f32::NAN), Err(Invalid::NonFinite));
+    assert_eq!(bad(&|t| t.resolution_m = 5.5), Err(Invalid::TileResolution));
+    assert_eq!(bad(&|t| t.resolution_m = 0.01), Err(Invalid::TileResolution));
+    assert_eq!(bad(&|t| t.rows = 129), Err(Invalid::TileTooLarge));
+    assert_eq!(bad(&|t| t.cols = 0), Err(Invalid::OutOfRange));
+    assert_eq!(NackReason::from(Invalid::TileTooLarge), NackReason::TileTooLarge);
+    // a heights length prefix over the capacity (257 heights, all sent) is its own reason
+    let mut raw = [0u8; 2100];
+    let mut body = std::vec![1u8, 0, 1, 0, 0, 0, 0xC0, 0, 0, 0x40, 0x40, 0, 0, 0, 0x3F, 1, 2, 0x81, 0x02];
+    body.extend(core::iter::repeat_n(0u8, 257 * 4));
+    let n = build_raw(Header { version: 7, kind: 0x0A, seq: 0 }, &body, &mut raw).unwrap();
+    assert_eq!(decode_frame(&raw[..n]).map(|_| ()), Err(NackReason::LengthOverLimit));
 }
 
 #[test]

@@ -177,6 +177,9 @@ pub struct DemRun {
     pub runs: [ModelRun; 2],
     /// Axel's measured limit on the wall.
     pub axel: AxelLimit,
+    /// Host wall time of the flight software's three homotopy phases (`firmware::nav::homotopy`: segmentation with
+    /// `check_ends` and the BTM; Axel's limit; Alg. 1 with Axel and the world route), seconds.
+    pub phase_s: [f64; 3],
 }
 
 /// Cuts, segments and plans a scenario (both models).
@@ -193,6 +196,7 @@ pub fn plan_tile(tile: Box<HeightTile>, s: &DemScenario) -> Result<DemRun, Strin
     let rover = RoverParams::AXEL;
     let params = DemParams::for_rover(&rover, s.mu, s.half_width_m);
     let mut scratch = Box::new(DemScratch::new());
+    let t0 = std::time::Instant::now();
     let descent = DemDescent::segment(&tile, s.a0, s.g, &params, &mut scratch).map_err(|e| format!("segmentation: {e:?}"))?;
     descent.check_ends().map_err(|e| {
         let planes: Vec<String> = descent.planes.iter().map(|p| format!("{:?} {:.1} deg", p.class, p.plane.slope_rad().to_degrees())).collect();
@@ -200,8 +204,11 @@ pub fn plan_tile(tile: Box<HeightTile>, s: &DemScenario) -> Result<DemRun, Strin
     })?;
     let mut btm = Box::new(Btm::new());
     descent.build_btm(&mut btm).map_err(|e| format!("BTM: {e:?}"))?;
+    let segment_s = t0.elapsed().as_secs_f64();
     let pm = descent.hold_model();
+    let t1 = std::time::Instant::now();
     let (ax, limits) = axel_model(&pm, &rover);
+    let hold_s = t1.elapsed().as_secs_f64();
     let mut ws = Box::new(Workspace::default());
     let mut one = |label: &'static str, model: HoldModel| -> Result<ModelRun, String> {
         let (mut lc, mut report) = (heapless::Vec::new(), PlanReport::default());
@@ -210,8 +217,11 @@ pub fn plan_tile(tile: Box<HeightTile>, s: &DemScenario) -> Result<DemRun, Strin
         let route = plan.as_ref().map(|p| descent.route_to_world(&tile, p, s.max_payout_m));
         Ok(ModelRun { label, model, plan, report, route })
     };
-    let runs = [one("point mass", pm)?, one("Axel", ax)?];
-    Ok(DemRun { tile, descent, btm, runs, axel: limits[0] })
+    let pm_run = one("point mass", pm)?;
+    let t2 = std::time::Instant::now();
+    let ax_run = one("Axel", ax)?;
+    let route_s = t2.elapsed().as_secs_f64();
+    Ok(DemRun { tile, descent, btm, runs: [pm_run, ax_run], axel: limits[0], phase_s: [segment_s, hold_s, route_s] })
 }
 
 /// Number of examined classes with a given verdict kind.

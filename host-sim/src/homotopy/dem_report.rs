@@ -158,6 +158,13 @@ pub fn report(s: &DemScenario, out: &Path) -> Result<bool, String> {
     let slope = d.planes.get(d.reference).map_or(0.0, |p| p.plane.slope_rad());
     println!("  Axel limit on the wall: theta_max {:.1} deg ({} stability checks); point mass asin(mu cot alpha): {} deg",
         run.axel.theta_max_rad.to_degrees(), run.axel.checks, theta_label(&HoldLimit::PointMass, slope, s.mu));
+    let (rows, cols) = run.tile.shape();
+    println!(
+        "  flight phases (host wall time, one call each, {rows} x {cols} posts): segment + BTM {:.2} ms, Axel limit {:.2} ms, Alg. 1 (Axel) + route {:.2} ms",
+        run.phase_s[0] * 1e3,
+        run.phase_s[1] * 1e3,
+        run.phase_s[2] * 1e3
+    );
     for r in run.runs.iter() {
         println!("  {:>10}: {} classes examined ({} chosen): {}", r.label, r.report.examined.len(), demrun::count_verdicts(&r.report, true), route_line(r));
         for v in r.report.examined.iter() {

@@ -6,3 +6,4 @@ pub mod dem_report;
 pub mod scenarios;
 pub mod sim;
 pub mod svg;
+pub mod tile;

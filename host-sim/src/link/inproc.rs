@@ -12,7 +12,7 @@ use firmware::config::map::{MapConfig, FLIGHT_BLOCKS, FLIGHT_INDEX};
 use firmware::exec::{Autonomy, ExecStorage, Executive, StepReport};
 use firmware::map::Block;
 use firmware::nav::retained::{RetainedBlock, RETAINED_BYTES};
-use firmware::nav::{NavPlanStorage, Navigator};
+use firmware::nav::{HomotopyStorage, NavPlanStorage, Navigator};
 use hal::{ByteLink, Instant, MonotonicClock, Watchdog};
 
 use super::{FlightLink, LinkError};
@@ -100,8 +100,9 @@ pub type InProcExecutive<A> = Executive<QueueByteLink, SimClock, SimWatchdog, A,
 
 /// The flight software's autonomy as it flies: the [`Navigator`] over a map pool of the flight computer's size
 /// ([`FLIGHT_BLOCKS`] blocks, ~14 MiB, the board's PSRAM) and the on-board planning storage ([`NavPlanStorage`],
-/// ~1.5 MiB, the board's SRAM), here on the heap.
-pub type FlightAutonomy = Navigator<Vec<Block>, Vec<u32>, Box<NavPlanStorage>>;
+/// ~1.5 MiB, the board's SRAM) and the global planner's ([`HomotopyStorage`], ~0.66 MiB: homotopy goals on an
+/// uploaded tile), here on the heap.
+pub type FlightAutonomy = Navigator<Vec<Block>, Vec<u32>, Box<NavPlanStorage>, Box<HomotopyStorage>>;
 
 /// A fresh [`FlightAutonomy`] with the flight defaults ([`MapConfig::DEFAULT`]); the board builds the same.
 pub fn flight_autonomy() -> FlightAutonomy {
@@ -112,7 +113,7 @@ pub fn flight_autonomy() -> FlightAutonomy {
         vec![0u32; FLIGHT_INDEX],
         planning,
     ) {
-        Ok(nav) => nav,
+        Ok(nav) => nav.with_homotopy(Box::new(HomotopyStorage::new())),
         // The defaults and the storage sizes are constants checked by the firmware's own tests.
         Err(e) => unreachable!("flight map defaults rejected: {e:?}"),
     }

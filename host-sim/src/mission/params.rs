@@ -100,6 +100,12 @@ pub struct MissionSection {
     /// True goal arrival tolerance for the verdict, added to the goal's tolerance (localisation error), metres.
     /// Default 0.25.
     pub arrival_slack_m: f64,
+    /// The rover's friction coefficient sent in `Configure` (and used by the truth), when not the scripted default
+    /// 0.7. A homotopy goal classifies the tile's slopes with it (tether-demand above `atan(mu)`).
+    pub friction: Option<f64>,
+    /// Upload a tile of the terrain and ask for `PlannerChoice::Homotopy` (`[mission.homotopy]`, issue 20 item 4).
+    /// Default none: the goal is an ABIT* goal.
+    pub homotopy: Option<crate::homotopy::tile::TileSpec>,
 }
 
 impl Default for MissionSection {
@@ -134,6 +140,8 @@ impl Default for MissionSection {
             min_margin_n: None,
             obstacles: Vec::new(),
             arrival_slack_m: 0.25,
+            friction: None,
+            homotopy: None,
         }
     }
 }

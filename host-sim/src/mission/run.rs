@@ -319,6 +319,9 @@ pub fn mission_configure(sc: &Scenario, opts: &MissionOptions) -> Configure {
         payout_tolerance_m: m.payout_tolerance_m.map_or(d.payout_tolerance_m, |v| v as f32),
         min_margin_n: m.min_margin_n.map_or(d.min_margin_n, |v| v as f32),
     };
+    if let Some(mu) = m.friction {
+        c.rover.friction_coefficient = mu as f32;
+    }
     // The scenario's map configuration (checked when the mission's link was made; `mission_link`).
     c.map = sc.map_config().ok().map(MapSettings::from);
     c
@@ -943,12 +946,24 @@ pub fn run_mission_from(
     sim.trace();
     sim.overview(sim.sc.rover.start)?;
     sim.scan_here()?;
+    // a homotopy goal: the tile of the terrain first (the orbital DEM: the base terrain, no hidden rocks)
+    let planner = match sim.m.homotopy {
+        Some(spec) => {
+            let heights = crate::homotopy::tile::tile_heights(sim.truth.world.base(), &spec);
+            for chunk in crate::homotopy::tile::tile_chunks(1, &spec, &heights) {
+                sim.s.send(&Message::TileChunk(chunk))?;
+                sim.recv()?;
+            }
+            PlannerChoice::Homotopy
+        }
+        None => PlannerChoice::Abit,
+    };
     let g = sc.goal.position;
     let goal = GoalRequest {
         goal_id: 1,
         position: Point3::new(g[0] as Real, g[1] as Real, g[2] as Real),
         tolerance_m: sc.goal.tolerance_m as f32,
-        planner: PlannerChoice::Abit,
+        planner,
         max_iterations: sc.budgets.planner_iterations,
         time_budget_ms: 0,
         allow_approximate: sim.m.allow_approximate,

@@ -36,7 +36,7 @@ use cortex_m_semihosting::debug;
 use firmware::config::map::{MapConfig, FLIGHT_BLOCKS, FLIGHT_INDEX};
 use firmware::exec::{ExecStorage, Executive};
 use firmware::map::Block;
-use firmware::nav::{NavPlanStorage, Navigator};
+use firmware::nav::{HomotopyStorage, NavPlanStorage, Navigator};
 use hal::{ByteLink, Instant};
 
 use crate::clock::{BoardClock, SysTickClock};
@@ -53,13 +53,19 @@ static MAP_BLOCKS: Lent<[Block; FLIGHT_BLOCKS]> = Lent::new([Block::ZEROED; FLIG
 #[link_section = ".psram"]
 static MAP_INDEX: Lent<[u32; FLIGHT_INDEX]> = Lent::new([0; FLIGHT_INDEX]);
 
-/// The navigator's planning storage (the ABIT* arena, the suspended search, the best path; `NavPlanStorage::bytes()`,
-/// ~1 MiB) in SRAM `.bss`: the PSRAM is nearly full with the map's pool and the bench's arenas. Its empty state is
-/// all zero bytes (empty `heapless` vectors), which the runtime's `.bss` zeroing provides.
+/// The navigator's planning storage (the ABIT* arena, the suspended search, the best path, the terrain tile and its
+/// staging copy; `NavPlanStorage::bytes()`, ~1.1 MiB) in SRAM: the PSRAM is nearly full with the map's pool and the
+/// bench's arenas. Measured on the panic-never flight build of 2026-12-04 (`llvm-nm -S`): 1 163 336 B, in `.data`
+/// (its empty state has 8 non-zero bytes, two 0xFFFFFFFF words, so it is not a `.bss` value).
 static NAV_PLAN: Lent<NavPlanStorage> = Lent::new(NavPlanStorage::new());
 
+/// The global planner's storage (homotopy goals on an uploaded tile, `HomotopyStorage`, ~0.66 MiB) in SRAM: its
+/// empty BTM and A* arena are not all zero bytes, so it is in `.data` (its image in flash).
+static NAV_HOMOTOPY: Lent<HomotopyStorage> = Lent::new(HomotopyStorage::new());
+
 /// The flight software's autonomy, the same as the host's in-process `FlightAutonomy` (so outputs are equal).
-type BoardAutonomy = Navigator<&'static mut [Block], &'static mut [u32], &'static mut NavPlanStorage>;
+type BoardAutonomy =
+    Navigator<&'static mut [Block], &'static mut [u32], &'static mut NavPlanStorage, &'static mut HomotopyStorage>;
 
 /// Bytes of an `R` command after its tag.
 const RUN_LEN: usize = 21;
@@ -265,12 +271,16 @@ pub fn run(systick: SysTickClock, lockstep: bool) -> ! {
         host_eprintln!("board: planning storage lent twice");
         crate::fault::fail()
     };
+    let Some(global) = NAV_HOMOTOPY.take() else {
+        host_eprintln!("board: global planner storage lent twice");
+        crate::fault::fail()
+    };
     let Some(retained) = take_retained() else {
         host_eprintln!("board: retained memory lent twice");
         crate::fault::fail()
     };
     let mut autonomy = match Navigator::new(MapConfig::DEFAULT, &mut blocks[..], &mut index[..], planning) {
-        Ok(nav) => nav,
+        Ok(nav) => nav.with_homotopy(global),
         Err(e) => {
             let why = match e {
                 firmware::map::MapError::Config(_) => "invalid configuration",

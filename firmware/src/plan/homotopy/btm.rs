@@ -410,7 +410,7 @@ impl Btm {
                     let _ = ts.push((*c - p).dot(d) / l2);
                 }
             }
-            ts.sort_unstable_by(|a, b| a.total_cmp(b));
+            super::geo::sort_by(&mut ts, |a, b| a.total_cmp(b).is_lt());
             for w in ts.windows(2) {
                 if let [t0, t1] = w {
                     let m = p + d * (0.5 * (t0 + t1));
@@ -670,7 +670,7 @@ impl Btm {
             }
         }
         let Some(cands) = self.cand.get_mut(..n) else { return Err(BtmError::Full(Arena::Candidates)) };
-        cands.sort_unstable_by(|x, y| x.2.total_cmp(&y.2).then(x.0.cmp(&y.0)).then(x.1.cmp(&y.1)));
+        super::geo::sort_by(cands, |x, y| x.2.total_cmp(&y.2).then(x.0.cmp(&y.0)).then(x.1.cmp(&y.1)).is_lt());
         for c in 0..n {
             let Some(&(a, b, _)) = self.cand.get(c) else { continue };
             let (Some(pa), Some(pb)) = (self.vertex(a).map(|v| v.p), self.vertex(b).map(|v| v.p)) else { continue };

@@ -107,9 +107,10 @@ impl Default for HeightTile {
 }
 
 impl HeightTile {
-    /// An empty tile (0 x 0).
+    /// An empty tile (0 x 0; spacing 0: no post to look up). All zero bytes, so a `static` holding one stays in
+    /// `.bss`.
     pub const fn new() -> Self {
-        HeightTile { origin: [0.0; 2], resolution_m: 1.0, rows: 0, cols: 0, heights: [0.0; MAX_TILE_CELLS] }
+        HeightTile { origin: [0.0; 2], resolution_m: 0.0, rows: 0, cols: 0, heights: [0.0; MAX_TILE_CELLS] }
     }
     /// Replaces the tile after checking every input; on error the previous tile is intact.
     pub fn load(&mut self, origin: [f64; 2], resolution_m: f64, rows: usize, cols: usize, heights: &[f32]) -> Result<(), TileError> {
@@ -494,7 +495,14 @@ fn fit_plane(
             let f = |i: usize| m.get(i).and_then(|r| r.get(col)).map_or(0.0, |v: &f64| v.abs());
             f(a).total_cmp(&f(b))
         })?;
-        m.swap(col, piv);
+        // `swap` without its bounds panic (the flight build links `panic-never`): both rows exist
+        let (Some(&rc), Some(&rp)) = (m.get(col), m.get(piv)) else { return None };
+        if let Some(r) = m.get_mut(col) {
+            *r = rp;
+        }
+        if let Some(r) = m.get_mut(piv) {
+            *r = rc;
+        }
         let p = *m.get(col)?;
         let d = p.get(col).copied()?;
         if d.abs() < 1e-12 * (1.0 + n as f64) {
@@ -550,7 +558,7 @@ fn merge_short_runs(runs: &mut HVec<Run, MAX_PROFILE_BINS>, min_len: f64) {
                     if let Some(x) = runs.get_mut(i - 1) {
                         x.to = b.to;
                     }
-                    runs.remove(i);
+                    let _ = super::geo::remove_at(runs, i);
                 }
                 _ => i += 1,
             }
@@ -578,7 +586,7 @@ fn merge_short_runs(runs: &mut HVec<Run, MAX_PROFILE_BINS>, min_len: f64) {
         } else if let Some(n) = runs.get_mut(i + 1) {
             n.from = cur.from;
         }
-        runs.remove(i);
+        let _ = super::geo::remove_at(runs, i);
     }
 }
 
@@ -831,7 +839,7 @@ impl DemDescent {
                     b.class = PlaneClass::TetherDemand;
                 }
             }
-            bands.remove(i + 1);
+            let _ = super::geo::remove_at(&mut bands, i + 1);
         }
 
         // 4. Fold lines clipped to the corridor sides; then each plane is refitted on the posts between its fold
@@ -1053,7 +1061,14 @@ impl DemDescent {
                 pair = Some((best.1, best.2));
             }
             let Some((i, j)) = pair else { break };
-            let b = comps.swap_remove(j);
+            // swap_remove without its panic path: the last takes j's place
+            let Some(&b) = comps.get(j) else { break };
+            if let Some(&last) = comps.last() {
+                if let Some(s) = comps.get_mut(j) {
+                    *s = last;
+                }
+            }
+            comps.pop();
             if let Some(a) = comps.get_mut(i) {
                 dop_merge(a, &b);
             }
@@ -1127,7 +1142,7 @@ impl DemDescent {
                         let _ = ts.push(oq / (oq - op));
                     }
                 }
-                ts.sort_unstable_by(f64::total_cmp);
+                super::geo::sort_by(&mut ts, |a, b| a.total_cmp(b).is_lt());
                 for t in ts {
                     let x = q + (*p - q) * t;
                     let w = self.fold_back(x).ok_or(RouteError::Geometry)?;

@@ -230,7 +230,7 @@ pub fn ear_clip(v: &[Pt], out: &mut [[u8; 3]]) -> usize {
             } else {
                 return written;
             }
-            idx.remove(k);
+            let _ = remove_at(&mut idx, k);
             clipped = true;
             break;
         }
@@ -254,4 +254,74 @@ pub fn grid_neighbours(i: usize, cols: usize, rows: usize) -> [Option<usize>; 4]
         (r > 0).then(|| i - cols),
         (r + 1 < rows).then(|| i + cols),
     ]
+}
+
+/// Sorts `v` by `less` (a strict weak order) with no panic path: heapsort (O(n log n), every loop bounded, every
+/// index through `get`). The flight build links with `panic-never`, and core's sorts keep a panic for an order
+/// that violates totality. Used with total orders (ties broken by ids), so the result is the one order there is.
+pub fn sort_by<T: Copy>(v: &mut [T], mut less: impl FnMut(&T, &T) -> bool) {
+    let n = v.len();
+    let mut i = n / 2;
+    while i > 0 {
+        i -= 1;
+        sift_down(v, i, n, &mut less);
+    }
+    let mut end = n;
+    while end > 1 {
+        end -= 1;
+        swap_at(v, 0, end);
+        sift_down(v, 0, end, &mut less);
+    }
+}
+
+fn swap_at<T: Copy>(v: &mut [T], i: usize, j: usize) {
+    if let (Some(&a), Some(&b)) = (v.get(i), v.get(j)) {
+        if let Some(x) = v.get_mut(i) {
+            *x = b;
+        }
+        if let Some(y) = v.get_mut(j) {
+            *y = a;
+        }
+    }
+}
+
+fn sift_down<T: Copy>(v: &mut [T], mut root: usize, end: usize, less: &mut impl FnMut(&T, &T) -> bool) {
+    // the root at least doubles each pass: at most usize::BITS passes
+    for _ in 0..usize::BITS {
+        let child = root.saturating_mul(2).saturating_add(1);
+        if child >= end {
+            return;
+        }
+        let mut c = child;
+        if child + 1 < end {
+            if let (Some(a), Some(b)) = (v.get(child), v.get(child + 1)) {
+                if less(a, b) {
+                    c = child + 1;
+                }
+            }
+        }
+        match (v.get(root), v.get(c)) {
+            (Some(r), Some(x)) if less(r, x) => {
+                swap_at(v, root, c);
+                root = c;
+            }
+            _ => return,
+        }
+    }
+}
+
+/// Removes element `i` of `v`, shifting the rest down (heapless's `remove` keeps a panic for an index out of range;
+/// this does nothing then).
+pub fn remove_at<T: Copy, const N: usize>(v: &mut heapless::Vec<T, N>, i: usize) -> Option<T> {
+    let out = v.get(i).copied()?;
+    let n = v.len();
+    for k in i..n.saturating_sub(1) {
+        if let Some(&next) = v.get(k + 1) {
+            if let Some(slot) = v.get_mut(k) {
+                *slot = next;
+            }
+        }
+    }
+    v.truncate(n.saturating_sub(1));
+    Some(out)
 }

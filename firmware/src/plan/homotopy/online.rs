@@ -166,7 +166,7 @@ impl OnlinePlanner {
         if self.route.is_empty() {
             return;
         }
-        let (p, leg) = self.route.remove(0);
+        let Some((p, leg)) = super::geo::remove_at(&mut self.route, 0) else { return };
         match leg {
             Leg::Advance => {
                 if self.traveled.last() != Some(&p) {

@@ -51,9 +51,16 @@ pub struct Workspace {
     pub classes: HVec<HomotopyClass, MAX_CLASSES>,
 }
 
+impl Workspace {
+    /// Empty (const: a flight computer keeps it in a `static`).
+    pub const fn new() -> Self {
+        Workspace { search: SearchArena::new(), grid: ControlGrid::new(), classes: HVec::new() }
+    }
+}
+
 impl Default for Workspace {
     fn default() -> Self {
-        Workspace { search: SearchArena::new(), grid: ControlGrid::new(), classes: HVec::new() }
+        Self::new()
     }
 }
 
@@ -300,8 +307,13 @@ pub fn plan_from(
             let len = shp.as_ref().map(|p| p.length()).unwrap_or(f64::MAX);
             let _ = order.push((len, i, shp.ok()));
         }
-        order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        for (len, i, shp) in order.iter() {
+        // sorted by (length, class index) through a key list (the panic-free sort moves `Copy` values)
+        let mut keys: HVec<(f64, usize, usize), MAX_CLASSES> = HVec::new();
+        for (k, o) in order.iter().enumerate() {
+            let _ = keys.push((o.0, o.1, k));
+        }
+        super::geo::sort_by(&mut keys, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).is_lt());
+        for (len, i, shp) in keys.iter().filter_map(|k| order.get(k.2)) {
             let Some(class) = ws.classes.get(*i).cloned() else { continue };
             let Some(shp) = shp.clone() else {
                 let _ = report.examined.push(ClassVerdict {
