@@ -245,6 +245,9 @@ fn lp_solver_agrees_with_clarabel_on_10000_random_instances() {
 
 
 
+/// One constraint row `(a, b)` of `s = b - a . x` in a cone: `a` as (column, value) pairs.
+type Row = (Vec<(usize, f64)>, f64);
+
 /// Eqs. 1-8 with Coulomb's friction cone (`|lambda_t| <= mu_scale mu lambda_z`) instead of the LP's octagon, the
 /// same moment box, load cap and tension bounds, as a second-order-cone feasibility problem for clarabel, built
 /// from the problem's contacts, masses and tether in the world frame. `None`: clarabel did not decide.
@@ -256,9 +259,9 @@ fn cone_feasible(prob: &StabilityProblem, mu_scale: f64) -> Option<bool> {
     let k = prob.contacts.len();
     let nv = 6 * k + 1; // per contact force f and moment m (world frame, in rover weights), then the tension
     let t_col = 6 * k;
-    let mut zero: Vec<(Vec<(usize, f64)>, f64)> = Vec::new();
-    let mut nonneg: Vec<(Vec<(usize, f64)>, f64)> = Vec::new();
-    let mut soc: Vec<[(Vec<(usize, f64)>, f64); 3]> = Vec::new();
+    let mut zero: Vec<Row> = Vec::new();
+    let mut nonneg: Vec<Row> = Vec::new();
+    let mut soc: Vec<[Row; 3]> = Vec::new();
     // force and moment balance about the origin: sum f + T d = -sum m g / W; sum (p x f + m) + T (e x d) = ...
     let weight_force: Vector3<f64> = prob.masses.iter().map(|m| g * f64::from(m.mass_kg)).sum::<Vector3<f64>>() / w;
     let weight_moment: Vector3<f64> = prob.masses.iter().map(|m| v(m.com).cross(&(g * f64::from(m.mass_kg)))).sum::<Vector3<f64>>() / w;
@@ -294,7 +297,7 @@ fn cone_feasible(prob: &StabilityProblem, mu_scale: f64) -> Option<bool> {
         let mu = mu_scale * f64::from(c.mu);
         // s = b - A x in the cone: (mu n.f, x.f, y.f) with n.f >= |(x.f, y.f)|
         soc.push([(on(6 * i, n, -mu), 0.0), (on(6 * i, x, -1.0), 0.0), (on(6 * i, y, -1.0), 0.0)]);
-        nonneg.push((on(6 * i, n, 1.0), f64::from(firmware::config::stability::NORMAL_FORCE_CAP)));
+        nonneg.push((on(6 * i, n, 1.0), firmware::config::stability::NORMAL_FORCE_CAP));
         let mu_m = f64::from(c.mu_m);
         for axis in [x, y, n] {
             if mu_m > 0.0 {
@@ -310,7 +313,7 @@ fn cone_feasible(prob: &StabilityProblem, mu_scale: f64) -> Option<bool> {
     }
     nonneg.push((vec![(t_col, -1.0)], 0.0));
     nonneg.push((vec![(t_col, 1.0)], tmax));
-    let mut rows: Vec<(Vec<(usize, f64)>, f64)> = Vec::new();
+    let mut rows: Vec<Row> = Vec::new();
     rows.extend(zero.iter().cloned());
     rows.extend(nonneg.iter().cloned());
     for c in &soc {

@@ -150,6 +150,7 @@ fn planner_verdict<D: DistanceField>(space: &TetherSpace<'_, D>, x: f64, y: f64,
 }
 
 /// `--explain`: both judges' view of one pose, printed.
+#[allow(clippy::too_many_arguments)] // a print helper: both judges and the pose, as the study holds them
 fn explain<D: DistanceField>(
     index: usize,
     space: &TetherSpace<'_, D>,
