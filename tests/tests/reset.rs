@@ -15,12 +15,17 @@ use host_sim::link::{FlightLink, ResetCause};
 use host_sim::mission::run::{run_mission, MissionOptions, ResetAt, Verdict};
 use host_sim::replay::{replay, ReplayOutcome};
 
-/// `mission_snag.toml`, seed 1, reset once the tether is wrapped.
+/// The seed of the snag mission these tests reset: one whose mission wraps the tether before it ends (seeds 1 and 2
+/// stop safe on `MarginBelowMinimum` before the tether touches the rock since the stability LP's friction octagon,
+/// 2026-12-04; the precondition is asserted below either way).
+const SEED: u64 = 3;
+
+/// `mission_snag.toml`, seed [`SEED`], reset once the tether is wrapped.
 fn snag_with_reset() -> (host_sim::scenario::Scenario, MissionOptions) {
     let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios/mission_snag.toml");
     let sc = host_sim::scenario::load(&p).unwrap_or_else(|e| panic!("{e}"));
     let opts = MissionOptions {
-        seed: 1,
+        seed: SEED,
         tracking: firmware::protocol::Tracking::ClosedLoop,
         noiseless: false,
         live: false,
@@ -33,7 +38,7 @@ fn header(scenario: &str, link: &str) -> fieldlog::Header {
     fieldlog::Header {
         protocol_version: firmware::config::protocol::PROTOCOL_VERSION,
         created_at_unix_ms: 0,
-        seed: 1,
+        seed: SEED,
         config: format!("{{\"scenario\":\"{scenario}\",\"link\":\"{link}\",\"step_us\":{DEFAULT_STEP_US}}}"),
     }
 }
