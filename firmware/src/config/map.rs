@@ -25,6 +25,11 @@ pub const FLIGHT_BLOCKS: usize = 23_040;
 /// Default size of the block index (open addressing, power of two, at least 2x the pool so probes stay short).
 pub const FLIGHT_INDEX: usize = 65_536;
 
+/// Largest block pool a [`crate::map::Map`] accepts (`Map::from_slices` and `Map::reattach` refuse a longer one
+/// with `MapError::BadStorage`): 2^24 - 1 blocks (9.1 GB at 544 B), so a slot fits the 24-bit link of the ESDF's
+/// FIFO of blocks with spilled voxels (`map::esdf`) with one value left for "none".
+pub const MAX_POOL_BLOCKS: usize = (1 << 24) - 1;
+
 /// Longest probe sequence in the block index before an insert gives up with
 /// [`crate::map::MapError::IndexProbeExhausted`]. Default 32: at load factor <= 0.5 linear probing needs ~1.5
 /// probes on average; 32 is a generous bound that keeps every lookup O(1) and bounded.
