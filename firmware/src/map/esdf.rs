@@ -214,6 +214,28 @@ impl Map<'_> {
                 self.append_block(&mut wave, s);
             }
         }
+        // A new block's voxels learn the sites of the blocks that were there before by a pull of the cells next to
+        // those blocks; the rest hear of every site through the queue (new sites and pulled voxels offer theirs).
+        for s in 0..used {
+            let Some(b) = self.blocks.get(s) else { break };
+            if b.flags & FLAG_ESDF_NEW == 0 {
+                continue;
+            }
+            let c = b.coord;
+            let mut pending = 0u64;
+            for (j, mask) in BORDER_CELLS.iter().enumerate() {
+                if j == 13 {
+                    continue;
+                }
+                let nc = [c[0] + (j % 3) as i32 - 1, c[1] + ((j / 3) % 3) as i32 - 1, c[2] + (j / 9) as i32 - 1];
+                if self.find_block(nc).and_then(|n| self.blocks.get(n)).is_some_and(|nb| nb.flags & FLAG_ESDF_NEW == 0) {
+                    pending |= mask;
+                }
+            }
+            if let Some(b) = self.blocks.get_mut(s) {
+                b.pending |= pending;
+            }
+        }
         let tol = self.site_tolerance();
         for s in 0..used {
             let Some(b) = self.blocks.get_mut(s) else { break };
@@ -222,10 +244,7 @@ impl Map<'_> {
             }
             wave.out.blocks_rebuilt += 1;
             let mut sites_changed = false;
-            let mut pending = b.pending;
-            if b.flags & FLAG_ESDF_NEW != 0 {
-                pending = u64::MAX; // a new block's voxels have not seen the sites around them yet
-            }
+            let pending = b.pending;
             for i in 0..BLOCK_VOXELS {
                 let Some(b) = self.blocks.get_mut(s) else { break };
                 let (Some(t), Some(w), Some(so), Some(sw)) =
@@ -687,6 +706,29 @@ const NEIGHBOUR_TABLE: [[[u16; 2]; 26]; BLOCK_VOXELS] = {
                     ni = ni * e + (nl[k] & (e - 1));
                 }
                 out[i][n] = [j as u16, ni as u16];
+            }
+            n += 1;
+        }
+        i += 1;
+    }
+    out
+};
+
+/// For each of the 27 blocks around a block (`bx + 3 by + 9 bz`, 13 = itself): the pull cells (bits of
+/// `Block::pending`, see `cell_bit`) whose voxels have a neighbour in that block.
+const BORDER_CELLS: [u64; 27] = {
+    let mut out = [0u64; 27];
+    let sh = super::CELL_SHIFT;
+    let mut i = 0;
+    while i < BLOCK_VOXELS {
+        let mut n = 0;
+        while n < 26 {
+            #[allow(clippy::indexing_slicing)] // const evaluation: an out-of-bounds index fails the build
+            {
+                let j = NEIGHBOUR_TABLE[i][n][0] as usize;
+                let l = [i % BLOCK_EDGE, (i / BLOCK_EDGE) % BLOCK_EDGE, i / (BLOCK_EDGE * BLOCK_EDGE)];
+                let c = (l[0] >> sh) + 4 * ((l[1] >> sh) + 4 * (l[2] >> sh));
+                out[j] |= 1u64 << (c & 63);
             }
             n += 1;
         }
