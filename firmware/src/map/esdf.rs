@@ -287,9 +287,20 @@ impl Map<'_> {
             }
             any_changed = true;
             let c = b.coord;
+            // The region of a block whose -x (-y, -z) neighbour's sites changed too already holds every block of
+            // this block's cube with dx < k (dy < k, dz < k): only the rest is looked up.
+            let changed = |d: [i32; 3]| {
+                self.find_block([c[0] - d[0], c[1] - d[1], c[2] - d[2]])
+                    .and_then(|n| self.blocks.get(n))
+                    .is_some_and(|nb| nb.flags & FLAG_SITES_CHANGED != 0)
+            };
+            let (hx, hy, hz) = (changed([1, 0, 0]), changed([0, 1, 0]), changed([0, 0, 1]));
             for dz in -k..=k {
                 for dy in -k..=k {
                     for dx in -k..=k {
+                        if (hx && dx < k) || (hy && dy < k) || (hz && dz < k) {
+                            continue;
+                        }
                         if let Some(n) = self.find_block([c[0] + dx, c[1] + dy, c[2] + dz]) {
                             if let Some(nb) = self.blocks.get_mut(n) {
                                 nb.flags |= FLAG_REGION;
