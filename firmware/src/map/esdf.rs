@@ -472,7 +472,7 @@ impl Map<'_> {
     /// The slots of the 27 blocks around block `s` (index `j` = `bx + 3 by + 9 bz`, offsets 0..3 for -1..=1; 13 is
     /// `s`), from the cache; entries are looked up on first use by [`Map::resolve`].
     #[inline]
-    fn around_slots<'w>(around: &'w mut Around, s: usize) -> Option<&'w mut [u32; 27]> {
+    fn around_slots(around: &mut Around, s: usize) -> Option<&mut [u32; 27]> {
         let way = s % AROUND_WAYS;
         let (key, slots) = (around.keys.get_mut(way)?, around.slots.get_mut(way)?);
         if *key != s as u32 {
