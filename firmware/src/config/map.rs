@@ -63,9 +63,9 @@ pub const ESDF_SWEEPS_LIMIT: usize = 256;
 
 /// Capacity of the ESDF's lower queue (the wavefront of voxels whose site just improved), in voxels: a fixed array
 /// of this many `u32` on the stack of [`crate::map::Map::update_esdf`]. Default 8192 (32 KiB of stack, a quarter
-/// of the board's stack guard). A voxel that finds the queue full is not lost: the cells around it are marked for
-/// a pull (each voxel compared with its 26 neighbours) in the next round, so a full queue costs time, not
-/// correctness.
+/// of the board's stack guard). A voxel that finds the queue full is not lost: it waits in a bit of its block, and
+/// its block in a first-in first-out list of such blocks that refills the queue when it runs dry (`map::esdf`), so
+/// a full queue costs a little time, not correctness.
 pub const ESDF_QUEUE_CAPACITY: usize = 8192;
 
 /// The unit of the ESDF budget [`MapConfig::esdf_max_sweeps`]: one "sweep" of the wavefront is this many voxel

@@ -11,9 +11,10 @@
 //! 2. Raise (done directly, as each voxel stores the offset of its site): in every block within
 //!    `esdf_max_distance` of a block whose sites moved or vanished, a voxel whose site is no longer a fixed-band
 //!    voxel with the same value is reset, and so is a fixed-band site that left the band; a reset voxel's unused
-//!    offset holds the marker `RESET` until it is pulled. Voxels that changed sign (marked by the integration) and
-//!    newly allocated blocks are marked by 2x2x2-voxel cells in the block's `pending` mask (64 bits in the lent
-//!    storage).
+//!    offset holds the marker `RESET` until it is pulled. Voxels that changed sign (marked by the integration), and
+//!    in a newly allocated block the voxels next to a block that existed before this update, are marked by pull
+//!    cells in the block's `pending` mask (64 bits in the lent storage; a cell is one voxel at the default edge of
+//!    4, 2x2x2 voxels at 8). The other voxels of a new block hear of every site through the queue.
 //! 3. Lower: every reset voxel and every voxel of a marked cell is **pulled** (takes the best site of its 26
 //!    neighbours) and queued if it improved; then the queue runs: each pop offers the voxel's site to its 26
 //!    neighbours and queues those it improves (strictly better by 1e-5 voxel, within `esdf_max_distance`).
@@ -23,13 +24,23 @@
 //! own and its 26 neighbours' sites. Which of several such fixed points is reached depends on the order, so
 //! individual voxels can differ from the sweeps' (where vector propagation is not exact either way).
 //!
+//! Neighbours: a voxel inside its block reaches its 26 neighbours by fixed index deltas; a voxel on the block's
+//! border through a const table (per local voxel and neighbour: which of the 27 blocks around, and the local
+//! index there) and the slots of those 27 blocks, looked up once per block in a 16-way direct-mapped cache.
+//!
 //! Bounds: the lower queue is a fixed array of [`ESDF_QUEUE_CAPACITY`] entries (default 8192, 32 KiB) on the
-//! stack of [`Map::update_esdf`]. A voxel that finds it full sets its bit in its block's `queued` mask (one bit
-//! per voxel, in the lent storage) and is counted in [`EsdfOutcome::queue_overflows`]; when the queue runs dry it
-//! is refilled from those bits, block by block round robin. The budget is `esdf_max_sweeps` (default 32) times
+//! stack of [`Map::update_esdf`]. A voxel that finds it full, or finds spilled voxels waiting, sets its bit in its
+//! block's `queued` mask (one bit per voxel, in the lent storage) and is counted in
+//! [`EsdfOutcome::queue_overflows`]; its block joins a first-in first-out list of blocks with spilled voxels,
+//! linked through a 24-bit slot in each block (hence a pool of at most
+//! [`MAX_POOL_BLOCKS`](crate::config::map::MAX_POOL_BLOCKS) blocks). When the queue runs dry it is refilled from
+//! the head of that list, so the wavefront stays breadth-first at the granularity of a block. The raise region of a
+//! block whose sites moved is the cube of blocks within `esdf_max_distance`; where its -x, -y or -z neighbour's
+//! sites moved too, only the part of the cube that neighbour's cube does not hold is looked up. The budget is `esdf_max_sweeps` (default 32) times
 //! [`ESDF_VISITS_PER_BLOCK`] (default 64) voxel visits (pulls and pops) per block in use, at least
 //! `esdf_max_sweeps` times the queue capacity. A call that runs out moves the voxels still queued into their bits
-//! and returns `converged: false`; the next call continues from the marks and bits. No heap, every loop bounded,
+//! and returns `converged: false`; the next call continues from the marks and bits (their blocks join the list in
+//! slot order). No heap, every loop bounded,
 //! slot and raster order only (deterministic).
 
 use super::{

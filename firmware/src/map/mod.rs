@@ -9,8 +9,9 @@
 //! - [`Block`]: `BLOCK_EDGE`^3 voxels (4^3 by default), [`VOXEL_BYTES`] = 8 bytes per voxel: quantised TSDF
 //!   (`i16`, units of truncation / 32767), weight (`u16`, 1/64 units), the ESDF site (`[i8; 3]` offset to the
 //!   nearest fixed-band voxel) and that site's signed TSDF (`i8`, hundredths of a voxel); plus the ESDF
-//!   wavefront's bookkeeping, a 64-bit mask of cells to pull and one bit per voxel for the
-//!   queue's overflow (544 B a block at the default edge, 32 B of it header).
+//!   wavefront's bookkeeping, a 64-bit mask of cells to pull, one bit per voxel for the
+//!   queue's overflow and a 24-bit link for the list of blocks with overflowed voxels (544 B a block at the
+//!   default edge, 32 B of it header).
 //! - [`MapStorage`]: the block pool plus the block index, owned by the caller (`static` on the board, `Box` on the
 //!   host) and lent to [`Map::new`]. The index is open addressing with linear probing, bounded by
 //!   [`MAX_PROBE`](crate::config::map::MAX_PROBE). Blocks are allocated on demand and never evicted: a full pool
