@@ -36,12 +36,12 @@
 //! [`MAX_POOL_BLOCKS`](crate::config::map::MAX_POOL_BLOCKS) blocks). When the queue runs dry it is refilled from
 //! the head of that list, so the wavefront stays breadth-first at the granularity of a block. The raise region of a
 //! block whose sites moved is the cube of blocks within `esdf_max_distance`; where its -x, -y or -z neighbour's
-//! sites moved too, only the part of the cube that neighbour's cube does not hold is looked up. The budget is `esdf_max_sweeps` (default 32) times
-//! [`ESDF_VISITS_PER_BLOCK`] (default 64) voxel visits (pulls and pops) per block in use, at least
-//! `esdf_max_sweeps` times the queue capacity. A call that runs out moves the voxels still queued into their bits
-//! and returns `converged: false`; the next call continues from the marks and bits (their blocks join the list in
-//! slot order). No heap, every loop bounded,
-//! slot and raster order only (deterministic).
+//! sites moved too, only the part of the cube that neighbour's cube does not hold is looked up. The budget is
+//! `esdf_max_sweeps` (default 32) times [`ESDF_VISITS_PER_BLOCK`] (default 8 at the default edge) voxel visits
+//! (pulls and pops) per block in use, at least `esdf_max_sweeps` times the queue capacity. A call that runs out
+//! moves the voxels still queued into their bits and returns `converged: false`; the next call continues from the
+//! marks and bits (their blocks join the list in slot order). No heap, every loop bounded, slot and raster order
+//! only (deterministic).
 
 use super::{
     cell_bit, local_coords, local_index, split, Map, BLOCK_EDGE, BLOCK_VOXELS, FLAG_ESDF_NEW, FLAG_QUEUED, FLAG_REGION, FLAG_RESET,
@@ -217,8 +217,6 @@ impl Map<'_> {
         let tq = self.cfg.truncation / 32767.0;
         let dmax = wave.dmax;
 
-        // 1. Rebuild the fixed-band sites of blocks whose TSDF changed (values within the hysteresis are kept). New
-        // sites are queued; voxels that lost their site, and every voxel of a new block, are marked for a pull.
         // Voxels left queued by a call that ran out of budget: their blocks join the FIFO in slot order.
         for s in 0..used {
             if self.blocks.get(s).is_some_and(|b| b.flags & FLAG_QUEUED != 0) {
@@ -239,7 +237,8 @@ impl Map<'_> {
                     continue;
                 }
                 let nc = [c[0] + (j % 3) as i32 - 1, c[1] + ((j / 3) % 3) as i32 - 1, c[2] + (j / 9) as i32 - 1];
-                if self.find_block(nc).and_then(|n| self.blocks.get(n)).is_some_and(|nb| nb.flags & FLAG_ESDF_NEW == 0) {
+                let old = self.find_block(nc).and_then(|n| self.blocks.get(n));
+                if old.is_some_and(|nb| nb.flags & FLAG_ESDF_NEW == 0) {
                     pending |= mask;
                 }
             }
@@ -247,6 +246,8 @@ impl Map<'_> {
                 b.pending |= pending;
             }
         }
+        // 1. Rebuild the fixed-band sites of blocks whose TSDF changed (values within the hysteresis are kept). New
+        // sites are queued; voxels that lost their site are marked for a pull.
         let tol = self.site_tolerance();
         for s in 0..used {
             let Some(b) = self.blocks.get_mut(s) else { break };
