@@ -25,6 +25,11 @@ pub const FLIGHT_BLOCKS: usize = 23_040;
 /// Default size of the block index (open addressing, power of two, at least 2x the pool so probes stay short).
 pub const FLIGHT_INDEX: usize = 65_536;
 
+/// Largest block pool a [`crate::map::Map`] accepts (`Map::from_slices` and `Map::reattach` refuse a longer one
+/// with `MapError::BadStorage`): 2^24 - 1 blocks (9.1 GB at 544 B), so a slot fits the 24-bit link of the ESDF's
+/// FIFO of blocks with spilled voxels (`map::esdf`) with one value left for "none".
+pub const MAX_POOL_BLOCKS: usize = (1 << 24) - 1;
+
 /// Longest probe sequence in the block index before an insert gives up with
 /// [`crate::map::MapError::IndexProbeExhausted`]. Default 32: at load factor <= 0.5 linear probing needs ~1.5
 /// probes on average; 32 is a generous bound that keeps every lookup O(1) and bounded.
@@ -58,9 +63,9 @@ pub const ESDF_SWEEPS_LIMIT: usize = 256;
 
 /// Capacity of the ESDF's lower queue (the wavefront of voxels whose site just improved), in voxels: a fixed array
 /// of this many `u32` on the stack of [`crate::map::Map::update_esdf`]. Default 8192 (32 KiB of stack, a quarter
-/// of the board's stack guard). A voxel that finds the queue full is not lost: the cells around it are marked for
-/// a pull (each voxel compared with its 26 neighbours) in the next round, so a full queue costs time, not
-/// correctness.
+/// of the board's stack guard). A voxel that finds the queue full is not lost: it waits in a bit of its block, and
+/// its block in a first-in first-out list of such blocks that refills the queue when it runs dry (`map::esdf`), so
+/// a full queue costs a little time, not correctness.
 pub const ESDF_QUEUE_CAPACITY: usize = 8192;
 
 /// The unit of the ESDF budget [`MapConfig::esdf_max_sweeps`]: one "sweep" of the wavefront is this many voxel

@@ -11,9 +11,10 @@
 //! 2. Raise (done directly, as each voxel stores the offset of its site): in every block within
 //!    `esdf_max_distance` of a block whose sites moved or vanished, a voxel whose site is no longer a fixed-band
 //!    voxel with the same value is reset, and so is a fixed-band site that left the band; a reset voxel's unused
-//!    offset holds the marker `RESET` until it is pulled. Voxels that changed sign (marked by the integration) and
-//!    newly allocated blocks are marked by 2x2x2-voxel cells in the block's `pending` mask (64 bits in the lent
-//!    storage).
+//!    offset holds the marker `RESET` until it is pulled. Voxels that changed sign (marked by the integration), and
+//!    in a newly allocated block the voxels next to a block that existed before this update, are marked by pull
+//!    cells in the block's `pending` mask (64 bits in the lent storage; a cell is one voxel at the default edge of
+//!    4, 2x2x2 voxels at 8). The other voxels of a new block hear of every site through the queue.
 //! 3. Lower: every reset voxel and every voxel of a marked cell is **pulled** (takes the best site of its 26
 //!    neighbours) and queued if it improved; then the queue runs: each pop offers the voxel's site to its 26
 //!    neighbours and queues those it improves (strictly better by 1e-5 voxel, within `esdf_max_distance`).
@@ -23,14 +24,24 @@
 //! own and its 26 neighbours' sites. Which of several such fixed points is reached depends on the order, so
 //! individual voxels can differ from the sweeps' (where vector propagation is not exact either way).
 //!
+//! Neighbours: a voxel inside its block reaches its 26 neighbours by fixed index deltas; a voxel on the block's
+//! border through a const table (per local voxel and neighbour: which of the 27 blocks around, and the local
+//! index there) and the slots of those 27 blocks, looked up once per block in a 16-way direct-mapped cache.
+//!
 //! Bounds: the lower queue is a fixed array of [`ESDF_QUEUE_CAPACITY`] entries (default 8192, 32 KiB) on the
-//! stack of [`Map::update_esdf`]. A voxel that finds it full sets its bit in its block's `queued` mask (one bit
-//! per voxel, in the lent storage) and is counted in [`EsdfOutcome::queue_overflows`]; when the queue runs dry it
-//! is refilled from those bits, block by block round robin. The budget is `esdf_max_sweeps` (default 32) times
-//! [`ESDF_VISITS_PER_BLOCK`] (default 64) voxel visits (pulls and pops) per block in use, at least
-//! `esdf_max_sweeps` times the queue capacity. A call that runs out moves the voxels still queued into their bits
-//! and returns `converged: false`; the next call continues from the marks and bits. No heap, every loop bounded,
-//! slot and raster order only (deterministic).
+//! stack of [`Map::update_esdf`]. A voxel that finds it full, or finds spilled voxels waiting, sets its bit in its
+//! block's `queued` mask (one bit per voxel, in the lent storage) and is counted in
+//! [`EsdfOutcome::queue_overflows`]; its block joins a first-in first-out list of blocks with spilled voxels,
+//! linked through a 24-bit slot in each block (hence a pool of at most
+//! [`MAX_POOL_BLOCKS`](crate::config::map::MAX_POOL_BLOCKS) blocks). When the queue runs dry it is refilled from
+//! the head of that list, so the wavefront stays breadth-first at the granularity of a block. The raise region of a
+//! block whose sites moved is the cube of blocks within `esdf_max_distance`; where its -x, -y or -z neighbour's
+//! sites moved too, only the part of the cube that neighbour's cube does not hold is looked up. The budget is
+//! `esdf_max_sweeps` (default 32) times [`ESDF_VISITS_PER_BLOCK`] (default 8 at the default edge) voxel visits
+//! (pulls and pops) per block in use, at least `esdf_max_sweeps` times the queue capacity. A call that runs out
+//! moves the voxels still queued into their bits and returns `converged: false`; the next call continues from the
+//! marks and bits (their blocks join the list in slot order). No heap, every loop bounded, slot and raster order
+//! only (deterministic).
 
 use super::{
     cell_bit, local_coords, local_index, split, Map, BLOCK_EDGE, BLOCK_VOXELS, FLAG_ESDF_NEW, FLAG_QUEUED, FLAG_REGION, FLAG_RESET,
@@ -136,6 +147,20 @@ impl Ring<'_> {
     }
 }
 
+/// "No block" in the 24-bit links of the FIFO of blocks with spilled voxels (`Block::qnext`); every slot is below
+/// it ([`crate::config::map::MAX_POOL_BLOCKS`]).
+const NO_LINK: usize = (1 << 24) - 1;
+
+#[inline]
+fn to_link(s: usize) -> [u8; 3] {
+    [s as u8, (s >> 8) as u8, (s >> 16) as u8]
+}
+
+#[inline]
+fn from_link(l: [u8; 3]) -> usize {
+    l[0] as usize | (l[1] as usize) << 8 | (l[2] as usize) << 16
+}
+
 /// Slots of the 27 blocks around recently visited blocks, looked up on demand: a direct-mapped cache of
 /// [`AROUND_WAYS`] blocks (by slot), since the queue interleaves the voxels of neighbouring blocks.
 struct Around {
@@ -159,12 +184,12 @@ struct Wave<'q> {
     around: Around,
     /// Some block has pending cells.
     pending: bool,
-    /// Some block has queued bits (voxels that found the queue full).
-    spilled: bool,
+    /// First block of the FIFO of blocks with queued bits (voxels that found the queue full), [`NO_LINK`] if none.
+    head: usize,
+    /// Last block of that FIFO.
+    tail: usize,
     /// Voxel visits (pulls and pops) left in this call.
     budget: u64,
-    /// Where the next refill starts (round robin over the slots, so spilled voxels are served in turn).
-    cursor: usize,
     dmax: Real,
     out: EsdfOutcome,
 }
@@ -179,8 +204,8 @@ impl Map<'_> {
             queue: Ring { buf: &mut buf, head: 0, len: 0 },
             around: Around::new(),
             pending: true,
-            spilled: true,
-            cursor: 0,
+            head: NO_LINK,
+            tail: NO_LINK,
             budget: (self.cfg.esdf_max_sweeps as u64)
                 .saturating_mul(((self.used * ESDF_VISITS_PER_BLOCK) as u64).max(ESDF_QUEUE_CAPACITY as u64)),
             dmax: self.cfg.esdf_max_distance / self.cfg.voxel_size,
@@ -192,8 +217,37 @@ impl Map<'_> {
         let tq = self.cfg.truncation / 32767.0;
         let dmax = wave.dmax;
 
+        // Voxels left queued by a call that ran out of budget: their blocks join the FIFO in slot order.
+        for s in 0..used {
+            if self.blocks.get(s).is_some_and(|b| b.flags & FLAG_QUEUED != 0) {
+                self.append_block(&mut wave, s);
+            }
+        }
+        // A new block's voxels learn the sites of the blocks that were there before by a pull of the cells next to
+        // those blocks; the rest hear of every site through the queue (new sites and pulled voxels offer theirs).
+        for s in 0..used {
+            let Some(b) = self.blocks.get(s) else { break };
+            if b.flags & FLAG_ESDF_NEW == 0 {
+                continue;
+            }
+            let c = b.coord;
+            let mut pending = 0u64;
+            for (j, mask) in BORDER_CELLS.iter().enumerate() {
+                if j == 13 {
+                    continue;
+                }
+                let nc = [c[0] + (j % 3) as i32 - 1, c[1] + ((j / 3) % 3) as i32 - 1, c[2] + (j / 9) as i32 - 1];
+                let old = self.find_block(nc).and_then(|n| self.blocks.get(n));
+                if old.is_some_and(|nb| nb.flags & FLAG_ESDF_NEW == 0) {
+                    pending |= mask;
+                }
+            }
+            if let Some(b) = self.blocks.get_mut(s) {
+                b.pending |= pending;
+            }
+        }
         // 1. Rebuild the fixed-band sites of blocks whose TSDF changed (values within the hysteresis are kept). New
-        // sites are queued; voxels that lost their site, and every voxel of a new block, are marked for a pull.
+        // sites are queued; voxels that lost their site are marked for a pull.
         let tol = self.site_tolerance();
         for s in 0..used {
             let Some(b) = self.blocks.get_mut(s) else { break };
@@ -202,10 +256,7 @@ impl Map<'_> {
             }
             wave.out.blocks_rebuilt += 1;
             let mut sites_changed = false;
-            let mut pending = b.pending;
-            if b.flags & FLAG_ESDF_NEW != 0 {
-                pending = u64::MAX; // a new block's voxels have not seen the sites around them yet
-            }
+            let pending = b.pending;
             for i in 0..BLOCK_VOXELS {
                 let Some(b) = self.blocks.get_mut(s) else { break };
                 let (Some(t), Some(w), Some(so), Some(sw)) =
@@ -248,9 +299,20 @@ impl Map<'_> {
             }
             any_changed = true;
             let c = b.coord;
+            // The region of a block whose -x (-y, -z) neighbour's sites changed too already holds every block of
+            // this block's cube with dx < k (dy < k, dz < k): only the rest is looked up.
+            let changed = |d: [i32; 3]| {
+                self.find_block([c[0] - d[0], c[1] - d[1], c[2] - d[2]])
+                    .and_then(|n| self.blocks.get(n))
+                    .is_some_and(|nb| nb.flags & FLAG_SITES_CHANGED != 0)
+            };
+            let (hx, hy, hz) = (changed([1, 0, 0]), changed([0, 1, 0]), changed([0, 0, 1]));
             for dz in -k..=k {
                 for dy in -k..=k {
                     for dx in -k..=k {
+                        if (hx && dx < k) || (hy && dy < k) || (hz && dz < k) {
+                            continue;
+                        }
                         if let Some(n) = self.find_block([c[0] + dx, c[1] + dy, c[2] + dz]) {
                             if let Some(nb) = self.blocks.get_mut(n) {
                                 nb.flags |= FLAG_REGION;
@@ -330,7 +392,7 @@ impl Map<'_> {
                 if wave.pending {
                     self.pull_pending(&mut wave);
                 }
-                if wave.spilled {
+                if wave.head != NO_LINK {
                     self.refill(&mut wave);
                 }
                 if wave.queue.len == 0 {
@@ -353,84 +415,101 @@ impl Map<'_> {
         wave.out
     }
 
-    /// Queues voxel `(s, i)` (its site improved), or sets its spill bit when the queue is full.
+    /// Queues voxel `(s, i)` (its site improved), or sets its spill bit when the queue is full or spilled
+    /// voxels are waiting (they are older: first in, first out, by block).
     #[inline]
     fn queue_or_spill(&mut self, wave: &mut Wave<'_>, s: usize, i: usize) {
-        if !wave.queue.push(s, i) {
+        if wave.head != NO_LINK || !wave.queue.push(s, i) {
             wave.out.queue_overflows += 1;
             self.spill(wave, s, i);
         }
     }
 
+    /// Sets the spill bit of voxel `(s, i)`; its block joins the FIFO of blocks with spilled voxels if it is not
+    /// in it yet.
     fn spill(&mut self, wave: &mut Wave<'_>, s: usize, i: usize) {
-        if let Some(b) = self.blocks.get_mut(s) {
-            if let Some(w) = b.queued.get_mut(i / 64) {
-                *w |= 1u64 << (i % 64);
-                b.flags |= FLAG_QUEUED;
-                wave.spilled = true;
-            }
+        let Some(b) = self.blocks.get_mut(s) else { return };
+        let Some(w) = b.queued.get_mut(i / 64) else { return };
+        *w |= 1u64 << (i % 64);
+        if b.flags & FLAG_QUEUED == 0 {
+            b.flags |= FLAG_QUEUED;
+            self.append_block(wave, s);
         }
     }
 
-    /// Moves spilled voxels into the empty queue until it is full, block by block from where the last refill
-    /// stopped.
+    /// Appends block `s` to the FIFO of blocks with spilled voxels.
+    fn append_block(&mut self, wave: &mut Wave<'_>, s: usize) {
+        if let Some(b) = self.blocks.get_mut(s) {
+            b.qnext = to_link(NO_LINK);
+        }
+        if wave.tail == NO_LINK {
+            wave.head = s;
+        } else if let Some(t) = self.blocks.get_mut(wave.tail) {
+            t.qnext = to_link(s);
+        }
+        wave.tail = s;
+    }
+
+    /// Moves spilled voxels into the empty queue until it is full, block by block from the head of the FIFO of
+    /// blocks with spilled voxels (a block whose voxels do not all fit stays at its head).
     fn refill(&mut self, wave: &mut Wave<'_>) {
-        wave.spilled = false;
         wave.out.refills += 1;
-        let used = self.used;
-        for k in 0..used {
-            let s = (wave.cursor + k) % used;
-            let Some(b) = self.blocks.get_mut(s) else { break };
-            if b.flags & FLAG_QUEUED == 0 {
-                continue;
-            }
+        // Each block leaves the FIFO once per pass: bounded by the pool.
+        for _ in 0..self.blocks.len() {
+            let s = wave.head;
+            let Some(b) = self.blocks.get_mut(s) else {
+                wave.head = NO_LINK;
+                wave.tail = NO_LINK;
+                return;
+            };
             for (k, w) in b.queued.iter_mut().enumerate() {
                 while *w != 0 {
                     let i = k * 64 + w.trailing_zeros() as usize;
                     if !wave.queue.push(s, i) {
-                        wave.spilled = true;
-                        wave.cursor = s;
                         return;
                     }
                     *w &= *w - 1;
                 }
             }
             b.flags &= !FLAG_QUEUED;
+            let next = from_link(b.qnext);
+            wave.head = next;
+            if next == NO_LINK {
+                wave.tail = NO_LINK;
+                return;
+            }
         }
     }
 
-    /// Slot and local index of the voxel at offset `d` (each component in -1..=1) from local voxel `l` of block
-    /// `s`, if its block exists.
+    /// The slots of the 27 blocks around block `s` (index `j` = `bx + 3 by + 9 bz`, offsets 0..3 for -1..=1; 13 is
+    /// `s`), from the cache; entries are looked up on first use by [`Map::resolve`].
     #[inline]
-    fn neighbour(&self, around: &mut Around, s: usize, l: [usize; 3], d: [i32; 3]) -> Option<(usize, usize)> {
-        let e = BLOCK_EDGE as i32;
-        let nl = [l[0] as i32 + d[0], l[1] as i32 + d[1], l[2] as i32 + d[2]];
-        let ob = [
-            if nl[0] < 0 { 0 } else if nl[0] >= e { 2 } else { 1 },
-            if nl[1] < 0 { 0 } else if nl[1] >= e { 2 } else { 1 },
-            if nl[2] < 0 { 0 } else if nl[2] >= e { 2 } else { 1 },
-        ];
-        let ni = local_index([(nl[0] & (e - 1)) as usize, (nl[1] & (e - 1)) as usize, (nl[2] & (e - 1)) as usize]);
-        let j = ob[0] + 3 * ob[1] + 9 * ob[2];
-        if j == 13 {
-            return Some((s, ni));
-        }
+    fn around_slots(around: &mut Around, s: usize) -> Option<&mut [u32; 27]> {
         let way = s % AROUND_WAYS;
         let (key, slots) = (around.keys.get_mut(way)?, around.slots.get_mut(way)?);
         if *key != s as u32 {
             *key = s as u32;
             *slots = [AROUND_UNKNOWN; 27];
+            if let Some(c) = slots.get_mut(13) {
+                *c = s as u32;
+            }
         }
+        Some(slots)
+    }
+
+    /// Slot of block `j` of the 27 around block `s` (see [`Map::around_slots`]), if it exists.
+    #[inline]
+    fn resolve(&self, slots: &mut [u32; 27], s: usize, j: usize) -> Option<usize> {
         let slot = slots.get_mut(j)?;
         if *slot == AROUND_UNKNOWN {
             let c = self.blocks.get(s)?.coord;
-            let nc = [c[0] + ob[0] as i32 - 1, c[1] + ob[1] as i32 - 1, c[2] + ob[2] as i32 - 1];
+            let nc = [c[0] + (j % 3) as i32 - 1, c[1] + ((j / 3) % 3) as i32 - 1, c[2] + (j / 9) as i32 - 1];
             *slot = self.find_block(nc).map_or(AROUND_MISSING, |n| n as u32);
         }
         if *slot == AROUND_MISSING {
             None
         } else {
-            Some((*slot as usize, ni))
+            Some(*slot as usize)
         }
     }
 
@@ -524,9 +603,13 @@ impl Map<'_> {
                 }
             }
         } else {
-            for d in NEIGHBOURS.iter() {
-                let Some((ns, ni)) = self.neighbour(&mut wave.around, s, l, *d) else { continue };
+            let (Some(slots), Some(table)) = (Map::around_slots(&mut wave.around, s), NEIGHBOUR_TABLE.get(i)) else {
+                return false;
+            };
+            for (d, &[j, ni]) in NEIGHBOURS.iter().zip(table.iter()) {
+                let Some(ns) = self.resolve(slots, s, j as usize) else { continue };
                 let Some(nb) = self.blocks.get(ns) else { continue };
+                let ni = ni as usize;
                 if let (Some(&w), Some(&so)) = (nb.site_tsdf.get(ni), nb.site.get(ni)) {
                     cand.consider(w, so, d, wave.dmax);
                 }
@@ -552,12 +635,18 @@ impl Map<'_> {
             return;
         }
         let interior = l.iter().all(|&c| c >= 1 && c + 1 < BLOCK_EDGE);
-        for (d, delta) in NEIGHBOURS.iter().zip(NEIGHBOUR_DELTAS.iter()) {
+        let (Some(slots), Some(table)) = (Map::around_slots(&mut wave.around, s), NEIGHBOUR_TABLE.get(i)) else {
+            return;
+        };
+        // Improved neighbours, queued after the loop (in neighbour order).
+        let mut improved = [(0usize, 0usize); 26];
+        let mut n_improved = 0;
+        for ((d, delta), &[j, ni]) in NEIGHBOURS.iter().zip(NEIGHBOUR_DELTAS.iter()).zip(table.iter()) {
             let (ns, ni) = if interior {
                 (s, (i as isize + delta) as usize)
             } else {
-                match self.neighbour(&mut wave.around, s, l, *d) {
-                    Some(v) => v,
+                match self.resolve(slots, s, j as usize) {
+                    Some(ns) => (ns, ni as usize),
                     None => continue,
                 }
             };
@@ -588,9 +677,15 @@ impl Map<'_> {
             if dist < cur - 1e-5 {
                 *sw = wu;
                 *so = off8;
-                wave.out.voxels_changed += 1;
-                self.queue_or_spill(wave, ns, ni);
+                if let Some(e) = improved.get_mut(n_improved) {
+                    *e = (ns, ni);
+                    n_improved += 1;
+                }
             }
+        }
+        for &(ns, ni) in improved.iter().take(n_improved) {
+            wave.out.voxels_changed += 1;
+            self.queue_or_spill(wave, ns, ni);
         }
     }
 }
@@ -606,6 +701,61 @@ const NEIGHBOUR_DELTAS: [isize; 26] = {
             out[n] = d[0] as isize + BLOCK_EDGE as isize * (d[1] as isize + BLOCK_EDGE as isize * d[2] as isize);
         }
         n += 1;
+    }
+    out
+};
+
+/// For each local voxel and each of [`NEIGHBOURS`]: which of the 27 blocks around (`bx + 3 by + 9 bz`, 13 = its
+/// own) holds the neighbour, and the neighbour's local index there.
+const NEIGHBOUR_TABLE: [[[u16; 2]; 26]; BLOCK_VOXELS] = {
+    let mut out = [[[0u16; 2]; 26]; BLOCK_VOXELS];
+    let e = BLOCK_EDGE as i32;
+    let mut i = 0;
+    while i < BLOCK_VOXELS {
+        let l = [i as i32 % e, (i as i32 / e) % e, i as i32 / (e * e)];
+        let mut n = 0;
+        while n < 26 {
+            #[allow(clippy::indexing_slicing)] // const evaluation: an out-of-bounds index fails the build
+            {
+                let d = NEIGHBOURS[n];
+                let nl = [l[0] + d[0], l[1] + d[1], l[2] + d[2]];
+                let mut j = 0;
+                let mut ni = 0;
+                let mut k = 3;
+                while k > 0 {
+                    k -= 1;
+                    let ob = if nl[k] < 0 { 0 } else if nl[k] >= e { 2 } else { 1 };
+                    j = j * 3 + ob;
+                    ni = ni * e + (nl[k] & (e - 1));
+                }
+                out[i][n] = [j as u16, ni as u16];
+            }
+            n += 1;
+        }
+        i += 1;
+    }
+    out
+};
+
+/// For each of the 27 blocks around a block (`bx + 3 by + 9 bz`, 13 = itself): the pull cells (bits of
+/// `Block::pending`, see `cell_bit`) whose voxels have a neighbour in that block.
+const BORDER_CELLS: [u64; 27] = {
+    let mut out = [0u64; 27];
+    let sh = super::CELL_SHIFT;
+    let mut i = 0;
+    while i < BLOCK_VOXELS {
+        let mut n = 0;
+        while n < 26 {
+            #[allow(clippy::indexing_slicing)] // const evaluation: an out-of-bounds index fails the build
+            {
+                let j = NEIGHBOUR_TABLE[i][n][0] as usize;
+                let l = [i % BLOCK_EDGE, (i / BLOCK_EDGE) % BLOCK_EDGE, i / (BLOCK_EDGE * BLOCK_EDGE)];
+                let c = (l[0] >> sh) + 4 * ((l[1] >> sh) + 4 * (l[2] >> sh));
+                out[j] |= 1u64 << (c & 63);
+            }
+            n += 1;
+        }
+        i += 1;
     }
     out
 };

@@ -9,8 +9,9 @@
 //! - [`Block`]: `BLOCK_EDGE`^3 voxels (4^3 by default), [`VOXEL_BYTES`] = 8 bytes per voxel: quantised TSDF
 //!   (`i16`, units of truncation / 32767), weight (`u16`, 1/64 units), the ESDF site (`[i8; 3]` offset to the
 //!   nearest fixed-band voxel) and that site's signed TSDF (`i8`, hundredths of a voxel); plus the ESDF
-//!   wavefront's bookkeeping, a 64-bit mask of cells to pull and one bit per voxel for the
-//!   queue's overflow (544 B a block at the default edge, 32 B of it header).
+//!   wavefront's bookkeeping, a 64-bit mask of cells to pull, one bit per voxel for the
+//!   queue's overflow and a 24-bit link for the list of blocks with overflowed voxels (544 B a block at the
+//!   default edge, 32 B of it header).
 //! - [`MapStorage`]: the block pool plus the block index, owned by the caller (`static` on the board, `Box` on the
 //!   host) and lent to [`Map::new`]. The index is open addressing with linear probing, bounded by
 //!   [`MAX_PROBE`](crate::config::map::MAX_PROBE). Blocks are allocated on demand and never evicted: a full pool
@@ -67,7 +68,7 @@ pub use esdf::EsdfOutcome;
 pub use query::{SurfaceCursor, SurfacePoint, VoxelState};
 pub use tsdf::IntegrationOutcome;
 
-use crate::config::map::{ConfigError, MapConfig, BLOCK_EDGE, BLOCK_VOXELS, MAX_PROBE};
+use crate::config::map::{ConfigError, MapConfig, BLOCK_EDGE, BLOCK_VOXELS, MAX_POOL_BLOCKS, MAX_PROBE};
 use crate::geom::{Real, Vec3};
 
 /// What a signed-distance query can say about a point.
@@ -166,6 +167,9 @@ pub struct Block {
     /// Voxels whose improved site is still to be offered to their neighbours and that found the ESDF's lower queue
     /// full (one bit per voxel): the queue's overflow, in the lent storage.
     queued: [u64; QUEUED_WORDS],
+    /// The next block in the ESDF update's FIFO of blocks with `queued` bits (24-bit slot, little-endian;
+    /// scratch of one update, rebuilt in slot order at the start of the next one).
+    qnext: [u8; 3],
     tsdf: [i16; BLOCK_VOXELS],
     weight: [u16; BLOCK_VOXELS],
     site: [[i8; 3]; BLOCK_VOXELS],
@@ -179,6 +183,7 @@ impl Block {
         flags: 0,
         pending: 0,
         queued: [0; QUEUED_WORDS],
+        qnext: [0; 3],
         tsdf: [0; BLOCK_VOXELS],
         weight: [0; BLOCK_VOXELS],
         site: [[0; 3]; BLOCK_VOXELS],
@@ -193,6 +198,7 @@ impl Block {
         flags: 0,
         pending: 0,
         queued: [0; QUEUED_WORDS],
+        qnext: [0; 3],
         tsdf: [0; BLOCK_VOXELS],
         weight: [0; BLOCK_VOXELS],
         site: [[0; 3]; BLOCK_VOXELS],
@@ -296,7 +302,11 @@ impl<'a> Map<'a> {
     /// `>= blocks.len() > 0`. Both are cleared.
     pub fn from_slices(cfg: MapConfig, blocks: &'a mut [Block], index: &'a mut [u32]) -> Result<Map<'a>, MapError> {
         cfg.validate().map_err(MapError::Config)?;
-        if blocks.is_empty() || !index.len().is_power_of_two() || index.len() < blocks.len() {
+        if blocks.is_empty()
+            || blocks.len() > MAX_POOL_BLOCKS
+            || !index.len().is_power_of_two()
+            || index.len() < blocks.len()
+        {
             return Err(MapError::BadStorage);
         }
         index.iter_mut().for_each(|e| *e = 0);
@@ -315,7 +325,12 @@ impl<'a> Map<'a> {
         used: usize,
     ) -> Result<Map<'a>, MapError> {
         cfg.validate().map_err(MapError::Config)?;
-        if blocks.is_empty() || !index.len().is_power_of_two() || index.len() < blocks.len() || used > blocks.len() {
+        if blocks.is_empty()
+            || blocks.len() > MAX_POOL_BLOCKS
+            || !index.len().is_power_of_two()
+            || index.len() < blocks.len()
+            || used > blocks.len()
+        {
             return Err(MapError::BadStorage);
         }
         Ok(Map { cfg, blocks, index, used })
