@@ -52,7 +52,10 @@ fn hirise_route_wraps_two_obstacles_within_the_payout() {
 }
 
 /// Kepler's west wall at 1:400: rim, wall and floor with the wall tether-demand at mu 0.4 and steeper than both
-/// tether-free planes; a route within the payout; Axel's holding limit within 2 deg of the point mass's there.
+/// tether-free planes; a route within the payout; Axel's holding limit never beyond the point mass's (Coulomb's cone,
+/// `asin(mu cot alpha)`) and within 2 deg of `asin(cos(pi/8) mu cot alpha)`: Axel faces along the tether, so the
+/// lateral friction it needs points at a facet of the stability LP's friction octagon, which reaches `cos(pi/8) mu`
+/// there (`firmware::stability`).
 #[test]
 fn kepler_rim_wall_floor_route() {
     let s = preset("kepler").unwrap();
@@ -66,7 +69,10 @@ fn kepler_rim_wall_floor_route() {
     let summed: f64 = w.tether.windows(2).map(|p| dist(p[0], p[1])).sum();
     assert!(summed <= s.max_payout_m);
     let pm = firmware::plan::homotopy::planes::theta_max(wall, s.mu);
-    assert!((r.axel.theta_max_rad - pm).abs() < 2f64.to_radians(), "Axel {} vs point mass {pm}", r.axel.theta_max_rad);
+    let facet = firmware::plan::homotopy::planes::theta_max(wall, s.mu * (core::f64::consts::PI / 8.0).cos());
+    let axel = r.axel.theta_max_rad;
+    assert!(axel <= pm, "Axel {axel} beyond the point mass {pm}");
+    assert!((axel - facet).abs() < 2f64.to_radians(), "Axel {axel} vs the octagon's facet limit {facet} (point mass {pm})");
 }
 
 /// The Mars Yard's slopes stay below atan(mu) over 2 m bands: a stated refusal, not a route.
