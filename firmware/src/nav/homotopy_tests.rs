@@ -5,7 +5,7 @@
 use super::*;
 use crate::config::protocol::MAX_HEIGHTS_PER_TILE_CHUNK;
 use crate::protocol::{
-    LogLevel, MissionConfig, PlannerConfig, Point3, Quat, RoverConfig, TelemetryConfig, TetherConfig,
+    LogLevel, MissionConfig, PlannerConfig, Point3, Quat, TelemetryConfig, TetherConfig,
 };
 use std::boxed::Box;
 use std::vec;
@@ -33,13 +33,7 @@ fn nav() -> TestNav {
 
 fn configure(max_payout_m: f32) -> Configure {
     Configure {
-        rover: RoverConfig {
-            mass_kg: 50.0,
-            wheel_radius_m: 0.35,
-            axle_length_m: 1.0,
-            boom_length_m: 1.0,
-            friction_coefficient: 0.6,
-        },
+        rover: super::tests::TEST_ROVER,
         tether: TetherConfig { root_anchor: Point3::new(8.0, 18.5, RIM_Z + 0.5), max_payout_m, max_tension_n: 2000.0 },
         planner: PlannerConfig { rng_seed: 3, max_iterations: 300, batch_size: 100, goal_bias: 0.0 },
         telemetry: TelemetryConfig { period_ms: 0, forward_log_level: LogLevel::Off },

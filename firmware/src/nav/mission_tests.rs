@@ -5,7 +5,7 @@
 
 use super::*;
 use crate::protocol::{
-    LogLevel, MissionConfig, MissionState, MotionOutcome, PlannerConfig, Point3, Quat, RoverConfig, StopReason,
+    LogLevel, MissionConfig, MissionState, MotionOutcome, PlannerConfig, Point3, Quat, StopReason,
     TelemetryConfig, TetherConfig, Tracking,
 };
 use std::boxed::Box;
@@ -22,13 +22,7 @@ const AXLE_H: f32 = 0.35;
 
 fn configure(root: Point3, mission: MissionConfig) -> Configure {
     Configure {
-        rover: RoverConfig {
-            mass_kg: 50.0,
-            wheel_radius_m: 0.35,
-            axle_length_m: 1.0,
-            boom_length_m: 1.0,
-            friction_coefficient: 0.6,
-        },
+        rover: super::tests::TEST_ROVER,
         tether: TetherConfig { root_anchor: root, max_payout_m: 50.0, max_tension_n: 2000.0 },
         planner: PlannerConfig { rng_seed: 11, max_iterations: 750, batch_size: 100, goal_bias: 0.0 },
         telemetry: TelemetryConfig { period_ms: 0, forward_log_level: LogLevel::Off },

@@ -93,10 +93,19 @@ fn a_configure_with_other_map_settings_rebuilds_the_map_and_equal_ones_keep_it()
 
 // ------------------------------------------------------------------------------------------- goal planning
 
+/// The rover of every navigator test's `Configure`: Axel's defaults (50 kg, 0.35 m wheels, 1 m axle and boom, mu 0.6).
+pub(super) const TEST_ROVER: crate::protocol::RoverConfig = crate::protocol::RoverConfig {
+    mass_kg: 50.0,
+    wheel_radius_m: 0.35,
+    axle_length_m: 1.0,
+    boom_length_m: 1.0,
+    friction_coefficient: 0.6,
+};
+
 mod planning {
     use super::super::*;
     use crate::protocol::{
-        Configure, GoalRequest, LogLevel, MissionConfig, PlannerConfig, Point3, Quat, RoverConfig, TelemetryConfig,
+        Configure, GoalRequest, LogLevel, MissionConfig, PlannerConfig, Point3, Quat, TelemetryConfig,
         TetherConfig,
     };
     use std::boxed::Box;
@@ -115,13 +124,7 @@ mod planning {
 
     pub(super) fn configure(seed: u64) -> Configure {
         Configure {
-            rover: RoverConfig {
-                mass_kg: 50.0,
-                wheel_radius_m: 0.35,
-                axle_length_m: 1.0,
-                boom_length_m: 1.0,
-                friction_coefficient: 0.6,
-            },
+            rover: super::TEST_ROVER,
             tether: TetherConfig { root_anchor: Point3 { x: -1.5, y: 0.0, z: 1.5 }, max_payout_m: 50.0, max_tension_n: 2000.0 },
             planner: PlannerConfig { rng_seed: seed, max_iterations: 750, batch_size: 100, goal_bias: 0.0 },
             telemetry: TelemetryConfig { period_ms: 0, forward_log_level: LogLevel::Off },
