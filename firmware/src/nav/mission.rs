@@ -411,6 +411,35 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
         }
     }
 
+    /// Planning finished with `state`, and nothing the mission could drive came of it (no path; an approximate
+    /// one not allowed or without `MIN_APPROXIMATE_PROGRESS_M` of progress): when the search only spent its
+    /// iterations, it goes on for another round of the goal's budget ([`planning::Problem::extend`], up to
+    /// `MAX_PLAN_ITERATIONS` in all) instead of stopping `NoSolution`. `true` when the search goes on.
+    pub(super) fn mission_search_more(&mut self, state: PlanState) -> bool {
+        if !self.mission.active() {
+            return false;
+        }
+        let drivable = match state {
+            PlanState::ExactSolution => true,
+            PlanState::ApproximateSolution => {
+                self.mission.goal.is_some_and(|g| g.allow_approximate)
+                    && self.approximate_progress_m() >= mcfg::MIN_APPROXIMATE_PROGRESS_M
+            }
+            PlanState::NoSolutionWithinBudget => false,
+            _ => return false,
+        };
+        if drivable {
+            return false;
+        }
+        let Some(problem) = self.problem.as_mut() else { return false };
+        if !problem.extend() {
+            return false;
+        }
+        self.stats.search_extensions = self.stats.search_extensions.saturating_add(1);
+        log::info!("mission: nothing to drive after {} iterations ({state:?}): the search goes on to {}", problem.done, problem.budget);
+        true
+    }
+
     /// Planning finished with `state` (the path is in the storage when solved).
     pub(super) fn mission_planned(&mut self, state: PlanState) {
         if !self.mission.active() {

@@ -686,3 +686,43 @@ fn an_unreadable_checkpoint_stops_safe_and_refuses_goals() {
     assert_ne!(nav.mission_status().map(|s| s.reason), Some(StopReason::TetherStateLost));
 }
 
+
+#[test]
+fn a_search_with_nothing_to_drive_goes_on_to_the_plan_cap_before_no_solution() {
+    // the goal behind unobserved ground (as above): every round ends approximate; not allowed, it is nothing the
+    // mission can drive, so the search goes on in rounds of the goal's budget up to MAX_PLAN_ITERATIONS
+    let seen = |x: f32| !(1.2..=2.4).contains(&x);
+    let mut nav = mapped_where(ROOT, MissionConfig::DEFAULT, &seen);
+    let mut g = goal(1, 3.5, 0.0);
+    g.allow_approximate = false;
+    g.max_iterations = 200;
+    assert_eq!(nav.goal(&g, Instant::from_micros(0)), PlanState::Accepted);
+    let mut buf = PlanBuffer::new();
+    let mut searching_after_first_round = false;
+    let mut finished = None;
+    for k in 0..20_000u64 {
+        match nav.plan_step(Instant::from_micros(k * 1000), 8, &mut buf) {
+            PlanProgress::Finished { state, iterations, .. } => {
+                finished = Some((state, iterations));
+                break;
+            }
+            PlanProgress::Searching { iterations, .. } => searching_after_first_round |= iterations > 200,
+        }
+    }
+    let (state, iterations) = finished.expect("planning finished");
+    assert!(searching_after_first_round, "the search did not go on after its first round");
+    assert_eq!((state, iterations), (PlanState::ApproximateSolution, MAX_PLAN_ITERATIONS));
+    // 200 -> 400 -> 600 -> 750: three more rounds, the last one cut at the cap
+    assert_eq!(nav.stats.search_extensions, 3);
+    let st = nav.mission_status().unwrap();
+    assert_eq!((st.state, st.reason), (MissionState::Safe, StopReason::NoSolution));
+    assert_eq!(nav.drive_step(Instant::from_micros(0)), DriveStep::Finished, "an approximate plan not allowed is driven");
+
+    // allowed and making progress, the first round's approximate plan is driven: no further round
+    let mut nav = mapped_where(ROOT, MissionConfig::DEFAULT, &seen);
+    g.allow_approximate = true;
+    assert_eq!(nav.goal(&g, Instant::from_micros(0)), PlanState::Accepted);
+    let PlanProgress::Finished { state, iterations, .. } = plan(&mut nav) else { unreachable!() };
+    assert_eq!((state, iterations, nav.stats.search_extensions), (PlanState::ApproximateSolution, 200, 0));
+    assert_eq!(nav.mission_status().unwrap().state, MissionState::Driving);
+}

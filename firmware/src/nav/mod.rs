@@ -30,7 +30,10 @@
 //! - **goal region**: within `tolerance_m` (axle distance) of the rover settled under the goal position (at the
 //!   first of `GOAL_SETTLE_YAWS` yaws that settles);
 //! - **budget**: `min(goal.max_iterations, MAX_PLAN_ITERATIONS)` iterations, and `time_budget_ms` of flight time
-//!   when non-zero; the sampler is SplitMix64 ([`crate::plan::SplitMix64`]) seeded from `Configure.planner.rng_seed` and the goal id;
+//!   when non-zero; in a mission, a search that spends its iterations with nothing the mission can drive (no
+//!   path; an approximate one not allowed or short of `MIN_APPROXIMATE_PROGRESS_M`) goes on where it stopped for
+//!   further rounds of the same budget, up to `MAX_PLAN_ITERATIONS` in all, before the mission stops
+//!   `NoSolution` (`NavPlanStats::search_extensions` counts them); the sampler is SplitMix64 ([`crate::plan::SplitMix64`]) seeded from `Configure.planner.rng_seed` and the goal id;
 //!   `batch_size` is the samples per batch (at most `SAMPLES_PER_BATCH`); `goal_bias` has no meaning for ABIT*
 //!   (it samples no goal states) and is ignored.
 //!
@@ -732,7 +735,11 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
             }
         };
         self.problem = Some(problem);
-        if let PlanProgress::Finished { state, .. } = progress {
+        if let PlanProgress::Finished { state, iterations, best_cost } = progress {
+            if self.mission_search_more(state) {
+                plan.clear();
+                return PlanProgress::Searching { iterations, best_cost };
+            }
             if let Some(p) = self.homotopy_leg_failed(state, plan) {
                 return p;
             }

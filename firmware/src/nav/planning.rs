@@ -163,6 +163,9 @@ pub struct NavPlanStats {
     pub totals: MotionStats,
     /// Waypoints whose anchor history was shortened to `MAX_ANCHORS_PER_WAYPOINT` (root and most recent kept).
     pub anchors_truncated: u32,
+    /// Search rounds added to a mission's search that had spent its budget with nothing the mission could drive
+    /// ([`Problem::extend`]).
+    pub search_extensions: u32,
 }
 
 /// What the navigator keeps from `Configure` for planning.
@@ -218,6 +221,11 @@ pub(crate) struct Problem {
     pub seed: u64,
     pub abit: AbitParams,
     pub budget: u32,
+    /// The goal request's own budget (`max_iterations`, capped): one search round ([`Problem::extend`]).
+    pub round: u32,
+    /// The search ended on its iteration budget alone (time left, not converged, arena not full): another round
+    /// would go on where it stopped.
+    pub budget_spent: bool,
     pub deadline: Option<Instant>,
     pub done: u32,
     /// Iterations of the goal before the current search began (non-zero after the map changed under a search,
@@ -239,6 +247,19 @@ pub(crate) struct Problem {
 }
 
 impl Problem {
+    /// Another search round of the goal's budget for a search that spent its iterations without a plan the
+    /// mission can drive; never beyond `MAX_PLAN_ITERATIONS` in all. `false` (nothing changed) when the search
+    /// ended otherwise (time budget, converged, arena full) or the cap is reached. The suspended search resumes.
+    pub fn extend(&mut self) -> bool {
+        if !self.budget_spent || self.budget >= cfg::MAX_PLAN_ITERATIONS {
+            return false;
+        }
+        self.budget = self.budget.saturating_add(self.round.max(1)).min(cfg::MAX_PLAN_ITERATIONS);
+        self.budget_spent = false;
+        self.finished = None;
+        true
+    }
+
     /// The space this problem is planned in, over `map`.
     pub fn space<'m, D: DistanceField>(&self, map: &'m D) -> Option<TetherSpace<'m, D>> {
         TetherSpace::new(map, self.bounds, self.rover, TetherSpaceParams::ONBOARD)
@@ -384,6 +405,8 @@ pub(crate) fn set_up(
         seed: setup.seed ^ u64::from(goal.goal_id).wrapping_mul(0x9E37_79B9_7F4A_7C15),
         abit,
         budget,
+        round: budget,
+        budget_spent: false,
         deadline,
         done: 0,
         search_base: 0,
@@ -542,12 +565,12 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
         PlannerStatus::Exact(cost) => Some(cost as f32),
         _ => None,
     };
-    let done = out_of_time
-        || problem.done >= problem.budget
-        || matches!(
-            report.termination,
-            Termination::Converged | Termination::ArenaFull(_) | Termination::ObjectiveSatisfied | Termination::InvalidInput
-        );
+    let ended_by_search = matches!(
+        report.termination,
+        Termination::Converged | Termination::ArenaFull(_) | Termination::ObjectiveSatisfied | Termination::InvalidInput
+    );
+    let done = out_of_time || problem.done >= problem.budget || ended_by_search;
+    problem.budget_spent = done && !out_of_time && !ended_by_search;
     let state = match report.status {
         PlannerStatus::Exact(_) => PlanState::ExactSolution,
         PlannerStatus::Approximate(_) => PlanState::ApproximateSolution,

@@ -30,6 +30,9 @@ use crate::campaign::{PlanningMap, Truth};
 use crate::physics::{BoomSetting, GroundPose, HoldOutcome, PhysicsJudge, TetherSpec};
 use crate::truth::taut::{TautTether, WrapEdges, SHORTEST_SAMPLE_M};
 
+/// With `--region`, how far the maps reach beyond it (m): the rover's footprint and settling neighbourhood.
+const REGION_MARGIN_M: f64 = 3.0;
+
 /// Arguments of `judge-agreement`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct JudgeAgreementArgs {
@@ -51,6 +54,13 @@ pub struct JudgeAgreementArgs {
     /// settled wheel contacts, its stability answer and boom, and each physics boom setting's placement and motion.
     #[arg(long, value_delimiter = ',')]
     pub explain: Vec<usize>,
+    /// Draw the poses' x, y in this rectangle instead of the planning bounds (`x0,y0,x1,y1`, metres; e.g. around a
+    /// mission's goal to see why the planner refuses it).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub region: Option<Vec<f64>>,
+    /// Every pose with this yaw (degrees) instead of a uniform one.
+    #[arg(long, allow_hyphen_values = true)]
+    pub yaw: Option<f64>,
 }
 
 /// The planner's verdict on a pose.
@@ -141,7 +151,12 @@ pub struct Agreement {
 
 fn planner_verdict<D: DistanceField>(space: &TetherSpace<'_, D>, x: f64, y: f64, yaw: f64, hist: &AnchorHistory) -> (PlannerVerdict, Option<RoverState>, Option<f64>) {
     match space.settle_state(x as Real, y as Real, yaw as Real) {
-        Err(_) => (PlannerVerdict::NoSettle, None, None),
+        Err(e) => {
+            if std::env::var_os("TETHERBOT_SETTLE_WHY").is_some() {
+                eprintln!("no settle at ({x:.3}, {y:.3}, yaw {yaw:.3}): {e:?}");
+            }
+            (PlannerVerdict::NoSettle, None, None)
+        }
         Ok(s) => match space.stable_with(&s.settled, hist) {
             Ok(m) => (PlannerVerdict::Stable, Some(s), Some(m)),
             Err(_) => (PlannerVerdict::Unstable, Some(s), None),
@@ -199,8 +214,20 @@ pub fn run(a: &JudgeAgreementArgs) -> Result<Agreement, String> {
     let sc = crate::scenario::load(&file).map_err(|e| e.to_string())?;
     let world = sc.build_world().map_err(|e| e.to_string())?;
     let wb = world.bounds();
-    let lo = sc.plan.bounds_min.unwrap_or([f64::from(wb.min.x), f64::from(wb.min.y), f64::from(wb.min.z) - 1.0]);
-    let hi = sc.plan.bounds_max.unwrap_or([f64::from(wb.max.x), f64::from(wb.max.y), f64::from(wb.max.z) + 1.0]);
+    let mut lo = sc.plan.bounds_min.unwrap_or([f64::from(wb.min.x), f64::from(wb.min.y), f64::from(wb.min.z) - 1.0]);
+    let mut hi = sc.plan.bounds_max.unwrap_or([f64::from(wb.max.x), f64::from(wb.max.y), f64::from(wb.max.z) + 1.0]);
+    let (draw_lo, draw_hi) = match a.region.as_deref() {
+        None => ([lo[0], lo[1]], [hi[0], hi[1]]),
+        Some(&[x0, y0, x1, y1]) if [x0, y0, x1, y1].iter().all(|v| v.is_finite()) && x0 < x1 && y0 < y1 => ([x0, y0], [x1, y1]),
+        Some(r) => return Err(format!("--region {r:?}: give four finite numbers x0,y0,x1,y1 with x0 < x1 and y0 < y1")),
+    };
+    if a.region.is_some() {
+        // The maps cover the region with room for the rover's footprint, not the whole world.
+        for k in 0..2 {
+            lo[k] = lo[k].max(draw_lo[k] - REGION_MARGIN_M);
+            hi[k] = hi[k].min(draw_hi[k] + REGION_MARGIN_M);
+        }
+    }
     let root = sc.tether.root_anchor;
     let bounds = PlanBounds { min: lo.map(|v| v as Real), max: hi.map(|v| v as Real) };
     let rover = RoverParams::AXEL;
@@ -222,8 +249,9 @@ pub fn run(a: &JudgeAgreementArgs) -> Result<Agreement, String> {
     let mut unit = || (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
     let mut out = Agreement { name: sc.name.clone(), poses: Vec::with_capacity(a.poses), map: Confusion::default(), exact: Confusion::default(), physics_s: 0.0 };
     for _ in 0..a.poses {
-        let (x, y) = (lo[0] + (hi[0] - lo[0]) * unit(), lo[1] + (hi[1] - lo[1]) * unit());
-        let yaw = core::f64::consts::TAU * unit() - core::f64::consts::PI;
+        let (x, y) = (draw_lo[0] + (draw_hi[0] - draw_lo[0]) * unit(), draw_lo[1] + (draw_hi[1] - draw_lo[1]) * unit());
+        let drawn = core::f64::consts::TAU * unit() - core::f64::consts::PI;
+        let yaw = a.yaw.map_or(drawn, f64::to_radians);
         // Physics first: the true tether (to the boom tip) gives the planner its anchor history too.
         let t0 = Instant::now();
         let s = on_truth.settle_state(x as Real, y as Real, yaw as Real).ok();
