@@ -13,6 +13,17 @@ pub const SURFACE_MIN_STEP_M: f32 = 0.05;
 /// round from the requested yaw. Default 8 (every 45 degrees).
 pub const GOAL_SETTLE_YAWS: u32 = 8;
 
+/// Settling rounds of `TetherSpace::settle_under_axle` (the state whose axle stands at a pose estimate's axle
+/// centre, with its heading). Default 4: the first round misses by the axle's offset from its surface point,
+/// `r sin(slope)` (0.2 m at 35 degrees), and each round cuts the miss by the change of that offset over it
+/// (a few mm on ground the rover can stand on).
+pub const AXLE_SETTLE_ROUNDS: u32 = 4;
+/// The axle of `TetherSpace::settle_under_axle` is where it was asked when horizontally this close, metres, and its
+/// heading within [`AXLE_SETTLE_HEADING_RAD`]. Default 0.005 m (a tenth of the default map's voxel).
+pub const AXLE_SETTLE_TOLERANCE_M: f32 = 0.005;
+/// Heading tolerance of `TetherSpace::settle_under_axle`, radians. Default 0.005 rad (0.3 degrees).
+pub const AXLE_SETTLE_HEADING_RAD: f32 = 0.005;
+
 /// Step of the surface trace through unknown space, metres. Default 0.1 m: no thicker than the observed band
 /// round a surface (the map's truncation in front of it, 0.15 m by default, plus the fill under it), so the trace
 /// cannot step over an observed surface.

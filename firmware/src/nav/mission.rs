@@ -682,7 +682,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
         let k = m.seg;
         m.counters.rechecks = m.counters.rechecks.saturating_add(1);
         let ok = match m.in_flight.map(|f| f.from) {
-            Some(from) => match space.settle_state(from.position.x, from.position.y, from.yaw) {
+            Some(from) => match space.settle_under_axle(from.position.x, from.position.y, from.yaw) {
                 Ok(start) => check_to_segment_end(&space, &start, &m.tracked, path, k),
                 Err(_) => false,
             },
@@ -1000,7 +1000,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
         m.counters.rechecks = m.counters.rechecks.saturating_add(1);
         let ok = if k == m.seg {
             // from the current state: its margin, then the motion to the end of the current segment
-            match space.settle_state(b.position.x, b.position.y, b.yaw) {
+            match space.settle_under_axle(b.position.x, b.position.y, b.yaw) {
                 Ok(cur) => {
                     match space.stable_with(&cur.settled, &m.tracked) {
                         Ok(margin) => {
@@ -1013,6 +1013,19 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
                         }
                         Err(e) => {
                             log::warn!("mission: the current state is not stable on the map: {:?}", e);
+                            // what the stop was decided on, for the field log: the state checked and both booms' answer
+                            let pull = crate::plan::tethered::tether_pull_anchor(&cur.settled, &m.tracked, &problem.rover);
+                            let a = cur.axle();
+                            log::warn!(
+                                "mission: checked the axle at ({}, {}, {}), heading {}, roll {}, pulled towards {:?}: {:?}",
+                                a.x,
+                                a.y,
+                                a.z,
+                                cur.heading(),
+                                cur.roll(),
+                                pull,
+                                crate::rover::check_pose_stability(&map, &cur.settled, pull.as_ref(), &problem.rover)
+                            );
                             m.margin_n = 0.0;
                             m.stop(StopReason::MarginBelowMinimum);
                             return DriveStep::Finished;

@@ -339,7 +339,8 @@ pub(crate) fn set_up(
         TetherSpace::new(map, bounds, rover, TetherSpaceParams::ONBOARD).map_err(|_| GoalRefusal::PlannerRejected)?;
     let yaw = crate::geom::heading(&pose.to_isometry().rotation);
     let mut escape = None;
-    let start = match space.settle_state(p.x, p.y, yaw) {
+    // The pose estimate is the axle centre and its heading: the start is the state whose axle stands there.
+    let start = match space.settle_under_axle(p.x, p.y, yaw) {
         Ok(s) => Ok(s),
         // The rover stands here, but on the map it is within the extra voxel of an obstacle (a rock that appeared
         // beside it) or has a wheel against a steep face (the rock's side). Plan from the pose it settles in with
@@ -347,21 +348,19 @@ pub(crate) fn set_up(
         // START_ESCAPE_VOXELS of it do the same, so motions can take it away (every motion from it would otherwise
         // fail in its first interpolated state); every other state keeps every check.
         Err(SettleFailure::Collision | SettleFailure::SteepContact) => {
-            let zone = |steep_ok| StartEscape {
-                x: p.x,
-                y: p.y,
-                radius_m: cfg::START_ESCAPE_VOXELS * map.config().voxel_size,
-                rover: setup.rover,
-                steep_ok,
+            let radius_m = cfg::START_ESCAPE_VOXELS * map.config().voxel_size;
+            let zone = |steep_ok, x, y, radius_m| StartEscape { x, y, radius_m, rover: setup.rover, steep_ok };
+            // The start's surface point lies within a wheel radius of the axle: find it with the zone that wide,
+            // then centre the zone on it.
+            let settle_with = |steep_ok| {
+                let relaxed = TetherSpace::new(map, bounds, rover, TetherSpaceParams::ONBOARD)
+                    .map_err(|_| SettleFailure::InvalidInput)?;
+                let wide = zone(steep_ok, p.x, p.y, radius_m + setup.rover.wheel_radius_m);
+                let s = relaxed.with_start_escape(Some(wide)).settle_under_axle(p.x, p.y, yaw)?;
+                Ok::<_, SettleFailure>((s, zone(steep_ok, s.ground.x, s.ground.y, radius_m)))
             };
-            let settle_with = |e: StartEscape| {
-                TetherSpace::new(map, bounds, rover, TetherSpaceParams::ONBOARD)
-                    .map_err(|_| SettleFailure::InvalidInput)
-                    .and_then(|relaxed| relaxed.with_start_escape(Some(e)).settle_state(p.x, p.y, yaw))
-                    .map(|s| (s, e))
-            };
-            match settle_with(zone(false)) {
-                Err(SettleFailure::SteepContact) => settle_with(zone(true)),
+            match settle_with(false) {
+                Err(SettleFailure::SteepContact) => settle_with(true),
                 r => r,
             }
             .map(|(s, e)| {

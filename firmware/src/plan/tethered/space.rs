@@ -8,7 +8,7 @@ use rand_core::Rng;
 use crate::config::rover::RoverParams;
 use crate::config::tether::ANCHOR_HISTORY_CAPACITY;
 use crate::config::tethered::{
-    CATCH_PAIR_ATTEMPTS, GOAL_SETTLE_YAWS, MAX_WHEEL_CONTACT_INCLINE_RAD, SURFACE_MIN_STEP_M, SURFACE_TRACE_STEPS, SURFACE_UNKNOWN_STEPS,
+    AXLE_SETTLE_HEADING_RAD, AXLE_SETTLE_ROUNDS, AXLE_SETTLE_TOLERANCE_M, CATCH_PAIR_ATTEMPTS, GOAL_SETTLE_YAWS, MAX_WHEEL_CONTACT_INCLINE_RAD, SURFACE_MIN_STEP_M, SURFACE_TRACE_STEPS, SURFACE_UNKNOWN_STEPS,
     SURFACE_UNKNOWN_STEP_M,
 };
 use crate::geom::{angle_diff, norm3, Real, Vec3};
@@ -139,6 +139,34 @@ pub fn settle_at(
     theta: Real,
 ) -> Result<RoverState, SettleFailure> {
     settle_checked(map, bounds, rover, x, y, theta, true)
+}
+
+/// The state `settle` gives whose axle centre lies horizontally at `(x, y)` with heading `heading`: fixed-point
+/// rounds (at most `AXLE_SETTLE_ROUNDS`) move the surface point by the axle's horizontal miss and the settle yaw
+/// by the heading's, until within `AXLE_SETTLE_TOLERANCE_M` and `AXLE_SETTLE_HEADING_RAD`. A round that does
+/// not settle ends it with that failure (the ground at the rover's own pose is what failed); when the rounds run
+/// out the last state is returned (on ground the rover stands on, the miss left is millimetres).
+pub fn settle_under_axle_with(
+    settle: impl Fn(Real, Real, Real) -> Result<RoverState, SettleFailure>,
+    x: Real,
+    y: Real,
+    heading: Real,
+) -> Result<RoverState, SettleFailure> {
+    let (mut gx, mut gy, mut theta) = (x, y, heading);
+    let mut st = settle(gx, gy, theta)?;
+    for _ in 1..AXLE_SETTLE_ROUNDS {
+        let a = st.axle();
+        let (ex, ey) = (x - a.x, y - a.y);
+        let eh = angle_diff(heading, st.heading());
+        if libm::hypotf(ex, ey) <= AXLE_SETTLE_TOLERANCE_M && libm::fabsf(eh) <= AXLE_SETTLE_HEADING_RAD {
+            break;
+        }
+        gx += ex;
+        gy += ey;
+        theta = crate::geom::wrap_angle(theta + eh);
+        st = settle(gx, gy, theta)?;
+    }
+    Ok(st)
 }
 
 /// [`settle_at`], with the steep-contact check only when `check_steep` ([`StartEscape::steep_ok`]).
@@ -380,6 +408,14 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
             }
             (r, _) => r,
         })
+    }
+    /// The state whose settled axle centre stands horizontally at `(x, y)` with heading `heading` (a pose
+    /// estimate: where the rover *is*). [`Self::settle_state`] takes the surface point and the yaw about the
+    /// surface normal instead: on a slope the axle stands `r sin(slope)` downhill of its surface point (0.2 m at 35
+    /// degrees: the normal leans downhill) and the heading differs from that yaw, so settling the estimate's axle
+    /// as a surface point checks a pose 0.2 m downhill of the rover. See [`settle_under_axle_with`].
+    pub fn settle_under_axle(&self, x: Real, y: Real, heading: Real) -> Result<RoverState, SettleFailure> {
+        settle_under_axle_with(|gx, gy, th| self.settle_state(gx, gy, th), x, y, heading)
     }
     /// A goal state: settled at `(x, y)` when inside the bounds (at the first yaw that settles), an off-map goal at
     /// `point` otherwise.

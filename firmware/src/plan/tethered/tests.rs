@@ -211,3 +211,31 @@ fn a_start_escape_relaxes_the_clearance_only_round_the_start() {
     assert_eq!(relaxed.settle_state(2.0 * x, 0.0, 0.0), Err(SettleFailure::Collision), "outside the zone, as near");
     assert_eq!(relaxed.settle_state(0.05, 0.0, 0.0), Err(SettleFailure::Collision), "nearer than its own clearance");
 }
+
+/// On a 35-degree plane a pose estimate's axle settled as a surface point puts the axle about `r sin(35 deg)` =
+/// 0.20 m downhill of where it was asked (the offset along the normal, which leans downhill), and the heading off the asked one except along the
+/// fall line or the contour; `settle_under_axle` puts the axle where it is (within `AXLE_SETTLE_TOLERANCE_M`) with
+/// the asked heading, for every heading round the compass.
+#[test]
+fn a_pose_estimate_settles_with_its_own_axle_and_heading() {
+    use crate::config::tethered::{AXLE_SETTLE_HEADING_RAD, AXLE_SETTLE_TOLERANCE_M};
+    let slope: Real = 35.0_f32.to_radians();
+    // the plane descends towards +x: its normal leans towards +x
+    let plane = Plane(Vec3::new(libm::sinf(slope), 0.0, libm::cosf(slope)));
+    let space = TetherSpace::new(&plane, BOUNDS, RoverParams::AXEL, TetherSpaceParams::DEFAULT).unwrap();
+    let r = RoverParams::AXEL.wheel_radius_m;
+    let (x, y) = (0.4, -0.3);
+    for k in 0..12 {
+        let heading = crate::geom::wrap_angle(k as Real * core::f32::consts::PI / 6.0 - 2.0);
+        let naive = space.settle_state(x, y, heading).unwrap();
+        let miss = libm::hypotf(naive.axle().x - x, naive.axle().y - y);
+        assert!(miss > 0.75 * r * libm::sinf(slope), "heading {heading}: the surface point's axle misses by {miss} only");
+        let st = space.settle_under_axle(x, y, heading).unwrap();
+        let a = st.axle();
+        assert!(libm::hypotf(a.x - x, a.y - y) <= AXLE_SETTLE_TOLERANCE_M, "heading {heading}: axle at {a:?}");
+        assert!(crate::geom::angle_diff(st.heading(), heading).abs() <= AXLE_SETTLE_HEADING_RAD, "heading {heading}: {}", st.heading());
+        // the axle stands a wheel radius off the plane, downhill of its surface point
+        assert!((a.dot(&plane.0) - r).abs() < 0.01, "axle {} off the plane", a.dot(&plane.0));
+        assert!(st.ground.x < x, "the surface point lies uphill of the axle");
+    }
+}
