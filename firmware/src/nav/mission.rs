@@ -11,7 +11,8 @@ use crate::config::nav::MAX_PLAN_ITERATIONS;
 use crate::exec::DriveStep;
 use crate::geom::{norm3, wrap_angle, Real, Vec3};
 use crate::map::{Block, DistanceField, Map, UnobservedAsFree};
-use crate::plan::tethered::{RoverState, TetherSpace, TetherSpaceParams};
+use crate::plan::tethered::{MotionFailure, RoverState, TetherSpace, TetherSpaceParams};
+use crate::stability::StabilityOutcome;
 use crate::protocol::{
     GoalRequest, MissionConfig, MissionState, MissionStatus, Motion, MotionOutcome, MotionReport, PlanState,
     Point3, Pose, Quat, StopReason, Tracking, TetherReading,
@@ -76,6 +77,9 @@ pub struct MissionCounters {
     pub recheck_failures: u32,
     /// Anchor predictions along executed motions that failed (the history was kept).
     pub propagation_failures: u32,
+    /// Re-checks that found the current state stable on the map but below the planner's minimum margin, and
+    /// replanned from there through states no worse (`planning::thin_start_escape`) instead of stopping.
+    pub thin_margin_replans: u32,
 }
 
 /// The mission's state (see the `nav` module docs).
@@ -182,7 +186,7 @@ impl Mission {
             drift_num: 0.0,
             drift_den: 0.0,
             generation: 0,
-            counters: MissionCounters { tether_rejected: 0, pose_jumps: 0, scans_rejected: 0, tether_reestimates: 0, rechecks: 0, recheck_failures: 0, propagation_failures: 0 },
+            counters: MissionCounters { tether_rejected: 0, pose_jumps: 0, scans_rejected: 0, tether_reestimates: 0, rechecks: 0, recheck_failures: 0, propagation_failures: 0, thin_margin_replans: 0 },
         }
     }
 
@@ -1002,7 +1006,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
             // from the current state: its margin, then the motion to the end of the current segment
             match space.settle_under_axle(b.position.x, b.position.y, b.yaw) {
                 Ok(cur) => {
-                    match space.stable_with(&cur.settled, &m.tracked) {
+                    let stable_enough = match space.stable_with(&cur.settled, &m.tracked) {
                         Ok(margin) => {
                             m.margin_n = margin as f32 * m.weight_n;
                             if m.margin_n < m.cfg.min_margin_n {
@@ -1010,28 +1014,44 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
                                 m.stop(StopReason::MarginBelowMinimum);
                                 return DriveStep::Finished;
                             }
+                            true
                         }
                         Err(e) => {
-                            log::warn!("mission: the current state is not stable on the map: {:?}", e);
-                            // what the stop was decided on, for the field log: the state checked and both booms' answer
+                            // what the decision is made on, for the field log: the state checked and both booms'
+                            // answer
                             let pull = crate::plan::tethered::tether_pull_anchor(&cur.settled, &m.tracked, &problem.rover);
+                            let answer = crate::rover::check_pose_stability(&map, &cur.settled, pull.as_ref(), &problem.rover);
                             let a = cur.axle();
                             log::warn!(
-                                "mission: checked the axle at ({}, {}, {}), heading {}, roll {}, pulled towards {:?}: {:?}",
+                                "mission: the current state is not stable enough on the map ({:?}): axle at ({}, {}, {}), heading {}, roll {}, pulled towards {:?}: {:?}",
+                                e,
                                 a.x,
                                 a.y,
                                 a.z,
                                 cur.heading(),
                                 cur.roll(),
                                 pull,
-                                crate::rover::check_pose_stability(&map, &cur.settled, pull.as_ref(), &problem.rover)
+                                answer
                             );
-                            m.margin_n = 0.0;
-                            m.stop(StopReason::MarginBelowMinimum);
-                            return DriveStep::Finished;
+                            let floor = f64::from((m.cfg.min_margin_n / m.weight_n).max(0.0));
+                            match answer {
+                                // Thin but not below the mission's floor: the rover stands here; plan the way out
+                                // from here through states no worse than this one (`planning::thin_start_escape`).
+                                Ok((StabilityOutcome::Stable(r), _)) if e == MotionFailure::Unstable && r.margin >= floor => {
+                                    m.margin_n = r.margin as f32 * m.weight_n;
+                                    m.counters.thin_margin_replans = m.counters.thin_margin_replans.saturating_add(1);
+                                    log::info!("mission: margin {} N, below the planner's minimum: replan from here", m.margin_n);
+                                    false
+                                }
+                                _ => {
+                                    m.margin_n = 0.0;
+                                    m.stop(StopReason::MarginBelowMinimum);
+                                    return DriveStep::Finished;
+                                }
+                            }
                         }
-                    }
-                    check_to_segment_end(&space, &cur, &m.tracked, path, k)
+                    };
+                    stable_enough && check_to_segment_end(&space, &cur, &m.tracked, path, k)
                 }
                 Err(_) => false,
             }
@@ -1097,8 +1117,16 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
         };
         planning::clear_plan(&mut self.storage);
         let budget = goal.max_iterations.min(MAX_PLAN_ITERATIONS);
+        let floor = f64::from((self.mission.cfg.min_margin_n / self.mission.weight_n).max(0.0));
+        let tracked = &self.mission.tracked;
         let set_up = match Map::reattach(self.cfg, self.blocks.borrow_mut(), self.index.borrow_mut(), self.used) {
-            Ok(map) => planning::set_up(&map, &setup, &pose, &goal, budget, now),
+            Ok(map) => planning::set_up(&map, &setup, &pose, &goal, budget, now).map(|mut p| {
+                p.margin_escape = planning::thin_start_escape(&map, &p, tracked, map.config().voxel_size, floor);
+                if let Some(e) = p.margin_escape {
+                    log::info!("mission: the start's margin is thin ({} rover weights): states within {} m of it need only that", e.min_margin, e.radius_m);
+                }
+                p
+            }),
             Err(_) => Err(GoalRefusal::MapEmpty),
         };
         let mut problem = match set_up {

@@ -112,7 +112,9 @@
 //!   within `tolerance_m` of the goal position), or `Safe` with a [`StopReason`](crate::protocol::StopReason): a
 //!   refused goal (`GoalRefused`), no path or an approximate one without `allow_approximate` (`NoSolution`; an
 //!   approximate plan that is allowed is driven to its last (safe) state, then `NoSolution`), a cancel, a
-//!   shutdown, the current state's margin below `min_margin_n` (`MarginBelowMinimum`), tension over
+//!   shutdown, the current state unstable on the map or its margin below `min_margin_n` (`MarginBelowMinimum`;
+//!   a margin below the planner's `min_stability_margin` but not below `min_margin_n` replans instead, see
+//!   "Re-checks and replans"), tension over
 //!   `max_tension_n` (`TensionLimit`), tracked tether and encoder inconsistent after a re-estimate
 //!   (`TetherInconsistent`), `MAX_POSE_JUMPS` rejected poses in a row (`PoseJump`), `MAX_STALLS` stalls in a row
 //!   (`MotionStalled`), more than `MAX_REPLANS` replans without `REPLAN_PROGRESS_M` of progress towards the goal
@@ -139,7 +141,12 @@
 //!   before that segment (the segments before it passed on the same map: they are driven, and the navigator
 //!   plans again at their end, where it sees more). A failed check of the current segment, a stall, a cross-track
 //!   distance over `replan_cross_track_m`, or the end of a plan short of the goal replans from the tracked pose
-//!   and history (a new seed per replan).
+//!   and history (a new seed per replan). The current state is settled with its own axle and heading
+//!   (`TetherSpace::settle_under_axle`), not as a surface point. When it is stable on the map with less than the
+//!   planner's minimum margin (0.02 rover weights) but at least `min_margin_n`, the rover stands where no plan
+//!   could start: the replan gives states within `START_ESCAPE_VOXELS` of it the start's own margin as their
+//!   minimum (`planning::thin_start_escape`, `MarginEscape`), so the plan leaves through nothing worse, and every
+//!   state beyond keeps the full minimum (counted in `MissionCounters::thin_margin_replans`).
 //! - **Tracking** (`Configure.mission.tracking`): `OpenLoop` hands out the plan's motions as planned (the
 //!   baseline). `ClosedLoop` is the tether-aware path-tracking controller: along the current segment it aims at
 //!   the point `TRACK_SEGMENT_M` ahead of the rover's projection, turns when the heading error exceeds

@@ -18,9 +18,11 @@ use crate::plan::space::{
     Budget, GoalState, MotionCheck, MotionValidator, Planner, PlannerStatus, ProblemDefinition, Termination,
 };
 use crate::plan::tethered::{
-    MotionPlan, MotionStats, PlanBounds, RoverState, SettleFailure, StartEscape, TetherMotionValidator, TetherObjective,
-    TetherSpace, TetherSpaceParams, TetherValidity,
+    tether_pull_anchor, MarginEscape, MotionPlan, MotionStats, PlanBounds, RoverState, SettleFailure, StartEscape,
+    TetherMotionValidator, TetherObjective, TetherSpace, TetherSpaceParams, TetherValidity,
 };
+use crate::rover::check_pose_stability;
+use crate::stability::StabilityOutcome;
 use crate::protocol::{Configure, Motion, PlanState, Point3, Pose, Quat, Waypoint};
 use crate::tether::{Anchor, AnchorHistory};
 use crate::plan::rng::SplitMix64;
@@ -244,6 +246,9 @@ pub(crate) struct Problem {
     /// Set when the start collides with the extra voxel of clearance: the zone round it where states settle with
     /// the rover's own clearance, so motions can take it away ([`StartEscape`]).
     pub escape: Option<StartEscape>,
+    /// Set when the start's margin on the map is below the planner's minimum but the rover stands there stable:
+    /// the zone round it where states need only the start's own margin ([`thin_start_escape`]).
+    pub margin_escape: Option<MarginEscape>,
 }
 
 impl Problem {
@@ -264,7 +269,33 @@ impl Problem {
     pub fn space<'m, D: DistanceField>(&self, map: &'m D) -> Option<TetherSpace<'m, D>> {
         TetherSpace::new(map, self.bounds, self.rover, TetherSpaceParams::ONBOARD)
             .ok()
-            .map(|s| s.with_start_escape(self.escape))
+            .map(|s| s.with_start_escape(self.escape).with_margin_escape(self.margin_escape))
+    }
+}
+
+/// A [`MarginEscape`] round the problem's start when the rover stands there stable on the map (tether pulling
+/// towards `history`'s pull anchor) with a margin below the planner's minimum but at least `floor` rover weights:
+/// within `START_ESCAPE_VOXELS` of the start's axle, states need only the start's own margin, so the plan can
+/// leave it without passing anything worse. `None` when the start has the full margin, or not even the floor.
+pub(crate) fn thin_start_escape<D: DistanceField>(
+    map: &D,
+    problem: &Problem,
+    history: &AnchorHistory,
+    voxel_m: Real,
+    floor: f64,
+) -> Option<MarginEscape> {
+    let space = problem.space(map)?;
+    let st = &problem.start.settled;
+    if space.stable_with(st, history).is_ok() {
+        return None;
+    }
+    let pull = tether_pull_anchor(st, history, &problem.rover);
+    match check_pose_stability(map, st, pull.as_ref(), &problem.rover) {
+        Ok((StabilityOutcome::Stable(r), _)) if r.margin >= floor => {
+            let a = problem.start.axle();
+            Some(MarginEscape { x: a.x, y: a.y, radius_m: cfg::START_ESCAPE_VOXELS * voxel_m, min_margin: r.margin })
+        }
+        _ => None,
     }
 }
 
@@ -417,6 +448,7 @@ pub(crate) fn set_up(
         cut: 0,
         work: MotionStats::default(),
         escape,
+        margin_escape: None,
     })
 }
 

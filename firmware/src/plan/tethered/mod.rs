@@ -108,6 +108,6 @@ pub use objective::TetherObjective;
 pub use params::{PlanBounds, TetherSpaceParams};
 pub use phases::{PhaseClock, PhaseTicks};
 pub use space::{
-    fall_line_theta, settle_at, settle_under_axle_with, surface_point, wraps, MotionStats, RoverState, SettleFailure, StartEscape,
+    fall_line_theta, settle_at, settle_under_axle_with, surface_point, wraps, MarginEscape, MotionStats, RoverState, SettleFailure, StartEscape,
     TetherSpace, TetherValidity,
 };

@@ -15,23 +15,23 @@ use super::{RoverState, SettleFailure, TetherSpace, TetherSpaceParams};
 
 impl<D: DistanceField> TetherSpace<'_, D> {
     /// The stability of a settled state with the last anchor of `history` (counted). `Ok(margin)` when stable
-    /// with at least `min_stability_margin`.
+    /// with at least `min_stability_margin` ([`Self::min_margin_at`]: a margin escape's minimum in its zone).
     pub fn stable_with(&self, st: &SettledPose, history: &AnchorHistory) -> Result<f64, MotionFailure> {
         self.count(|s| s.stability_checks += 1);
         let pull = tether_pull_anchor(st, history, &self.rover);
         match self.timed(Phase::Stability, || check_pose_stability(self.map, st, pull.as_ref(), &self.rover)) {
-            Ok((StabilityOutcome::Stable(r), _)) if r.margin >= self.params.min_stability_margin => Ok(r.margin),
+            Ok((StabilityOutcome::Stable(r), _)) if r.margin >= self.min_margin_at(st) => Ok(r.margin),
             Ok((StabilityOutcome::Unknown(_), _)) => Err(MotionFailure::Unknown),
             _ => Err(MotionFailure::Unstable),
         }
     }
 
     /// [`Self::stable_with`]'s verdict alone (counted the same): `Ok` when stable with at least
-    /// `min_stability_margin`, with one stability LP instead of two whenever the inline boom holds.
+    /// `min_stability_margin` (as there), with one stability LP instead of two whenever the inline boom holds.
     pub fn stable_enough(&self, st: &SettledPose, history: &AnchorHistory) -> Result<(), MotionFailure> {
         self.count(|s| s.stability_checks += 1);
         let pull = tether_pull_anchor(st, history, &self.rover);
-        let min = self.params.min_stability_margin;
+        let min = self.min_margin_at(st);
         match self.timed(Phase::Stability, || check_pose_stability_at_least(self.map, st, pull.as_ref(), &self.rover, min)) {
             Ok((StabilityOutcome::Stable(r), _)) if r.margin >= min => Ok(()),
             Ok((StabilityOutcome::Unknown(_), _)) => Err(MotionFailure::Unknown),

@@ -289,6 +289,7 @@ pub struct TetherSpace<'m, D> {
     pub(super) params: TetherSpaceParams,
     pub(super) stats: Cell<MotionStats>,
     pub(super) escape: Option<StartEscape>,
+    pub(super) margin_escape: Option<MarginEscape>,
     pub(super) clock: Option<&'m dyn PhaseClock>,
     pub(super) phases: Cell<PhaseTicks>,
 }
@@ -300,9 +301,9 @@ pub struct TetherSpace<'m, D> {
 /// first interpolated state, and a start that does not settle cannot be planned from at all.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StartEscape {
-    /// The start's axle position, x (m).
+    /// The start's surface point, x (m).
     pub x: Real,
-    /// The start's axle position, y (m).
+    /// The start's surface point, y (m).
     pub y: Real,
     /// Radius of the zone (m).
     pub radius_m: Real,
@@ -310,6 +311,24 @@ pub struct StartEscape {
     pub rover: RoverParams,
     /// Steep wheel contacts accepted in the zone.
     pub steep_ok: bool,
+}
+
+/// The way out of a start the rover stands on whose stability margin on the map is below the space's
+/// `min_stability_margin` but not below the mission's own floor ([`TetherSpace::with_margin_escape`]): within
+/// `radius_m` (horizontally, axle to the start's axle) a state is stable enough with `min_margin` instead. Without it
+/// every motion from such a start fails in its first interpolated state, and the mission could only stop where it
+/// stands; with it the plan leaves through states no worse than the floor and every state beyond the zone keeps the
+/// full minimum.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MarginEscape {
+    /// The start's axle position, x (m).
+    pub x: Real,
+    /// The start's axle position, y (m).
+    pub y: Real,
+    /// Radius of the zone (m).
+    pub radius_m: Real,
+    /// The smallest margin accepted in the zone, in rover weights (as `min_stability_margin`).
+    pub min_margin: f64,
 }
 
 impl<'m, D: DistanceField> TetherSpace<'m, D> {
@@ -331,6 +350,7 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
             params,
             stats: Cell::new(MotionStats::default()),
             escape: None,
+            margin_escape: None,
             clock: None,
             phases: Cell::new(PhaseTicks::default()),
         })
@@ -360,6 +380,20 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
     pub fn with_start_escape(mut self, escape: Option<StartEscape>) -> Self {
         self.escape = escape;
         self
+    }
+    /// The space with a [`MarginEscape`] round a start whose margin is thin (`None`: none).
+    pub fn with_margin_escape(mut self, escape: Option<MarginEscape>) -> Self {
+        self.margin_escape = escape;
+        self
+    }
+    /// The smallest stability margin a state with this pose needs: `min_stability_margin`, or the margin escape's
+    /// within its zone.
+    pub fn min_margin_at(&self, st: &SettledPose) -> f64 {
+        let a = st.pose.translation.vector;
+        match self.margin_escape {
+            Some(e) if libm::hypotf(a.x - e.x, a.y - e.y) <= e.radius_m => e.min_margin.min(self.params.min_stability_margin),
+            _ => self.params.min_stability_margin,
+        }
     }
     /// The distance field planned on.
     pub fn map(&self) -> &'m D {

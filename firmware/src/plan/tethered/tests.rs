@@ -239,3 +239,47 @@ fn a_pose_estimate_settles_with_its_own_axle_and_heading() {
         assert!(st.ground.x < x, "the surface point lies uphill of the axle");
     }
 }
+
+/// A state whose margin is positive but below `min_stability_margin` is refused, except inside a margin escape
+/// zone that accepts its margin; a state as thin outside the zone, or thinner than the zone's minimum inside it,
+/// is still refused.
+#[test]
+fn a_margin_escape_accepts_the_start_s_own_margin_only_round_the_start() {
+    use crate::plan::tethered::MarginEscape;
+    let params = TetherSpaceParams::DEFAULT;
+    // the slope (descending towards +x, slack tether) on which a settled state's margin is thin
+    let mut thin = None;
+    for tenth in 0..900 {
+        let slope: Real = (tenth as Real * 0.1).to_radians();
+        let plane = Plane(Vec3::new(libm::sinf(slope), 0.0, libm::cosf(slope)));
+        let space = TetherSpace::new(&plane, BOUNDS, RoverParams::AXEL, params).unwrap();
+        let Ok(st) = space.settle_state(0.0, 0.0, 0.0) else { continue };
+        let hist = history(&[]); // slack: the brakes' friction alone holds the rover
+        let pull = tether_pull_anchor(&st.settled, &hist, &RoverParams::AXEL);
+        if let Ok((crate::stability::StabilityOutcome::Stable(r), _)) =
+            crate::rover::check_pose_stability(&plane, &st.settled, pull.as_ref(), &RoverParams::AXEL)
+        {
+            if r.margin > 0.2 * params.min_stability_margin && r.margin < 0.8 * params.min_stability_margin {
+                thin = Some((slope, r.margin, hist));
+                break;
+            }
+        }
+    }
+    let (slope, margin, hist) = thin.expect("a slope with a thin margin");
+    let plane = Plane(Vec3::new(libm::sinf(slope), 0.0, libm::cosf(slope)));
+    let space = TetherSpace::new(&plane, BOUNDS, RoverParams::AXEL, params).unwrap();
+    let st = space.settle_state(0.0, 0.0, 0.0).unwrap();
+    assert_eq!(space.stable_with(&st.settled, &hist), Err(MotionFailure::Unstable), "margin {margin} at {slope} rad");
+    let a = st.axle();
+    let zone = |min_margin| MarginEscape { x: a.x, y: a.y, radius_m: 0.2, min_margin };
+    let relaxed = TetherSpace::new(&plane, BOUNDS, RoverParams::AXEL, params).unwrap().with_margin_escape(Some(zone(margin)));
+    assert_eq!(relaxed.stable_with(&st.settled, &hist), Ok(margin));
+    assert!(relaxed.stable_enough(&st.settled, &hist).is_ok());
+    // the same pose 0.5 m along the contour (the same margin on a plane) is outside the zone
+    let far = relaxed.settle_state(0.0, 0.5, 0.0).unwrap();
+    assert_eq!(relaxed.stable_with(&far.settled, &hist.clone()), Err(MotionFailure::Unstable));
+    // a zone asking for more than the state has refuses it
+    let strict = TetherSpace::new(&plane, BOUNDS, RoverParams::AXEL, params).unwrap().with_margin_escape(Some(zone(margin + 1e-3)));
+    assert_eq!(strict.stable_with(&st.settled, &hist), Err(MotionFailure::Unstable));
+    assert_eq!(relaxed.min_margin_at(&far.settled), params.min_stability_margin);
+}
