@@ -132,6 +132,11 @@ pub struct MissionArgs {
     /// No live progress line.
     #[arg(long)]
     pub quiet: bool,
+    /// Falls are judged by the physics judge too (rapier3d, `host-sim/src/physics`): after every motion it holds
+    /// the rover at its true pose with the true tether, and a pose it cannot hold is a fall. Sets the scenario's
+    /// `[mission] physics_falls`.
+    #[arg(long)]
+    pub physics_falls: bool,
     /// Fault the link with this profile: `KIND=RATE,...` per byte on the uplink (kinds bitflip, drop, duplicate,
     /// reorder, truncate, delay, stall; `all=RATE`), `down.KIND=RATE` (`down.all=`) on the downlink, `delay_us=`, `stall_us=`, `reorder_hold_us=`, `seed=`. Replaces the
     /// scenario's `[faults]` section (`--faults none`: a clean link whatever the scenario says).
@@ -727,10 +732,11 @@ pub fn cli_main(c: &MissionCli) -> ExitCode {
 /// `mission` entry point: exit 0 when every mission arrived or stopped safe with a reason and none fell, 1 on a
 /// fall, a false arrival or a campaign's mission that could not run, 2 when it could not run at all.
 pub fn main(args: &MissionArgs) -> ExitCode {
-    let sc = match load_scenario(args.scenario.as_deref()) {
+    let mut sc = match load_scenario(args.scenario.as_deref()) {
         Ok(s) => s,
         Err(e) => return super::fail(e),
     };
+    sc.mission.physics_falls |= args.physics_falls;
     // the scenario's `[faults]` unless --faults replaces it (checked when the scenario was parsed)
     let mut args = args.clone();
     if args.faults.is_none() {

@@ -180,7 +180,17 @@ pub fn table(name: &str, reports: &[MissionReport]) -> String {
             stop_text.join(", ")
         }
     );
-    let _ = writeln!(s, "  falls                        {falls}");
+    let checks: u32 = reports.iter().map(|r| r.physics_checks).sum();
+    if checks > 0 {
+        let blocked: u32 = reports.iter().map(|r| r.physics_blocked).sum();
+        let by_physics = reports.iter().filter(|r| r.physics_fall.is_some()).count();
+        let _ = writeln!(
+            s,
+            "  falls                        {falls} ({by_physics} by the physics judge: {checks} rest poses judged, {blocked} not placeable)"
+        );
+    } else {
+        let _ = writeln!(s, "  falls                        {falls} (simple statics; --physics-falls for the physics judge)");
+    }
     let _ = writeln!(s, "  autonomy by distance         {autonomy:.1} % ({auto:.2} m driven, {rest:.2} m left to an operator)");
     let _ = writeln!(
         s,

@@ -87,6 +87,12 @@ pub struct MissionSection {
     pub overview_resolution_deg: f64,
     /// Allow the flight software to drive an approximate solution up to its last safe state. Default false.
     pub allow_approximate: bool,
+    /// After every motion, the physics judge (`crate::physics`, rapier3d, independent of the flight software's
+    /// model) holds the rover at its true pose with the true tether; a pose it cannot hold is a **fall**, as is
+    /// one the simple statics cannot hold (`tetherbot mission --physics-falls`). Default false: with it the
+    /// development missions fall where the planner's wheel-patch model is optimistic (`host-sim/doc/mission.md`,
+    /// 2026-12-05), an open defect of the planner, not of the judge.
+    pub physics_falls: bool,
     /// Cross-track distance that triggers a replan on board (`MissionConfig.replan_cross_track_m`), metres.
     /// Default: the flight software's `MissionConfig::DEFAULT`.
     pub replan_cross_track_m: Option<f64>,
@@ -135,6 +141,7 @@ impl Default for MissionSection {
             overview_eye: None,
             overview_resolution_deg: 0.5,
             allow_approximate: false,
+            physics_falls: false,
             replan_cross_track_m: None,
             payout_tolerance_m: None,
             min_margin_n: None,

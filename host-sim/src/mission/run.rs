@@ -38,6 +38,7 @@ use super::sensing::{
 };
 use super::truth::Body;
 use super::world::MissionWorld;
+use crate::physics::{GroundPose, HoldOutcome, PhysicsJudge, TetherSpec};
 use crate::link::{FlightLink, ResetCause};
 use crate::scenario::{Scenario, WorldSpec};
 use crate::sensor::{to_wire_pose, RangeSensorParams, Scan};
@@ -229,6 +230,12 @@ pub struct MissionReport {
     pub goal: P3,
     /// Goal tolerance (flight) and the truth's slack.
     pub tolerance_m: f64,
+    /// Poses the physics judge held the rover at (after each motion, `[mission] physics_falls`).
+    pub physics_checks: u32,
+    /// Poses the physics judge could not place the rover at (wheels or body in the terrain): not judged.
+    pub physics_blocked: u32,
+    /// The physics judge's verdict that ended the mission as a fall, in words.
+    pub physics_fall: Option<String>,
 }
 
 impl MissionReport {
@@ -398,9 +405,41 @@ struct Sim<'a, L: FlightLink> {
     /// The id of the last `Turn` / `Straight` taken (none since boot): a `Stop` of a newer one names a motion that
     /// never arrived.
     last_motion_id: Option<u32>,
+    /// The physics judge of the true world as it is now (rebuilt when a rock appears); `None` without
+    /// `physics_falls`.
+    judge: Option<PhysicsJudge>,
 }
 
 impl<L: FlightLink> Sim<'_, L> {
+    /// The physics judge holds the rover where it stands after a motion, with the true tether (taut from its last
+    /// anchor). `Some(words)` when it does not hold: a fall.
+    fn physics_fall(&mut self) -> Option<String> {
+        let judge = self.judge.as_ref()?;
+        let a = self.rover.axle();
+        let pose = GroundPose { x: a[0], y: a[1], yaw: f64::from(self.rover.state.heading()) };
+        let anchor = self.rover.tether.last_anchor(self.truth.root);
+        let v = judge.hold(pose, &TetherSpec { anchor, free_length_m: None });
+        self.rep.physics_checks += 1;
+        match v.outcome {
+            HoldOutcome::Holds => None,
+            HoldOutcome::Blocked => {
+                self.rep.physics_blocked += 1;
+                None
+            }
+            HoldOutcome::Falls => Some(format!(
+                "the physics judge does not hold the rover at ({:.2}, {:.2}, {:.2}) heading {:.1} deg after motion {}: slides {:.3} m, tilts {:.1} deg, {:.3} m/s at the end",
+                a[0],
+                a[1],
+                a[2],
+                pose.yaw.to_degrees(),
+                self.rep.motions,
+                v.slide_m,
+                v.tilt_deg,
+                v.end_speed_mps
+            )),
+        }
+    }
+
     fn now_s(&self) -> f64 {
         self.s.link().now_us() as f64 / 1e6
     }
@@ -717,6 +756,9 @@ impl<L: FlightLink> Sim<'_, L> {
             self.loc.moved(self.rover.driven_m - before);
             if self.truth.world.advance(self.rover.driven_m) > 0 {
                 log::info!("a rock appeared after {:.2} m", self.rover.driven_m);
+                if self.judge.is_some() {
+                    self.judge = Some(PhysicsJudge::new(&self.truth.world.truth(), self.truth.rover).map_err(|e| MissionError::Setup(format!("physics judge: {e}")))?);
+                }
             }
             self.trace();
             let t = self.s.link().now_us() + dt_us;
@@ -739,6 +781,15 @@ impl<L: FlightLink> Sim<'_, L> {
         self.rep.motions += 1;
         if self.rep.motions % 8 == 1 {
             self.snapshot_tether();
+        }
+        if outcome != TrueOutcome::Fell {
+            if let Some(why) = self.physics_fall() {
+                log::warn!("fall: {why}");
+                self.rep.physics_fall = Some(why);
+                self.snapshot_tether();
+                self.done = Some(Verdict::Fell);
+                return Ok(false);
+            }
         }
         let wire = match outcome {
             TrueOutcome::Fell => {
@@ -896,8 +947,16 @@ pub fn run_mission_from(
         start: rover.axle(),
         goal: sc.goal.position,
         tolerance_m: sc.goal.tolerance_m,
+        physics_checks: 0,
+        physics_blocked: 0,
+        physics_fall: None,
     };
     let estimate = rover.state.settled.pose;
+    let judge = if m.physics_falls {
+        Some(PhysicsJudge::new(&truth.world.truth(), truth.rover).map_err(|e| MissionError::Setup(format!("physics judge: {e}")))?)
+    } else {
+        None
+    };
     let mut sim = Sim {
         s: {
             // Every frame that changes the flight state is sent again when unanswered (lost on a faulty link).
@@ -935,6 +994,7 @@ pub fn run_mission_from(
         recovery_due: false,
         last_command_id: None,
         last_motion_id: None,
+        judge,
     };
     sim.recv()?;
     sim.s.send(&Message::Configure(cfg))?;
