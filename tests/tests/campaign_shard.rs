@@ -226,6 +226,7 @@ fn mission_args(out: &Path, seeds: u32, shard: Option<Shard>) -> MissionArgs {
         threads: Some(2),
         created_at_ms: Some(0),
         quiet: true,
+        physics_falls: false,
         live: None,
         live_wait: 0.0,
         faults: None,
