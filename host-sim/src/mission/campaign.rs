@@ -302,6 +302,9 @@ pub struct MissionRow {
     pub plans: usize,
     /// Onboard map high-water, blocks.
     pub map_blocks: u32,
+    /// The physics judge's words when it ended the mission as a fall (`--physics-falls`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub physics_fall: Option<String>,
 }
 
 impl MissionRow {
@@ -321,6 +324,7 @@ impl MissionRow {
             max_cross_track_m: fin(r.max_cross_track_m),
             plans: r.plans.len(),
             map_blocks: r.map_blocks,
+            physics_fall: r.physics_fall.clone(),
         }
     }
 }
