@@ -36,7 +36,7 @@ use super::params::MissionSection;
 use super::sensing::{
     gaussian, overview_scan, overview_sensor, rover_scan, tether_reading, Localiser,
 };
-use super::truth::Body;
+use super::truth::{true_tether, Body};
 use super::world::MissionWorld;
 use crate::physics::{GroundPose, HoldOutcome, PhysicsJudge, TetherSpec};
 use crate::link::{FlightLink, ResetCause};
@@ -413,11 +413,20 @@ struct Sim<'a, L: FlightLink> {
 impl<L: FlightLink> Sim<'_, L> {
     /// The physics judge holds the rover where it stands after a motion, with the true tether (taut from its last
     /// anchor). `Some(words)` when it does not hold: a fall.
+    ///
+    /// The tether leaves the rover at the boom tip, not at the axle the executor's tether ends at: the inline boom
+    /// is aimed at the tether's last anchor and the true tether re-computed to that tip
+    /// ([`PhysicsJudge::aim_tether`]), as [`crate::physics::path::judge_path`] does.
     fn physics_fall(&mut self) -> Option<String> {
         let judge = self.judge.as_ref()?;
         let a = self.rover.axle();
         let pose = GroundPose { x: a[0], y: a[1], yaw: f64::from(self.rover.state.heading()) };
-        let anchor = self.rover.tether.last_anchor(self.truth.root);
+        let root = self.truth.root;
+        let first = self.rover.tether.last_anchor(root);
+        let (world, prev) = (&self.truth.world, &self.rover.tether);
+        let aimed = judge.aim_tether(pose, first, |tip| Ok::<_, ()>(true_tether(world, root, tip, Some(prev)).last_anchor(root)));
+        // unplaceable: the hold below says so (Blocked)
+        let anchor = aimed.ok().flatten().unwrap_or(first);
         let v = judge.hold(pose, &TetherSpec { anchor, free_length_m: None });
         self.rep.physics_checks += 1;
         match v.outcome {

@@ -92,6 +92,10 @@ pub const HOLD_SLIDE_M: f64 = 0.05;
 pub const HOLD_TILT_DEG: f64 = 5.0;
 /// Largest axle speed at the end of a hold, m/s.
 pub const HOLD_END_SPEED_MPS: f64 = 0.01;
+/// Rounds of aiming the boom at the tether and moving the tether's end to the tip ([`PhysicsJudge::aim_tether`]).
+pub const AIM_ROUNDS: usize = 2;
+/// The aim has settled when the last anchor moves less than this, metres.
+pub const AIM_TOLERANCE_M: f64 = 1e-3;
 /// Seconds braked after a drive.
 pub const DRIVE_SETTLE_SECONDS: f64 = 1.0;
 /// Axle turn beyond which a drive fell, degrees.
@@ -471,6 +475,31 @@ impl PhysicsJudge {
         });
         let wheel_joints = [joints[0], joints[1]];
         (w, RoverBodies { chassis, wheels, wheel_joints, rope })
+    }
+
+    /// The tether's last anchor when it ends at the boom tip rather than at the axle: the inline boom is aimed at
+    /// `first` (the last anchor of a tether to the axle, or the previous pose's), `anchor_for_tip` gives the true
+    /// tether's last anchor for a tether ending at that tip, and the boom is re-aimed, at most [`AIM_ROUNDS`] times,
+    /// until the anchor moves less than [`AIM_TOLERANCE_M`]. Within a boom length of an edge this matters: just
+    /// over a lip the boom reaches back past it, and the tether runs from the tip to the root, not down to the lip.
+    /// `Ok(None)`: the rover cannot be placed at `pose`.
+    pub fn aim_tether<E>(
+        &self,
+        pose: GroundPose,
+        first: P3,
+        mut anchor_for_tip: impl FnMut(P3) -> Result<P3, E>,
+    ) -> Result<Option<P3>, E> {
+        let mut anchor = first;
+        for _ in 0..AIM_ROUNDS {
+            let Some(pl) = self.place(pose, anchor, BoomSetting::Inline) else { return Ok(None) };
+            let next = anchor_for_tip(pl.tip)?;
+            let moved = firmware::geom::p3::dist(next, anchor);
+            anchor = next;
+            if moved < AIM_TOLERANCE_M {
+                break;
+            }
+        }
+        Ok(Some(anchor))
     }
 
     /// The hold test (see the module docs): the boom settings of [`BOOM_SETTINGS`] in turn, the first that holds

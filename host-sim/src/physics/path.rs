@@ -17,7 +17,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{BoomSetting, GroundPose, HoldOutcome, PhysicsJudge, TetherSpec};
+use super::{GroundPose, HoldOutcome, PhysicsJudge, TetherSpec};
 use crate::truth::taut::{TautTether, WrapEdges, SHORTEST_SAMPLE_M};
 use firmware::geom::p3::P3;
 
@@ -100,29 +100,26 @@ pub fn judge_path(judge: &PhysicsJudge, edges: &WrapEdges, root: P3, path: &[Pat
         j.poses += 1;
         let pose = GroundPose { x, y, yaw: heading };
         // The tether ends at the boom tip, and the inline boom points at the tether's last anchor: start from the
-        // previous last anchor (the root at first), move the tether's end to the tip, re-aim, twice.
-        let mut anchor = tether.as_ref().map_or(root, |t| t.last_anchor(edges));
-        let mut step: Result<(), String> = Ok(());
-        for _ in 0..2 {
-            let Some(pl) = judge.place(pose, anchor, BoomSetting::Inline) else {
+        // previous last anchor (the root at first), move the tether's end to the tip, re-aim.
+        let first = tether.as_ref().map_or(root, |t| t.last_anchor(edges));
+        let aimed = judge.aim_tether(pose, first, |tip| {
+            match tether.as_mut() {
+                None => TautTether::shortest(edges, root, tip, SHORTEST_SAMPLE_M).map(|t| tether = Some(t)),
+                Some(t) => t.update(edges, tip),
+            }
+            .map_err(|e| e.to_string())?;
+            tether.as_ref().map(|t| t.last_anchor(edges)).ok_or_else(|| "no tether".to_string())
+        });
+        let why = match aimed {
+            Ok(Some(_)) => None,
+            Ok(None) => {
                 j.failure = Some(format!("pose {k} ({x:.2}, {y:.2}, heading {:.1} deg): the rover cannot be placed (no ground, or the body or boom meets the terrain)", heading.to_degrees()));
                 return j;
-            };
-            step = match tether.as_mut() {
-                None => TautTether::shortest(edges, root, pl.tip, SHORTEST_SAMPLE_M).map(|t| tether = Some(t)),
-                Some(t) => t.update(edges, pl.tip),
             }
-            .map_err(|e| e.to_string());
-            let Some(t) = tether.as_ref().filter(|_| step.is_ok()) else { break };
-            let next = t.last_anchor(edges);
-            let moved = firmware::geom::p3::dist(next, anchor);
-            anchor = next;
-            if moved < 1e-3 {
-                break;
-            }
-        }
-        let Some(t) = tether.as_ref().filter(|_| step.is_ok()) else {
-            let why = step.err().unwrap_or_else(|| "no tether".to_string());
+            Err(why) => Some(why),
+        };
+        let Some(t) = tether.as_ref().filter(|_| why.is_none()) else {
+            let why = why.unwrap_or_else(|| "no tether".to_string());
             j.failure = Some(format!("pose {k} ({x:.2}, {y:.2}): the true tether: {why}"));
             return j;
         };

@@ -123,3 +123,24 @@ fn a_heading_across_the_face_is_the_rolling_direction() {
         assert!(err.abs() < 0.5f64.to_radians(), "{off_deg} deg: rolling heading {} deg", heading.to_degrees());
     }
 }
+
+#[test]
+fn just_over_the_lip_the_boom_reaches_back_past_it_and_the_tether_runs_to_the_root() {
+    // The axle 0.6 m down the 55-degree slope, facing down it: a tether ending at the axle wraps the lip
+    // (x = 0, z = 4), 0.65 m away, less than the 1 m boom. The tether leaves at the boom tip, over the ledge top.
+    let w = LedgeWorld::new();
+    let j = judge(&w);
+    let root = [-6.4, 0.0, 6.35];
+    let pose = GroundPose { x: 0.6, y: 0.0, yaw: 0.0 };
+    let to = |end: P3| crate::truth::tether::true_tether(&w, root, end, None).expect("a tether");
+    let axle = j.place(pose, root, BoomSetting::Inline).expect("placed").axle;
+    let lip = *to(axle).contacts.last().expect("a tether to the axle wraps the lip");
+    assert!(lip[0].abs() < 1e-9 && (lip[2] - 4.0).abs() < 1e-9, "{lip:?}");
+    assert!(firmware::geom::p3::dist(axle, lip) < f64::from(RoverParams::AXEL.boom_length_m), "{axle:?}");
+    let aimed = j.aim_tether(pose, lip, |tip| Ok::<_, ()>(to(tip).contacts.last().copied().unwrap_or(root)));
+    assert_eq!(aimed, Ok(Some(root)), "the tether from the tip clears the lip");
+    // Pulled from the tip towards the root the rover holds; pulled back down to the lip it would not be.
+    assert!(j.hold(pose, &TetherSpec { anchor: root, free_length_m: None }).holds());
+    let to_lip = j.hold(pose, &TetherSpec { anchor: lip, free_length_m: None });
+    assert_eq!(to_lip.outcome, HoldOutcome::Falls, "{to_lip:?}");
+}
