@@ -40,7 +40,9 @@ use super::{StabilityLp, LP_EQS, LP_INEQS, LP_VARS};
 use nalgebra::SVector;
 
 const ROWS: usize = LP_EQS + LP_INEQS;
-const COLS: usize = LP_VARS + 1;
+/// The `LP_VARS + 1` columns a table can use, rounded up to whole groups of four (the exchange updates four
+/// columns a step; the pivot row is zero in the columns past the table's last).
+const COLS: usize = (LP_VARS + 1).div_ceil(4) * 4;
 
 /// Smallest `|T|` accepted as a pivot.
 const PIVOT_TOL: f64 = 1e-9;
@@ -86,14 +88,19 @@ fn columns(m: &[f64], rows: usize) -> impl Iterator<Item = &[f64]> {
     (0..LP_VARS).map(move |j| m.get(j * rows..(j + 1) * rows).unwrap_or(&[]))
 }
 
+/// `v != 0.0` by its bits (both zeros have only the sign bit set at most).
+fn nonzero(v: f64) -> bool {
+    v.to_bits() << 1 != 0
+}
+
 fn u16_of(i: usize) -> u16 {
     u16::try_from(i).unwrap_or(u16::MAX)
 }
 
 /// The condensed tableau with its two objective rows.
 struct Tableau<'a> {
-    /// Lent by [`solve_until`] (a 12 KiB table is not moved around).
-    t: &'a mut [[f64; COLS]; ROWS],
+    /// Lent by [`solve_until`] (a 15 KiB table is not moved around): `ROWS` rows.
+    t: &'a mut [[f64; COLS]],
     rhs: [f64; ROWS],
     basic: [Var; ROWS],
     nonbasic: [Var; COLS],
@@ -108,6 +115,8 @@ struct Tableau<'a> {
     nr: usize,
     nc: usize,
     pivots: u32,
+    /// The current exchange's pivot row (kept here: not zeroed again for every exchange).
+    prow: PivotRow,
 }
 
 /// Why a phase stopped before its optimum.
@@ -122,26 +131,51 @@ fn get(v: &[f64], i: usize) -> f64 {
     v.get(i).copied().unwrap_or(0.0)
 }
 
-/// The pivot row of an exchange, divided by the pivot.
+/// The pivot row of an exchange, divided by the pivot, with the pivot column's entry left out (the other rows'
+/// pivot column is set apart): dense (`v`, columns `..nc`) and as its nonzeros (`idx`, `val`, `m` of them), so
+/// that a sparse pivot row updates only the columns it touches.
 struct PivotRow {
     v: [f64; COLS],
-    /// Columns in use (`Tableau::nc`).
-    nc: usize,
+    idx: [u8; COLS],
+    val: [f64; COLS],
+    m: usize,
+    /// Groups of four columns covering the columns in use (`Tableau::nc`); `v` is zero past `nc`.
+    q: usize,
+    /// Update by the nonzeros (`true`) or the whole row.
+    sparse: bool,
     k: usize,
     inv_p: f64,
     rhs: f64,
 }
 
 impl PivotRow {
-    /// `row -= f * pivot_row` with `f = row_k`, and `row_k = -f / p`.
+    const EMPTY: Self =
+        PivotRow { v: [0.0; COLS], idx: [0; COLS], val: [0.0; COLS], m: 0, q: 0, sparse: false, k: 0, inv_p: 0.0, rhs: 0.0 };
+
+    /// `row -= f * pivot_row` with `f = row_k`, and `row_k = -f / p`. A column where the pivot row is zero is
+    /// left as it is (`a - f 0 = a`). Inlined into the exchange's loop over the rows (most rows are skipped).
     fn apply(&self, row: &mut [f64; COLS], rhs: &mut f64) {
         let f = get(row, self.k);
         if f == 0.0 {
             return;
         }
-        if let (Some(row), Some(v)) = (row.get_mut(..self.nc), self.v.get(..self.nc)) {
-            for (a, b) in row.iter_mut().zip(v) {
-                *a -= f * b;
+        if self.sparse {
+            let (idx, val) = (self.idx.get(..self.m).unwrap_or(&[]), self.val.get(..self.m).unwrap_or(&[]));
+            for (j, b) in idx.iter().zip(val) {
+                if let Some(a) = row.get_mut(usize::from(*j)) {
+                    *a -= f * b;
+                }
+            }
+        } else if let (Some(row4), Some(v4)) =
+            (row.as_chunks_mut::<4>().0.get_mut(..self.q), self.v.as_chunks::<4>().0.get(..self.q))
+        {
+            // four columns a step (the loads and stores pair up, the loop's bookkeeping is shared); past the
+            // table's last column `v` is zero, which leaves those entries as they are
+            for (a, b) in row4.iter_mut().zip(v4) {
+                a[0] -= f * b[0];
+                a[1] -= f * b[1];
+                a[2] -= f * b[2];
+                a[3] -= f * b[3];
             }
         }
         if let Some(a) = row.get_mut(self.k) {
@@ -170,29 +204,52 @@ impl Tableau<'_> {
 
     /// Exchange the basic variable of row `r` with the nonbasic variable of column `k`.
     fn pivot(&mut self, r: usize, k: usize) {
+        let nc = self.nc.min(COLS);
         let inv_p = 1.0 / self.entry(r, k);
-        let mut prow = PivotRow { v: [0.0; COLS], nc: self.nc, k, inv_p, rhs: get(&self.rhs, r) * inv_p };
+        let prow = &mut self.prow;
+        prow.q = nc.div_ceil(4);
+        prow.k = k;
+        prow.inv_p = inv_p;
+        prow.rhs = get(&self.rhs, r) * inv_p;
+        prow.m = 0;
         if let Some(row) = self.t.get_mut(r) {
-            if let (Some(v), Some(row)) = (prow.v.get_mut(..self.nc), row.get_mut(..self.nc)) {
-                for (a, b) in v.iter_mut().zip(row.iter_mut()) {
-                    *a = *b * inv_p;
-                    *b = *a;
+            for (j, (a, v)) in row.iter_mut().zip(prow.v.iter_mut()).enumerate().take(nc) {
+                *a *= inv_p;
+                *v = *a;
+                if j != k && nonzero(*a) {
+                    if let (Some(i), Some(w)) = (prow.idx.get_mut(prow.m), prow.val.get_mut(prow.m)) {
+                        *i = u8::try_from(j).unwrap_or(u8::MAX);
+                        *w = *a;
+                        prow.m += 1;
+                    }
                 }
             }
-            // the pivot column of the other rows is set apart (`apply`): leave it out of the subtraction
             if let Some(a) = prow.v.get_mut(k) {
+                *a = 0.0;
+            }
+            for a in prow.v.iter_mut().take(4 * prow.q).skip(nc) {
                 *a = 0.0;
             }
             if let Some(a) = row.get_mut(k) {
                 *a = inv_p;
             }
         }
+        // a sparse update costs about three times as much per entry as a dense one
+        prow.sparse = 10 * prow.m < 12 * prow.q;
         if let Some(v) = self.rhs.get_mut(r) {
             *v = prow.rhs;
         }
-        for (i, (row, rhs)) in self.t.iter_mut().zip(self.rhs.iter_mut()).enumerate().take(self.nr) {
-            if i != r {
-                prow.apply(row, rhs);
+        let nr = self.nr.min(ROWS);
+        if let (Some(t), Some(rhs)) = (self.t.get_mut(..nr), self.rhs.get_mut(..nr)) {
+            if let (Some((t_lo, t_hi)), Some((rhs_lo, rhs_hi))) = (t.split_at_mut_checked(r), rhs.split_at_mut_checked(r)) {
+                for (row, b) in t_lo.iter_mut().zip(rhs_lo.iter_mut()) {
+                    prow.apply(row, b);
+                }
+                if let (Some(t_hi), Some(rhs_hi)) = (t_hi.get_mut(1..), rhs_hi.get_mut(1..)) {
+                    for (row, b) in t_hi.iter_mut().zip(rhs_hi.iter_mut()) {
+                        prow.apply(row, b);
+                    }
+                }
             }
         }
         prow.apply(&mut self.cost, &mut self.cost_rhs);
@@ -259,7 +316,7 @@ impl Tableau<'_> {
 
     /// Exchange rows `a` and `b` (table, right-hand side, basic variable); nothing when either is out of range.
     fn swap_rows(&mut self, a: usize, b: usize) {
-        if a < ROWS && b < ROWS {
+        if a < ROWS && b < ROWS && a < self.t.len() && b < self.t.len() {
             self.t.swap(a, b);
             self.rhs.swap(a, b);
             self.basic.swap(a, b);
@@ -346,15 +403,16 @@ impl Tableau<'_> {
             let Some(k) = enter else { return Ok(()) };
             // leaving row
             let mut leave: Option<(usize, f64, f64)> = None;
-            for r in 0..self.nr {
-                if !self.bounded_row(r) {
+            let rows = self.t.iter().zip(self.rhs.iter()).zip(self.basic.iter()).enumerate().take(self.nr);
+            for (r, ((row, rhs), b)) in rows {
+                if !matches!(b, Var::Slack(_) | Var::T) {
                     continue;
                 }
-                let a = self.entry(r, k);
+                let a = get(row, k);
                 if a <= PIVOT_TOL {
                     continue;
                 }
-                let ratio = get(&self.rhs, r).max(0.0) / a;
+                let ratio = rhs.max(0.0) / a;
                 let better = match leave {
                     None => true,
                     Some((lr, lratio, la)) => {
@@ -399,9 +457,11 @@ pub fn solve(lp: &StabilityLp, max_pivots: u32) -> LpSolution<LP_VARS> {
 /// ([`LpStatus::TargetReached`]: a feasible point, checked like an optimum, not necessarily optimal). Phase 2
 /// never raises the objective, so when the optimum is above the target the answer is [`solve`]'s.
 pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> LpSolution<LP_VARS> {
-    let mut table = [[0.0; COLS]; ROWS];
+    // one flat array: zeroed in one piece
+    let mut flat = [0.0; ROWS * COLS];
+    let (table, _) = flat.as_chunks_mut::<COLS>();
     let mut tab = Tableau {
-        t: &mut table,
+        t: table,
         rhs: [0.0; ROWS],
         basic: [Var::None; ROWS],
         nonbasic: [Var::None; COLS],
@@ -413,6 +473,7 @@ pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> Lp
         nr: 0,
         nc: 0,
         pivots: 0,
+        prow: PivotRow::EMPTY,
     };
     let fail = |status: LpStatus, pivots: u32| LpSolution {
         status,
@@ -420,69 +481,76 @@ pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> Lp
         objective: 0.0,
         iterations: pivots,
     };
-    // 1. compaction: live columns and rows (the matrices are column-major: one slice chunk per variable)
-    let a_cols = || columns(lp.a.as_slice(), LP_EQS);
-    let g_cols = || columns(lp.g.as_slice(), LP_INEQS);
-    let mut col_of = [usize::MAX; LP_VARS];
-    let mut a_live = [false; LP_EQS];
-    let mut g_live = [false; LP_INEQS];
-    for (j, ((ac, gc), (c, slot))) in a_cols().zip(g_cols()).zip(lp.c.as_slice().iter().zip(col_of.iter_mut())).enumerate() {
+    // 1. compaction and fill in one pass over the dense data (column-major: one slice chunk per variable). Table
+    // row `p` is equation `p` (its sign chosen so that the artificial starts nonnegative), row `LP_EQS + i`
+    // inequality `i`; a variable's column is written at the next free slot and kept if the variable is live (a
+    // dead column wrote nothing). Then the rows nothing was written to are left out, the others moved up in order.
+    let mut sign = [1.0; LP_EQS];
+    for (s, b) in sign.iter_mut().zip(lp.b.as_slice()) {
+        if *b < 0.0 {
+            *s = -1.0;
+        }
+    }
+    let mut row_live = [false; ROWS];
+    let (eq_live, in_live) = row_live.split_at_mut(LP_EQS);
+    let (eq_rows, in_rows) = tab.t.split_at_mut(LP_EQS);
+    for (j, ((ac, gc), c)) in columns(lp.a.as_slice(), LP_EQS)
+        .zip(columns(lp.g.as_slice(), LP_INEQS))
+        .zip(lp.c.as_slice())
+        .enumerate()
+    {
+        let k = tab.nc;
         let mut live = *c != 0.0;
-        for (l, v) in a_live.iter_mut().zip(ac).chain(g_live.iter_mut().zip(gc)) {
-            if *v != 0.0 {
+        for (((v, row), l), s) in ac.iter().zip(eq_rows.iter_mut()).zip(eq_live.iter_mut()).zip(sign.iter()) {
+            if nonzero(*v) {
+                if let Some(e) = row.get_mut(k) {
+                    *e = s * v;
+                }
+                *l = true;
+                live = true;
+            }
+        }
+        for ((v, row), l) in gc.iter().zip(in_rows.iter_mut()).zip(in_live.iter_mut()) {
+            if nonzero(*v) {
+                if let Some(e) = row.get_mut(k) {
+                    *e = *v;
+                }
                 *l = true;
                 live = true;
             }
         }
         if live {
-            if let (Some(n), Some(cst)) = (tab.nonbasic.get_mut(tab.nc), tab.cost.get_mut(tab.nc)) {
+            if let (Some(n), Some(cst)) = (tab.nonbasic.get_mut(k), tab.cost.get_mut(k)) {
                 *n = Var::X(u16_of(j));
                 *cst = *c;
             }
-            *slot = tab.nc;
             tab.nc += 1;
         }
     }
-    // rows: equations (sign chosen so that the artificial starts nonnegative), then inequalities
-    let mut a_row = [(usize::MAX, 1.0); LP_EQS];
-    for (p, ((live, b), slot)) in a_live.iter().zip(lp.b.as_slice()).zip(a_row.iter_mut()).enumerate() {
+    for (src, live) in row_live.iter().enumerate() {
+        let (rhs, var) = match src.checked_sub(LP_EQS) {
+            None => (get(&sign, src) * get(lp.b.as_slice(), src), Var::Art(u16_of(src))),
+            Some(i) => (get(lp.h.as_slice(), i), Var::Slack(u16_of(i))),
+        };
         if !*live {
-            if b.abs() > EQ_TOL {
+            let bad = match var {
+                Var::Art(_) => rhs.abs() > EQ_TOL,
+                _ => rhs < -FEAS_TOL,
+            };
+            if bad {
                 return fail(LpStatus::Infeasible, 0);
             }
             continue;
         }
-        let sign = if *b < 0.0 { -1.0 } else { 1.0 };
-        *slot = (tab.nr, sign);
-        tab.push_row(sign * b, Var::Art(u16_of(p)));
-    }
-    let mut g_row = [usize::MAX; LP_INEQS];
-    for (i, ((live, h), slot)) in g_live.iter().zip(lp.h.as_slice()).zip(g_row.iter_mut()).enumerate() {
-        if !*live {
-            if *h < -FEAS_TOL {
-                return fail(LpStatus::Infeasible, 0);
-            }
-            continue;
-        }
-        *slot = tab.nr;
-        tab.push_row(*h, Var::Slack(u16_of(i)));
-    }
-    // the table is zero: write the nonzeros (a few per row)
-    for ((ac, gc), k) in a_cols().zip(g_cols()).zip(col_of.iter()) {
-        for (v, (r, sign)) in ac.iter().zip(a_row.iter()) {
-            if *v != 0.0 {
-                if let Some(e) = tab.t.get_mut(*r).and_then(|row| row.get_mut(*k)) {
-                    *e = sign * v;
+        if src != tab.nr {
+            // a later row moves up; its old slot is past the table's rows from now on
+            if let Some(row) = tab.t.get(src).copied() {
+                if let Some(dst) = tab.t.get_mut(tab.nr) {
+                    *dst = row;
                 }
             }
         }
-        for (v, r) in gc.iter().zip(g_row.iter()) {
-            if *v != 0.0 {
-                if let Some(e) = tab.t.get_mut(*r).and_then(|row| row.get_mut(*k)) {
-                    *e = *v;
-                }
-            }
-        }
+        tab.push_row(rhs, var);
     }
     // 2. phase 0: free variables into the basis, equations first (complete pivoting)
     while let Some((r, k)) = tab.best_equation_pivot() {
@@ -618,9 +686,17 @@ pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> Lp
         *r = -b;
     }
     for ((ac, gc), xj) in columns(lp.a.as_slice(), LP_EQS).zip(columns(lp.g.as_slice(), LP_INEQS)).zip(x.as_slice()) {
+        // zero coefficients (most of them) leave the residual as it is
         if *xj != 0.0 {
-            for (r, a) in r_a.iter_mut().zip(ac).chain(r_g.iter_mut().zip(gc)) {
-                *r += a * xj;
+            for (r, a) in r_a.iter_mut().zip(ac) {
+                if nonzero(*a) {
+                    *r += a * xj;
+                }
+            }
+            for (r, a) in r_g.iter_mut().zip(gc) {
+                if nonzero(*a) {
+                    *r += a * xj;
+                }
             }
         }
     }
