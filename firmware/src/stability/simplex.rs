@@ -112,6 +112,8 @@ struct Tableau<'a> {
     /// Phase-1 objective row (the artificial `t`).
     p1: [f64; COLS],
     p1_rhs: f64,
+    /// Phase 1 is running: its objective row is updated (zero before, not read after).
+    p1_live: bool,
     nr: usize,
     nc: usize,
     pivots: u32,
@@ -153,7 +155,8 @@ impl PivotRow {
         PivotRow { v: [0.0; COLS], idx: [0; COLS], val: [0.0; COLS], m: 0, q: 0, sparse: false, k: 0, inv_p: 0.0, rhs: 0.0 };
 
     /// `row -= f * pivot_row` with `f = row_k`, and `row_k = -f / p`. A column where the pivot row is zero is
-    /// left as it is (`a - f 0 = a`). Inlined into the exchange's loop over the rows (most rows are skipped).
+    /// left as it is (`a - f 0 = a`). Inlined into [`Self::apply_rows`], its one caller.
+    #[inline(always)]
     fn apply(&self, row: &mut [f64; COLS], rhs: &mut f64) {
         let f = get(row, self.k);
         if f == 0.0 {
@@ -182,6 +185,13 @@ impl PivotRow {
             *a = -f * self.inv_p;
         }
         *rhs -= f * self.rhs;
+    }
+
+    /// [`Self::apply`] to every row of `rows` (right-hand sides `rhs`).
+    fn apply_rows(&self, rows: &mut [[f64; COLS]], rhs: &mut [f64]) {
+        for (row, b) in rows.iter_mut().zip(rhs.iter_mut()) {
+            self.apply(row, b);
+        }
     }
 }
 
@@ -242,18 +252,16 @@ impl Tableau<'_> {
         let nr = self.nr.min(ROWS);
         if let (Some(t), Some(rhs)) = (self.t.get_mut(..nr), self.rhs.get_mut(..nr)) {
             if let (Some((t_lo, t_hi)), Some((rhs_lo, rhs_hi))) = (t.split_at_mut_checked(r), rhs.split_at_mut_checked(r)) {
-                for (row, b) in t_lo.iter_mut().zip(rhs_lo.iter_mut()) {
-                    prow.apply(row, b);
-                }
+                prow.apply_rows(t_lo, rhs_lo);
                 if let (Some(t_hi), Some(rhs_hi)) = (t_hi.get_mut(1..), rhs_hi.get_mut(1..)) {
-                    for (row, b) in t_hi.iter_mut().zip(rhs_hi.iter_mut()) {
-                        prow.apply(row, b);
-                    }
+                    prow.apply_rows(t_hi, rhs_hi);
                 }
             }
         }
-        prow.apply(&mut self.cost, &mut self.cost_rhs);
-        prow.apply(&mut self.p1, &mut self.p1_rhs);
+        prow.apply_rows(core::slice::from_mut(&mut self.cost), core::slice::from_mut(&mut self.cost_rhs));
+        if self.p1_live {
+            prow.apply_rows(core::slice::from_mut(&mut self.p1), core::slice::from_mut(&mut self.p1_rhs));
+        }
         let leaving = self.basic_of(r);
         let entering = self.nonbasic_of(k);
         if let Some(b) = self.basic.get_mut(r) {
@@ -470,6 +478,7 @@ pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> Lp
         cost_rhs: 0.0,
         p1: [0.0; COLS],
         p1_rhs: 0.0,
+        p1_live: false,
         nr: 0,
         nc: 0,
         pivots: 0,
@@ -624,8 +633,11 @@ pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> Lp
         if let Some(e) = tab.p1.get_mut(kt) {
             *e = 1.0;
         }
+        tab.p1_live = true;
         tab.pivot(wr, kt);
-        match tab.optimise(true, max_pivots, None) {
+        let phase1 = tab.optimise(true, max_pivots, None);
+        tab.p1_live = false;
+        match phase1 {
             Ok(()) | Err(Stop::Target) => {}
             Err(Stop::Budget) => return fail(LpStatus::BudgetExhausted, tab.pivots),
             Err(Stop::Unbounded) => return fail(LpStatus::NumericalFailure, tab.pivots),
