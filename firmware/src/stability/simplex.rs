@@ -33,7 +33,18 @@
 //! (`config::stability::SIMPLEX_MAX_PIVOTS`, default 200; [`LpStatus::BudgetExhausted`] when it runs out).
 //! Tolerances (absolute: the LP's numbers are O(1) because forces are in rover weights): `PIVOT_TOL = 1e-9`,
 //! `FEAS_TOL = 1e-10`, `OPT_TOL = 1e-11`, `EQ_TOL = 1e-9`, `CHECK_TOL = 1e-7`; `DEGENERATE_RUN = 8`.
-//! Storage: the table, `(LP_EQS + LP_INEQS) x (LP_VARS + 1)` `f64` (12.4 KiB), on the stack; no heap.
+//! Storage: the table, `LP_EQS + LP_INEQS` rows of `LP_VARS + 1` `f64` rounded up to a multiple of four (73 x 28,
+//! 16.0 KiB), on the stack and zeroed once per solve; no heap.
+//!
+//! # Cost
+//! The LP's dense `A` and `G` are read once, in the compaction: each live variable's column is written into the
+//! table as it is scanned (four zero coefficients in a row are passed over by one test), and the rows nothing was
+//! written to are then left out. From there on only the table's active part is touched (`nr` rows, `nc`
+//! columns). An exchange divides the pivot row by the pivot once (one reciprocal), then updates every other row
+//! whose pivot-column entry is nonzero: by the pivot row's nonzeros when they are few (under 30 % of the columns),
+//! otherwise four columns a step over whole groups of four (the pivot row is zero past column `nc`, so the padding
+//! entries stay as they are). Phase 1's objective row is updated only while phase 1 runs, and the residual check
+//! skips zero coefficients. Per solve on the emulated board: `host-sim/doc/board_test3.md`.
 
 use super::lp::{LpSolution, LpStatus};
 use super::{StabilityLp, LP_EQS, LP_INEQS, LP_VARS};
@@ -93,13 +104,35 @@ fn nonzero(v: f64) -> bool {
     v.to_bits() << 1 != 0
 }
 
+/// `f(i, col[i])` for each nonzero entry of `col`, in order; four zeros in a row (most of a column of the LP) are
+/// passed over by one test.
+#[inline(always)]
+fn for_nonzeros(col: &[f64], mut f: impl FnMut(usize, f64)) {
+    let (c4, c1) = col.as_chunks::<4>();
+    for (g, c) in c4.iter().enumerate() {
+        if (c[0].to_bits() | c[1].to_bits() | c[2].to_bits() | c[3].to_bits()) << 1 != 0 {
+            for (i, v) in c.iter().enumerate() {
+                if nonzero(*v) {
+                    f(4 * g + i, *v);
+                }
+            }
+        }
+    }
+    let base = 4 * c4.len();
+    for (i, v) in c1.iter().enumerate() {
+        if nonzero(*v) {
+            f(base + i, *v);
+        }
+    }
+}
+
 fn u16_of(i: usize) -> u16 {
     u16::try_from(i).unwrap_or(u16::MAX)
 }
 
 /// The condensed tableau with its two objective rows.
 struct Tableau<'a> {
-    /// Lent by [`solve_until`] (a 15 KiB table is not moved around): `ROWS` rows.
+    /// Lent by [`solve_until`] (a 16 KiB table is not moved around): `ROWS` rows.
     t: &'a mut [[f64; COLS]],
     rhs: [f64; ROWS],
     basic: [Var; ROWS],
@@ -510,24 +543,24 @@ pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> Lp
     {
         let k = tab.nc;
         let mut live = *c != 0.0;
-        for (((v, row), l), s) in ac.iter().zip(eq_rows.iter_mut()).zip(eq_live.iter_mut()).zip(sign.iter()) {
-            if nonzero(*v) {
-                if let Some(e) = row.get_mut(k) {
-                    *e = s * v;
-                }
-                *l = true;
-                live = true;
+        for_nonzeros(ac, |p, v| {
+            if let Some(e) = eq_rows.get_mut(p).and_then(|row| row.get_mut(k)) {
+                *e = get(&sign, p) * v;
             }
-        }
-        for ((v, row), l) in gc.iter().zip(in_rows.iter_mut()).zip(in_live.iter_mut()) {
-            if nonzero(*v) {
-                if let Some(e) = row.get_mut(k) {
-                    *e = *v;
-                }
+            if let Some(l) = eq_live.get_mut(p) {
                 *l = true;
-                live = true;
             }
-        }
+            live = true;
+        });
+        for_nonzeros(gc, |i, v| {
+            if let Some(e) = in_rows.get_mut(i).and_then(|row| row.get_mut(k)) {
+                *e = v;
+            }
+            if let Some(l) = in_live.get_mut(i) {
+                *l = true;
+            }
+            live = true;
+        });
         if live {
             if let (Some(n), Some(cst)) = (tab.nonbasic.get_mut(k), tab.cost.get_mut(k)) {
                 *n = Var::X(u16_of(j));
@@ -700,16 +733,16 @@ pub fn solve_until(lp: &StabilityLp, max_pivots: u32, target: Option<f64>) -> Lp
     for ((ac, gc), xj) in columns(lp.a.as_slice(), LP_EQS).zip(columns(lp.g.as_slice(), LP_INEQS)).zip(x.as_slice()) {
         // zero coefficients (most of them) leave the residual as it is
         if *xj != 0.0 {
-            for (r, a) in r_a.iter_mut().zip(ac) {
-                if nonzero(*a) {
+            for_nonzeros(ac, |p, a| {
+                if let Some(r) = r_a.get_mut(p) {
                     *r += a * xj;
                 }
-            }
-            for (r, a) in r_g.iter_mut().zip(gc) {
-                if nonzero(*a) {
+            });
+            for_nonzeros(gc, |i, a| {
+                if let Some(r) = r_g.get_mut(i) {
                     *r += a * xj;
                 }
-            }
+            });
         }
     }
     let ok_eq = r_a.iter().zip(lp.b.as_slice()).all(|(r, b)| r.abs() <= CHECK_TOL * (1.0 + b.abs()));
