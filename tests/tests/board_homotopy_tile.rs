@@ -53,7 +53,7 @@ impl Harness for Collect {
 /// The three phases on the host: the descent has several planes and a BTM, Axel holds within a real angle, and
 /// Alg. 1's route from the root anchor crosses the fold onto the wall, within the 40 m tether, ending at the goal; two runs give the same summaries (the board is compared with them).
 #[test]
-fn the_host_run_finds_a_route_with_anchors() {
+fn the_host_run_finds_a_route_over_the_fold() {
     let (_, heights) = hirise_tile().unwrap();
     let run = || {
         let (mut store, mut btm, mut ws): (Box<TileStorage>, Box<Btm>, Box<Workspace>) =
