@@ -11,6 +11,7 @@
 //!   3D box world) and the planner's tests (`tests/abit_geometric.rs`).
 //! - [`ledge`]: the ledge world of Paton et al. VI-A (with or without the test-3 pole) as an exact analytic
 //!   distance field; host-sim's ledge worlds wrap it.
+//! - [`homotopy_tile`]: the homotopy planning phases on a terrain tile (the HiRISE scarp of the mission scenario).
 //! - [`ledge_pole`]: the opt-in `tethered_test3` workload (Table I test 3 on the board).
 //! - [`team`]: the climbing-team workloads (a synthetic scan, a local plan, a D* Lite replan).
 //! - [`config`]: the workloads' own capacities (fixtures, not flight settings).
@@ -32,6 +33,11 @@
 //! | `team_dstar_replan` | [`team::dstar_workload`] (plan, move, crevasse, replan) | Morad et al. |
 //! | `homotopy_btm_build_c` | BTM of scenario C's plane (two triangular obstacles) | Tanner et al. IV |
 //! | `homotopy_preplan_c` | Alg. 1 pre-planning a0 -> g on scenario C | Tanner et al. Alg. 1 |
+//!
+//! Default too, but not in [`run_all`] (their input is a terrain tile the caller lends: the board embeds it, the host
+//! cuts it from the mission scenario): [`homotopy_tile::run`], the navigator's three homotopy planning phases on the
+//! HiRISE scarp tile, `homotopy_tile_segment`, `homotopy_tile_hold`, `homotopy_tile_route` (Abad-Manterola et al.;
+//! Tanner et al. Alg. 1; `host-sim/doc/homotopy.md`, "On the board").
 //!
 //! Opt-in (not in [`run_all`]; tens of billions of instructions under QEMU):
 //!
@@ -89,6 +95,7 @@ use team::{dstar_workload, local_plan_workload, synthetic_scan, SCAN_SIDE};
 
 pub mod config;
 pub mod geometric;
+pub mod homotopy_tile;
 pub mod ledge;
 pub mod ledge_pole;
 pub mod lp_batch;

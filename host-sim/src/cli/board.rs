@@ -5,7 +5,8 @@
 //!   executive buffer / arena.
 //! - `tetherbot board bench`: instruction counts of the fixed on-target workloads under `-icount shift=0`, and the
 //!   planning workloads of the `workloads` crate with their outcomes next to the host's (exit status 1 unless equal)
-//!   and the run's stack high-water mark. `--workload tethered_test3 [--iterations N]` runs instead only the opt-in
+//!   and the run's stack high-water mark (the default set includes the homotopy planning phases on the embedded
+//!   HiRISE scarp tile, `workloads::homotopy_tile`: `homotopy_tile_segment` / `_hold` / `_route`). `--workload tethered_test3 [--iterations N]` runs instead only the opt-in
 //!   test-3 planning workload (`workloads::ledge_pole`: ABIT* over the tether-aware space, Paton et al.
 //!   Table I test 3, 750 iterations by default) on the board and on the host, compares the summaries and reports
 //!   instructions in total, per iteration, per settle and per stability LP, the wall time, the stack high-water

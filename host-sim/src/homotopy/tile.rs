@@ -55,3 +55,15 @@ pub fn tile_chunks(tile_id: u32, spec: &TileSpec, heights: &[f32]) -> Vec<TileCh
         })
         .collect()
 }
+
+/// The mission scenario whose tile the board's `homotopy_tile_*` workloads plan on (`workloads::homotopy_tile`).
+pub const HIRISE_SCENARIO: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/mission_homotopy_hirise.toml");
+
+/// The tile `mission_homotopy_hirise.toml` uploads (its `[mission.homotopy]` spec on its terrain): the input of the
+/// `homotopy_tile_*` workloads on the host, and what the board embeds (`firmware/boards/mps2-an500/data/`).
+pub fn hirise_tile() -> Result<(TileSpec, Vec<f32>), String> {
+    let sc = crate::scenario::load(std::path::Path::new(HIRISE_SCENARIO)).map_err(|e| e.to_string())?;
+    let spec = sc.mission.homotopy.ok_or_else(|| format!("{HIRISE_SCENARIO}: no [mission.homotopy]"))?;
+    let world = sc.build_world().map_err(|e| e.to_string())?;
+    Ok((spec, tile_heights(world.as_ref(), &spec)))
+}

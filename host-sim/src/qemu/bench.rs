@@ -9,7 +9,7 @@ use firmware::plan::homotopy::{Btm, Workspace};
 use firmware::plan::team::dstar_lite::DStarArena;
 use firmware::plan::team::DefaultLocalPlanner;
 use workloads::ledge_pole::{run_ledge_pole, LedgePoleStorage};
-use workloads::{run_all, Arenas, Harness, WallGapArena, SCAN_POINTS};
+use workloads::{homotopy_tile, run_all, Arenas, Harness, WallGapArena, SCAN_POINTS};
 
 struct Collect(Vec<(String, String)>);
 
@@ -40,6 +40,14 @@ pub fn host_summaries() -> Vec<(String, String)> {
     };
     let mut h = Collect(Vec::new());
     run_all(&mut arenas, &mut h);
+    // The homotopy phases on the HiRISE tile (the board embeds the same heights).
+    match crate::homotopy::tile::hirise_tile() {
+        Ok((_, heights)) => {
+            let mut store: Box<homotopy_tile::TileStorage> = Box::default();
+            homotopy_tile::run(&mut store, &mut btm, &mut ws, &heights, &mut h);
+        }
+        Err(e) => h.0.push((homotopy_tile::SEGMENT.to_owned(), format!("host tile unavailable: {e}"))),
+    }
     h.0
 }
 
