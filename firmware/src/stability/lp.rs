@@ -26,8 +26,8 @@
 //! by a sparse Cholesky on the symbolic pattern, then the `P x P` Schur complement `A H^-1 A'` by a dense Cholesky.
 //! An equation row that is identically zero (`0 = 0`) is pinned by a unit diagonal. Reciprocals of `s`, `z` and of
 //! the factor's diagonal replace divisions (software floating point on the board). The predictor (affine-scaling)
-//! direction is used as solved (it only steers the centring); the corrector direction gets one step of iterative
-//! refinement on the full (unreduced) system once `max w / min w` exceeds `REFINE_SPREAD = 1e6` (the reduced
+//! direction is used as solved (it only steers the centring); the corrector direction gets `REFINE_STEPS = 3` steps of
+//! iterative refinement on the full (unreduced) system once `max w / min w` exceeds `REFINE_SPREAD = 1e6` (the reduced
 //! normal equations lose digits once `z / s` spans many orders of magnitude). The method starts from an infeasible
 //! point (`x = 0`, `s = max(h - Gx, 1)`, `z = 1`), and the centring measure is `s'z / m` over the `m` kept rows.
 //!
@@ -43,7 +43,7 @@
 //!
 //! Parameters: `max_iterations` (budget, see `config::stability::SOLVER_MAX_ITERATIONS`, default 50) and `tol`
 //! (relative residual and gap tolerance, `config::stability::SOLVER_TOLERANCE`, default 1e-9); internal constants
-//! `DUAL_TOL_FACTOR = 1000`, `ALMOST_FACTOR = 100`, `REFINE_SPREAD = 1e6`.
+//! `DUAL_TOL_FACTOR = 1000`, `ALMOST_FACTOR = 100`, `REFINE_SPREAD = 1e6`, `REFINE_STEPS = 3`.
 //!
 //! Cost against the simplex, per solve on the emulated board: `host-sim/doc/board_test3.md`.
 
@@ -103,6 +103,11 @@ const DUAL_TOL_FACTOR: f64 = 1000.0;
 
 /// The corrector direction is refined once `max w / min w` (`w = z / s`) exceeds this spread.
 const REFINE_SPREAD: f64 = 1e6;
+
+/// Refinement steps on the corrector once the spread is past `REFINE_SPREAD`. One step was not enough: near the
+/// optimum the corrected step could still carry a primal residual of order 1 (the 10,000-instance oracle's case
+/// 6549, `tests/tests/stability.rs`); each further step costs one more pair of triangular solves.
+const REFINE_STEPS: usize = 3;
 
 /// Accuracy accepted as [`LpStatus::AlmostOptimal`], as a multiple of `tol`.
 pub const ALMOST_FACTOR: f64 = 100.0;
@@ -704,7 +709,7 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
         Step { dx, dy, dz, ds }
     }
 
-    /// Newton direction, with one step of iterative refinement on the full (unreduced) system if `refine`: the
+    /// Newton direction, with `REFINE_STEPS` steps of iterative refinement on the full (unreduced) system if `refine`: the
     /// reduced normal equations lose digits once `z / s` spans many orders of magnitude.
     fn direction(
         &self,
@@ -716,35 +721,36 @@ impl<const N: usize, const P: usize, const M: usize> LinearProgram<N, P, M> {
     ) -> Step<N, P, M> {
         let (nv, nr) = (st.nv, st.nr);
         let (s, z) = (&sc.s, &sc.z);
-        let d = self.direction_once(st, kkt, sc, r);
+        let mut out = self.direction_once(st, kkt, sc, r);
         if !refine {
-            return d;
+            return out;
         }
-        // residuals of: A'dy + G'dz = -r_d; A dx = -r_p; G dx + ds = -r_g; Z ds + S dz = -r_c
-        let mut e1 = Self::a_tr_mul(st, &d.dy);
-        let gdz = Self::g_tr_mul(st, &d.dz);
-        for ((e, g), rd) in e1.iter_mut().zip(gdz.iter()).zip(r.d.iter()).take(nv) {
-            *e = rd + *e + g;
-        }
-        let e2 = r.p + Self::a_mul(st, &d.dx);
-        let mut e3 = Self::g_mul(st, &d.dx);
-        let mut e4 = [0.0; M];
-        for i in 0..nr {
-            let v = vec_get(r.g, i) + vec_get(&e3, i) + vec_get(&d.ds, i);
-            vec_set(&mut e3, i, v);
-            vec_set(&mut e4, i, vec_get(r.c, i) + vec_get(z, i) * vec_get(&d.ds, i) + vec_get(s, i) * vec_get(&d.dz, i));
-        }
-        let c = self.direction_once(st, kkt, sc, &Rhs { d: &e1, p: &e2, g: &e3, c: &e4 });
-        let mut out = d;
-        for (a, b) in out.dx.iter_mut().zip(c.dx.iter()).take(nv) {
-            *a += b;
-        }
-        out.dy += c.dy;
-        for (a, b) in out.dz.iter_mut().zip(c.dz.iter()).take(nr) {
-            *a += b;
-        }
-        for (a, b) in out.ds.iter_mut().zip(c.ds.iter()).take(nr) {
-            *a += b;
+        for _ in 0..REFINE_STEPS {
+            // residuals of: A'dy + G'dz = -r_d; A dx = -r_p; G dx + ds = -r_g; Z ds + S dz = -r_c
+            let mut e1 = Self::a_tr_mul(st, &out.dy);
+            let gdz = Self::g_tr_mul(st, &out.dz);
+            for ((e, g), rd) in e1.iter_mut().zip(gdz.iter()).zip(r.d.iter()).take(nv) {
+                *e = rd + *e + g;
+            }
+            let e2 = r.p + Self::a_mul(st, &out.dx);
+            let mut e3 = Self::g_mul(st, &out.dx);
+            let mut e4 = [0.0; M];
+            for i in 0..nr {
+                let v = vec_get(r.g, i) + vec_get(&e3, i) + vec_get(&out.ds, i);
+                vec_set(&mut e3, i, v);
+                vec_set(&mut e4, i, vec_get(r.c, i) + vec_get(z, i) * vec_get(&out.ds, i) + vec_get(s, i) * vec_get(&out.dz, i));
+            }
+            let c = self.direction_once(st, kkt, sc, &Rhs { d: &e1, p: &e2, g: &e3, c: &e4 });
+            for (a, b) in out.dx.iter_mut().zip(c.dx.iter()).take(nv) {
+                *a += b;
+            }
+            out.dy += c.dy;
+            for (a, b) in out.dz.iter_mut().zip(c.dz.iter()).take(nr) {
+                *a += b;
+            }
+            for (a, b) in out.ds.iter_mut().zip(c.ds.iter()).take(nr) {
+                *a += b;
+            }
         }
         out
     }
