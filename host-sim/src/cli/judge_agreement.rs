@@ -27,6 +27,9 @@ use rand_core::{Rng, SeedableRng};
 use serde::Serialize;
 
 use crate::campaign::{PlanningMap, Truth};
+use crate::mission::params::ObstacleSpec;
+use crate::mission::world::MissionWorld;
+use crate::world::World;
 use crate::physics::{BoomSetting, GroundPose, HoldOutcome, PhysicsJudge, TetherSpec};
 use crate::truth::taut::{TautTether, WrapEdges, SHORTEST_SAMPLE_M};
 
@@ -212,7 +215,11 @@ fn explain<D: DistanceField>(
 pub fn run(a: &JudgeAgreementArgs) -> Result<Agreement, String> {
     let file = crate::cli::campaign::scenario_file(&a.scenario);
     let sc = crate::scenario::load(&file).map_err(|e| e.to_string())?;
-    let world = sc.build_world().map_err(|e| e.to_string())?;
+    // the mission's rocks stand where they would once they appear: the poses near them are the ones to judge
+    let rocks = sc.mission.obstacles.iter().map(|o| ObstacleSpec { appears_after_m: 0.0, ..o.clone() }).collect();
+    let mission_world = MissionWorld::new(sc.build_world().map_err(|e| e.to_string())?, None, rocks);
+    let world = mission_world.truth();
+    let world: &dyn World = &world;
     let wb = world.bounds();
     let mut lo = sc.plan.bounds_min.unwrap_or([f64::from(wb.min.x), f64::from(wb.min.y), f64::from(wb.min.z) - 1.0]);
     let mut hi = sc.plan.bounds_max.unwrap_or([f64::from(wb.max.x), f64::from(wb.max.y), f64::from(wb.max.z) + 1.0]);
@@ -234,16 +241,16 @@ pub fn run(a: &JudgeAgreementArgs) -> Result<Agreement, String> {
     let params = TetherSpaceParams::DEFAULT;
     let box_lo = core::array::from_fn(|k| lo[k].min(root[k] - 1.0));
     let box_hi = core::array::from_fn(|k| hi[k].max(root[k] + 1.0));
-    let mut map = PlanningMap::from_world(world.as_ref(), box_lo, box_hi, a.voxel)?;
+    let mut map = PlanningMap::from_world(world, box_lo, box_hi, a.voxel)?;
     let view = map.view()?;
     let mut map_rover = rover;
     map_rover.body_clearance_m += a.voxel as Real;
     let mut map_params = params;
     map_params.surface_uncertainty_m = map_params.surface_uncertainty_m.max(0.5 * a.voxel as Real);
     let on_map = TetherSpace::new(&view, bounds, map_rover, map_params).map_err(|(f, r)| format!("{f}: {r}"))?;
-    let truth = Truth(world.as_ref());
+    let truth = Truth(world);
     let on_truth = TetherSpace::new(&truth, bounds, rover, params).map_err(|(f, r)| format!("{f}: {r}"))?;
-    let judge = PhysicsJudge::new(world.as_ref(), rover).map_err(|e| e.to_string())?;
+    let judge = PhysicsJudge::new(world, rover).map_err(|e| e.to_string())?;
     let edges = WrapEdges::new(&world.exact_geometry(), (box_lo.map(|v: f64| v - 1.0), box_hi.map(|v: f64| v + 1.0)))?;
     let mut rng = rand_pcg::Pcg64::seed_from_u64(a.seed);
     let mut unit = || (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
@@ -332,4 +339,33 @@ impl Agreement {
 /// Run the command.
 pub fn main(a: &JudgeAgreementArgs) -> std::process::ExitCode {
     super::printed(run(a).map(|r| r.report()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The mission's rock (`mission_corridor_rock`: a 0.35 m sphere on the wall at (1.4, 0)) is in both judges'
+    /// world, although it only appears mid-mission: poses drawn on top of it do not settle for the planner on the
+    /// exact field, and the physics judge does not hold them. Without the rock they stand on the bare 35-degree
+    /// wall, where every one of them settles.
+    #[test]
+    fn a_missions_rock_is_judged_where_it_will_stand() {
+        let args = JudgeAgreementArgs {
+            scenario: "mission_corridor_rock".into(),
+            poses: 6,
+            seed: 1,
+            voxel: 0.1,
+            out: None,
+            explain: Vec::new(),
+            region: Some(vec![1.35, -0.05, 1.45, 0.05]),
+            yaw: None,
+        };
+        let a = run(&args).unwrap();
+        assert_eq!(a.poses.len(), 6);
+        for p in &a.poses {
+            assert_eq!(p.exact, PlannerVerdict::NoSettle, "{p:?}");
+            assert_ne!(p.physics, PhysicsVerdict::Holds, "{p:?}");
+        }
+    }
 }
