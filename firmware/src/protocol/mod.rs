@@ -24,6 +24,7 @@ pub mod deframer;
 pub mod frame;
 pub mod message;
 pub mod reassembly;
+pub mod team;
 
 pub use deframer::{DeframeError, Deframer};
 pub use frame::{
