@@ -462,7 +462,7 @@ use host_sim::team::{simulate_over, TeamLink};
 fn direct_and_link(world: &str, fail: Option<(usize, usize)>, seed: u64) -> (SimReport, SimReport) {
     let (surf, start, cfg, _, _) = team_scenario(world, &data(""), fail, seed).unwrap();
     let direct = simulate_over(surf.as_ref(), &start, &cfg, &mut team_rng(seed), TeamLink::Direct).unwrap();
-    let link = simulate_over(surf.as_ref(), &start, &cfg, &mut team_rng(seed), TeamLink::InProc).unwrap();
+    let link = simulate_over(surf.as_ref(), &start, &cfg, &mut team_rng(seed), TeamLink::Inproc).unwrap();
     (direct, link)
 }
 
@@ -495,4 +495,14 @@ fn team_over_the_link_equals_direct_on_itokawa_with_node_loss() {
     assert_same_run("itokawa", 3, &d, &l);
     assert_eq!(l.lost.first().map(|x| x.0), Some(1));
     assert_eq!(l.outcome, Some(MissionOutcome::GoalReached), "{:?}", l.stats);
+}
+
+/// Fig. 12's crevasse through the link: the wall the flight executive adds and D* Lite's reroute are the same as
+/// direct (the scenes blocked beforehand go up in the `TeamConfigure`).
+#[test]
+fn team_over_the_link_equals_direct_on_the_crevasse_reroute() {
+    let (d, l) = direct_and_link("crevasse", None, 1);
+    assert_same_run("crevasse", 1, &d, &l);
+    assert_eq!(l.walls, vec![((1, 2), (1, 3))]);
+    assert_eq!(l.visited, vec![(1, 1), (1, 2), (2, 2), (2, 3), (1, 3)]);
 }

@@ -16,6 +16,10 @@
 //! r_max after each hub motion. Violations are recorded, never corrected. Whether the goal was reached is the
 //! referee's own distance check of the true hub, reported beside the flight code's outcome.
 //!
+//! Where the flight code runs ([`TeamLink`], [`flight`]): called as a library ([`simulate`]), or in the flight
+//! executive in-process over protocol v8 ([`simulate_over`] with [`TeamLink::Inproc`]); the same seed gives the
+//! same run either way (`tests/tests/team.rs`).
+//!
 //! Worlds: [`cliff_from_hirise`] (the steepest part of the HiRISE crop, scaled into a cliff) and
 //! [`itokawa`] (the Hayabusa shape model, metres; 30 m hops as in Fig. 16). Pictures: [`svg`].
 
@@ -222,16 +226,18 @@ impl Referee {
 
 /// Where the team's flight code runs (`tetherbot team --link`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "sim", derive(clap::ValueEnum))]
 pub enum TeamLink {
-    /// The flight crate's mission called as a library.
+    /// The flight executive in-process, over protocol v8 ([`flight::LinkFlight::inproc`]): the hub's flight
+    /// computer as it flies.
     #[default]
+    Inproc,
+    /// The flight crate's mission called as a library (the simulation before protocol v8; the same run).
     Direct,
-    /// The flight executive in-process, over protocol v8 ([`flight::LinkFlight::inproc`]).
-    InProc,
 }
 
 /// Run the team mission from `start` (one grip point per robot) to `cfg.goal` on `surface`: the flight code
-/// ([`DefaultTeamMission`]) commands, the simulator executes on the true surface and reports back.
+/// ([`DefaultTeamMission`], called directly) commands, the simulator executes on the true surface and reports back.
 pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig, rng: &mut R) -> Result<SimReport, SimError> {
     simulate_over(surface, start, cfg, rng, TeamLink::Direct)
 }
@@ -258,7 +264,7 @@ pub fn simulate_over<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimCo
             }
             simulate_with(surface, start, cfg, rng, &mut flight::DirectFlight { mission })
         }
-        TeamLink::InProc => simulate_with(surface, start, cfg, rng, &mut flight::LinkFlight::inproc(cfg, start.map(to_vec3))?),
+        TeamLink::Inproc => simulate_with(surface, start, cfg, rng, &mut flight::LinkFlight::inproc(cfg, start.map(to_vec3))?),
     }
 }
 
