@@ -12,7 +12,8 @@
 //! ## Storage
 //! The mission borrows its D* Lite arena (`GLOBAL_GRID_MAX_CELLS` = 4096 scenes, ~190 KiB), the local planner
 //! (`DefaultLocalPlanner`, ~0.6 MiB) and the scan reassembly (`TEAM_SCAN_POINTS_CAPACITY` = 4096 points, 48 KiB) for
-//! its whole run, so they are lent to the executive for good as a [`TeamLend`] of `&'static mut` parts
+//! its whole run, and the mission itself (~7 KiB) lives beside them; so they are lent to the executive for good as a
+//! [`TeamLend`] of `&'static mut` parts
 //! ([`Executive::lend_team`]): the board's `.psram` statics, the host's leaked boxes. A mission keeps its storage
 //! after it ends (`TeamMission` has no way to hand it back), so **one team mission per lending**: a later team goal
 //! is answered `PlannerUnavailable`. Without a lending every team goal is `PlannerUnavailable`.
@@ -53,6 +54,9 @@ pub struct TeamLend {
     pub planner: &'static mut DefaultLocalPlanner,
     /// Team scan reassembly.
     pub points: &'static mut [Vec3; TEAM_SCAN_POINTS_CAPACITY],
+    /// Where the mission itself lives (~7 KiB: its walls and route records), so it is neither in the executive
+    /// nor on the stack between steps. Empty (`None`) when lent.
+    pub mission: &'static mut Option<DefaultTeamMission<'static>>,
 }
 
 /// A scan being reassembled.
@@ -69,7 +73,7 @@ struct ScanIn {
 
 /// A running (or finished) mission.
 pub(super) struct TeamRun {
-    mission: DefaultTeamMission<'static>,
+    mission: &'static mut DefaultTeamMission<'static>,
     points: &'static mut [Vec3; TEAM_SCAN_POINTS_CAPACITY],
     goal_id: u32,
     /// The pending order, its id and when it was last sent.
@@ -146,7 +150,7 @@ impl TeamRun {
 
     /// The mission, for the host's pictures and reports (in-process only).
     pub(super) fn mission(&self) -> &DefaultTeamMission<'static> {
-        &self.mission
+        self.mission
     }
 }
 
@@ -219,7 +223,7 @@ where
             self.note(LogLevel::Warn, format_args!("team goal {}: goal or start outside the scenes", g.goal_id));
             return Ok(PlanState::InvalidInput);
         }
-        let TeamLend { dstar, planner, points } = lend;
+        let TeamLend { dstar, planner, points, mission: slot } = lend;
         let made = DefaultTeamMission::new(
             grid,
             goal,
@@ -230,8 +234,8 @@ where
             dstar.storage(),
             planner,
         );
-        let mut mission = match made {
-            Ok(m) => m,
+        let mission = match made {
+            Ok(m) => slot.insert(m),
             Err(e) => {
                 self.note(LogLevel::Error, format_args!("team goal {}: {e:?}; team storage spent", g.goal_id));
                 return Ok(PlanState::InvalidInput);

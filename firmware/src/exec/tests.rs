@@ -1031,6 +1031,7 @@ fn team_lend() -> TeamLend {
         dstar: Box::leak(Box::default()),
         planner: Box::leak(Box::default()),
         points: Box::leak(Box::new([crate::geom::Vec3::zeros(); TEAM_SCAN_POINTS_CAPACITY])),
+        mission: Box::leak(Box::new(None)),
     }
 }
 

@@ -337,6 +337,15 @@ fn positive(v: f32) -> Result<(), Invalid> {
     }
 }
 
+fn non_negative(v: f32) -> Result<(), Invalid> {
+    finite(v)?;
+    if v >= 0.0 {
+        Ok(())
+    } else {
+        Err(Invalid::OutOfRange)
+    }
+}
+
 fn robot_index(r: u8) -> Result<(), Invalid> {
     if usize::from(r) < TEAM_SIZE {
         Ok(())
@@ -377,7 +386,7 @@ impl Validate for TeamConfigure {
         [p.h_max_m, p.r_max_m, p.relief_scale_m, p.flatness_scale_m, p.score_radius_m].into_iter().try_for_each(positive)?;
         [p.landing_margin_m, p.w_relative_height, p.w_flatness, p.unobserved_penalty, p.risk_m]
             .into_iter()
-            .try_for_each(|v| finite(v).and_then(|()| if v >= 0.0 { Ok(()) } else { Err(Invalid::OutOfRange) }))?;
+            .try_for_each(non_negative)?;
         if p.keep_permille == 0 || p.keep_permille > 1000 || p.astar_budget == 0 {
             return Err(Invalid::OutOfRange);
         }
@@ -396,14 +405,7 @@ impl Validate for TeamConfigure {
 
 impl Validate for TeamReport {
     fn validate(&self) -> Result<(), Invalid> {
-        self.state.legs_m.iter().try_for_each(|&l| {
-            finite(l)?;
-            if l >= 0.0 {
-                Ok(())
-            } else {
-                Err(Invalid::OutOfRange)
-            }
-        })?;
+        self.state.legs_m.iter().copied().try_for_each(non_negative)?;
         match &self.event {
             TeamEvent::Landed { robot, pos } => {
                 robot_index(*robot)?;

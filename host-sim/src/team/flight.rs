@@ -60,6 +60,7 @@ pub fn leaked_team_lend() -> TeamLend {
     TeamLend {
         dstar: Box::leak(dstar_arena()),
         planner: Box::leak(local_planner()),
+        mission: Box::leak(Box::new(None)),
         points: Box::leak(vec![Vec3::zeros(); firmware::config::protocol::TEAM_SCAN_POINTS_CAPACITY].into_boxed_slice().try_into().unwrap_or_else(|_| unreachable!("sized above"))),
     }
 }
