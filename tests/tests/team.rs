@@ -459,8 +459,11 @@ use host_sim::team::{simulate_over, TeamLink};
 
 /// One mission run twice with the same seed: the flight crate's mission called directly, and the flight executive
 /// in-process over protocol v8. Returns both reports.
-fn direct_and_link(world: &str, fail: Option<(usize, usize)>, seed: u64) -> (SimReport, SimReport) {
-    let (surf, start, cfg, _, _) = team_scenario(world, &data(""), fail, seed).unwrap();
+fn direct_and_link(world: &str, fail: Option<(usize, usize)>, seed: u64, grip_slips: bool) -> (SimReport, SimReport) {
+    let (surf, start, mut cfg, _, _) = team_scenario(world, &data(""), fail, seed).unwrap();
+    if !grip_slips {
+        cfg.grip = GripModel::never_slips(cfg.params.h_max as f64);
+    }
     let direct = simulate_over(surf.as_ref(), &start, &cfg, &mut team_rng(seed), TeamLink::Direct).unwrap();
     let link = simulate_over(surf.as_ref(), &start, &cfg, &mut team_rng(seed), TeamLink::Inproc).unwrap();
     (direct, link)
@@ -480,7 +483,7 @@ fn assert_same_run(world: &str, seed: u64, d: &SimReport, l: &SimReport) {
 /// the rounds, the hub path), and the link run reaches the goal (flight code and referee agree).
 #[test]
 fn team_over_the_link_equals_direct_on_the_cliff_and_reaches_the_goal() {
-    let (d, l) = direct_and_link("cliff", None, 3);
+    let (d, l) = direct_and_link("cliff", None, 3, true);
     assert_same_run("cliff", 3, &d, &l);
     assert_eq!(l.outcome, Some(MissionOutcome::GoalReached), "{:?}", l.stats);
     assert!(l.success(), "{:?}", l.violations);
@@ -491,17 +494,17 @@ fn team_over_the_link_equals_direct_on_the_cliff_and_reaches_the_goal() {
 /// `TeamReport{Lost}`; the run is identical to direct and still reaches the goal.
 #[test]
 fn team_over_the_link_equals_direct_on_itokawa_with_node_loss() {
-    let (d, l) = direct_and_link("itokawa", Some((1, 2)), 3);
+    let (d, l) = direct_and_link("itokawa", Some((1, 2)), 3, true);
     assert_same_run("itokawa", 3, &d, &l);
     assert_eq!(l.lost.first().map(|x| x.0), Some(1));
     assert_eq!(l.outcome, Some(MissionOutcome::GoalReached), "{:?}", l.stats);
 }
 
-/// Fig. 12's crevasse through the link: the wall the flight executive adds and D* Lite's reroute are the same as
+/// Fig. 12's crevasse through the link (grips never slip, as in `crevasse_reroute_of_fig_12_in_closed_loop`): the wall the flight executive adds and D* Lite's reroute are the same as
 /// direct (the scenes blocked beforehand go up in the `TeamConfigure`).
 #[test]
 fn team_over_the_link_equals_direct_on_the_crevasse_reroute() {
-    let (d, l) = direct_and_link("crevasse", None, 1);
+    let (d, l) = direct_and_link("crevasse", None, 1, false);
     assert_same_run("crevasse", 1, &d, &l);
     assert_eq!(l.walls, vec![((1, 2), (1, 3))]);
     assert_eq!(l.visited, vec![(1, 1), (1, 2), (2, 2), (2, 3), (1, 3)]);
