@@ -616,12 +616,7 @@ where
         if replacing && state != PlanState::Accepted {
             self.set_mode(Mode::Mapping);
         }
-        self.goal = Some(ActiveGoal {
-            goal_id: g.goal_id,
-            state,
-            iterations: 0,
-            best_cost: None,
-        });
+        self.set_goal(g.goal_id, state);
         Ok(if stop {
             Reply::PlanStatusAndStop
         } else {
@@ -642,17 +637,22 @@ where
         if state == PlanState::Accepted && self.mode == Mode::Idle {
             self.set_mode(Mode::Mapping);
         }
-        self.goal = Some(ActiveGoal {
-            goal_id: g.goal_id,
-            state,
-            iterations: 0,
-            best_cost: None,
-        });
+        self.set_goal(g.goal_id, state);
         Ok(if state == PlanState::Accepted {
             Reply::PlanStatusAndTeam
         } else {
             Reply::PlanStatus
         })
+    }
+
+    /// The goal now planned (or refused) is `goal_id`, in `state`.
+    fn set_goal(&mut self, goal_id: u32, state: PlanState) {
+        self.goal = Some(ActiveGoal {
+            goal_id,
+            state,
+            iterations: 0,
+            best_cost: None,
+        });
     }
 
     fn set_mode(&mut self, to: Mode) {

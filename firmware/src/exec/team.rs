@@ -154,14 +154,7 @@ impl TeamRun {
     }
 }
 
-impl<L, C, W, A, S> Executive<L, C, W, A, S>
-where
-    L: ByteLink,
-    C: MonotonicClock,
-    W: Watchdog,
-    A: Autonomy,
-    S: BorrowMut<ExecStorage>,
-{
+impl<L: ByteLink, C: MonotonicClock, W: Watchdog, A: Autonomy, S: BorrowMut<ExecStorage>> Executive<L, C, W, A, S> {
     /// Lends the team mission's storage for good (module docs). A second lending replaces an unused first one.
     pub fn lend_team(&mut self, lend: TeamLend) {
         if !matches!(self.team, TeamSlot::Run(_)) {

@@ -1004,21 +1004,7 @@ fn tiles_are_checked_without_a_navigator_and_refused_in_safe_mode() {
 // ---- protocol v8: the team mission ----
 
 fn team_configure() -> TeamConfigure {
-    use crate::config::team::{MissionParams, TeamParams};
-    TeamConfigure {
-        grid: TeamGrid {
-            origin: Point3::new(-30.0, -30.0, 0.0),
-            u: Point3::new(1.0, 0.0, 0.0),
-            v: Point3::new(0.0, 1.0, 0.0),
-            cell_m: 20.0,
-            width: 4,
-            height: 3,
-        },
-        start: [Point3::new(4.0, 4.0, 0.0), Point3::new(4.0, -4.0, 0.0), Point3::new(-4.0, 4.0, 0.0), Point3::new(-4.0, -4.0, 0.0)],
-        planner: TeamParams::DEFAULT.into(),
-        mission: MissionParams::DEFAULT.into(),
-        blocked: heapless::Vec::new(),
-    }
+    TeamConfigure::example()
 }
 
 fn team_goal() -> GoalRequest {

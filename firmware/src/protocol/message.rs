@@ -1079,7 +1079,7 @@ pub trait Validate {
     fn validate(&self) -> Result<(), Invalid>;
 }
 
-fn finite(v: f32) -> Result<(), Invalid> {
+pub(super) fn finite(v: f32) -> Result<(), Invalid> {
     if v.is_finite() {
         Ok(())
     } else {
@@ -1087,7 +1087,7 @@ fn finite(v: f32) -> Result<(), Invalid> {
     }
 }
 
-fn positive(v: f32) -> Result<(), Invalid> {
+pub(super) fn positive(v: f32) -> Result<(), Invalid> {
     finite(v)?;
     if v > 0.0 {
         Ok(())
@@ -1096,7 +1096,7 @@ fn positive(v: f32) -> Result<(), Invalid> {
     }
 }
 
-fn non_negative(v: f32) -> Result<(), Invalid> {
+pub(super) fn non_negative(v: f32) -> Result<(), Invalid> {
     finite(v)?;
     if v >= 0.0 {
         Ok(())

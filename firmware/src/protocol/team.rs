@@ -21,7 +21,7 @@
 use heapless::Vec;
 use serde::{Deserialize, Serialize};
 
-use super::message::{Invalid, Point3, Validate};
+use super::message::{non_negative, positive, Invalid, Point3, Validate};
 use crate::config::protocol::{MAX_CHUNKS_PER_TEAM_SCAN, MAX_POINTS_PER_CHUNK, MAX_TEAM_BLOCKED_CELLS};
 use crate::config::team::{MissionParams, TeamParams, GLOBAL_GRID_MAX_CELLS, TEAM_SIZE};
 
@@ -65,47 +65,40 @@ pub struct TeamPlannerSettings {
     pub astar_budget: u32,
 }
 
-impl From<TeamParams> for TeamPlannerSettings {
-    fn from(p: TeamParams) -> Self {
-        Self {
-            h_max_m: p.h_max,
-            r_max_m: p.r_max,
-            landing_margin_m: p.landing_margin,
-            keep_permille: p.keep_permille,
-            w_relative_height: p.w_relative_height,
-            w_flatness: p.w_flatness,
-            relief_scale_m: p.relief_scale,
-            flatness_scale_m: p.flatness_scale,
-            score_radius_m: p.score_radius,
-            unobserved_penalty: p.unobserved_penalty,
-            risk_m: p.risk_m,
-            fill_max_cells: p.fill_max_cells,
-            fill_sweeps: p.fill_sweeps,
-            astar_budget: p.astar_budget,
+/// `From` both ways between a parameter struct and its wire mirror, field for field (`wire: config`).
+macro_rules! mirror {
+    ($wire:ty, $cfg:ty, $($w:ident: $c:ident),+ $(,)?) => {
+        impl From<$cfg> for $wire {
+            fn from(p: $cfg) -> Self {
+                Self { $($w: p.$c),+ }
+            }
         }
-    }
+        impl From<$wire> for $cfg {
+            fn from(p: $wire) -> Self {
+                Self { $($c: p.$w),+ }
+            }
+        }
+    };
 }
 
-impl From<TeamPlannerSettings> for TeamParams {
-    fn from(p: TeamPlannerSettings) -> Self {
-        Self {
-            h_max: p.h_max_m,
-            r_max: p.r_max_m,
-            landing_margin: p.landing_margin_m,
-            keep_permille: p.keep_permille,
-            w_relative_height: p.w_relative_height,
-            w_flatness: p.w_flatness,
-            relief_scale: p.relief_scale_m,
-            flatness_scale: p.flatness_scale_m,
-            score_radius: p.score_radius_m,
-            unobserved_penalty: p.unobserved_penalty,
-            risk_m: p.risk_m,
-            fill_max_cells: p.fill_max_cells,
-            fill_sweeps: p.fill_sweeps,
-            astar_budget: p.astar_budget,
-        }
-    }
-}
+mirror!(
+    TeamPlannerSettings,
+    TeamParams,
+    h_max_m: h_max,
+    r_max_m: r_max,
+    landing_margin_m: landing_margin,
+    keep_permille: keep_permille,
+    w_relative_height: w_relative_height,
+    w_flatness: w_flatness,
+    relief_scale_m: relief_scale,
+    flatness_scale_m: flatness_scale,
+    score_radius_m: score_radius,
+    unobserved_penalty: unobserved_penalty,
+    risk_m: risk_m,
+    fill_max_cells: fill_max_cells,
+    fill_sweeps: fill_sweeps,
+    astar_budget: astar_budget,
+);
 
 /// The mission's budgets and thresholds: `config::team::MissionParams` field for field (defaults there).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -120,33 +113,17 @@ pub struct TeamMissionSettings {
     pub waypoint_radius_fraction: f32,
 }
 
-impl From<MissionParams> for TeamMissionSettings {
-    fn from(p: MissionParams) -> Self {
-        Self {
-            max_rounds: p.max_rounds,
-            max_hops: p.max_hops,
-            dstar_budget: p.dstar_budget,
-            stall_rounds: p.stall_rounds,
-            goal_stall_rounds: p.goal_stall_rounds,
-            progress_fraction: p.progress_fraction,
-            waypoint_radius_fraction: p.waypoint_radius_fraction,
-        }
-    }
-}
-
-impl From<TeamMissionSettings> for MissionParams {
-    fn from(p: TeamMissionSettings) -> Self {
-        Self {
-            max_rounds: p.max_rounds,
-            max_hops: p.max_hops,
-            dstar_budget: p.dstar_budget,
-            stall_rounds: p.stall_rounds,
-            goal_stall_rounds: p.goal_stall_rounds,
-            progress_fraction: p.progress_fraction,
-            waypoint_radius_fraction: p.waypoint_radius_fraction,
-        }
-    }
-}
+mirror!(
+    TeamMissionSettings,
+    MissionParams,
+    max_rounds: max_rounds,
+    max_hops: max_hops,
+    dstar_budget: dstar_budget,
+    stall_rounds: stall_rounds,
+    goal_stall_rounds: goal_stall_rounds,
+    progress_fraction: progress_fraction,
+    waypoint_radius_fraction: waypoint_radius_fraction,
+);
 
 /// Host -> flight (v8): the team mission's set-up. Accepted when no team mission runs; replaces an earlier one.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -161,6 +138,28 @@ pub struct TeamConfigure {
     pub mission: TeamMissionSettings,
     /// Scenes known beforehand to be impassable (column, row), each inside the grid.
     pub blocked: Vec<(u16, u16), MAX_TEAM_BLOCKED_CELLS>,
+}
+
+impl TeamConfigure {
+    /// A valid configuration for tests: a 4 x 3 grid of 20 m scenes around the origin, the team in an "x" of
+    /// 4 m around it, default parameters.
+    #[cfg(test)]
+    pub(crate) fn example() -> Self {
+        TeamConfigure {
+            grid: TeamGrid {
+                origin: Point3::new(-30.0, -30.0, 0.0),
+                u: Point3::new(1.0, 0.0, 0.0),
+                v: Point3::new(0.0, 1.0, 0.0),
+                cell_m: 20.0,
+                width: 4,
+                height: 3,
+            },
+            start: [Point3::new(4.0, 4.0, 0.0), Point3::new(4.0, -4.0, 0.0), Point3::new(-4.0, 4.0, 0.0), Point3::new(-4.0, -4.0, 0.0)],
+            planner: TeamParams::DEFAULT.into(),
+            mission: MissionParams::DEFAULT.into(),
+            blocked: Vec::new(),
+        }
+    }
 }
 
 /// A robot's grip (v8 team state).
@@ -318,32 +317,6 @@ pub struct TeamCommand {
     pub goal_id: u32,
     /// The order.
     pub order: TeamOrder,
-}
-
-fn finite(v: f32) -> Result<(), Invalid> {
-    if v.is_finite() {
-        Ok(())
-    } else {
-        Err(Invalid::NonFinite)
-    }
-}
-
-fn positive(v: f32) -> Result<(), Invalid> {
-    finite(v)?;
-    if v > 0.0 {
-        Ok(())
-    } else {
-        Err(Invalid::OutOfRange)
-    }
-}
-
-fn non_negative(v: f32) -> Result<(), Invalid> {
-    finite(v)?;
-    if v >= 0.0 {
-        Ok(())
-    } else {
-        Err(Invalid::OutOfRange)
-    }
 }
 
 fn robot_index(r: u8) -> Result<(), Invalid> {

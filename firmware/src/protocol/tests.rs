@@ -581,21 +581,9 @@ fn spec_example_v8_team_command() {
 }
 
 fn sample_team_configure() -> TeamConfigure {
-    use crate::config::team::{MissionParams, TeamParams};
-    TeamConfigure {
-        grid: TeamGrid {
-            origin: Point3::new(-10.0, -10.0, 0.0),
-            u: Point3::new(1.0, 0.0, 0.0),
-            v: Point3::new(0.0, 1.0, 0.0),
-            cell_m: 20.0,
-            width: 5,
-            height: 5,
-        },
-        start: [Point3::new(1.0, 1.0, 0.0), Point3::new(1.0, -1.0, 0.0), Point3::new(-1.0, 1.0, 0.0), Point3::new(-1.0, -1.0, 0.0)],
-        planner: TeamParams::DEFAULT.into(),
-        mission: MissionParams::DEFAULT.into(),
-        blocked: heapless::Vec::from_slice(&[(0, 4)]).unwrap(),
-    }
+    let mut c = TeamConfigure::example();
+    c.blocked.push((0, 2)).unwrap();
+    c
 }
 
 /// v8: every team message round-trips, and each bad value has its reason (NaN, robot out of range, axes, counts).
@@ -645,7 +633,7 @@ fn v8_team_messages_round_trip_and_bad_values_have_their_reasons() {
     assert_eq!(bad_c(&|x| x.grid.u = Point3::new(2.0, 0.0, 0.0)), Err(Invalid::OutOfRange));
     assert_eq!(bad_c(&|x| x.grid.v = Point3::new(1.0, 0.0, 0.0)), Err(Invalid::OutOfRange));
     assert_eq!(bad_c(&|x| x.grid.width = 65 * 64), Err(Invalid::OutOfRange));
-    assert_eq!(bad_c(&|x| x.blocked[0] = (5, 0)), Err(Invalid::OutOfRange));
+    assert_eq!(bad_c(&|x| x.blocked[0] = (4, 0)), Err(Invalid::OutOfRange));
     assert_eq!(bad_c(&|x| x.planner.h_max_m = f32::INFINITY), Err(Invalid::NonFinite));
     assert_eq!(bad_c(&|x| x.mission.max_rounds = 0), Err(Invalid::OutOfRange));
     let mut r = report;
