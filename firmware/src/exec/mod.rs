@@ -65,7 +65,9 @@
 //! - `cycle.rs`: [`Executive::step`] and its budgets, the receive and transmit paths, the counters and
 //!   high-water marks of `Telemetry`, log forwarding, [`StepReport`];
 //! - `hooks.rs`: the [`Autonomy`] hook points where the map and the planners plug in;
-//! - `requests.rs`: the last accepted requests, so a resend is answered but not acted on twice (v5).
+//! - `requests.rs`: the last accepted requests, so a resend is answered but not acted on twice (v5);
+//! - `team.rs`: the climbing team's mission (v8): `TeamConfigure`, team goals, scans, reports and orders, on the
+//!   team storage lent with [`Executive::lend_team`].
 
 mod cycle;
 mod hooks;
