@@ -133,6 +133,10 @@ pub fn message_json(m: &Message) -> serde_json::Value {
         Message::GoalCancel(b) => serde_json::to_value(b),
         Message::TileChunk(b) => serde_json::to_value(b),
         Message::MissionStatus(b) => serde_json::to_value(b),
+        Message::TeamConfigure(b) => serde_json::to_value(b),
+        Message::TeamScanChunk(b) => serde_json::to_value(b),
+        Message::TeamReport(b) => serde_json::to_value(b),
+        Message::TeamCommand(b) => serde_json::to_value(b),
     };
     body.unwrap_or(serde_json::Value::Null)
 }

@@ -71,6 +71,23 @@ fn seeds() -> Vec<(String, Vec<u8>)> {
             pose: Pose::IDENTITY,
         }),
         Message::GoalCancel(GoalCancel { goal_id: 1 }),
+        // protocol v8: the team mission
+        Message::TeamScanChunk(TeamScanChunk {
+            command_id: 1,
+            robot: 2,
+            chunk_index: 0,
+            chunk_count: 1,
+            grip: Point3::new(1.0, 2.0, 3.0),
+            up: Point3::new(0.0, 0.0, 1.0),
+            hub: Point3::new(0.0, 0.0, 3.5),
+            points: heapless::Vec::from_slice(&[Point3::new(1.0, 2.5, 3.0), Point3::new(0.5, 2.0, 3.1)]).unwrap(),
+        }),
+        Message::TeamReport(TeamReport {
+            command_id: 2,
+            event: TeamEvent::Landed { robot: 1, pos: Point3::new(4.0, 0.0, 0.0) },
+            state: TeamState { grip: [GripState::Gripping; 4], legs_m: [4.0, 5.0, 6.0, 7.0] },
+        }),
+        Message::TeamCommand(TeamCommand { command_id: 3, goal_id: 1, order: TeamOrder::MoveHub { to: Point3::new(1.0, 0.0, 2.0) } }),
     ];
     let mut out = Vec::new();
     for (i, m) in msgs.iter().enumerate() {

@@ -218,6 +218,42 @@ fn one_of_every_kind() -> Vec<Message> {
             scans_rejected: 6,
             tether_reestimates: 7,
         }),
+        Message::TeamConfigure(TeamConfigure {
+            grid: TeamGrid {
+                origin: Point3::new(-12.5, 40.0, 3.0),
+                u: Point3::new(0.6, 0.8, 0.0),
+                v: Point3::new(-0.8, 0.6, 0.0),
+                cell_m: 30.0,
+                width: 64,
+                height: 64,
+            },
+            start: [Point3::new(1.0, 2.0, 3.0), Point3::new(-1.0, 2.0, 3.0), Point3::new(1.0, -2.0, 3.0), Point3::new(-1.0, -2.0, 3.0)],
+            planner: firmware::config::team::TeamParams::DEFAULT.into(),
+            mission: firmware::config::team::MissionParams::DEFAULT.into(),
+            // the most blocked scenes one configuration holds
+            blocked: (0..32).map(|i| (i, 63 - i)).collect(),
+        }),
+        Message::TeamScanChunk(TeamScanChunk {
+            command_id: 70_000,
+            robot: 3,
+            chunk_index: 31,
+            chunk_count: 32,
+            grip: Point3::new(1.0, 2.0, 3.0),
+            up: Point3::new(0.0, 0.6, 0.8),
+            hub: Point3::new(0.5, 0.5, 4.0),
+            // a full chunk: the largest frame of the kind
+            points: (0..MAX_POINTS_PER_CHUNK).map(|i| Point3::new(i as f32, -(i as f32), 0.5)).collect(),
+        }),
+        Message::TeamReport(TeamReport {
+            command_id: 70_001,
+            event: TeamEvent::Lost { robot: 2, cause: TeamLoss::GripFailure },
+            state: TeamState { grip: [GripState::Gripping, GripState::Released, GripState::Lost, GripState::Gripping], legs_m: [3.0, 4.5, 0.0, 14.9] },
+        }),
+        Message::TeamCommand(TeamCommand {
+            command_id: 70_002,
+            goal_id: 4,
+            order: TeamOrder::Hop { robot: 1, target: Point3::new(9.5, -3.0, 1.25), scene_normal: Point3::new(0.0, 0.0, 1.0) },
+        }),
     ]
 }
 
@@ -273,8 +309,8 @@ fn every_kind_round_trips_through_frame_and_deframe() {
 #[test]
 fn kind_codes_are_exactly_the_documented_ones() {
     let documented = [
-        0x01u8, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08, 0x09, 0x0A, 0x81, 0x82, 0x83, 0x84, 0x85,
-        0x86, 0x87, 0x88,
+        0x01u8, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08, 0x09, 0x0A, 0x0B, 0x0C, 0x0D, 0x81, 0x82, 0x83,
+        0x84, 0x85, 0x86, 0x87, 0x88, 0x89,
     ];
     for b in 0..=255u8 {
         assert_eq!(

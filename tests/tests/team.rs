@@ -452,3 +452,60 @@ fn malformed_team_scenario_files_are_rejected_naming_the_field() {
     // a good file parses
     assert!(parse("name = \"x\"\n[world]\nsource = \"builtin\"\nbuiltin = \"crevasse\"\n[team]\nslip = false\n", p).is_ok());
 }
+
+// ---- issue 21 item 1: the team mission in the flight executive, over protocol v8 ----
+
+use host_sim::team::{simulate_over, TeamLink};
+
+/// One mission run twice with the same seed: the flight crate's mission called directly, and the flight executive
+/// in-process over protocol v8. Returns both reports.
+fn direct_and_link(world: &str, fail: Option<(usize, usize)>, seed: u64, grip_slips: bool) -> (SimReport, SimReport) {
+    let (surf, start, mut cfg, _, _) = team_scenario(world, &data(""), fail, seed).unwrap();
+    if !grip_slips {
+        cfg.grip = GripModel::never_slips(cfg.params.h_max as f64);
+    }
+    let direct = simulate_over(surf.as_ref(), &start, &cfg, &mut team_rng(seed), TeamLink::Direct).unwrap();
+    let link = simulate_over(surf.as_ref(), &start, &cfg, &mut team_rng(seed), TeamLink::Inproc).unwrap();
+    (direct, link)
+}
+
+fn assert_same_run(world: &str, seed: u64, d: &SimReport, l: &SimReport) {
+    assert_eq!(d.outcome, l.outcome, "{world} seed {seed}: outcome");
+    assert_eq!(d.hops, l.hops, "{world} seed {seed}: hops");
+    assert_eq!(d.rounds, l.rounds, "{world} seed {seed}: rounds");
+    assert_eq!(d.hub_path, l.hub_path, "{world} seed {seed}: hub path");
+    assert_eq!(d.lost, l.lost, "{world} seed {seed}: robots lost");
+    assert_eq!(d.walls, l.walls, "{world} seed {seed}: walls");
+    assert_eq!(d.stats, l.stats, "{world} seed {seed}: mission counters");
+}
+
+/// The same seed gives the identical run through the link as direct on the HiRISE cliff (the outcome, every hop,
+/// the rounds, the hub path), and the link run reaches the goal (flight code and referee agree).
+#[test]
+fn team_over_the_link_equals_direct_on_the_cliff_and_reaches_the_goal() {
+    let (d, l) = direct_and_link("cliff", None, 3, true);
+    assert_same_run("cliff", 3, &d, &l);
+    assert_eq!(l.outcome, Some(MissionOutcome::GoalReached), "{:?}", l.stats);
+    assert!(l.success(), "{:?}", l.violations);
+    assert!(!l.hops.is_empty());
+}
+
+/// The same on Itokawa (30 m hops) with a node loss: robot 1's tether cut at its third turn goes up as a
+/// `TeamReport{Lost}`; the run is identical to direct and still reaches the goal.
+#[test]
+fn team_over_the_link_equals_direct_on_itokawa_with_node_loss() {
+    let (d, l) = direct_and_link("itokawa", Some((1, 2)), 3, true);
+    assert_same_run("itokawa", 3, &d, &l);
+    assert_eq!(l.lost.first().map(|x| x.0), Some(1));
+    assert_eq!(l.outcome, Some(MissionOutcome::GoalReached), "{:?}", l.stats);
+}
+
+/// Fig. 12's crevasse through the link (grips never slip, as in `crevasse_reroute_of_fig_12_in_closed_loop`): the wall the flight executive adds and D* Lite's reroute are the same as
+/// direct (the scenes blocked beforehand go up in the `TeamConfigure`).
+#[test]
+fn team_over_the_link_equals_direct_on_the_crevasse_reroute() {
+    let (d, l) = direct_and_link("crevasse", None, 1, false);
+    assert_same_run("crevasse", 1, &d, &l);
+    assert_eq!(l.walls, vec![((1, 2), (1, 3))]);
+    assert_eq!(l.visited, vec![(1, 1), (1, 2), (2, 2), (2, 3), (1, 3)]);
+}

@@ -20,6 +20,7 @@
 //! | [`SEQ_WINDOW`] | 1024 | host sequence numbers within this distance of the expected one count as lost (ahead) or late (behind); further behind is a new host session (`exec` module docs) |
 //! | [`SEQ_HISTORY_LEN`] | 16 | accepted frames (sequence number, CRC) remembered to refuse a duplicate |
 //! | [`DRIVE_COMMAND_RESEND_US`] | 10_000_000 | flight time after which an unreported drive command is sent again (same `command_id`; v5), until `MOTION_REPORT_TIMEOUT_US` |
+//! | [`TEAM_COMMAND_RESEND_US`] | 10_000_000 | flight time after which an unanswered team order is sent again (same `command_id`; v8), until the mission ends |
 
 use super::protocol::MAX_ENCODED_FRAME_LEN;
 
@@ -76,3 +77,8 @@ pub const SEQ_HISTORY_LEN: usize = 16;
 pub const DRIVE_COMMAND_RESEND_US: u64 = 10_000_000;
 
 const _: () = assert!(DRIVE_COMMAND_RESEND_US > 0 && DRIVE_COMMAND_RESEND_US < MOTION_REPORT_TIMEOUT_US);
+
+/// Flight time after which a team order (protocol v8 `TeamCommand`) with no answer goes again, unchanged,
+/// microseconds. Default 10 s, as `DRIVE_COMMAND_RESEND_US`: a hop or a hub move takes seconds; the host executes
+/// an order's id once, so a resend is safe.
+pub const TEAM_COMMAND_RESEND_US: u64 = 10_000_000;

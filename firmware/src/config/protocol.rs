@@ -2,7 +2,7 @@
 //!
 //! | const | default | reason |
 //! |---|---|---|
-//! | [`PROTOCOL_VERSION`] | 7 | first byte of every frame; a receiver rejects any other value (v2: the closed-loop mission messages; v3: `Configure.map`; v4: sequence and cycle accounting in `Telemetry`, `Nack(DuplicateFrame)`; v5: resent requests answered without acting again, drive commands resent; v6: a `Stop` names the motion it stops and is resent; v7: `TileChunk`, the terrain-tile upload, its `Nack` reasons and `MapStatus` tile counters) |
+//! | [`PROTOCOL_VERSION`] | 7 | first byte of every frame; a receiver rejects any other value (v2: the closed-loop mission messages; v3: `Configure.map`; v4: sequence and cycle accounting in `Telemetry`, `Nack(DuplicateFrame)`; v5: resent requests answered without acting again, drive commands resent; v6: a `Stop` names the motion it stops and is resent; v7: `TileChunk`, the terrain-tile upload, its `Nack` reasons and `MapStatus` tile counters; v8: the team mission, `TeamConfigure`, `TeamScanChunk`, `TeamReport`, `TeamCommand`, `Nack` reasons `UnknownRobot` and `NoTeam`) |
 //! | [`HEADER_LEN`] | 6 | version u8, kind u8, sequence u32 little-endian |
 //! | [`CRC_LEN`] | 4 | CRC-32 (ISO-HDLC, the Ethernet/zlib CRC) over header and body, little-endian |
 //! | [`MAX_FRAME_LEN`] | 2048 | largest decoded frame (header + body + CRC): a full sensor chunk plus margin; small enough for a UART DMA buffer |
@@ -13,6 +13,9 @@
 //! | [`SCAN_POINTS_CAPACITY`] | 8192 | reassembly buffer (points), lent by the caller: 96 KiB |
 //! | [`MAX_HEIGHTS_PER_TILE_CHUNK`] | 256 | 256 x 4 bytes = 1024 bytes of heights per `TileChunk` frame, with room for the header fields |
 //! | [`MAX_CHUNKS_PER_TILE`] | 64 | `MAX_TILE_CELLS` (128 x 128 posts, `config::homotopy`) / 256: a full tile; bounds the tile bookkeeping |
+//! | [`MAX_CHUNKS_PER_TEAM_SCAN`] | 32 | chunks of one robot's scan (v8): 32 x 128 = 4096 points, the local planner's `SCENE_MAX_POINTS` |
+//! | [`TEAM_SCAN_POINTS_CAPACITY`] | 4096 | team scan reassembly (points), in the team storage the board lends: 48 KiB |
+//! | [`MAX_TEAM_BLOCKED_CELLS`] | 32 | scenes blocked beforehand in one `TeamConfigure` (v8); keeps the frame under 512 bytes |
 //! | [`MAX_ANCHORS_PER_WAYPOINT`] | 8 | anchor history carried with each plan waypoint (Paton et al. IV-B: a bounded stack) |
 //! | [`MAX_WAYPOINTS_PER_PLAN_FRAME`] | 12 | waypoints per `Plan` frame (12 x 129 bytes at most fits a frame); longer plans go in parts |
 //! | [`MAX_LOG_TEXT`] | 120 | bytes of text in one forwarded `Log` record; longer text is cut |
@@ -20,7 +23,7 @@
 //! | [`MIN_TELEMETRY_PERIOD_MS`] | 100 | telemetry rate limit: a `Configure` asking for periodic telemetry faster than 10 Hz is rejected |
 
 /// The protocol version this build speaks (first byte of every frame).
-pub const PROTOCOL_VERSION: u8 = 7;
+pub const PROTOCOL_VERSION: u8 = 8;
 /// Header length in bytes: version (u8), kind (u8), sequence number (u32 LE).
 pub const HEADER_LEN: usize = 6;
 /// Trailer length in bytes: CRC-32 (ISO-HDLC) little-endian.
@@ -43,6 +46,12 @@ pub const SCAN_POINTS_CAPACITY: usize = MAX_POINTS_PER_CHUNK * MAX_CHUNKS_PER_SC
 pub const MAX_HEIGHTS_PER_TILE_CHUNK: usize = 256;
 /// Most chunks in one terrain tile (v7): a full tile of `MAX_TILE_CELLS` posts.
 pub const MAX_CHUNKS_PER_TILE: u16 = (crate::config::homotopy::MAX_TILE_CELLS / MAX_HEIGHTS_PER_TILE_CHUNK) as u16;
+/// Most chunks in one team scan (v8): `SCENE_MAX_POINTS` points.
+pub const MAX_CHUNKS_PER_TEAM_SCAN: u16 = (crate::config::team::SCENE_MAX_POINTS / MAX_POINTS_PER_CHUNK) as u16;
+/// Points the team scan reassembly holds (v8).
+pub const TEAM_SCAN_POINTS_CAPACITY: usize = MAX_POINTS_PER_CHUNK * MAX_CHUNKS_PER_TEAM_SCAN as usize;
+/// Scenes blocked beforehand in one `TeamConfigure` (v8).
+pub const MAX_TEAM_BLOCKED_CELLS: usize = 32;
 /// Anchor points carried with each plan waypoint.
 pub const MAX_ANCHORS_PER_WAYPOINT: usize = 8;
 /// Waypoints in one `Plan` frame.
@@ -68,3 +77,6 @@ const _: () = assert!(
 const _: () = assert!(MAX_HEIGHTS_PER_TILE_CHUNK * 4 + 17 + 12 + 6 + 3 <= MAX_BODY_LEN);
 const _: () = assert!(MAX_CHUNKS_PER_TILE as usize * MAX_HEIGHTS_PER_TILE_CHUNK == crate::config::homotopy::MAX_TILE_CELLS);
 const _: () = assert!(MAX_CHUNKS_PER_TILE as u32 <= u64::BITS);
+// A full team scan chunk (ids and counts <= 16 bytes, grip, up and hub 36, points 12 each, length prefix <= 2).
+const _: () = assert!(MAX_POINTS_PER_CHUNK * 12 + 16 + 36 + 2 <= MAX_BODY_LEN);
+const _: () = assert!(TEAM_SCAN_POINTS_CAPACITY == crate::config::team::SCENE_MAX_POINTS);

@@ -65,11 +65,14 @@
 //! - `cycle.rs`: [`Executive::step`] and its budgets, the receive and transmit paths, the counters and
 //!   high-water marks of `Telemetry`, log forwarding, [`StepReport`];
 //! - `hooks.rs`: the [`Autonomy`] hook points where the map and the planners plug in;
-//! - `requests.rs`: the last accepted requests, so a resend is answered but not acted on twice (v5).
+//! - `requests.rs`: the last accepted requests, so a resend is answered but not acted on twice (v5);
+//! - `team.rs`: the climbing team's mission (v8): `TeamConfigure`, team goals, scans, reports and orders, on the
+//!   team storage lent with [`Executive::lend_team`].
 
 mod cycle;
 mod hooks;
 mod requests;
+mod team;
 
 use core::borrow::BorrowMut;
 
@@ -77,10 +80,12 @@ use hal::{ByteLink, Instant, MonotonicClock, Watchdog};
 use heapless::{Deque, Vec};
 
 pub use cycle::StepReport;
+pub use team::TeamLend;
 pub use hooks::{Autonomy, DriveStep, NoAutonomy, PlanBuffer, PlanProgress, Refused, Scan};
 
 use cycle::Counters;
 use requests::LastRequests;
+use team::TeamSlot;
 
 use crate::config::exec::*;
 use crate::config::protocol::SCAN_POINTS_CAPACITY;
@@ -88,7 +93,7 @@ use crate::config::protocol::{HEADER_LEN, MAX_WAYPOINTS_PER_PLAN_FRAME};
 use crate::protocol::{
     self, Ack, Configure, Deframer, Direction, DriveCommand, Frame, GoalCancel, GoalRequest, Log,
     LogLevel, Message, MissionState, Mode, Motion, MotionReport, Nack, NackReason, Plan, PlanState,
-    PlanStatus, Point3, ScanAssembler, SensorChunk, StopReason, TileAssembler, TileChunk,
+    PlanStatus, PlannerChoice, Point3, ScanAssembler, SensorChunk, StopReason, TeamConfigure, TileAssembler, TileChunk,
 };
 
 impl Mode {
@@ -169,6 +174,10 @@ enum Reply {
     PlanStatusAndStop,
     Stop,
     MissionStatus,
+    /// The pending team order (v8).
+    TeamCommand,
+    /// `PlanStatus`, then the team mission's first order (v8).
+    PlanStatusAndTeam,
 }
 
 /// The flight executive. See the module docs.
@@ -210,6 +219,10 @@ pub struct Executive<L, C, W, A, S> {
     seq_history: Deque<(u32, u32), SEQ_HISTORY_LEN>,
     /// The last accepted `Configure` and `GoalRequest` (v5: a resend is answered, not acted on again).
     requests: LastRequests,
+    /// The team mission's set-up (v8), kept for the next team goal.
+    team_cfg: Option<TeamConfigure>,
+    /// The team mission and its storage (v8, `team.rs`).
+    team: TeamSlot,
 }
 
 impl<L, C, W, A, S> Executive<L, C, W, A, S>
@@ -257,6 +270,8 @@ where
             seq_seen: false,
             seq_history: Deque::new(),
             requests: LastRequests::default(),
+            team_cfg: None,
+            team: TeamSlot::Unlent,
         }
     }
 
@@ -343,6 +358,11 @@ where
                     }
                     Reply::Stop => self.send_stop(),
                     Reply::MissionStatus => self.send_mission_status(),
+                    Reply::TeamCommand => self.send_team_command(),
+                    Reply::PlanStatusAndTeam => {
+                        self.send_plan_status();
+                        self.send_team_command();
+                    }
                 }
             }
             Err(reason) => self.reject(seq, reason),
@@ -425,8 +445,12 @@ where
             Message::GoalRequest(g) => self.on_goal(g),
             Message::MotionReport(r) => self.on_motion_report(r),
             Message::GoalCancel(c) => self.on_cancel(c),
+            Message::TeamConfigure(c) => self.on_team_configure(c),
+            Message::TeamScanChunk(c) => self.on_team_scan(c),
+            Message::TeamReport(r) => self.on_team_report(r),
             Message::Shutdown(_) => {
                 self.autonomy.abort();
+                self.team_abort();
                 if let Some(g) = self.goal.as_mut() {
                     if matches!(g.state, PlanState::Accepted | PlanState::Searching) {
                         g.state = PlanState::Aborted;
@@ -448,7 +472,8 @@ where
             | Message::DriveCommand(_)
             | Message::Telemetry(_)
             | Message::Log(_)
-            | Message::MissionStatus(_) => Err(NackReason::WrongDirection),
+            | Message::MissionStatus(_)
+            | Message::TeamCommand(_) => Err(NackReason::WrongDirection),
         }
     }
 
@@ -554,6 +579,9 @@ where
         if self.mode == Mode::Safe {
             return Err(NackReason::NotAllowedInMode);
         }
+        if g.planner == PlannerChoice::Team {
+            return self.on_goal_team(g);
+        }
         if self.config.is_none() {
             return Err(NackReason::NotConfigured);
         }
@@ -590,17 +618,43 @@ where
         if replacing && state != PlanState::Accepted {
             self.set_mode(Mode::Mapping);
         }
-        self.goal = Some(ActiveGoal {
-            goal_id: g.goal_id,
-            state,
-            iterations: 0,
-            best_cost: None,
-        });
+        self.set_goal(g.goal_id, state);
         Ok(if stop {
             Reply::PlanStatusAndStop
         } else {
             Reply::PlanStatus
         })
+    }
+
+    /// A team goal (v8): needs a `TeamConfigure`, not a `Configure`; refused (`NoTeam`) while a team mission runs
+    /// or before its configuration; started on the lent team storage (`team.rs`). The mission runs in `Mapping`.
+    fn on_goal_team(&mut self, g: &GoalRequest) -> Result<Reply, NackReason> {
+        if !matches!(self.mode, Mode::Idle | Mode::Mapping) {
+            return Err(NackReason::NotAllowedInMode);
+        }
+        let state = self.on_team_goal(g)?;
+        self.counters.goals_received += 1;
+        self.plan_tx = None;
+        // The mission steps inside the dispatch of each report, so the executive is not `Planning` between them.
+        if state == PlanState::Accepted && self.mode == Mode::Idle {
+            self.set_mode(Mode::Mapping);
+        }
+        self.set_goal(g.goal_id, state);
+        Ok(if state == PlanState::Accepted {
+            Reply::PlanStatusAndTeam
+        } else {
+            Reply::PlanStatus
+        })
+    }
+
+    /// The goal now planned (or refused) is `goal_id`, in `state`.
+    fn set_goal(&mut self, goal_id: u32, state: PlanState) {
+        self.goal = Some(ActiveGoal {
+            goal_id,
+            state,
+            iterations: 0,
+            best_cost: None,
+        });
     }
 
     fn set_mode(&mut self, to: Mode) {
@@ -713,6 +767,7 @@ where
 
     fn emit_plan_or_motion(&mut self, now: Instant) {
         self.check_report_timeout(now);
+        self.resend_team_command(now);
         for _ in 0..PLAN_FRAMES_PER_STEP {
             if let Some(mut tx) = self.plan_tx {
                 let start = usize::from(tx.next_part) * MAX_WAYPOINTS_PER_PLAN_FRAME;

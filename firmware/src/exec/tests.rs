@@ -1000,3 +1000,141 @@ fn tiles_are_checked_without_a_navigator_and_refused_in_safe_mode() {
     let r = exchange_from(&mut e, 2, &chunks);
     assert_eq!(nacks(&r), [NackReason::NotAllowedInMode]);
 }
+
+// ---- protocol v8: the team mission ----
+
+fn team_configure() -> TeamConfigure {
+    TeamConfigure::example()
+}
+
+fn team_goal() -> GoalRequest {
+    GoalRequest { planner: PlannerChoice::Team, position: Point3::new(40.0, 0.0, 0.0), tolerance_m: 5.0, ..goal() }
+}
+
+fn team_lend() -> TeamLend {
+    use crate::config::protocol::TEAM_SCAN_POINTS_CAPACITY;
+    TeamLend {
+        dstar: Box::leak(Box::default()),
+        planner: Box::leak(Box::default()),
+        points: Box::leak(Box::new([crate::geom::Vec3::zeros(); TEAM_SCAN_POINTS_CAPACITY])),
+        mission: Box::leak(Box::new(None)),
+    }
+}
+
+fn team_orders(r: &[Message]) -> StdVec<TeamCommand> {
+    r.iter().filter_map(|m| if let Message::TeamCommand(c) = m { Some(*c) } else { None }).collect()
+}
+
+/// A flat patch of the plane z = 0 around `(x, y)`, 1 m lattice, as scan chunks answering order `id`.
+fn flat_scan(id: u32, robot: u8, at: Point3, hub: Point3) -> StdVec<TeamScanChunk> {
+    let pts: StdVec<Point3> = (0..30 * 30).map(|i| Point3::new(at.x - 15.0 + (i % 30) as f32, at.y - 15.0 + (i / 30) as f32, 0.0)).collect();
+    let parts: StdVec<&[Point3]> = pts.chunks(128).collect();
+    parts
+        .iter()
+        .enumerate()
+        .map(|(i, p)| TeamScanChunk {
+            command_id: id,
+            robot,
+            chunk_index: i as u16,
+            chunk_count: parts.len() as u16,
+            grip: at,
+            up: Point3::new(0.0, 0.0, 1.0),
+            hub,
+            points: heapless::Vec::from_slice(p).unwrap(),
+        })
+        .collect()
+}
+
+/// A team goal before any `TeamConfigure` is refused `NoTeam` (counted), as are team scans and reports with no
+/// mission; configured but with no team storage lent, the goal is `PlannerUnavailable`.
+#[test]
+fn a_team_goal_without_a_team_configuration_is_refused_clearly() {
+    let mut e = exec(NoAutonomy);
+    let r = exchange(&mut e, &[Message::GoalRequest(team_goal())]);
+    assert_eq!(nacks(&r), [NackReason::NoTeam]);
+    assert!(team_orders(&r).is_empty());
+    let state = TeamState { grip: [GripState::Gripping; 4], legs_m: [5.0; 4] };
+    let r = exchange_from(
+        &mut e,
+        200,
+        &[
+            Message::TeamReport(TeamReport { command_id: 0, event: TeamEvent::HubAt { pos: Point3::new(0.0, 0.0, 0.0) }, state }),
+            Message::TeamScanChunk(flat_scan(0, 0, Point3::new(4.0, 4.0, 0.0), Point3::new(0.0, 0.0, 0.0)).remove(0)),
+            Message::TelemetryRequest(TelemetryRequest),
+        ],
+    );
+    assert_eq!(nacks(&r), [NackReason::NoTeam, NackReason::NoTeam]);
+    assert_eq!(telemetry_of(&r).frames_rejected[NackReason::NoTeam.index()], 3);
+    // configured, but this flight computer lent no team storage
+    let r = exchange_from(&mut e, 300, &[Message::TeamConfigure(team_configure()), Message::GoalRequest(team_goal())]);
+    assert!(nacks(&r).is_empty());
+    assert!(r.iter().any(|m| matches!(m, Message::PlanStatus(s) if s.state == PlanState::PlannerUnavailable)));
+}
+
+/// The executive runs the team mission: a team goal after a `TeamConfigure` is accepted and the first order
+/// follows; answers out of order, for another robot or another order are refused with their reasons and change
+/// nothing; a complete scan steps the mission (a new order, a new id); a copy of the last chunk is answered, not
+/// applied; a robot lost moves the mission on; an unanswered order is sent again unchanged.
+#[test]
+fn the_executive_runs_the_team_mission_and_refuses_answers_out_of_order() {
+    let mut e = exec(NoAutonomy);
+    e.lend_team(team_lend());
+    let r = exchange(&mut e, &[Message::TeamConfigure(team_configure()), Message::GoalRequest(team_goal())]);
+    assert!(nacks(&r).is_empty(), "{r:?}");
+    assert!(r.iter().any(|m| matches!(m, Message::PlanStatus(s) if s.state == PlanState::Accepted)));
+    let first = team_orders(&r);
+    assert_eq!(first.len(), 1);
+    let TeamOrder::Scan { robot } = first[0].order else { panic!("{first:?}") };
+    let id = first[0].command_id;
+    let hub = Point3::new(0.0, 0.0, 0.0);
+    let at = team_configure().start[usize::from(robot)];
+    let chunks = flat_scan(id, robot, at, hub);
+    let state = TeamState { grip: [GripState::Gripping; 4], legs_m: [5.66; 4] };
+    let other = (robot + 1) % 4;
+    let r = exchange_from(
+        &mut e,
+        200,
+        &[
+            Message::TeamScanChunk(TeamScanChunk { command_id: id + 7, ..chunks[0].clone() }),
+            Message::TeamScanChunk(TeamScanChunk { robot: other, ..chunks[0].clone() }),
+            Message::TeamScanChunk(chunks[1].clone()),
+            Message::TeamReport(TeamReport { command_id: id, event: TeamEvent::HubAt { pos: hub }, state }),
+            Message::TeamConfigure(team_configure()),
+        ],
+    );
+    assert_eq!(
+        nacks(&r),
+        [NackReason::UnknownCommand, NackReason::UnknownRobot, NackReason::OutOfOrderChunk, NackReason::UnknownCommand, NackReason::NoTeam]
+    );
+    assert!(team_orders(&r).is_empty());
+    // the whole scan, in order: the mission plans the robot's hop and orders the next step
+    let msgs: StdVec<Message> = chunks.iter().cloned().map(Message::TeamScanChunk).collect();
+    let r = exchange_from(&mut e, 300, &msgs);
+    assert!(nacks(&r).is_empty(), "{r:?}");
+    let next = team_orders(&r);
+    assert_eq!(next.len(), 1, "{r:?}");
+    assert!(next[0].command_id != id);
+    // the last chunk again (its Ack lost): answered, not applied, no new order
+    let r = exchange_from(&mut e, 400, &[msgs[msgs.len() - 1].clone()]);
+    assert!(nacks(&r).is_empty() && team_orders(&r).is_empty(), "{r:?}");
+    // no answer: the pending order goes again, unchanged, after TEAM_COMMAND_RESEND_US
+    e.clock_mut().0 += crate::config::exec::TEAM_COMMAND_RESEND_US;
+    let r = exchange_from(&mut e, 500, &[]);
+    assert_eq!(team_orders(&r), next);
+    // the robot of the pending order is lost: the mission moves on to another order
+    let lost_robot = match next[0].order {
+        TeamOrder::Scan { robot } | TeamOrder::Hop { robot, .. } => robot,
+        o => panic!("{o:?}"),
+    };
+    let r = exchange_from(
+        &mut e,
+        600,
+        &[Message::TeamReport(TeamReport { command_id: next[0].command_id, event: TeamEvent::Lost { robot: lost_robot, cause: TeamLoss::TetherCut }, state })],
+    );
+    assert!(nacks(&r).is_empty(), "{r:?}");
+    let after = team_orders(&r);
+    assert_eq!(after.len(), 1);
+    assert!(after[0].command_id != next[0].command_id);
+    assert!(!matches!(after[0].order, TeamOrder::Scan { robot } | TeamOrder::Hop { robot, .. } if robot == lost_robot));
+    assert!(e.team_mission().is_some_and(|m| m.lost()[usize::from(lost_robot)].is_some()));
+}

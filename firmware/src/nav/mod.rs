@@ -39,7 +39,8 @@
 //!
 //! Refusals are `InvalidInput` with a [`GoalRefusal`] reason, logged and counted ([`NavPlanStats::refusals`]): no
 //! `Configure`, no scan yet, an empty map, a map without an observed surface block, a start or an on-map goal that
-//! does not settle. `PlannerChoice::Team` is answered `PlannerUnavailable`, and so is `Homotopy` on a navigator
+//! does not settle. `PlannerChoice::Team` never reaches the navigator: the executive runs the team mission itself
+//! (protocol v8, `exec/team.rs`); a navigator asked anyway answers `PlannerUnavailable`, as it answers `Homotopy`
 //! without the global planner's storage ([`Navigator::new`]; [`Navigator::with_homotopy`] lends it).
 //!
 //! ## Terrain tiles and homotopy goals (protocol v7; issue 20 item 4; `nav/tile.rs`, `nav/homotopy.rs`)
@@ -692,6 +693,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
         match goal.planner {
             PlannerChoice::Abit => {}
             PlannerChoice::Homotopy => return self.goal_homotopy(goal),
+            // the executive runs team goals (`exec/team.rs`); this is reached only by a caller of the hook itself
             PlannerChoice::Team => return PlanState::PlannerUnavailable,
         }
         self.replan_pending = false;

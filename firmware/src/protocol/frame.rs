@@ -244,6 +244,15 @@ fn sequence_over_capacity(kind: MessageKind, b: &[u8]) -> bool {
                 varint(b, at)?;
                 Some(varint(b, at)? > MAX_LOG_TEXT)
             }
+            MessageKind::TeamScanChunk => {
+                // command id, robot (u8), chunk index, chunk count; grip, up, hub (3 x 12 bytes)
+                varint(b, at)?;
+                *at += 1;
+                varint(b, at)?;
+                varint(b, at)?;
+                *at += 36;
+                Some(varint(b, at)? > MAX_POINTS_PER_CHUNK)
+            }
             MessageKind::Plan => {
                 varint(b, at)?;
                 varint(b, at)?;
@@ -295,6 +304,10 @@ pub fn decode<T: AsRef<[u8]>>(frame: &Frame<T>) -> Result<(Header, Message), Dec
         MessageKind::Telemetry => Message::Telemetry(body(kind, b)?),
         MessageKind::Log => Message::Log(body(kind, b)?),
         MessageKind::MissionStatus => Message::MissionStatus(body(kind, b)?),
+        MessageKind::TeamConfigure => Message::TeamConfigure(body(kind, b)?),
+        MessageKind::TeamScanChunk => Message::TeamScanChunk(body(kind, b)?),
+        MessageKind::TeamReport => Message::TeamReport(body(kind, b)?),
+        MessageKind::TeamCommand => Message::TeamCommand(body(kind, b)?),
     };
     m.validate().map_err(DecodeError::Invalid)?;
     Ok((h, m))

@@ -13,6 +13,11 @@
 use heapless::{String, Vec};
 use serde::{Deserialize, Serialize};
 
+pub use super::team::{
+    GripState, TeamCommand, TeamConfigure, TeamEvent, TeamGrid, TeamLoss, TeamMissionSettings, TeamOrder, TeamOutcome,
+    TeamPlannerSettings, TeamReport, TeamScanChunk, TeamState,
+};
+
 use crate::config::map::MapConfig;
 use crate::config::mission as mission_cfg;
 use crate::config::protocol::{
@@ -54,6 +59,12 @@ pub enum MessageKind {
     GoalCancel = 0x09,
     /// [`TileChunk`] (host -> flight, v7).
     TileChunk = 0x0A,
+    /// [`TeamConfigure`] (host -> flight, v8).
+    TeamConfigure = 0x0B,
+    /// [`TeamScanChunk`] (host -> flight, v8).
+    TeamScanChunk = 0x0C,
+    /// [`TeamReport`] (host -> flight, v8).
+    TeamReport = 0x0D,
     /// [`Ack`] (flight -> host).
     Ack = 0x81,
     /// [`Nack`] (flight -> host).
@@ -70,11 +81,13 @@ pub enum MessageKind {
     Log = 0x87,
     /// [`MissionStatus`] (flight -> host, v2).
     MissionStatus = 0x88,
+    /// [`TeamCommand`] (flight -> host, v8).
+    TeamCommand = 0x89,
 }
 
 impl MessageKind {
     /// Every kind, in code order.
-    pub const ALL: [MessageKind; 18] = [
+    pub const ALL: [MessageKind; 22] = [
         Self::TimeTick,
         Self::SensorChunk,
         Self::TetherReading,
@@ -85,6 +98,9 @@ impl MessageKind {
         Self::MotionReport,
         Self::GoalCancel,
         Self::TileChunk,
+        Self::TeamConfigure,
+        Self::TeamScanChunk,
+        Self::TeamReport,
         Self::Ack,
         Self::Nack,
         Self::PlanStatus,
@@ -93,6 +109,7 @@ impl MessageKind {
         Self::Telemetry,
         Self::Log,
         Self::MissionStatus,
+        Self::TeamCommand,
     ];
 
     /// The kind for a header byte; `None` for every value not listed in the spec.
@@ -544,10 +561,15 @@ pub enum NackReason {
     /// A `TileChunk` whose height count is not what its index requires (`MAX_HEIGHTS_PER_TILE_CHUNK`, the last
     /// chunk the rest), or whose chunk count does not match its shape: fix the uploader (v7).
     TileChunkLength,
+    /// A team message naming a robot outside `0..TEAM_SIZE` (v8).
+    UnknownRobot,
+    /// A team goal without a `TeamConfigure`, a team scan or report when no team mission awaits it, or a
+    /// `TeamConfigure` while a team mission runs (v8).
+    NoTeam,
 }
 
 /// Number of [`NackReason`] values (the length of the rejection counters).
-pub const NACK_REASON_COUNT: usize = 30;
+pub const NACK_REASON_COUNT: usize = 32;
 
 impl NackReason {
     /// Every reason, in wire order.
@@ -582,6 +604,8 @@ impl NackReason {
         Self::TileResolution,
         Self::TileMismatch,
         Self::TileChunkLength,
+        Self::UnknownRobot,
+        Self::NoTeam,
     ];
 
     /// Index into rejection counters (equals the wire value).
@@ -1007,6 +1031,10 @@ pub enum Message {
     Telemetry(Telemetry),
     Log(Log),
     MissionStatus(MissionStatus),
+    TeamConfigure(TeamConfigure),
+    TeamScanChunk(TeamScanChunk),
+    TeamReport(TeamReport),
+    TeamCommand(TeamCommand),
 }
 
 /// Why a decoded body is not a valid message (narrow: only what validation can find).
@@ -1022,6 +1050,12 @@ pub enum Invalid {
     TileTooLarge,
     /// A terrain tile's post spacing is outside its range.
     TileResolution,
+    /// A robot index outside `0..TEAM_SIZE` (v8).
+    UnknownRobot,
+    /// A chunk count of 0 or above its limit (v8 team scans).
+    TooManyChunks,
+    /// A chunk index not below the chunk count (v8 team scans).
+    ChunkIndexOutOfRange,
 }
 
 impl From<Invalid> for NackReason {
@@ -1032,6 +1066,9 @@ impl From<Invalid> for NackReason {
             Invalid::OutOfRange => NackReason::OutOfRange,
             Invalid::TileTooLarge => NackReason::TileTooLarge,
             Invalid::TileResolution => NackReason::TileResolution,
+            Invalid::UnknownRobot => NackReason::UnknownRobot,
+            Invalid::TooManyChunks => NackReason::TooManyChunks,
+            Invalid::ChunkIndexOutOfRange => NackReason::ChunkIndexOutOfRange,
         }
     }
 }
@@ -1042,7 +1079,7 @@ pub trait Validate {
     fn validate(&self) -> Result<(), Invalid>;
 }
 
-fn finite(v: f32) -> Result<(), Invalid> {
+pub(super) fn finite(v: f32) -> Result<(), Invalid> {
     if v.is_finite() {
         Ok(())
     } else {
@@ -1050,7 +1087,7 @@ fn finite(v: f32) -> Result<(), Invalid> {
     }
 }
 
-fn positive(v: f32) -> Result<(), Invalid> {
+pub(super) fn positive(v: f32) -> Result<(), Invalid> {
     finite(v)?;
     if v > 0.0 {
         Ok(())
@@ -1059,7 +1096,7 @@ fn positive(v: f32) -> Result<(), Invalid> {
     }
 }
 
-fn non_negative(v: f32) -> Result<(), Invalid> {
+pub(super) fn non_negative(v: f32) -> Result<(), Invalid> {
     finite(v)?;
     if v >= 0.0 {
         Ok(())
@@ -1261,6 +1298,10 @@ impl Validate for Message {
             Message::DriveCommand(m) => m.validate(),
             Message::MotionReport(m) => m.validate(),
             Message::MissionStatus(m) => m.validate(),
+            Message::TeamConfigure(m) => m.validate(),
+            Message::TeamScanChunk(m) => m.validate(),
+            Message::TeamReport(m) => m.validate(),
+            Message::TeamCommand(m) => m.validate(),
             Message::TimeTick(_)
             | Message::GoalCancel(_)
             | Message::Shutdown(_)
@@ -1295,6 +1336,10 @@ impl Message {
             Message::Telemetry(_) => MessageKind::Telemetry,
             Message::Log(_) => MessageKind::Log,
             Message::MissionStatus(_) => MessageKind::MissionStatus,
+            Message::TeamConfigure(_) => MessageKind::TeamConfigure,
+            Message::TeamScanChunk(_) => MessageKind::TeamScanChunk,
+            Message::TeamReport(_) => MessageKind::TeamReport,
+            Message::TeamCommand(_) => MessageKind::TeamCommand,
         }
     }
 
@@ -1319,6 +1364,10 @@ impl Message {
             Message::Telemetry(m) => postcard::to_slice(m, buf),
             Message::Log(m) => postcard::to_slice(m, buf),
             Message::MissionStatus(m) => postcard::to_slice(m, buf),
+            Message::TeamConfigure(m) => postcard::to_slice(m, buf),
+            Message::TeamScanChunk(m) => postcard::to_slice(m, buf),
+            Message::TeamReport(m) => postcard::to_slice(m, buf),
+            Message::TeamCommand(m) => postcard::to_slice(m, buf),
         }?;
         Ok(out.len())
     }

@@ -1,4 +1,4 @@
-//! # Wire protocol between the simulator / ground station and the flight software (version 3)
+//! # Wire protocol between the simulator / ground station and the flight software (version 8)
 //!
 //! The byte-level specification, with limits and example bytes, is `firmware/PROTOCOL.md`; this module is its
 //! implementation and the unit tests check the document's example bytes.
@@ -9,6 +9,7 @@
 //!   [`decode`] / [`decode_frame`].
 //! - [`cobs`]: byte stuffing, so `0x00` delimits frames.
 //! - [`deframer`]: the incremental [`Deframer`] (any byte split, resynchronises after garbage or oversize).
+//! - [`team`]: the team mission's messages (v8: `TeamConfigure`, `TeamScanChunk`, `TeamReport`, `TeamCommand`).
 //! - [`reassembly`]: the bounded [`ScanAssembler`] for chunked sensor scans and the [`TileAssembler`] for chunked
 //!   terrain tiles (v7).
 //!
@@ -24,6 +25,7 @@ pub mod deframer;
 pub mod frame;
 pub mod message;
 pub mod reassembly;
+pub mod team;
 
 pub use deframer::{DeframeError, Deframer};
 pub use frame::{

@@ -32,7 +32,7 @@ fn spec_example_time_tick() {
     let mut raw = [0u8; 64];
     let n = build_raw(
         Header {
-            version: 7,
+            version: 8,
             kind: 1,
             seq: 1,
         },
@@ -141,7 +141,7 @@ fn header_errors_and_nonfinite_values() {
         Err(NackReason::Truncated)
     );
     let mut raw = [0u8; 64];
-    for version in [0u8, 1, 2, 3, 4, 5, 6, 8, 0xFF] {
+    for version in [0u8, 1, 2, 3, 4, 5, 6, 7, 9, 0xFF] {
         let n = build_raw(
             Header {
                 version,
@@ -300,7 +300,7 @@ fn round_trip(m: &Message) -> Message {
     let (n, ev) = d.push(&w);
     assert_eq!(n, w.len());
     let (h, back) = decode_frame(ev.unwrap().unwrap()).unwrap();
-    assert_eq!(h.version, 7);
+    assert_eq!(h.version, 8);
     assert_eq!(h.kind, m.kind() as u8);
     back
 }
@@ -366,8 +366,14 @@ fn v2_messages_round_trip() {
     // v7's tile chunk is the next host kind; the one after it is none
     assert_eq!(MessageKind::from_u8(0x0A), Some(MessageKind::TileChunk));
     assert_eq!(MessageKind::TileChunk.direction(), Direction::HostToFlight);
-    assert_eq!(MessageKind::from_u8(0x0B), None);
-    assert_eq!(MessageKind::from_u8(0x89), None);
+    // v8's team kinds follow; the ones after them are none
+    assert_eq!(MessageKind::from_u8(0x0B), Some(MessageKind::TeamConfigure));
+    assert_eq!(MessageKind::from_u8(0x0D), Some(MessageKind::TeamReport));
+    assert_eq!(MessageKind::from_u8(0x89), Some(MessageKind::TeamCommand));
+    assert_eq!(MessageKind::TeamCommand.direction(), Direction::FlightToHost);
+    assert_eq!(MessageKind::TeamScanChunk.direction(), Direction::HostToFlight);
+    assert_eq!(MessageKind::from_u8(0x0E), None);
+    assert_eq!(MessageKind::from_u8(0x8A), None);
 }
 
 #[test]
@@ -394,7 +400,7 @@ fn spec_examples_v2() {
     let mut d = Deframer::new();
     let (_, ev) = d.push(&w);
     assert_eq!(ev.unwrap().unwrap(), &frame[..]);
-    // real version-1 to -6 frames (the earlier documents' example) are a wrong version, not a CRC or kind
+    // real version-1 to -7 frames (the earlier documents' example) are a wrong version, not a CRC or kind
     // error
     for old in [
         "example-v1-time-tick-frame",
@@ -403,6 +409,7 @@ fn spec_examples_v2() {
         "example-v4-time-tick-frame",
         "example-v5-time-tick-frame",
         "example-v6-time-tick-frame",
+        "example-v7-time-tick-frame",
     ] {
         assert_eq!(decode_frame(&spec_bytes(old)).map(|_| ()), Err(NackReason::WrongVersion));
     }
@@ -452,7 +459,7 @@ fn spec_example_v7_tile_chunk() {
     let mut raw = [0u8; 2100];
     let mut body = std::vec![1u8, 0, 1, 0, 0, 0, 0xC0, 0, 0, 0x40, 0x40, 0, 0, 0, 0x3F, 1, 2, 0x81, 0x02];
     body.extend(core::iter::repeat_n(0u8, 257 * 4));
-    let n = build_raw(Header { version: 7, kind: 0x0A, seq: 0 }, &body, &mut raw).unwrap();
+    let n = build_raw(Header { version: 8, kind: 0x0A, seq: 0 }, &body, &mut raw).unwrap();
     assert_eq!(decode_frame(&raw[..n]).map(|_| ()), Err(NackReason::LengthOverLimit));
 }
 
@@ -563,4 +570,97 @@ fn v2_bad_values_have_their_reasons() {
         decode_frame(&frame_with_body(MessageKind::GoalRequest, &b[..n - 1])).map(|_| ()),
         Err(NackReason::BodyTooShort)
     );
+}
+
+/// v8: a team order, byte for byte as the spec derives it.
+#[test]
+fn spec_example_v8_team_command() {
+    let m = Message::TeamCommand(TeamCommand { command_id: 6, goal_id: 1, order: TeamOrder::Scan { robot: 2 } });
+    assert_eq!(wire(6, &m), spec_bytes("example-team-scan-command-wire"));
+    assert_eq!(round_trip(&m), m);
+}
+
+fn sample_team_configure() -> TeamConfigure {
+    let mut c = TeamConfigure::example();
+    c.blocked.push((0, 2)).unwrap();
+    c
+}
+
+/// v8: every team message round-trips, and each bad value has its reason (NaN, robot out of range, axes, counts).
+#[test]
+fn v8_team_messages_round_trip_and_bad_values_have_their_reasons() {
+    let c = sample_team_configure();
+    let state = TeamState { grip: [GripState::Gripping; 4], legs_m: [1.5; 4] };
+    let report = TeamReport { command_id: 3, event: TeamEvent::Landed { robot: 1, pos: Point3::new(1.0, 2.0, 3.0) }, state };
+    let mut points = heapless::Vec::new();
+    points.extend_from_slice(&[Point3::new(0.0, 0.0, 1.0); 128]).unwrap();
+    let scan = TeamScanChunk {
+        command_id: 2,
+        robot: 3,
+        chunk_index: 31,
+        chunk_count: 32,
+        grip: Point3::new(1.0, 1.0, 0.0),
+        up: Point3::new(0.0, 0.0, 1.0),
+        hub: Point3::new(0.0, 0.0, 0.0),
+        points,
+    };
+    let hop = TeamCommand {
+        command_id: 4,
+        goal_id: 1,
+        order: TeamOrder::Hop { robot: 0, target: Point3::new(3.0, 0.0, 0.0), scene_normal: Point3::new(0.0, 0.0, 1.0) },
+    };
+    let done = TeamCommand {
+        command_id: 5,
+        goal_id: 1,
+        order: TeamOrder::Done { outcome: TeamOutcome::GoalReached, rounds: 12, hops: 40, walls: 1 },
+    };
+    for m in [
+        Message::TeamConfigure(c.clone()),
+        Message::TeamReport(report),
+        Message::TeamScanChunk(scan.clone()),
+        Message::TeamCommand(hop),
+        Message::TeamCommand(done),
+    ] {
+        assert_eq!(round_trip(&m), m);
+    }
+    let bad_c = |f: &dyn Fn(&mut TeamConfigure)| {
+        let mut x = c.clone();
+        f(&mut x);
+        x.validate()
+    };
+    assert_eq!(bad_c(&|x| x.start[2].y = f32::NAN), Err(Invalid::NonFinite));
+    assert_eq!(bad_c(&|x| x.grid.cell_m = 0.0), Err(Invalid::OutOfRange));
+    assert_eq!(bad_c(&|x| x.grid.u = Point3::new(2.0, 0.0, 0.0)), Err(Invalid::OutOfRange));
+    assert_eq!(bad_c(&|x| x.grid.v = Point3::new(1.0, 0.0, 0.0)), Err(Invalid::OutOfRange));
+    assert_eq!(bad_c(&|x| x.grid.width = 65 * 64), Err(Invalid::OutOfRange));
+    assert_eq!(bad_c(&|x| x.blocked[0] = (4, 0)), Err(Invalid::OutOfRange));
+    assert_eq!(bad_c(&|x| x.planner.h_max_m = f32::INFINITY), Err(Invalid::NonFinite));
+    assert_eq!(bad_c(&|x| x.mission.max_rounds = 0), Err(Invalid::OutOfRange));
+    let mut r = report;
+    r.event = TeamEvent::Lost { robot: 4, cause: TeamLoss::TetherCut };
+    assert_eq!(r.validate(), Err(Invalid::UnknownRobot));
+    r.event = TeamEvent::HubAt { pos: Point3::new(f32::NAN, 0.0, 0.0) };
+    assert_eq!(r.validate(), Err(Invalid::NonFinite));
+    r.event = TeamEvent::HubAt { pos: Point3::new(0.0, 0.0, 0.0) };
+    r.state.legs_m[3] = -1.0;
+    assert_eq!(r.validate(), Err(Invalid::OutOfRange));
+    let bad_s = |f: &dyn Fn(&mut TeamScanChunk)| {
+        let mut x = scan.clone();
+        f(&mut x);
+        x.validate()
+    };
+    assert_eq!(bad_s(&|x| x.robot = 4), Err(Invalid::UnknownRobot));
+    assert_eq!(bad_s(&|x| x.points[7].z = f32::NAN), Err(Invalid::NonFinite));
+    assert_eq!(bad_s(&|x| x.up = Point3::new(0.0, 0.0, 0.5)), Err(Invalid::OutOfRange));
+    assert_eq!(bad_s(&|x| x.chunk_count = 33), Err(Invalid::TooManyChunks));
+    assert_eq!(bad_s(&|x| x.chunk_index = 32), Err(Invalid::ChunkIndexOutOfRange));
+    assert_eq!(NackReason::from(Invalid::UnknownRobot), NackReason::UnknownRobot);
+    // a points length prefix over the capacity (129 points) is its own reason
+    let mut raw = [0u8; 2100];
+    let mut body = std::vec![2u8, 3, 31, 32];
+    body.extend(core::iter::repeat_n(0u8, 36));
+    body.extend([0x81, 0x01]);
+    body.extend(core::iter::repeat_n(0u8, 129 * 12));
+    let n = build_raw(Header { version: 8, kind: 0x0C, seq: 0 }, &body, &mut raw).unwrap();
+    assert_eq!(decode_frame(&raw[..n]).map(|_| ()), Err(NackReason::LengthOverLimit));
 }

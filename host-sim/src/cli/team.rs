@@ -84,6 +84,10 @@ pub struct TeamArgs {
     /// Grips never slip (the grip model's slip probability set to 0; isolates the route from node losses).
     #[arg(long)]
     pub no_slip: bool,
+    /// Where the hub's flight code runs: `inproc` (the flight executive, over protocol v8's team messages) or
+    /// `direct` (the flight crate's mission called as a library, the simulation before v8; the same run).
+    #[arg(long, value_enum, default_value_t = crate::team::TeamLink::Inproc)]
+    pub link: crate::team::TeamLink,
 }
 
 fn fmt_cells(c: &[(i64, i64)]) -> String {
@@ -126,7 +130,7 @@ pub fn team(args: &TeamArgs) -> Result<bool, String> {
         }
         let mut rng = team_rng(seed);
         let t = Instant::now();
-        let rep = crate::team::simulate(surf.as_ref(), &start, &cfg, &mut rng).map_err(|e| e.to_string())?;
+        let rep = crate::team::simulate_over(surf.as_ref(), &start, &cfg, &mut rng, args.link).map_err(|e| e.to_string())?;
         let secs = t.elapsed().as_secs_f64();
         let mut times = rep.plan_times.clone();
         let med = median(&mut times);

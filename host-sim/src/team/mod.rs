@@ -16,9 +16,14 @@
 //! r_max after each hub motion. Violations are recorded, never corrected. Whether the goal was reached is the
 //! referee's own distance check of the true hub, reported beside the flight code's outcome.
 //!
+//! Where the flight code runs ([`TeamLink`], [`flight`]): called as a library ([`simulate`]), or in the flight
+//! executive in-process over protocol v8 ([`simulate_over`] with [`TeamLink::Inproc`]); the same seed gives the
+//! same run either way (`tests/tests/team.rs`).
+//!
 //! Worlds: [`cliff_from_hirise`] (the steepest part of the HiRISE crop, scaled into a cliff) and
 //! [`itokawa`] (the Hayabusa shape model, metres; 30 m hops as in Fig. 16). Pictures: [`svg`].
 
+pub mod flight;
 pub mod grip;
 pub mod scenario;
 pub mod svg;
@@ -165,12 +170,15 @@ impl SimReport {
 pub enum SimError {
     /// The flight code rejected the set-up (grid, goal outside it, ...).
     Mission(MissionError),
+    /// The link to the flight software failed or the flight software refused a team message (link runs).
+    Link(String),
 }
 
 impl core::fmt::Display for SimError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             SimError::Mission(e) => write!(f, "the flight code rejected the mission: {e:?}"),
+            SimError::Link(e) => write!(f, "team link: {e}"),
         }
     }
 }
@@ -216,35 +224,63 @@ impl Referee {
     }
 }
 
+/// Where the team's flight code runs (`tetherbot team --link`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "sim", derive(clap::ValueEnum))]
+pub enum TeamLink {
+    /// The flight executive in-process, over protocol v8 ([`flight::LinkFlight::inproc`]): the hub's flight
+    /// computer as it flies.
+    #[default]
+    Inproc,
+    /// The flight crate's mission called as a library (the simulation before protocol v8; the same run).
+    Direct,
+}
+
 /// Run the team mission from `start` (one grip point per robot) to `cfg.goal` on `surface`: the flight code
-/// ([`DefaultTeamMission`]) commands, the simulator executes on the true surface and reports back.
+/// ([`DefaultTeamMission`], called directly) commands, the simulator executes on the true surface and reports back.
 pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig, rng: &mut R) -> Result<SimReport, SimError> {
-    let params = cfg.params;
-    let mut storage = OwnedDStarStorage::new((cfg.grid.width * cfg.grid.height) as usize);
-    let mut planner: Box<DefaultLocalPlanner> = Box::default();
-    let mut mission = DefaultTeamMission::new(
-        cfg.grid,
-        to_vec3(cfg.goal),
-        cfg.goal_tol as Real,
-        start.map(to_vec3),
-        params,
-        cfg.mission,
-        storage.storage(),
-        &mut planner,
-    )
-    .map_err(SimError::Mission)?;
-    for &c in &cfg.blocked {
-        mission.block_cell(c).map_err(SimError::Mission)?;
+    simulate_over(surface, start, cfg, rng, TeamLink::Direct)
+}
+
+/// [`simulate`] with the flight code behind `link`.
+pub fn simulate_over<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig, rng: &mut R, link: TeamLink) -> Result<SimReport, SimError> {
+    match link {
+        TeamLink::Direct => {
+            let mut storage = OwnedDStarStorage::new((cfg.grid.width * cfg.grid.height) as usize);
+            let mut planner: Box<DefaultLocalPlanner> = Box::default();
+            let mut mission = DefaultTeamMission::new(
+                cfg.grid,
+                to_vec3(cfg.goal),
+                cfg.goal_tol as Real,
+                start.map(to_vec3),
+                cfg.params,
+                cfg.mission,
+                storage.storage(),
+                &mut planner,
+            )
+            .map_err(SimError::Mission)?;
+            for &c in &cfg.blocked {
+                mission.block_cell(c).map_err(SimError::Mission)?;
+            }
+            simulate_with(surface, start, cfg, rng, &mut flight::DirectFlight { mission })
+        }
+        TeamLink::Inproc => simulate_with(surface, start, cfg, rng, &mut flight::LinkFlight::inproc(cfg, start.map(to_vec3))?),
     }
+}
+
+/// [`simulate`] against any flight computer.
+pub fn simulate_with<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig, rng: &mut R, mission: &mut dyn flight::TeamFlight) -> Result<SimReport, SimError> {
+    let params = cfg.params;
     let referee = Referee { h_max: params.h_max as f64, r_max: params.r_max as f64 };
     let dirs = cfg.sensor.directions();
     let mut rep = SimReport { world: surface.name().to_string(), grid: Some(cfg.grid), ..Default::default() };
-    let mut truth = Truth { pos: *start, attached: [true; 4], hub: from_vec3(&mission.team().hub) };
+    let hub0 = start.iter().fold(Vec3::zeros(), |a, p| a + to_vec3(*p)) / 4.0;
+    let mut truth = Truth { pos: *start, attached: [true; 4], hub: from_vec3(&mission.mission().map_or(hub0, |m| m.team().hub)) };
     rep.paths = start.iter().map(|p| vec![*p]).collect();
     rep.hub_path.push(truth.hub);
     let mut turns = [0usize; 4];
-    let mut cmd = mission.begin();
-    rep.routes.0 = route(&mission);
+    let mut cmd = mission.begin()?;
+    rep.routes.0 = mission.mission().map(route).unwrap_or_default();
     // every command is answered once; the flight code's budgets end the mission long before this bound
     let max_steps = 4 * (cfg.mission.max_hops as usize + 5 * cfg.mission.max_rounds as usize + 10);
     for _ in 0..max_steps {
@@ -256,7 +292,7 @@ pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig,
                 if cfg.fail == Some((m, turn)) {
                     truth.attached[m] = false;
                     rep.lost.push((m, LossCause::TetherCut));
-                    mission.step(Report::Lost { robot: m, cause: LossCause::TetherCut })
+                    mission.step(Report::Lost { robot: m, cause: LossCause::TetherCut })?
                 } else {
                     let pos = truth.pos[m];
                     // the robot's attitude: the plane of the ground under its footprint
@@ -269,10 +305,10 @@ pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig,
                         .map(|(d, t)| to_vec3(add(sensor, scale(*d, t + (2.0 * uniform(rng) - 1.0) * cfg.sensor.noise))))
                         .collect();
                     let t0 = std::time::Instant::now();
-                    let c = mission.step(Report::Scan { robot: m, pos: to_vec3(pos), up: to_vec3(n_true), hub: to_vec3(truth.hub), points: &pts });
+                    let c = mission.step(Report::Scan { robot: m, pos: to_vec3(pos), up: to_vec3(n_true), hub: to_vec3(truth.hub), points: &pts })?;
                     rep.plan_times.push(t0.elapsed().as_secs_f64());
                     if m == 0 && rep.first_graph.0.is_empty() {
-                        rep.first_graph = graph_of(mission.planner());
+                        rep.first_graph = mission.mission().map(|x| graph_of(x.planner())).unwrap_or_default();
                     }
                     c
                 }
@@ -280,7 +316,7 @@ pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig,
             Command::Hop { robot: m, target } => {
                 let from = truth.pos[m];
                 let commanded = from_vec3(&target);
-                let n_scene = from_vec3(&mission.planner().scene.frame.n);
+                let n_scene = from_vec3(&mission.hop_normal());
                 let to = land(surface, commanded, n_scene, cfg.landing_error, rng).unwrap_or(from);
                 referee.hop(&mut rep, m, from, to, truth.hub);
                 let grip_q = cfg.grip.quality(surface, to);
@@ -289,11 +325,11 @@ pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig,
                 if slipped {
                     truth.attached[m] = false;
                     rep.lost.push((m, LossCause::GripFailure));
-                    mission.step(Report::Lost { robot: m, cause: LossCause::GripFailure })
+                    mission.step(Report::Lost { robot: m, cause: LossCause::GripFailure })?
                 } else {
                     truth.pos[m] = to;
                     rep.paths[m].push(to);
-                    mission.step(Report::Landed { robot: m, pos: to_vec3(to) })
+                    mission.step(Report::Landed { robot: m, pos: to_vec3(to) })?
                 }
             }
             Command::MoveHub { to } => {
@@ -303,18 +339,23 @@ pub fn simulate<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimConfig,
                 referee.legs(&mut rep, &truth);
                 rep.hub_path.push(truth.hub);
                 let t0 = std::time::Instant::now();
-                let c = mission.step(Report::HubAt { pos: to });
+                let c = mission.step(Report::HubAt { pos: to })?;
                 rep.round_times.push(t0.elapsed().as_secs_f64());
                 c
             }
         };
     }
-    rep.outcome = mission.outcome();
+    rep.outcome = match cmd {
+        Command::Done(o) => Some(o),
+        _ => None,
+    };
     rep.reached = dist(truth.hub, cfg.goal) <= cfg.goal_tol;
-    rep.walls = mission.walls().to_vec();
-    rep.visited = mission.visited().to_vec();
-    rep.routes.1 = route(&mission);
-    rep.stats = mission.stats();
+    if let Some(m) = mission.mission() {
+        rep.walls = m.walls().to_vec();
+        rep.visited = m.visited().to_vec();
+        rep.routes.1 = route(m);
+        rep.stats = m.stats();
+    }
     Ok(rep)
 }
 
