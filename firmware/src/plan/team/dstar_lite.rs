@@ -436,7 +436,8 @@ impl<'a> DStarLite<'a> {
 
     /// (x, y) of a cell index.
     pub fn coords(&self, c: u32) -> (i64, i64) {
-        ((c % self.width) as i64, (c / self.width) as i64)
+        // `width >= 1` (checked by `new`); the checked forms leave no division-by-zero panic path in the flight build
+        (c.checked_rem(self.width).unwrap_or(0) as i64, c.checked_div(self.width).unwrap_or(0) as i64)
     }
 
     fn idx_or_err(&self, x: i64, y: i64) -> Result<u32, DStarError> {

@@ -167,11 +167,20 @@ pub fn smallest_eigenvector(m: [[Real; 3]; 3]) -> Option<(Vec3, [Real; 3])> {
     }
     let ev = [a.m11, a.m22, a.m33];
     let (k, _) = ev.iter().enumerate().fold((0usize, Real::INFINITY), |(bk, bv), (i, &x)| if x < bv { (i, x) } else { (bk, bv) });
-    let col = v.column(k);
-    let vec = Vec3::new(col.x, col.y, col.z);
-    let mut sorted = ev;
-    sorted.sort_unstable_by(|x, y| x.total_cmp(y));
-    Some((vec, sorted))
+    let at = |i: usize| v.get((i, k)).copied().unwrap_or(0.0);
+    let vec = Vec3::new(at(0), at(1), at(2));
+    // three values in ascending order by a sorting network (no library sort: no panic path in the flight build)
+    let [mut e0, mut e1, mut e2] = ev;
+    if e0.total_cmp(&e1).is_gt() {
+        core::mem::swap(&mut e0, &mut e1);
+    }
+    if e1.total_cmp(&e2).is_gt() {
+        core::mem::swap(&mut e1, &mut e2);
+    }
+    if e0.total_cmp(&e1).is_gt() {
+        core::mem::swap(&mut e0, &mut e1);
+    }
+    Some((vec, [e0, e1, e2]))
 }
 
 /// Covariance of points (about their mean) -> smallest eigenvector.
