@@ -43,6 +43,20 @@ fn header(scenario: &str, link: &str) -> fieldlog::Header {
     }
 }
 
+/// The mission went on after the reset `r`: more motions after it, and an end that is an arrival or a safe stop
+/// with a reason (not the reset's own `Reset`, not a lost tether state).
+fn assert_went_on(rep: &host_sim::mission::run::MissionReport, r: &host_sim::mission::run::ResetSeen) {
+    assert!(rep.motions > r.after_motions, "nothing driven after the reset: {} motions", rep.motions);
+    match rep.verdict {
+        Verdict::Arrived => {}
+        Verdict::SafeStop(reason) => assert!(
+            !matches!(reason, StopReason::Reset | StopReason::TetherStateLost | StopReason::None),
+            "{reason:?}"
+        ),
+        v => panic!("after the reset the mission ended {v:?}"),
+    }
+}
+
 /// Runs the snag mission with `opts` in-process, recorded; checks what every reset must give (one reset, reason
 /// `Reset`, the anchor history recovered, more motions after it, an arrival or a safe stop with a reason, the
 /// reset's record with its `cause` in the log and an identical replay). Returns the reset and the log.
@@ -56,16 +70,7 @@ fn reset_mission(opts: &MissionOptions, cause: ResetCause) -> (host_sim::mission
     let [r] = rep.resets.as_slice() else { panic!("one reset expected: {:?}", rep.resets) };
     assert_eq!(r.reason, "Reset");
     assert_eq!(r.anchors_recovered, r.anchors_before, "the anchor history did not come back: {r:?}");
-    // it continued: more motions after the reset, and an end that is an arrival or a safe stop with a reason
-    assert!(rep.motions > r.after_motions, "nothing driven after the reset: {} motions", rep.motions);
-    match rep.verdict {
-        Verdict::Arrived => {}
-        Verdict::SafeStop(reason) => assert!(
-            !matches!(reason, StopReason::Reset | StopReason::TetherStateLost | StopReason::None),
-            "{reason:?}"
-        ),
-        v => panic!("after the reset the mission ended {v:?}"),
-    }
+    assert_went_on(&rep, r);
     // the log holds the reset, and a fresh flight software fed the same bytes resets there and answers the same
     let log = fieldlog::parse(&bytes).unwrap();
     assert_eq!(log.faults.iter().filter(|f| f.bytes == cause.record()).count(), 1);
@@ -195,15 +200,7 @@ fn a_watchdog_bite_mid_descent_on_the_board_recovers_the_wrapped_tether_and_repl
     let [r] = rep.resets.as_slice() else { panic!("one reset expected: {:?}", rep.resets) };
     assert!(r.true_contacts >= 1 && r.anchors_before >= 2, "not a wrapped tether at the bite: {r:?}");
     assert_eq!((r.cause, r.reason.as_str(), r.anchors_recovered), ("watchdog", "Reset", r.anchors_before));
-    assert!(rep.motions > r.after_motions, "nothing driven after the bite: {} motions", rep.motions);
-    match rep.verdict {
-        Verdict::Arrived => {}
-        Verdict::SafeStop(reason) => assert!(
-            !matches!(reason, StopReason::Reset | StopReason::TetherStateLost | StopReason::None),
-            "{reason:?}"
-        ),
-        v => panic!("after the bite the mission ended {v:?}"),
-    }
+    assert_went_on(&rep, r);
     // the board itself says the watchdog reset it
     let text = board.quit(core::time::Duration::from_secs(20)).unwrap_or_else(|e| panic!("{e}")).output.both();
     assert!(text.contains("board: REBOOTED by the watchdog's reset output"), "board output: {text}");
