@@ -26,6 +26,7 @@ pub mod frame;
 pub mod message;
 pub mod reassembly;
 pub mod team;
+pub mod values;
 
 pub use deframer::{DeframeError, Deframer};
 pub use frame::{

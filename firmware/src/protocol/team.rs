@@ -21,7 +21,7 @@
 use heapless::Vec;
 use serde::{Deserialize, Serialize};
 
-use super::message::{non_negative, positive, Invalid, Point3, Validate};
+use super::values::{non_negative, positive, Invalid, Point3, Validate};
 use crate::config::protocol::{MAX_CHUNKS_PER_TEAM_SCAN, MAX_POINTS_PER_CHUNK, MAX_TEAM_BLOCKED_CELLS};
 use crate::config::team::{MissionParams, TeamParams, GLOBAL_GRID_MAX_CELLS, TEAM_SIZE};
 
