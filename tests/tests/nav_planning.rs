@@ -7,7 +7,7 @@
 //! equivalent in-process and on the flight computer.
 
 use firmware::protocol::{
-    DriveCommand, GoalRequest, Message, MissionState, Mode, Motion, MotionOutcome, MotionReport, PlanState, PlanStatus,
+    DriveCommand, GoalRequest, Message, MissionState, Mode, Motion, MotionOutcome, MotionReport, NackReason, PlanState, PlanStatus,
     PlannerChoice, Point3, Pose, Quat, SensorChunk,
 };
 use firmware::config::protocol::{
@@ -212,11 +212,12 @@ fn goal_before_any_scan_is_refused_over_the_link() {
     let r = s.exchange(&Message::GoalRequest(goal(3.0, 10))).expect("goal");
     let state = r.iter().find_map(|m| if let Message::PlanStatus(p) = m { Some(p.state) } else { None });
     assert_eq!(state, Some(PlanState::InvalidInput), "{r:?}");
+    // protocol v8: a team goal needs a `TeamConfigure` first; without one it is refused with that reason
     let mut g = goal(3.0, 10);
     g.planner = PlannerChoice::Team;
     let r = s.exchange(&Message::GoalRequest(g)).expect("goal");
-    let state = r.iter().find_map(|m| if let Message::PlanStatus(p) = m { Some(p.state) } else { None });
-    assert_eq!(state, Some(PlanState::PlannerUnavailable), "{r:?}");
+    assert!(r.iter().any(|m| matches!(m, Message::Nack(n) if n.reason == NackReason::NoTeam)), "{r:?}");
+    assert!(!r.iter().any(|m| matches!(m, Message::PlanStatus(_))), "{r:?}");
 }
 
 /// The emulated flight computer plans the same goal to the same messages (a smaller map and budget: QEMU runs the
