@@ -465,7 +465,18 @@ fn direct_and_link(world: &str, fail: Option<(usize, usize)>, seed: u64, grip_sl
         cfg.grip = GripModel::never_slips(cfg.params.h_max as f64);
     }
     let direct = simulate_over(surf.as_ref(), &start, &cfg, &mut team_rng(seed), TeamLink::Direct).unwrap();
-    let link = simulate_over(surf.as_ref(), &start, &cfg, &mut team_rng(seed), TeamLink::Inproc).unwrap();
+    // The in-process executive steps the mission inside its frame dispatch; unoptimised (the test profile) its
+    // frames overflowed the 2 MiB of a test thread (found 2026-12-05), so the link run gets the 8 MiB a main
+    // thread has. The release build and the board's flight build are measured by `tools/max-frame.sh`.
+    let link = std::thread::scope(|sc| {
+        std::thread::Builder::new()
+            .stack_size(8 << 20)
+            .spawn_scoped(sc, || simulate_over(surf.as_ref(), &start, &cfg, &mut team_rng(seed), TeamLink::Inproc))
+            .unwrap()
+            .join()
+            .unwrap()
+    })
+    .unwrap();
     (direct, link)
 }
 
