@@ -45,7 +45,9 @@
 //! *Inline*: the boom points at the most recent anchor ([`boom_inline_angle`]). *In contact*: from the inline angle
 //! the boom is swept (`BOOM_SWEEP_STEPS` steps of 2 degrees, in the direction that lowers its tip) until its tip
 //! touches the terrain ([`boom_in_contact`]; a boom whose inline tip is buried rests where it enters the terrain).
-//! [`check_pose_stability`] tries both: a pose is stable when one boom
+//! *In contact, over*: swept the other way, over the axle, until the tip rests on the far side
+//! ([`boom_swept_contact`] with [`BoomSweep::Over`]; Axel's boom turns all the way round its axle, and the physics
+//! judge tries the same three settings). [`check_pose_stability`] tries all three: a pose is stable when one boom
 //! configuration admits static equilibrium (the rover chooses its boom angle).
 //!
 //! # Parameters
@@ -483,11 +485,38 @@ pub fn boom_in_contact(
     start_angle: Real,
     params: &RoverParams,
 ) -> Option<BoomContact> {
+    boom_swept_contact(map, settled, start_angle, BoomSweep::Down, params)
+}
+
+/// Which way the boom is swept from its start angle onto the terrain.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BoomSweep {
+    /// The way that lowers the tip first (the boom comes down behind the rover, Paton IV-A).
+    Down,
+    /// The other way: the tip rises over the axle and comes down on the far side (Axel's boom turns all the way
+    /// round its axle).
+    Over,
+}
+
+/// The boom swept from `start_angle` in `BOOM_SWEEP_STEPS` steps of 2 degrees the `sweep` way until its tip
+/// touches the terrain; a boom whose start tip is buried rests where it enters the terrain (either way).
+pub fn boom_swept_contact(
+    map: &impl DistanceField,
+    settled: &SettledPose,
+    start_angle: Real,
+    sweep: BoomSweep,
+    params: &RoverParams,
+) -> Option<BoomContact> {
     let step = 2.0 * core::f32::consts::PI / BOOM_SWEEP_STEPS as Real;
     let up = settled.pose.rotation * Vec3::z();
     let h0 = boom_tip(settled, start_angle, params).dot(&up);
     let h1 = boom_tip(settled, start_angle + step, params).dot(&up);
-    let dir = if h1 < h0 { 1.0 } else { -1.0 };
+    let lowers = if h1 < h0 { 1.0 } else { -1.0 };
+    let dir = match sweep {
+        BoomSweep::Down => lowers,
+        BoomSweep::Over => -lowers,
+    };
+    let axle = settled.pose.translation.vector;
     for k in 0..BOOM_SWEEP_STEPS {
         let beta = start_angle + dir * step * k as Real;
         let tip = boom_tip(settled, beta, params);
@@ -495,12 +524,26 @@ pub fn boom_in_contact(
         if k == 0 && d < -params.contact_threshold_m * 2.0 {
             return boom_entry_contact(map, settled, beta, tip, params);
         }
-        if d <= params.contact_threshold_m * 2.0 {
-            return Some(boom_contact_at(beta, tip, &tip, d, &g, &up));
+        // the boom comes to rest where any part of it first touches: the tip, or the shaft on a concave surface
+        // (a slope's toe, a rock beside the rover) before the tip gets there
+        let mut rest = (d <= params.contact_threshold_m * 2.0).then_some((d, g, tip));
+        for f in BOOM_SHAFT_FRACTIONS {
+            let p = axle + (tip - axle) * f;
+            let (ds, gs) = query(map, &p)?;
+            if ds <= params.contact_threshold_m * 2.0 && rest.is_none_or(|(dr, _, _)| ds < dr) {
+                rest = Some((ds, gs, p));
+            }
+        }
+        if let Some((dr, gr, p)) = rest {
+            return Some(boom_contact_at(beta, tip, &p, dr, &gr, &up));
         }
     }
     None
 }
+
+/// Points along the boom (fractions of its length from the axle) checked for contact while it is swept, besides
+/// the tip: the half of the boom nearer the axle stays within the wheels' reach of the ground.
+const BOOM_SHAFT_FRACTIONS: [Real; 2] = [0.5, 0.75];
 
 /// The boom at `beta` (tip `tip`) touching the surface nearest to `p`, which lies `d` from it along `-g`.
 fn boom_contact_at(beta: Real, tip: Vec3, p: &Vec3, d: Real, g: &Vec3, up: &Vec3) -> BoomContact {
@@ -539,7 +582,7 @@ pub fn stability_problem(
     let forward = settled.pose.rotation * Vec3::x();
     let mut contacts = heapless::Vec::new();
     for w in &settled.wheels {
-        let _ = contacts.push(Contact::new(w.point, w.normal, forward, params.wheel_mu, params.wheel_mu_m));
+        let _ = contacts.push(Contact::line(w.point, w.normal, forward, params.wheel_mu, params.wheel_mu_m));
     }
     if let Some(b) = boom_contact {
         let _ = contacts.push(Contact::new(b.point, b.normal, forward, params.boom_mu, 0.0));
@@ -570,10 +613,12 @@ pub enum BoomConfig {
     Inline,
     /// Boom swept down until its tip rests on the terrain.
     InContact,
+    /// Boom swept the other way, over the axle, until its tip rests on the terrain on the far side.
+    InContactOver,
 }
 
 /// Static stability of a settled pose given the last anchor of its anchor history (`None`: slack tether). Tries
-/// the inline boom (if its tip is clear of the terrain) and the in-contact boom; returns the better answer
+/// the inline boom (if its tip is clear of the terrain) and the boom in contact both ways; returns the best answer
 /// (Stable beats Unstable beats Unknown; among equals the larger margin).
 pub fn check_pose_stability(
     map: &impl DistanceField,
@@ -631,9 +676,9 @@ fn pose_stability(
     // the in-contact boom first when only the verdict is needed: it is the one that holds more often (its tip
     // adds a contact with the terrain)
     let order = if enough.is_some() {
-        [BoomConfig::InContact, BoomConfig::Inline]
+        [BoomConfig::InContact, BoomConfig::Inline, BoomConfig::InContactOver]
     } else {
-        [BoomConfig::Inline, BoomConfig::InContact]
+        [BoomConfig::Inline, BoomConfig::InContact, BoomConfig::InContactOver]
     };
     for config in order {
         let p = match config {
@@ -644,8 +689,13 @@ fn pose_stability(
                 }
                 stability_problem(settled, inline, None, last_anchor, params)
             }
-            BoomConfig::InContact => {
-                let Some(bc) = boom_in_contact(map, settled, inline, params) else { continue };
+            BoomConfig::InContact | BoomConfig::InContactOver => {
+                let sweep = if config == BoomConfig::InContact { BoomSweep::Down } else { BoomSweep::Over };
+                let Some(bc) = boom_swept_contact(map, settled, inline, sweep, params) else { continue };
+                if sweep == BoomSweep::Over && bc.angle_rad == inline {
+                    // a buried inline tip rests where it enters the terrain either way: that LP was solved
+                    continue;
+                }
                 stability_problem(settled, bc.angle_rad, Some(&bc), last_anchor, params)
             }
         };
@@ -896,6 +946,27 @@ mod tests {
             }
         }
         assert!(stable > 10 && unstable > 10, "{stable} stable, {unstable} unstable: the sweep no longer covers both");
+    }
+
+    /// Flat ground, the anchor 3 m up behind the rover: the inline boom points up and back. Swept down it rests
+    /// behind the axle, swept over it rests in front, a boom length from the axle both times.
+    #[test]
+    fn the_boom_swept_over_the_axle_rests_on_the_far_side() {
+        let params = RoverParams::AXEL;
+        let field = Plane::new(0.0);
+        let SettleOutcome::Settled(s) = settle(&field, &Vec3::zeros(), 0.0, &params) else { panic!("no settle") };
+        let axle = s.pose.translation.vector;
+        let anchor = Vec3::new(-3.0, 0.0, 3.0);
+        let beta = boom_inline_angle(&s, &anchor);
+        let down = boom_swept_contact(&field, &s, beta, BoomSweep::Down, &params).expect("rests behind");
+        let over = boom_swept_contact(&field, &s, beta, BoomSweep::Over, &params).expect("rests in front");
+        assert_eq!(boom_in_contact(&field, &s, beta, &params), Some(down));
+        assert!(down.point.x < -0.5 && over.point.x > 0.5, "down {down:?} over {over:?}");
+        for c in [down, over] {
+            assert!(c.point.z.abs() < 0.03 && c.normal.z > 0.99, "{c:?}");
+            let reach = (c.tip - axle).norm();
+            assert!((reach - params.boom_length_m).abs() < 1e-3, "{reach}");
+        }
     }
 
     /// Flat ground `z = 0` plus a vertical pole of radius 0.25 m at `(0.93, 0)`: exact SDF (union).

@@ -51,7 +51,10 @@ fn random_problem(r: &mut Pcg64) -> StabilityProblem {
         let n = unit(r, 0.0);
         let mu = unif(r, 0.2, 1.2) as Real;
         let mu_m = if r.next_u64().is_multiple_of(2) { 0.0 } else { unif(r, 0.01, 0.15) as Real };
-        let _ = contacts.push(Contact::new(pos, n, unit(r, -1.0), mu, mu_m));
+        // about half of the contacts that carry moments are wheel rims: a line contact, no moment about its y axis
+        // (chosen by `mu_m` itself, so the random stream and the other instances stay as they were)
+        let contact = if mu_m > 0.0 && mu_m < 0.08 { Contact::line } else { Contact::new };
+        let _ = contacts.push(contact(pos, n, unit(r, -1.0), mu, mu_m));
     }
     let m1 = unif(r, 10.0, 40.0) as Real;
     let m2 = unif(r, 5.0, 20.0) as Real;
@@ -323,8 +326,8 @@ fn cone_feasible(prob: &StabilityProblem, mu_scale: f64) -> Option<bool> {
         // s = b - A x in the cone: (mu n.f, x.f, y.f) with n.f >= |(x.f, y.f)|
         soc.push([(on(6 * i, n, -mu), 0.0), (on(6 * i, x, -1.0), 0.0), (on(6 * i, y, -1.0), 0.0)]);
         nonneg.push((on(6 * i, n, 1.0), firmware::config::stability::NORMAL_FORCE_CAP));
-        let mu_m = f64::from(c.mu_m);
-        for axis in [x, y, n] {
+        for (axis, mu_m) in [(x, c.mu_m), (y, c.mu_m_y), (n, c.mu_m)] {
+            let mu_m = f64::from(mu_m);
             if mu_m > 0.0 {
                 for sign in [1.0, -1.0] {
                     let mut row = on(6 * i + 3, axis, sign);

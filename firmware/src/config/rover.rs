@@ -46,8 +46,9 @@ pub struct RoverParams {
     pub boom_mass_kg: f32,
     /// Wheel-terrain friction coefficient (Coulomb cone; the stability LP inscribes an octagon). Default 0.6 (assumption: compact regolith, grousers).
     pub wheel_mu: f32,
-    /// Wheel contact-patch moment coefficient (Paton eqs. 4-6), metres. Default 0.05 m (assumption: half the
-    /// spacing of a grouser pair).
+    /// Wheel contact moment coefficient about the rolling direction and the normal (Paton eqs. 4, 6), metres.
+    /// Default 0.05 m (assumption: half the rim's 0.1 m width). A rigid rim's line contact carries no moment about
+    /// the axle (eq. 5), whatever this is (`stability::Contact::line`).
     pub wheel_mu_m: f32,
     /// Boom-tip friction coefficient (point contact, no moment). Default 0.4 (assumption).
     pub boom_mu: f32,

@@ -7,8 +7,12 @@
 //! # Model (eqs. 1-8)
 //! Each contact `i` carries a full wrench `(lambda_i, M_i)` in its contact frame (z along the contact normal, x and y
 //! tangent): `lambda_z >= 0` (1), friction (2, 3), moment limits
-//! `|M_x|, |M_y|, |M_z| <= mu_m lambda_z` (4-6) (the grouser contact patch; a contact with `mu_m = 0` is a point
-//! contact and carries no moment). The tether pulls at the exit point `r_t` along the unit direction to the last
+//! `|M_x|, |M_y|, |M_z| <= mu_m lambda_z` (4-6) (a contact patch; a contact with `mu_m = 0` is a point
+//! contact and carries no moment). A wheel's contact is a **line** ([`Contact::line`]): a rigid rim touches the
+//! ground along a line parallel to the axle (contact-frame y), which carries moments about the rolling direction
+//! (its width) and the normal but none about the axle, so `M_y = 0` (eq. 5 with `mu_m = 0`). Paton's patch moment
+//! about the axle is the resistance of grousers dug into soil, which rigid wheels on rock do not have; poses the
+//! planner held only by it slid in the physics judge (`host-sim/doc/physics_judge.md`). The tether pulls at the exit point `r_t` along the unit direction to the last
 //! anchor with tension `0 <= T <= T_max` (a slack tether has `T = 0`). Force (7) and moment (8) balance include both
 //! body masses `m_1 g`, `m_2 g` at their centres of mass `r_1`, `r_2`. Moments are taken about the combined centre
 //! of mass; all forces are divided by the total weight `W = (m_1 + m_2) |g|`, so the numbers are O(1).
@@ -120,8 +124,12 @@ pub struct Contact {
     pub tangent: Vec3,
     /// Coulomb friction coefficient (eqs. 2, 3: the octagon inscribed in its cone).
     pub mu: Real,
-    /// Moment coefficient, metres (eqs. 4-6); 0 for a point contact.
+    /// Moment coefficient about the contact-frame x and z axes, metres (eqs. 4, 6); 0 for a point contact.
     pub mu_m: Real,
+    /// Moment coefficient about the contact-frame y axis, metres (eq. 5). For a wheel (x the rolling direction) y
+    /// is the axle, and a rigid rim touches the ground along a line parallel to it, which carries no moment about
+    /// it: 0 (see [`Contact::line`]).
+    pub mu_m_y: Real,
 }
 
 impl Contact {
@@ -135,7 +143,18 @@ impl Contact {
             let t = alt - n * n.dot(&alt);
             crate::geom::normalize3(&t, 1e-9).unwrap_or(Vec3::x())
         });
-        Contact { position, normal: n, tangent: t, mu, mu_m }
+        Contact { position, normal: n, tangent: t, mu, mu_m, mu_m_y: mu_m }
+    }
+
+    /// The contact of a rigid wheel's rim: a line along the contact-frame y axis (the axle; x along `hint`, the
+    /// rolling direction), `mu_m` about x (the line's width) and z, none about the line itself.
+    pub fn line(position: Vec3, normal: Vec3, hint: Vec3, mu: Real, mu_m: Real) -> Self {
+        Contact { mu_m_y: 0.0, ..Contact::new(position, normal, hint, mu, mu_m) }
+    }
+
+    /// The moment coefficient about contact-frame axis `k` (0 x, 1 y, 2 z).
+    fn mu_m_about(&self, k: usize) -> f64 {
+        f64::from(if k == 1 { self.mu_m_y } else { self.mu_m })
     }
 }
 
@@ -296,7 +315,9 @@ impl StabilityProblem {
                 && c.mu.is_finite()
                 && c.mu > 0.0
                 && c.mu_m.is_finite()
-                && c.mu_m >= 0.0;
+                && c.mu_m >= 0.0
+                && c.mu_m_y.is_finite()
+                && c.mu_m_y >= 0.0;
             if !ok {
                 return Err(StabilityError::BadContact);
             }
@@ -309,12 +330,12 @@ impl StabilityProblem {
             let pr = p.cross_matrix() * r;
             let col = 6 * i;
             let mu = f64::from(c.mu);
-            let mu_m = f64::from(c.mu_m);
             for k in 0..3 {
                 for row in 0..3 {
                     mat_set(&mut lp.a, row, col + k, mat_get(&r, row, k));
                     mat_set(&mut lp.a, row + 3, col + k, mat_get(&pr, row, k));
-                    if mu_m > 0.0 {
+                    // a moment the contact cannot carry has no variable: it is 0
+                    if c.mu_m_about(k) > 0.0 {
                         mat_set(&mut lp.a, row + 3, col + 3 + k, mat_get(&r, row, k));
                     }
                 }
@@ -334,12 +355,12 @@ impl StabilityProblem {
                 mat_set(&mut lp.g, r0 + 1 + j, S_COL, OCTAGON_INSET);
                 vec_set(&mut lp.h, r0 + 1 + j, 0.0);
             }
-            // (4)-(6) with margin, only for contacts that carry moments
-            if mu_m > 0.0 {
-                for j in 0..6 {
-                    let k = 3 + j / 2;
+            // (4)-(6) with margin, only for the moments the contact carries
+            for j in 0..6 {
+                let mu_m = c.mu_m_about(j / 2);
+                if mu_m > 0.0 {
                     let sign = if j % 2 == 0 { 1.0 } else { -1.0 };
-                    mat_set(&mut lp.g, r0 + 9 + j, col + k, sign);
+                    mat_set(&mut lp.g, r0 + 9 + j, col + 3 + j / 2, sign);
                     mat_set(&mut lp.g, r0 + 9 + j, col + 2, -mu_m);
                     mat_set(&mut lp.g, r0 + 9 + j, S_COL, mu_m / mu);
                     vec_set(&mut lp.h, r0 + 9 + j, 0.0);
@@ -419,9 +440,11 @@ fn outcome(problem: &StabilityProblem, sol: &lp::LpSolution<LP_VARS>) -> Stabili
         let fz = vec_get(&x, col + 2);
         if fz > 1e-9 {
             util = util.max(libm::hypot(vec_get(&x, col), vec_get(&x, col + 1)) / (f64::from(c.mu) * fz));
-            if c.mu_m > 0.0 {
-                let m = vec_get(&x, col + 3).abs().max(vec_get(&x, col + 4).abs()).max(vec_get(&x, col + 5).abs());
-                util = util.max(m / (f64::from(c.mu_m) * fz));
+            for k in 0..3 {
+                let mu_m = c.mu_m_about(k);
+                if mu_m > 0.0 {
+                    util = util.max(vec_get(&x, col + 3 + k).abs() / (mu_m * fz));
+                }
             }
         }
     }
@@ -454,7 +477,7 @@ mod tests {
             let across = n.cross(&d);
             let tangent = across * libm::cosf(twist) + d * libm::sinf(twist);
             let mut contacts = heapless::Vec::new();
-            let _ = contacts.push(Contact { position: Vec3::zeros(), normal: n, tangent, mu, mu_m: 0.0 });
+            let _ = contacts.push(Contact { position: Vec3::zeros(), normal: n, tangent, mu, mu_m: 0.0, mu_m_y: 0.0 });
             let p = StabilityProblem {
                 contacts,
                 masses: [
@@ -507,6 +530,38 @@ mod tests {
             holds_up_to(mu, core::f32::consts::PI / 8.0, alpha, libm::asinf(mu / libm::tanf(alpha)));
             holds_up_to(mu, 0.0, alpha, libm::asinf(inset * mu / libm::tanf(alpha)));
         }
+    }
+
+    /// Two rims on flat ground, slack tether, the combined centre of mass `offset` ahead of the contact line
+    /// (along the rolling direction x). Nothing but a moment about the axle can hold the weight's torque
+    /// `W offset` about that line: a patch holds it while `|offset| <= mu_m`, a rim's line contact never (the
+    /// braked rover rolls over its wheels), and with the mass over the line both hold.
+    #[test]
+    fn a_rim_line_contact_carries_no_moment_about_the_axle() {
+        let problem = |line: bool, offset: Real| {
+            let mut contacts = heapless::Vec::new();
+            for y in [-0.5f32, 0.5] {
+                let p = Vec3::new(0.0, y, 0.0);
+                let c = if line { Contact::line } else { Contact::new };
+                let _ = contacts.push(c(p, Vec3::z(), Vec3::x(), 0.6, 0.05));
+            }
+            StabilityProblem {
+                contacts,
+                masses: [
+                    BodyMass { mass_kg: 40.0, com: Vec3::new(offset, 0.0, 0.35) },
+                    BodyMass { mass_kg: 10.0, com: Vec3::new(offset, 0.0, 0.3) },
+                ],
+                gravity: Vec3::new(0.0, 0.0, -3.71),
+                tether: TetherForce::Slack,
+            }
+        };
+        let stable = |line, offset| matches!(check_stability(&problem(line, offset)), Ok(o) if o.is_stable());
+        for offset in [-0.04f32, -0.01, 0.02, 0.045] {
+            assert!(stable(false, offset), "a patch holds {offset}");
+            assert!(!stable(true, offset), "a line holds {offset}");
+        }
+        assert!(!stable(false, 0.06), "a patch beyond mu_m");
+        assert!(stable(true, 0.0) && stable(false, 0.0), "the mass over the line");
     }
 
     #[test]

@@ -1,6 +1,11 @@
-//! The stability LP over a batch of real Axel poses: settled on exact planes of 0, 25 and 50 degrees at eight
+//! The stability LP over a batch of real Axel poses: settled on exact planes of 0, 25 and 50 degrees at sixteen
 //! yaws, tethered to an anchor upslope or downslope, with the boom inline (two wheel contacts) and, where its tip
-//! reaches the plane, in contact (three contacts): the margin LPs the planners solve (Paton et al. IV-C).
+//! reaches the plane, in contact swept down and over the axle (three contacts): the margin LPs the planners solve
+//! (Paton et al. IV-C).
+//!
+//! Only problems with an equilibrium that is not deeply unstable (simplex margin at least [`DEEPLY_UNSTABLE`]) are
+//! kept: both solvers are timed on problems both answer (beyond it the interior point may spend its iteration budget,
+//! and callers read Unknown as unstable either way; `tests/tests/stability.rs` checks that against clarabel).
 //!
 //! The problems are built before the measurement; the three workloads then measure building the LPs alone
 //! (`to_lp`), building and solving them by the interior-point method, and building and solving them by the
@@ -9,15 +14,26 @@
 use firmware::config::rover::RoverParams;
 use firmware::config::stability::{SIMPLEX_MAX_PIVOTS, SOLVER_MAX_ITERATIONS, SOLVER_TOLERANCE};
 use firmware::geom::{Real, Vec3};
-use firmware::rover::{boom_in_contact, boom_inline_angle, settle, stability_problem, SettleOutcome};
+use firmware::rover::{boom_inline_angle, boom_swept_contact, settle, stability_problem, BoomSweep, SettleOutcome};
 use firmware::stability::lp::LpStatus;
 use firmware::stability::{simplex, StabilityProblem};
 use heapless::Vec as HVec;
 
 use crate::InclinedPlane;
 
-/// Most problems in the batch: 3 slopes x 8 yaws x 2 anchors x 2 boom configurations.
-pub const BATCH_CAPACITY: usize = 96;
+/// Most problems in the batch: 3 slopes x 16 yaws x 2 anchors x 3 boom configurations, of which those answered
+/// are kept (about a third).
+pub const BATCH_CAPACITY: usize = 128;
+
+/// Margin below which a problem is deeply unstable and left out of the batch (rover weights).
+pub const DEEPLY_UNSTABLE: f64 = -0.1;
+
+/// Whether the simplex answers `p` with an optimum of margin at least [`DEEPLY_UNSTABLE`].
+fn answered(p: &StabilityProblem) -> bool {
+    let Ok(lp) = p.to_lp() else { return false };
+    let sol = simplex::solve(&lp, SIMPLEX_MAX_PIVOTS);
+    matches!(sol.status, LpStatus::Optimal) && -sol.objective >= DEEPLY_UNSTABLE
+}
 
 /// The batch (see the module docs).
 pub fn problems() -> HVec<StabilityProblem, BATCH_CAPACITY> {
@@ -28,14 +44,21 @@ pub fn problems() -> HVec<StabilityProblem, BATCH_CAPACITY> {
         // the plane descends towards +x: upslope is -x
         let t = libm::tanf(slope_deg.to_radians());
         let anchors = [Vec3::new(-8.0, 0.0, 8.0 * t + 1.0), Vec3::new(8.0, 1.0, -8.0 * t + 0.5)];
-        for yaw_k in 0..8 {
-            let yaw = yaw_k as Real * core::f32::consts::FRAC_PI_4;
+        for yaw_k in 0..16 {
+            let yaw = yaw_k as Real * core::f32::consts::FRAC_PI_8;
             let SettleOutcome::Settled(pose) = settle(&plane, &Vec3::zeros(), yaw, &params) else { continue };
             for anchor in &anchors {
                 let inline = boom_inline_angle(&pose, anchor);
-                let _ = out.push(stability_problem(&pose, inline, None, Some(anchor), &params));
-                if let Some(bc) = boom_in_contact(&plane, &pose, inline, &params) {
-                    let _ = out.push(stability_problem(&pose, bc.angle_rad, Some(&bc), Some(anchor), &params));
+                let mut keep = |p: StabilityProblem| {
+                    if answered(&p) {
+                        let _ = out.push(p);
+                    }
+                };
+                keep(stability_problem(&pose, inline, None, Some(anchor), &params));
+                for sweep in [BoomSweep::Down, BoomSweep::Over] {
+                    if let Some(bc) = boom_swept_contact(&plane, &pose, inline, sweep, &params) {
+                        keep(stability_problem(&pose, bc.angle_rad, Some(&bc), Some(anchor), &params));
+                    }
                 }
             }
         }
