@@ -585,7 +585,7 @@ pub fn stability_problem(
         let _ = contacts.push(Contact::line(w.point, w.normal, forward, params.wheel_mu, params.wheel_mu_m));
     }
     if let Some(b) = boom_contact {
-        let _ = contacts.push(Contact::new(b.point, b.normal, forward, params.boom_mu, 0.0));
+        let _ = contacts.push(Contact::tip(b.point, b.normal, forward, params.boom_mu));
     }
     let tip = boom_tip(settled, boom_angle, params);
     let origin = settled.pose.translation.vector;
