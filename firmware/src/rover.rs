@@ -4,7 +4,8 @@
 //!
 //! # Rover frame
 //! Origin at the axle centre; x forward (the rolling direction), y along the axle (left wheel at `+track/2`), z up
-//! (away from the terrain). A wheel is a circle of radius `wheel_radius_m` in the rover's x-z plane; the body is a
+//! (away from the terrain). A wheel is a cylinder of radius `wheel_radius_m` and width `wheel_width_m` about the
+//! axle (its contacts are on its two edge circles, parallel to the rover's x-z plane); the body is a
 //! cylinder of radius `body_radius_m` around the axle; the boom turns about the axle in the x-z plane: at boom angle
 //! `beta` its tip (the tether exit orifice) is at `boom_length_m * (cos beta, 0, sin beta)` (beta = pi: trailing
 //! straight back).
@@ -18,7 +19,9 @@
 //!    the plane's normal, and it needs only the `DistanceField` trait.
 //! 2. Orientation: x is world x projected on the tangent plane (world y if x is parallel to `n`), turned by
 //!    `theta_m` about `n`; the start pose is at `p_m + delta n`.
-//! 3. Each wheel is `WHEEL_CONTACT_POINTS` = 12 points. Drop along `n` by sphere tracing (move by the smallest ESDF
+//! 3. Each wheel is `WHEEL_CONTACT_POINTS` = 24 points: Paton's circle of 12 on each of its two edge circles (a
+//!    cylinder touches a plane, an edge or a rock's flank first with an edge circle; one circle in the mid-plane
+//!    missed a rock that a rim edge stands on). Drop along `n` by sphere tracing (move by the smallest ESDF
 //!    distance of all contact points) until one touches (`contact_threshold_m`). On a map, the points of a wheel's
 //!    upper half (above the axle) may lie in unobserved space (a slope seen from afar is observed only in a thin
 //!    layer above it): they are then no contact, and the search assumes no overhang there; the lower half, the
@@ -51,15 +54,15 @@
 //! configuration admits static equilibrium (the rover chooses its boom angle).
 //!
 //! # Parameters
-//! `config::rover::RoverParams::AXEL` (wheel radius 0.35 m, track 1.0 m, body radius 0.15 m, boom 1.0 m, masses
+//! `config::rover::RoverParams::AXEL` (wheel radius 0.35 m, wheel width 0.10 m, track 1.0 m, body radius 0.15 m, boom 1.0 m, masses
 //! 40 kg + 10 kg, wheel mu 0.6, wheel mu_m 0.05 m, boom mu 0.4, tether max tension 2000 N, gravity 3.71 m/s^2,
 //! delta 0.8 m, contact threshold 0.01 m, roll step 0.5 deg, body clearance 0.02 m, max drop 1.5 m) and the
-//! capacities/budgets of `config::rover` (12 wheel points, 9 body points, 24 settle iterations, 64 drop steps,
+//! capacities/budgets of `config::rover` (2 x 12 wheel points, 9 body points, 24 settle iterations, 64 drop steps,
 //! 60 roll steps, 180 boom steps, 8 footprint points).
 
 use crate::config::rover::{
     RoverParams, BODY_COLLISION_POINTS, BOOM_ENTRY_STEPS, BOOM_SWEEP_STEPS, FOOTPRINT_POINTS, SETTLE_MAX_DROP_STEPS,
-    RIM_REFINE_STEPS, SETTLE_MAX_ITERATIONS, SETTLE_ROLL_STEPS, WHEEL_CONTACT_POINTS,
+    RIM_REFINE_STEPS, SETTLE_MAX_ITERATIONS, SETTLE_ROLL_STEPS, WHEEL_CONTACT_POINTS, WHEEL_RIM_POINTS,
 };
 use crate::geom::{normalize3, Pose3, Real, Rot3, Vec3};
 use crate::map::{DistanceField, DistanceQuery};
@@ -127,15 +130,18 @@ fn query(map: &impl DistanceField, p: &Vec3) -> Option<(Real, Vec3)> {
     }
 }
 
-/// Contact points of both wheels in the rover frame: `[left; right]`, each `WHEEL_CONTACT_POINTS` long.
+/// Contact points of both wheels in the rover frame: `[left; right]`, each `WHEEL_CONTACT_POINTS` long: the
+/// wheel's `WHEEL_RIMS` edge circles (mid-plane `+-wheel_width_m / 2`), `WHEEL_RIM_POINTS` each.
 fn wheel_points(params: &RoverParams) -> [[Vec3; WHEEL_CONTACT_POINTS]; 2] {
     let mut out = [[Vec3::zeros(); WHEEL_CONTACT_POINTS]; 2];
     for (w, side) in out.iter_mut().zip([1.0 as Real, -1.0]) {
         for (k, p) in w.iter_mut().enumerate() {
-            let a = 2.0 * core::f32::consts::PI * k as Real / WHEEL_CONTACT_POINTS as Real;
+            let (rim, j) = (k / WHEEL_RIM_POINTS, k % WHEEL_RIM_POINTS);
+            let edge = if rim == 0 { -0.5 } else { 0.5 } * params.wheel_width_m;
+            let a = 2.0 * core::f32::consts::PI * j as Real / WHEEL_RIM_POINTS as Real;
             *p = Vec3::new(
                 params.wheel_radius_m * libm::cosf(a),
-                side * 0.5 * params.track_m,
+                side * 0.5 * params.track_m + edge,
                 params.wheel_radius_m * libm::sinf(a),
             );
         }
@@ -169,9 +175,11 @@ fn wheel_gaps(
     Some(out)
 }
 
-/// The centre of a wheel's contact circle (rover frame): the mean of its contact points.
-fn wheel_centre(rim: &[Vec3; WHEEL_CONTACT_POINTS]) -> Vec3 {
-    rim.iter().fold(Vec3::zeros(), |acc, p| acc + p) / WHEEL_CONTACT_POINTS as Real
+/// The centre of the rim circle through `point` (world frame) of the rover at (`origin`, `rot`): the axle point
+/// at `point`'s offset along the axle.
+fn rim_centre(point: &Vec3, origin: &Vec3, rot: &Matrix3<Real>) -> Vec3 {
+    let axle = rot * Vec3::y();
+    origin + axle * (point - origin).dot(&axle)
 }
 
 /// The rim point nearest the surface (step 5 of the module docs): `lowest` (distance, point, gradient) is the
@@ -187,7 +195,7 @@ fn nearest_rim_point(
     let (ex, ez) = (rot * Vec3::x(), rot * Vec3::z());
     let v = lowest.1 - centre;
     let a0 = libm::atan2f(v.dot(&ez), v.dot(&ex));
-    let step = core::f32::consts::PI / (WHEEL_CONTACT_POINTS as Real * RIM_REFINE_STEPS as Real);
+    let step = core::f32::consts::PI / (WHEEL_RIM_POINTS as Real * RIM_REFINE_STEPS as Real);
     let mut best = lowest;
     for j in 1..=RIM_REFINE_STEPS {
         for sign in [-1.0, 1.0] {
@@ -407,8 +415,8 @@ pub fn settle(map: &impl DistanceField, p_m: &Vec3, theta_m: Real, params: &Rove
     };
     let axle = rot * Vec3::y();
     let mut wheels = [WheelContact { point: Vec3::zeros(), normal: n, gap_m: 0.0 }; 2];
-    for ((w, lowest), rim) in wheels.iter_mut().zip(g).zip(pts.iter()) {
-        let centre = origin + rot * wheel_centre(rim);
+    for (w, lowest) in wheels.iter_mut().zip(g) {
+        let centre = rim_centre(&lowest.1, &origin, &rot);
         let Some((d, q, grad)) = nearest_rim_point(map, lowest, &centre, &rot, params.wheel_radius_m) else {
             return SettleOutcome::UnknownSpace;
         };

@@ -5,8 +5,13 @@
 //! 2020 (12 contact points per wheel, body collision points along the axle, boom inline / in contact). Where the
 //! papers give no number the value is an assumption, marked so.
 
-/// Contact points per wheel circle. Default 12 (Paton et al. IV-A: "a circle of 12 contact points").
-pub const WHEEL_CONTACT_POINTS: usize = 12;
+/// Contact points per rim circle. Default 12 (Paton et al. IV-A: "a circle of 12 contact points").
+pub const WHEEL_RIM_POINTS: usize = 12;
+/// Rim circles per wheel: the wheel is a cylinder of width `wheel_width_m`, and what it touches first is on one of
+/// its two edge circles (a plane, an edge, a rock's flank beside it). Default 2.
+pub const WHEEL_RIMS: usize = 2;
+/// Contact points per wheel: `WHEEL_RIMS` circles of `WHEEL_RIM_POINTS`. Default 24.
+pub const WHEEL_CONTACT_POINTS: usize = WHEEL_RIMS * WHEEL_RIM_POINTS;
 /// Steps of the rim search either side of a wheel's lowest contact point, over half a point spacing, for the rim
 /// point nearest the surface (`rover` module docs, step 5). Default 8 (1.9 degree steps over +-15 degrees).
 pub const RIM_REFINE_STEPS: u32 = 8;
@@ -34,6 +39,9 @@ pub const FOOTPRINT_POINTS: usize = 8;
 pub struct RoverParams {
     /// Wheel radius. Default 0.35 m (0.7 m wheels; Axel's wheels are ~0.7-0.8 m across, JFR 2012).
     pub wheel_radius_m: f32,
+    /// Wheel width along the axle (rim to rim). Default 0.10 m (assumption: Axel-class wheel, grousers not
+    /// modelled; the physics judge's wheels are cylinders of the same width).
+    pub wheel_width_m: f32,
     /// Distance between the wheel mid-planes along the axle. Default 1.0 m (assumption, Axel class).
     pub track_m: f32,
     /// Radius of the central body cylinder around the axle. Default 0.15 m (assumption).
@@ -77,6 +85,7 @@ impl RoverParams {
     /// The default Axel-class rover.
     pub const AXEL: RoverParams = RoverParams {
         wheel_radius_m: 0.35,
+        wheel_width_m: 0.10,
         track_m: 1.0,
         body_radius_m: 0.15,
         boom_length_m: 1.0,
