@@ -5,7 +5,8 @@
 //!
 //! # The rover (Paton et al. IV-A's Axel, dimensions and masses from `RoverParams`)
 //! - Two **wheels**: each a plain cylinder of radius `wheel_radius_m` (0.35 m) and width [`WHEEL_WIDTH_M`]
-//!   (0.10 m, an assumption: the grousers are not modelled, their grip is in the friction coefficient), centred
+//!   (0.10 m, an assumption: the grousers are not modelled, their grip is in the friction coefficient; the
+//!   planner's `RoverParams::wheel_width_m` states the same width on the flight side), centred
 //!   at `+-track_m / 2` (0.5 m) on the axle, each its own rigid body on a revolute joint about the axle. Mass
 //!   [`WHEEL_MASS_KG`] = 10 kg each.
 //! - The **body**: a cylinder of radius `body_radius_m` (0.15 m) around the axle between the wheels (1 cm gap to
