@@ -26,7 +26,9 @@
 //!    upper half (above the axle) may lie in unobserved space (a slope seen from afar is observed only in a thin
 //!    layer above it): they are then no contact, and the search assumes no overhang there; the lower half, the
 //!    body and the footprint must be observed. When the start pose's wheels meet unobserved space, the rover starts
-//!    with its wheels just above `p_m` instead (`wheel_radius_m + 2 contact_threshold_m` up along `n`).
+//!    with its wheels just above `p_m` instead (`wheel_radius_m + 2 contact_threshold_m` up along `n`). A wheel
+//!    still buried after a whole drop of upward steps (`SETTLE_MAX_DROP_STEPS`) is wedged against a surface that
+//!    rising does not clear (a pole's side cutting through a rim edge): [`SettleOutcome::Wedged`].
 //! 4. Search discrete roll perturbations (`roll_step_rad` steps, up to `SETTLE_ROLL_STEPS` each way) for the roll
 //!    at which the two wheels' lowest points are equally far from the surface; drop again; repeat until both wheels
 //!    touch (at most `SETTLE_MAX_ITERATIONS`). Rolling lifts one wheel and lowers the other, so the search brackets
@@ -108,6 +110,15 @@ pub enum SettleOutcome {
         /// The pose found.
         pose: Pose3,
         /// The offending body collision point.
+        point: Vec3,
+    },
+    /// A wheel stayed buried through all `SETTLE_MAX_DROP_STEPS` of a drop, each of which lifted the rover along
+    /// the normal: a surface that rising does not clear (a pole's or a wall's side) cuts through the wheel's rim.
+    /// No pose.
+    Wedged {
+        /// The last pose tried.
+        pose: Pose3,
+        /// The buried wheel's lowest rim point (world frame).
         point: Vec3,
     },
     /// An ESDF query answered `Unknown` (unobserved space): unsafe.
@@ -352,6 +363,7 @@ pub fn settle(map: &impl DistanceField, p_m: &Vec3, theta_m: Real, params: &Rove
         // leaves the bracket bisects it instead. On an exact distance field no step overshoots, so nothing changes.
         let mut touched = false;
         let (mut clear_at, mut buried_at) = (Real::INFINITY, Real::NEG_INFINITY);
+        let mut buried_point = Vec3::zeros();
         for _ in 0..SETTLE_MAX_DROP_STEPS {
             let Some(g) = wheel_gaps(map, &pts, &origin, &rot) else {
                 if first_query {
@@ -383,8 +395,13 @@ pub fn settle(map: &impl DistanceField, p_m: &Vec3, theta_m: Real, params: &Rove
             if (origin - p_m).dot(&n) < -params.max_drop_m {
                 return SettleOutcome::NoGround;
             }
+            buried_point = if g[0].0 < g[1].0 { g[0].1 } else { g[1].1 };
         }
         if !touched {
+            if clear_at == Real::INFINITY && buried_at > Real::NEG_INFINITY {
+                // every drop step rose and none cleared the wheel: rising does not free it, it is wedged sideways
+                return SettleOutcome::Wedged { pose: pose_from(&origin, &rot), point: buried_point };
+            }
             break;
         }
         let Some(g) = wheel_gaps(map, &pts, &origin, &rot) else {
@@ -856,6 +873,44 @@ mod tests {
         }
         // 2 m away the ground is clear
         assert!(matches!(settle(&Fin, &Vec3::new(2.0, 0.0, 0.0), 0.0, &params), SettleOutcome::Settled(_)));
+    }
+
+    /// Flat ground `z = 0` and a vertical pole of radius `R` about the vertical line through `C` (the union's
+    /// distance is the smaller of the two, exact outside both).
+    struct PoleAtTheRim;
+    impl PoleAtTheRim {
+        const C: (Real, Real) = (0.0, 0.65);
+        const R: Real = 0.12;
+    }
+    impl DistanceField for PoleAtTheRim {
+        fn query(&self, p: &Vec3) -> DistanceQuery {
+            let (dx, dy) = (p.x - Self::C.0, p.y - Self::C.1);
+            let r = libm::hypotf(dx, dy);
+            let pole = r - Self::R;
+            if pole < p.z {
+                DistanceQuery::Known { distance: pole, gradient: Vec3::new(dx / r, dy / r, 0.0) }
+            } else {
+                DistanceQuery::Known { distance: p.z, gradient: Vec3::z() }
+            }
+        }
+    }
+
+    /// The pole's side reaches 2 cm into the left wheel's outer rim edge (`y = 0.55`): no drop clears it, so the
+    /// settler says `Wedged` at that rim (it used to rise for its whole drop and report a spent budget); turned
+    /// 90 degrees the wheels stand clear of the pole and the rover settles.
+    #[test]
+    fn a_pole_through_a_wheel_rim_is_wedged_not_a_spent_budget() {
+        let params = RoverParams::AXEL;
+        match settle(&PoleAtTheRim, &Vec3::zeros(), 0.0, &params) {
+            SettleOutcome::Wedged { point, .. } => {
+                assert!(libm::fabsf(point.y - 0.55) < 1e-3 && point.y > 0.0, "{point:?}");
+                let (dx, dy) = (point.x - PoleAtTheRim::C.0, point.y - PoleAtTheRim::C.1);
+                assert!(libm::hypotf(dx, dy) < PoleAtTheRim::R - params.contact_threshold_m, "{point:?}");
+            }
+            other => panic!("expected Wedged, got {other:?}"),
+        }
+        let turned = settle(&PoleAtTheRim, &Vec3::zeros(), core::f32::consts::FRAC_PI_2, &params);
+        assert!(matches!(turned, SettleOutcome::Settled(_)), "{turned:?}");
     }
 
     /// The lip of the 55-degree ledge: flat top `z = 0` for `x <= 0`, slope `z = -tan(55 deg) x` beyond; the solid

@@ -121,8 +121,9 @@ pub enum SettleFailure {
     UnknownSpace,
     /// The settler ran out of iterations.
     Budget,
-    /// A wheel rests on a surface steeper than `MAX_WHEEL_CONTACT_INCLINE_RAD` (a pole's side, a wall): the
-    /// settler's answer there is not a pose Axel can stand in.
+    /// A wheel rests on a surface steeper than `MAX_WHEEL_CONTACT_INCLINE_RAD` (a pole's side, a wall), or such
+    /// a surface cuts through a wheel's rim so that no drop clears it (`SettleOutcome::Wedged`): the settler's
+    /// answer there is not a pose Axel can stand in.
     SteepContact,
     /// Non-finite input.
     InvalidInput,
@@ -190,6 +191,7 @@ fn settle_checked(
         SettleOutcome::Settled(settled) => Ok(RoverState { ground, theta, settled, off_map: false }),
         SettleOutcome::NoGround => Err(SettleFailure::NoGround),
         SettleOutcome::Collision { .. } => Err(SettleFailure::Collision),
+        SettleOutcome::Wedged { .. } => Err(SettleFailure::SteepContact),
         SettleOutcome::UnknownSpace => Err(SettleFailure::UnknownSpace),
         SettleOutcome::BudgetExhausted { .. } => Err(SettleFailure::Budget),
         SettleOutcome::InvalidInput => Err(SettleFailure::InvalidInput),
