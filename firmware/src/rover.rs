@@ -32,8 +32,9 @@
 //! 4. Search discrete roll perturbations (`roll_step_rad` steps, up to `SETTLE_ROLL_STEPS` each way) for the roll
 //!    at which the two wheels' lowest points are equally far from the surface; drop again; repeat until both wheels
 //!    touch (at most `SETTLE_MAX_ITERATIONS`). Rolling lifts one wheel and lowers the other, so the search brackets
-//!    the gap difference's sign change by doubling steps and bisects it on the grid (`roll_search`: about 12 wheel
-//!    evaluations, not the grid's 120; the grid's answer wherever the difference is monotone in the roll).
+//!    the gap difference's sign change by secant steps and closes it on the grid (`roll_search`: about 5 wheel
+//!    evaluations on smooth ground, not the grid's 120; the grid's answer wherever the difference is monotone in
+//!    the roll).
 //! 5. Wheel contacts: from each wheel's lowest contact point the rim is searched within half a point spacing either
 //!    way (`RIM_REFINE_STEPS` steps each side) for the rim point nearest the surface (the tangent point on smooth
 //!    ground, the point on the edge-to-centre line on an edge); the contact is the surface point under it. Its normal
@@ -232,11 +233,15 @@ fn wheel_contact_normal(surface: &Vec3, point: &Vec3, centre: &Vec3, axle: &Vec3
 
 /// Step 4's roll search on the grid `roll + k * step`, `|k| <= SETTLE_ROLL_STEPS`: the roll whose wheel-gap
 /// difference `f = gap(left) - gap(right)` is nearest 0, as `(|f|, roll)`; `f0` is `f` at `k = 0`. Rolling lifts
-/// one wheel and lowers the other, so `f` grows with the roll and `|f|` falls to the root and rises after it: the
-/// search steps from 0 towards the side where `|f|` falls, doubling the step until `f` changes sign (or the grid
-/// ends, or `|f|` rises again: no root on that side), then bisects the bracket down to neighbouring grid points.
-/// About 2 log2(`SETTLE_ROLL_STEPS`) evaluations instead of the whole grid's 120, with the grid's answer whenever
-/// `f` is monotone over it; the best point evaluated is returned either way. `None` in unknown space.
+/// one wheel and lowers the other, so `f` grows with the roll and `|f|` falls to the root and rises after it, nearly
+/// linearly on smooth ground (`f ~ track * sin(roll - root)`). The search steps from 0 towards the side where `|f|`
+/// falls, to the grid point just past the root that the secant through its last two points predicts (at least one
+/// step, at most `ROLL_REACH` times as far out as it is), until `f` changes sign (or the grid ends, or `|f|` rises
+/// again: no root on that side); then it closes the bracket on the grid, trying the two grid points either side of
+/// the secant's root first and halving the bracket when they miss. About 5 evaluations on smooth ground instead of
+/// bisection's 10 and the grid's 120, with the grid's answer whenever `f` is monotone over it (the sign change is
+/// then one pair of neighbouring grid points, and the nearest-0 point is one of them); the best point evaluated is
+/// returned either way. `None` in unknown space.
 fn roll_search(
     map: &impl DistanceField,
     pts: &[[Vec3; WHEEL_CONTACT_POINTS]; 2],
@@ -263,33 +268,72 @@ fn roll_search(
         return Some((best.0, roll));
     }
     let dir = best.1;
-    // bracket: (k_in, f_in) on f0's side of the root, (k_out, f_out) the last point stepped to
+    let done = |best: (Real, i32)| Some((best.0, roll + best.1 as Real * step));
+    // bracket: (k_in, f_in) on f0's side of the root, (k_out, f_out) the last point stepped to; the secant of the
+    // outward steps runs through (k_ref, f_ref) and (k_out, f_out), first through the point behind 0 if it lies on
+    // the line's side (f0's sign), for the wider base
     let (mut k_in, mut f_in) = (0i32, f0);
     let (mut k_out, mut f_out) = (dir, if dir > 0 { fp } else { fm });
+    let f_back = if dir > 0 { fm } else { fp };
+    let (mut k_ref, mut f_ref) = if (f_back > 0.0) == (f0 > 0.0) { (-dir, f_back) } else { (0, f0) };
     while (f_out > 0.0) == (f0 > 0.0) {
-        let k_next = (k_out * 2).clamp(-SETTLE_ROLL_STEPS, SETTLE_ROLL_STEPS);
+        // the secant's root, in steps beyond k_out (positive where |f| keeps falling towards the root)
+        let beyond = (secant_root(k_ref, f_ref, k_out, f_out) - k_out as Real) * dir as Real;
+        let reach = (ROLL_REACH * k_out.abs()).max(1);
+        let ahead = if beyond > 0.0 { (libm::ceilf(beyond) as i32).clamp(1, reach) } else { 1 };
+        let k_next = (k_out + dir * ahead).clamp(-SETTLE_ROLL_STEPS, SETTLE_ROLL_STEPS);
         if k_next == k_out {
-            return Some((best.0, roll + best.1 as Real * step));
+            return done(best);
         }
         let f_next = f(k_next)?;
         keep(libm::fabsf(f_next), k_next, &mut best);
         if libm::fabsf(f_next) > libm::fabsf(f_out) && (f_next > 0.0) == (f0 > 0.0) {
-            return Some((best.0, roll + best.1 as Real * step));
+            return done(best);
         }
+        (k_ref, f_ref) = (k_out, f_out);
         (k_in, f_in, k_out, f_out) = (k_out, f_out, k_next, f_next);
     }
-    // f changes sign between k_in and k_out: bisect on the grid
+    // f changes sign between k_in and k_out: close the bracket on the grid. Two secant points (on smooth ground
+    // the grid points either side of the root), then one halving, and again.
+    let mut round = 0u32;
     while (k_out - k_in).abs() > 1 {
-        let mid = k_in + (k_out - k_in) / 2;
+        let (lo, hi) = (k_in.min(k_out) + 1, k_in.max(k_out) - 1);
+        let mid = if round % 3 == 2 {
+            k_in + (k_out - k_in) / 2
+        } else {
+            // the grid point on k_in's side of the secant's root (next round, with k_in moved up to it, the
+            // clamp takes the one past it)
+            let r = secant_root(k_in, f_in, k_out, f_out);
+            let toward_in = if k_in < k_out { libm::floorf(r) } else { libm::ceilf(r) };
+            (toward_in as i32).clamp(lo, hi)
+        };
+        round += 1;
         let fm = f(mid)?;
         keep(libm::fabsf(fm), mid, &mut best);
         if (fm > 0.0) == (f_in > 0.0) {
             (k_in, f_in) = (mid, fm);
         } else {
-            k_out = mid;
+            (k_out, f_out) = (mid, fm);
         }
     }
-    Some((best.0, roll + best.1 as Real * step))
+    done(best)
+}
+
+/// How many times its distance from 0 one step of the roll search's outward secant may go (at least one step).
+const ROLL_REACH: i32 = 4;
+
+/// Where the line through `(ka, fa)` and `(kb, fb)` crosses 0 (as a grid coordinate); `kb` when the line is flat.
+fn secant_root(ka: i32, fa: Real, kb: i32, fb: Real) -> Real {
+    let df = fb - fa;
+    if df == 0.0 || !df.is_finite() {
+        return kb as Real;
+    }
+    let r = kb as Real - fb * (kb - ka) as Real / df;
+    if r.is_finite() {
+        r
+    } else {
+        kb as Real
+    }
 }
 
 fn roll_matrix(base: &Matrix3<Real>, roll: Real) -> Matrix3<Real> {
@@ -354,14 +398,14 @@ pub fn settle(map: &impl DistanceField, p_m: &Vec3, theta_m: Real, params: &Rove
     let mut roll: Real = 0.0;
     let mut rot = base;
     let mut iterations = 0;
-    let mut settled = false;
+    let mut settled = None;
     while iterations < SETTLE_MAX_ITERATIONS {
         iterations += 1;
         // drop along n by sphere tracing, bracketed: on a map's distance field (trilinear, not exactly Euclidean
         // near the surface) a step can overshoot into the terrain and the next one back out, round and round;
         // once the contact is bracketed (wheels clear at one offset along n, buried at another), a step that
         // leaves the bracket bisects it instead. On an exact distance field no step overshoots, so nothing changes.
-        let mut touched = false;
+        let mut touched = None;
         let (mut clear_at, mut buried_at) = (Real::INFINITY, Real::NEG_INFINITY);
         let mut buried_point = Vec3::zeros();
         for _ in 0..SETTLE_MAX_DROP_STEPS {
@@ -378,7 +422,7 @@ pub fn settle(map: &impl DistanceField, p_m: &Vec3, theta_m: Real, params: &Rove
             first_query = false;
             let dmin = if g[0].0 < g[1].0 { g[0].0 } else { g[1].0 };
             if libm::fabsf(dmin) <= thr {
-                touched = true;
+                touched = Some(g);
                 break;
             }
             let at = (origin - p_m).dot(&n);
@@ -397,18 +441,16 @@ pub fn settle(map: &impl DistanceField, p_m: &Vec3, theta_m: Real, params: &Rove
             }
             buried_point = if g[0].0 < g[1].0 { g[0].1 } else { g[1].1 };
         }
-        if !touched {
+        // the gaps where the drop touched: the pose the roll search starts from
+        let Some(g) = touched else {
             if clear_at == Real::INFINITY && buried_at > Real::NEG_INFINITY {
                 // every drop step rose and none cleared the wheel: rising does not free it, it is wedged sideways
                 return SettleOutcome::Wedged { pose: pose_from(&origin, &rot), point: buried_point };
             }
             break;
-        }
-        let Some(g) = wheel_gaps(map, &pts, &origin, &rot) else {
-            return SettleOutcome::UnknownSpace;
         };
         if libm::fabsf(g[0].0 - g[1].0) <= thr {
-            settled = true;
+            settled = Some(g);
             break;
         }
         // discrete roll search: the roll at which both wheels' lowest points are equally far from the surface
@@ -417,18 +459,18 @@ pub fn settle(map: &impl DistanceField, p_m: &Vec3, theta_m: Real, params: &Rove
         };
         if best.1 == roll {
             // no perturbation improves: the wheels are as level as the roll grid allows
-            settled = libm::fabsf(g[0].0) <= 2.0 * thr && libm::fabsf(g[1].0) <= 2.0 * thr;
+            if libm::fabsf(g[0].0) <= 2.0 * thr && libm::fabsf(g[1].0) <= 2.0 * thr {
+                settled = Some(g);
+            }
             break;
         }
         roll = best.1;
         rot = roll_matrix(&base, roll);
     }
     let pose = pose_from(&origin, &rot);
-    if !settled {
+    // the gaps at the pose the rover rests in (neither has moved since they were queried)
+    let Some(g) = settled else {
         return SettleOutcome::BudgetExhausted { pose };
-    }
-    let Some(g) = wheel_gaps(map, &pts, &origin, &rot) else {
-        return SettleOutcome::UnknownSpace;
     };
     let axle = rot * Vec3::y();
     let mut wheels = [WheelContact { point: Vec3::zeros(), normal: n, gap_m: 0.0 }; 2];
@@ -824,6 +866,87 @@ mod tests {
         fn query(&self, p: &Vec3) -> DistanceQuery {
             DistanceQuery::Known { distance: 2.0 * p.z, gradient: Vec3::z() }
         }
+    }
+
+    /// Counts the queries it answers (the roll search's wheel evaluations are 48 queries each).
+    struct Counted<'a, D>(&'a D, core::cell::Cell<u32>);
+    impl<D: DistanceField> DistanceField for Counted<'_, D> {
+        fn query(&self, p: &Vec3) -> DistanceQuery {
+            self.1.set(self.1.get() + 1);
+            self.0.query(p)
+        }
+    }
+
+    /// The roll search gives the whole grid's answer (the grid point whose gap difference is nearest 0) wherever
+    /// the gap difference is monotone over the grid: on planes up to 45 degrees with the wheels' frame tilted off
+    /// the plane by up to 25 degrees (the root anywhere on the grid, or past its end) and on the 55-degree lip,
+    /// from rolls either side of the root; on the planes it needs at most 8 wheel evaluations and 6 on average (the
+    /// bisection it replaced: 13 and 9.7 on the same cases).
+    #[test]
+    fn the_roll_search_finds_the_grids_answer_in_a_few_evaluations() {
+        let params = RoverParams::AXEL;
+        let pts = wheel_points(&params);
+        let step = params.roll_step_rad;
+        let (mut cases, mut monotone, mut most, mut on_planes) = (0, 0, 0, 0);
+        enum Field {
+            Plane(Plane),
+            Lip,
+        }
+        impl DistanceField for Field {
+            fn query(&self, p: &Vec3) -> DistanceQuery {
+                match self {
+                    Field::Plane(plane) => plane.query(p),
+                    Field::Lip => Lip.query(p),
+                }
+            }
+        }
+        let plane = |a: f32| {
+            let p = Plane::new(a.to_radians());
+            let n = p.n;
+            (Field::Plane(p), n)
+        };
+        for (i, (field, n)) in [plane(0.0), plane(20.0), plane(45.0), (Field::Lip, Vec3::z())].into_iter().enumerate() {
+            let counted = Counted(&field, core::cell::Cell::new(0));
+            let t0 = normalize3(&(Vec3::x() - n * n.x), 1e-6).unwrap();
+            for k in 0..6 {
+                let yaw = -core::f32::consts::PI + k as Real * core::f32::consts::PI / 3.0 + 0.1;
+                let x = t0 * libm::cosf(yaw) + n.cross(&t0) * libm::sinf(yaw);
+                for tilt_deg in [-25.0f32, -11.3, -2.6, 0.7, 6.1, 17.9] {
+                    let base = roll_matrix(&Matrix3::from_columns(&[x, n.cross(&x), n]), tilt_deg.to_radians());
+                    // on the lip: axle centres either side of the edge
+                    let origin = n * (params.wheel_radius_m + 0.05) + Vec3::x() * (0.3 * k as Real - 0.8) * (i / 3) as Real;
+                    for roll0 in [-0.3f32, -0.05, 0.0, 0.02, 0.2] {
+                        let f = |k: i32| {
+                            let r = roll_matrix(&base, roll0 + k as Real * step);
+                            let g = wheel_gaps(&field, &pts, &origin, &r).unwrap();
+                            g[0].0 - g[1].0
+                        };
+                        let all: std::vec::Vec<(Real, i32)> =
+                            (-SETTLE_ROLL_STEPS..=SETTLE_ROLL_STEPS).map(|k| (f(k), k)).collect();
+                        let rising = all.windows(2).all(|w| w[1].0 >= w[0].0);
+                        let falling = all.windows(2).all(|w| w[1].0 <= w[0].0);
+                        let grid = all.iter().fold((Real::INFINITY, 0), |b, c| if libm::fabsf(c.0) < b.0 { (libm::fabsf(c.0), c.1) } else { b });
+                        counted.1.set(0);
+                        let (e, roll) = roll_search(&counted, &pts, &origin, &base, roll0, f(0), step).unwrap();
+                        let evaluations = counted.1.get() / (2 * WHEEL_CONTACT_POINTS as u32);
+                        if rising || falling {
+                            monotone += 1;
+                            let at = (i, yaw, tilt_deg, roll0);
+                            assert_eq!(roll, roll0 + grid.1 as Real * step, "{at:?}");
+                            assert_eq!(e, grid.0, "{at:?}");
+                        }
+                        if i < 3 {
+                            most = most.max(evaluations);
+                            on_planes += evaluations;
+                        }
+                        cases += 1;
+                    }
+                }
+            }
+        }
+        assert_eq!(cases, 720);
+        assert!(monotone >= 540, "{monotone} of the cases monotone");
+        assert!(most <= 8 && on_planes <= 6 * 540, "{most} evaluations at most, {on_planes} in all on the planes");
     }
 
     #[test]
