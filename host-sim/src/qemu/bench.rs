@@ -24,6 +24,25 @@ impl Harness for Collect {
 
 /// `(workload, summary)` of every planning workload, computed on the host.
 pub fn host_summaries() -> Vec<(String, String)> {
+    on_twin_stack(host_summaries_here)
+        .unwrap_or_else(|e| vec![("host twin".to_owned(), e)])
+}
+
+/// The host twin's stack (bytes): its arenas are built before they are boxed and the planners recurse into the
+/// stability LP, more than a test thread's 2 MiB holds (the board's stack is measured on the board).
+const HOST_TWIN_STACK_BYTES: usize = 64 << 20;
+
+/// Runs `f` on a thread with the host twin's stack.
+fn on_twin_stack<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> Result<T, String> {
+    std::thread::Builder::new()
+        .stack_size(HOST_TWIN_STACK_BYTES)
+        .spawn(f)
+        .map_err(|e| format!("cannot start the host twin: {e}"))?
+        .join()
+        .map_err(|_| "the host twin panicked".to_string())
+}
+
+fn host_summaries_here() -> Vec<(String, String)> {
     let mut abit: Box<WallGapArena> = Box::default();
     let mut local: Box<DefaultLocalPlanner> = Box::default();
     let mut scan: Box<[Vec3; SCAN_POINTS]> = Box::new([Vec3::zeros(); SCAN_POINTS]);
@@ -51,21 +70,15 @@ pub fn host_summaries() -> Vec<(String, String)> {
     h.0
 }
 
-/// The opt-in `tethered_test3` workload on the host (`iterations` iterations): `(name, summary)`. Runs on a
-/// thread with a large stack (the storage is built before it is boxed, and the planner's recursion into the
-/// stability LP is deep at opt-level 1).
+/// The opt-in `tethered_test3` workload on the host (`iterations` iterations): `(name, summary)`, on the host
+/// twin's stack.
 pub fn host_ledge_pole_summary(iterations: u32) -> Result<(String, String), String> {
-    std::thread::Builder::new()
-        .stack_size(64 << 20)
-        .spawn(move || {
-            let mut storage: Box<LedgePoleStorage> = Box::default();
-            let mut h = Collect(Vec::new());
-            run_ledge_pole(&mut storage, iterations, &mut h, None);
-            h.0.into_iter().next().unwrap_or_default()
-        })
-        .map_err(|e| format!("cannot start the host twin: {e}"))?
-        .join()
-        .map_err(|_| "the host twin panicked".to_string())
+    on_twin_stack(move || {
+        let mut storage: Box<LedgePoleStorage> = Box::default();
+        let mut h = Collect(Vec::new());
+        run_ledge_pole(&mut storage, iterations, &mut h, None);
+        h.0.into_iter().next().unwrap_or_default()
+    })
 }
 
 /// `(workload, summary)` from the board's bench output.
