@@ -294,7 +294,7 @@ fn roll_search(
         // the secant's root, in steps beyond k_out (positive where |f| keeps falling towards the root)
         let beyond = (secant_root(k_ref, f_ref, k_out, f_out) - k_out as Real) * dir as Real;
         let reach = (ROLL_REACH * k_out.abs()).max(1);
-        let ahead = if beyond > 0.0 { (libm::ceilf(beyond) as i32).clamp(1, reach) } else { 1 };
+        let ahead = if beyond > 0.0 { (libm::ceilf(beyond) as i32).max(1).min(reach) } else { 1 };
         let k_next = (k_out + dir * ahead).clamp(-SETTLE_ROLL_STEPS, SETTLE_ROLL_STEPS);
         if k_next == k_out {
             return done(best);
@@ -319,7 +319,7 @@ fn roll_search(
             // clamp takes the one past it)
             let r = secant_root(k_in, f_in, k_out, f_out);
             let toward_in = if k_in < k_out { libm::floorf(r) } else { libm::ceilf(r) };
-            (toward_in as i32).clamp(lo, hi)
+            (toward_in as i32).max(lo).min(hi)
         };
         round += 1;
         let fm = f(mid)?;
