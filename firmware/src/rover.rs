@@ -36,12 +36,13 @@
 //!    evaluations on smooth ground, not the grid's 120; the grid's answer wherever the difference is monotone in
 //!    the roll).
 //! 5. Wheel contacts: from each wheel's lowest contact point the rim is searched within half a point spacing either
-//!    way (`RIM_REFINE_STEPS` steps each side, walking downhill in distance) for the rim point nearest the surface (the tangent point on smooth
-//!    ground, the point on the edge-to-centre line on an edge); the contact is the surface point under it. Its normal
-//!    keeps the ESDF gradient's component along the axle (a side slope) and, in the wheel's plane, points from the
-//!    contact to the wheel centre: on smooth ground that is the gradient, on an edge (the lip of a ledge) it is the
-//!    edge-to-centre direction that pushes a rim resting on an edge, where the gradient is one face's normal
-//!    (the slope face's when the rim point lies just past the lip: 35 degrees off on the 55-degree ledge).
+//!    way (`RIM_REFINE_STEPS` steps each side, walking while the rim comes nearer) for the rim point nearest the
+//!    surface (the tangent point on smooth ground, the point on the edge-to-centre line on an edge); the contact is
+//!    the surface point under it. Its normal keeps the ESDF gradient's component along the axle (a side slope)
+//!    and, in the wheel's plane, points from the contact to the wheel centre: on smooth ground that is the
+//!    gradient, on an edge (the lip of a ledge) it is the edge-to-centre direction that pushes a rim resting on an
+//!    edge, where the gradient is one face's normal (the slope face's when the rim point lies just past the lip: 35
+//!    degrees off on the 55-degree ledge).
 //! 6. Body collision: `BODY_COLLISION_POINTS` points on the axle between the wheels must keep
 //!    `body_radius_m + body_clearance_m` from the terrain.
 //!
@@ -316,7 +317,7 @@ fn roll_search(
             k_in + (k_out - k_in) / 2
         } else {
             // the grid point on k_in's side of the secant's root (next round, with k_in moved up to it, the
-            // clamp takes the one past it)
+            // bounds lo..hi take the one past it)
             let r = secant_root(k_in, f_in, k_out, f_out);
             let toward_in = if k_in < k_out { libm::floorf(r) } else { libm::ceilf(r) };
             (toward_in as i32).max(lo).min(hi)
