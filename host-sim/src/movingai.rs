@@ -358,6 +358,67 @@ pub fn run_scenarios(map: &GridMap, scens: &[Scenario], mut filter: impl FnMut(u
     Ok(summary)
 }
 
+/// Fixed-point unit of [`run_astar_reference`]'s path costs: 1e9 per straight step (the `pathfinding` crate wants
+/// integer costs; a diagonal step is `sqrt 2` rounded to 1e-9, so a 10,000-step path errs by at most 5e-6).
+#[cfg(feature = "sim")]
+const ASTAR_UNIT: f64 = 1e9;
+
+/// The same scenarios through the `pathfinding` crate's A* (octile heuristic, no corner cutting: a diagonal step
+/// needs both cardinal cells it passes free, as Moving AI's optima assume): the reference D* Lite is compared with
+/// and timed against. `expansions` counts the vertices whose successors A* asked for.
+#[cfg(feature = "sim")]
+pub fn run_astar_reference(map: &GridMap, scens: &[Scenario], mut filter: impl FnMut(usize, &Scenario) -> bool) -> RunSummary {
+    let straight = ASTAR_UNIT as u64;
+    let diagonal = (core::f64::consts::SQRT_2 * ASTAR_UNIT).round() as u64;
+    let free = |x: i64, y: i64| x >= 0 && y >= 0 && map.is_passable(x as usize, y as usize);
+    let mut summary = RunSummary { run: 0, mismatches: Vec::new(), expansions: 0, max_abs_error: 0.0 };
+    for (i, s) in scens.iter().enumerate() {
+        if !filter(i, s) {
+            continue;
+        }
+        summary.run += 1;
+        let goal = (s.goal_x as i64, s.goal_y as i64);
+        let mut expansions = 0u64;
+        let found = pathfinding::prelude::astar(
+            &(s.start_x as i64, s.start_y as i64),
+            |&(x, y)| {
+                expansions += 1;
+                let mut next = Vec::with_capacity(8);
+                for dy in -1..=1i64 {
+                    for dx in -1..=1i64 {
+                        if (dx, dy) == (0, 0) || !free(x + dx, y + dy) {
+                            continue;
+                        }
+                        if dx != 0 && dy != 0 {
+                            if free(x + dx, y) && free(x, y + dy) {
+                                next.push(((x + dx, y + dy), diagonal));
+                            }
+                        } else {
+                            next.push(((x + dx, y + dy), straight));
+                        }
+                    }
+                }
+                next
+            },
+            |&(x, y)| {
+                let (ax, ay) = ((x - goal.0).unsigned_abs(), (y - goal.1).unsigned_abs());
+                let (lo, hi) = (ax.min(ay), ax.max(ay));
+                lo * diagonal + (hi - lo) * straight
+            },
+            |&p| p == goal,
+        );
+        summary.expansions += expansions;
+        let planned = found.map(|(_, c)| c as f64 / ASTAR_UNIT);
+        match planned {
+            Some(c) if (c - s.optimal).abs() <= tolerance(s.decimals) => {
+                summary.max_abs_error = summary.max_abs_error.max((c - s.optimal).abs());
+            }
+            _ => summary.mismatches.push(Mismatch { scenario: s.clone(), planned }),
+        }
+    }
+    summary
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

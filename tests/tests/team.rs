@@ -2,7 +2,7 @@
 //! benchmark's published optimal lengths, incremental replanning against planning from scratch, and the team
 //! simulation on real terrain.
 
-use host_sim::movingai::{load_map, load_scen, run_scenarios};
+use host_sim::movingai::{load_map, load_scen, run_astar_reference, run_scenarios};
 use std::path::PathBuf;
 
 fn data(rel: &str) -> PathBuf {
@@ -24,6 +24,19 @@ fn check(map: &str, stride: usize) {
         assert_eq!(buckets, run_buckets, "the subset must cover every bucket");
     }
     assert!(r.mismatches.is_empty(), "{:#?}", &r.mismatches[..r.mismatches.len().min(5)]);
+}
+
+/// The reference `tetherbot movingai` times D* Lite against (the `pathfinding` crate's A*, with Moving AI's
+/// no-corner-cutting moves written again in the host crate) finds the published optimum of every arena2 scenario
+/// too, so the two are timed on the same problems and the same answers.
+#[test]
+fn the_astar_reference_matches_movingai_arena2_all_scenarios() {
+    let m = load_map(&data("movingai/arena2.map")).unwrap();
+    let s = load_scen(&data("movingai/arena2.map.scen")).unwrap();
+    let r = run_astar_reference(&m, &s, |_, _| true);
+    assert_eq!(r.run, s.len());
+    assert!(r.mismatches.is_empty(), "{:#?}", &r.mismatches[..r.mismatches.len().min(5)]);
+    assert!(r.expansions >= r.run as u64, "every scenario expands at least its start");
 }
 
 #[test]

@@ -1,7 +1,7 @@
 //! `tetherbot movingai` and `tetherbot team`: the climbing-team subcommands (Morad et al.). See
 //! `host-sim/doc/team.md`.
 
-use crate::movingai::{load_map, load_scen, run_scenarios, tolerance};
+use crate::movingai::{load_map, load_scen, run_astar_reference, run_scenarios, tolerance, RunSummary};
 use crate::team::worlds::{team_rng, team_scenario};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -42,9 +42,9 @@ pub fn movingai(args: &MovingaiArgs) -> Result<bool, String> {
             tolerance(s.decimals)
         );
     }
+    let name = args.map.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
     println!(
-        "movingai {}: scenarios run {}, mismatches {}, max |error| {:.3e}, expansions {}, time {:.3} s ({:.0} scenarios/s)",
-        args.map.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default(),
+        "movingai {name}: scenarios run {}, mismatches {}, max |error| {:.3e}, expansions {}, time {:.3} s ({:.0} scenarios/s)",
         r.run,
         r.mismatches.len(),
         r.max_abs_error,
@@ -52,7 +52,31 @@ pub fn movingai(args: &MovingaiArgs) -> Result<bool, String> {
         secs,
         r.run as f64 / secs.max(1e-9)
     );
-    Ok(r.mismatches.is_empty())
+    // the reference, on the same scenarios in the same run
+    let t = Instant::now();
+    let a = run_astar_reference(&map, &scens, |i, _| i % stride == 0);
+    let a_secs = t.elapsed().as_secs_f64();
+    for m in &a.mismatches {
+        let s = &m.scenario;
+        println!("REFERENCE MISMATCH line {}: planned {:?} published {}", s.line, m.planned, s.optimal);
+    }
+    println!("| planner on {name} | scenarios | mismatches | max abs error | expansions | time [s] | expansions/s | scenarios/s |");
+    println!("|---|---|---|---|---|---|---|---|");
+    let row = |who: &str, r: &RunSummary, secs: f64| {
+        println!(
+            "| {who} | {} | {} | {:.2e} | {} | {:.3} | {:.3e} | {:.0} |",
+            r.run,
+            r.mismatches.len(),
+            r.max_abs_error,
+            r.expansions,
+            secs,
+            r.expansions as f64 / secs.max(1e-9),
+            r.run as f64 / secs.max(1e-9)
+        )
+    };
+    row("D* Lite (flight code, from scratch per scenario)", &r, secs);
+    row("A* (`pathfinding` crate, reference)", &a, a_secs);
+    Ok(r.mismatches.is_empty() && a.mismatches.is_empty())
 }
 
 /// `tetherbot team`: run the four-robot team mission in closed loop (the flight code's D* Lite over scenes and
