@@ -89,3 +89,8 @@ pub const HOMOTOPY_MAX_GLOBAL_REPLANS: u32 = 3;
 /// Radius of the obstacle a failed leg adds round its goal in the unfolded BTM, metres. Default 1.0 m (Axel's
 /// footprint radius 0.61 m, as the tile's obstacles are inflated, plus the leg tolerance's scale).
 pub const HOMOTOPY_BLOCK_RADIUS_M: f64 = 1.0;
+
+/// Rings of positions round a goal position where the rover does not settle, searched for a goal state within the
+/// goal's tolerance (`nav::planning`, `goal_in_region`): ring k at `k * tolerance / 4`, 8 positions each. Default 2
+/// (out to half the tolerance, 16 positions of up to `GOAL_SETTLE_YAWS` settles each): a bound on the work.
+pub const GOAL_REGION_RINGS: u32 = 2;

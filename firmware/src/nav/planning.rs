@@ -215,8 +215,14 @@ impl PlanSetup {
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Problem {
     pub start: RoverState,
+    /// The goal position the planner settles its goal state at, and the radius of its goal region round that
+    /// state: the request's position and tolerance, or a position of the request's region where the rover settles
+    /// and what is left of the tolerance there ([`goal_in_region`]).
     pub goal: Vec3,
     pub tolerance: f64,
+    /// The goal request's position and tolerance.
+    pub requested_goal: Vec3,
+    pub requested_tolerance: f64,
     pub root: Vec3,
     pub bounds: PlanBounds,
     pub rover: RoverParams,
@@ -412,8 +418,9 @@ pub(crate) fn set_up(
         log::warn!("nav: the start does not settle at ({}, {}): {:?}", p.x, p.y, e);
         GoalRefusal::StartNotSettled
     })?;
-    let goal_state = space.goal_or_unobserved(g, 0.0).map_err(|e| {
-        log::warn!("nav: the goal does not settle at ({}, {}): {:?}", g.x, g.y, e);
+    let tolerance = f64::from(goal.tolerance_m);
+    let (goal_state, goal_at, region) = goal_in_region(&space, g, tolerance, start.axle()).map_err(|e| {
+        log::warn!("nav: the goal does not settle at ({}, {}) nor within its region: {:?}", g.x, g.y, e);
         GoalRefusal::GoalNotSettled
     })?;
     if goal_state.off_map && bounds.contains_xy(g.x, g.y) {
@@ -427,8 +434,10 @@ pub(crate) fn set_up(
         .then(|| Instant::from_micros(now.micros.saturating_add(u64::from(goal.time_budget_ms) * 1000)));
     Ok(Problem {
         start,
-        goal: g,
-        tolerance: f64::from(goal.tolerance_m),
+        goal: goal_at,
+        tolerance: region,
+        requested_goal: g,
+        requested_tolerance: tolerance,
         root: setup.root,
         bounds,
         rover,
@@ -450,6 +459,48 @@ pub(crate) fn set_up(
         escape,
         margin_escape: None,
     })
+}
+
+/// The goal state of the request's position `goal` and tolerance `tol`, the position it settles at and the radius
+/// of the planner's goal region round it. The rover settled at `goal` ([`TetherSpace::goal_or_unobserved`]:
+/// an unobserved goal too) with the whole tolerance; where it does not settle there on observed ground (the body
+/// on a rock's voxels, a steep contact), the goal region is a position within `tol` (the mission arrives when the
+/// axle is within it): of `GOAL_REGION_RINGS` rings of 8 positions, `tol / 4` apart, round `goal`, the innermost
+/// ring with a position where the rover settles with its axle at most `3 tol / 4` from `goal`, and there the
+/// position nearest `from` (the rover comes from there; the first of equals from +x, anticlockwise). The region
+/// shrinks by the axle's distance from `goal`, so that a plan reaching it ends within `tol` of `goal`. Else the
+/// first failure at `goal`.
+fn goal_in_region<D: DistanceField>(
+    space: &TetherSpace<'_, D>,
+    goal: Vec3,
+    tol: f64,
+    from: Vec3,
+) -> Result<(RoverState, Vec3, f64), SettleFailure> {
+    let first = match space.goal_or_unobserved(goal, 0.0) {
+        Ok(s) => return Ok((s, goal, tol)),
+        Err(e @ (SettleFailure::InvalidInput | SettleFailure::NoSurface | SettleFailure::UnknownSpace)) => return Err(e),
+        Err(e) => e,
+    };
+    let step = tol as Real / 4.0;
+    for ring in 1..=cfg::GOAL_REGION_RINGS {
+        let mut best: Option<(Real, RoverState, Vec3, f64)> = None;
+        for k in 0..8u32 {
+            let a = core::f32::consts::TAU * k as Real / 8.0;
+            let r = step * ring as Real;
+            let p = Vec3::new(goal.x + r * libm::cosf(a), goal.y + r * libm::sinf(a), goal.z);
+            let Ok(st) = space.goal_state(p, 0.0) else { continue };
+            let d = f64::from(libm::hypotf(st.axle().x - goal.x, st.axle().y - goal.y));
+            let near = libm::hypotf(st.axle().x - from.x, st.axle().y - from.y);
+            if !st.off_map && d <= 0.75 * tol && best.as_ref().is_none_or(|b| near < b.0) {
+                best = Some((near, st, p, tol - d));
+            }
+        }
+        if let Some((_, st, p, region)) = best {
+            log::info!("nav: the goal does not settle at ({}, {}) ({first:?}); its region's goal state is at ({}, {})", goal.x, goal.y, p.x, p.y);
+            return Ok((st, p, region));
+        }
+    }
+    Err(first)
 }
 
 /// [`TetherMotionValidator`], counting the motion checks of one `plan_step` call (its stop predicate bounds them).
@@ -536,8 +587,12 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
         problem.finished = Some(PlanState::InvalidInput);
         return finished(problem, PlanState::InvalidInput);
     };
-    let goal_state = match space.goal_or_unobserved(problem.goal, 0.0) {
-        Ok(g) => g,
+    let again = || goal_in_region(&space, problem.requested_goal, problem.requested_tolerance, problem.start.axle());
+    let goal_state = match space.goal_or_unobserved(problem.goal, 0.0).map(|g| (g, problem.goal, problem.tolerance)).or_else(|_| again()) {
+        Ok((g, at, region)) => {
+            (problem.goal, problem.tolerance) = (at, region);
+            g
+        }
         Err(_) => {
             // The map changed under the goal since it was accepted.
             log::warn!("nav: {}", GoalRefusal::GoalNotSettled.reason());
@@ -788,9 +843,10 @@ fn fails_around_stop<D: DistanceField>(space: &TetherSpace<'_, D>, s: &RoverStat
     [d, -d].iter().find_map(|&d| {
         let (x, y) = (s.ground.x + d * libm::cosf(th), s.ground.y + d * libm::sinf(th));
         let f = match space.settle_state(x, y, s.theta) {
-            Ok(to) => space.check(s, h, &to).err()?,
-            Err(e) => MotionFailure::Settle(e),
+            Ok(to) => space.check(s, h, &to).err(),
+            Err(e) => Some(MotionFailure::Settle(e)),
         };
+        let f = f?;
         falls(&f).then_some(f)
     })
 }
@@ -811,6 +867,12 @@ fn earlier_stop<D: DistanceField>(
     (1..=crate::config::mission::STOP_BACKOFF_STEPS).map(|k| k as Real * d).take_while(|&back| back < len).find_map(|back| {
         let t = 1.0 - back / len;
         let e = space.settle_state(p.ground.x + t * dx, p.ground.y + t * dy, s.theta).ok()?;
+        // the rover itself (its axle) moves back as far as the ground point: a state leaning over an edge stands
+        // far ahead of its ground point
+        let (a, b) = (s.axle(), e.axle());
+        if ((a.x - b.x) * dx + (a.y - b.y) * dy) / len < back {
+            return None;
+        }
         let eh = space.check(p, ph, &e).ok()?;
         if fails_around_stop(space, &e, &eh).is_some() {
             return None;
