@@ -28,7 +28,11 @@
 //!   wasted). A goal outside it is an **off-map goal** (section VI-B): it connects from any state
 //!   within `off_map_edge_m` of the bounds, and the plan ends at that state;
 //! - **goal region**: within `tolerance_m` (axle distance) of the rover settled under the goal position (at the
-//!   first of `GOAL_SETTLE_YAWS` yaws that settles);
+//!   first of `GOAL_SETTLE_YAWS` yaws that settles); where it does not settle there on observed ground (a rock's
+//!   voxels under the body, a steep contact), a position of the region where it does: of `GOAL_REGION_RINGS`
+//!   rings of 8 positions `tolerance_m / 4` apart, the innermost with one whose axle stands within
+//!   `3 tolerance_m / 4` of the goal, the one nearest the start, and the region shrinks by that distance (so a plan
+//!   that reaches it ends within `tolerance_m`); searched again when a scan changes the map under it;
 //! - **budget**: `min(goal.max_iterations, MAX_PLAN_ITERATIONS)` iterations, and `time_budget_ms` of flight time
 //!   when non-zero; in a mission, a search that spends its iterations with nothing the mission can drive (no
 //!   path; an approximate one not allowed or short of `MIN_APPROXIMATE_PROGRESS_M`) goes on where it stopped for
@@ -218,7 +222,7 @@
 //! - planning (`config::nav`): `NODE_CAPACITY` 512, `EDGE_QUEUE_CAPACITY` 4096, `EDGE_MEMO_CAPACITY` 256,
 //!   `MOTION_CHECKS_PER_STEP` 1, `SAMPLES_PER_BATCH` 100, `DRAWS_PER_STEP` 20, `MAX_PLAN_ITERATIONS` 750, `PATH_CAPACITY` 64,
 //!   `MOTION_CAPACITY` 189, `MIN_TURN_RAD` 1e-3, `MIN_DRIVE_M` 1e-3, `BOUNDS_Z_MARGIN_M` 0.5,
-//!   `PLAN_WINDOW_MARGIN_M` 3.0, `FOOTPRINT_UNOBSERVED_MAX` 4,
+//!   `PLAN_WINDOW_MARGIN_M` 3.0, `FOOTPRINT_UNOBSERVED_MAX` 4, `GOAL_REGION_RINGS` 2,
 //!   `TRACK_APPROXIMATE` true, `BOOM_MASS_FRACTION` 0.2; the space's parameters are
 //!   [`TetherSpaceParams::ONBOARD`](crate::plan::tethered::TetherSpaceParams::ONBOARD) and ABIT*'s
 //!   [`AbitParams::ompl_defaults`](crate::plan::abit::AbitParams::ompl_defaults).
