@@ -32,17 +32,6 @@ pub const TRACK_SEGMENT_M: f32 = 0.5;
 pub const HEADING_TOLERANCE_RAD: f32 = 0.03;
 /// A path segment counts as driven when less than this of it is left along the path, metres. Default 0.08 m.
 pub const SEGMENT_DONE_M: f32 = 0.08;
-/// The last state of an approximate plan (where the rover stops short of the goal and plans again) is kept only when
-/// the states this far ahead of it and behind it, along its heading, have ground under them and the motions to
-/// them keep the planning margin (`nav::planning`, `fails_around_stop`), metres. Default `SEGMENT_DONE_M` (0.08 m): the controller
-/// counts a segment driven with that much of it left, and the pose estimate errs by as much. Why: the search's
-/// vertex closest to the goal sits where the stable region ends (a lip), so a stop that only just holds is the
-/// one an approximate plan picks.
-pub const STOP_CHECK_M: f32 = SEGMENT_DONE_M;
-/// How far an approximate plan's last state may be moved back along its segment, in steps of `STOP_CHECK_M`, to
-/// find a stop where the rover holds a little further on; beyond that the state is dropped. Default 8 (0.64 m): a
-/// bound on the work (each step is a settle and three motion checks), not a tuning.
-pub const STOP_BACKOFF_STEPS: usize = 8;
 /// Replans of one goal without progress before the mission stops safe with `ReplanLimit`: the count restarts
 /// whenever the rover has come `REPLAN_PROGRESS_M` nearer the goal (horizontally) since it last restarted, so a
 /// long descent may replan as often as its map grows, while a rover that replans in place stops. Bounded: at

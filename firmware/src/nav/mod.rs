@@ -138,12 +138,7 @@
 //! - **Approximate plans (a receding horizon)**: an approximate plan is driven only when the goal request allows
 //!   it and its last state is at least `MIN_APPROXIMATE_PROGRESS_M` nearer the goal than its start (else
 //!   `NoSolution`); at its last (safe) state the navigator replans from there, on the map its scans have grown
-//!   on the way (terrain beyond a rise or a lip is observed only from near it). The search's vertex nearest the
-//!   goal sits where the stable region ends (at a lip), so that last state must also hold `STOP_CHECK_M` ahead of
-//!   and behind it along its heading: the states there must have ground under them, and the motions to them keep
-//!   the planning margin (a steep contact, unobserved space, a collision or a tether failure there leave the stop
-//!   as it is: where observed ground ends at a lip, the map's edge reads as a steep contact). Otherwise it moves back along its segment in steps of `STOP_CHECK_M` (at most
-//!   `STOP_BACKOFF_STEPS`) to a stop that does, or is dropped and the state before it is tried.
+//!   on the way (terrain beyond a rise or a lip is observed only from near it).
 //! - **Re-checks and replans**: after each report the next `RECHECK_AFTER_MOTION` segments are re-checked
 //!   (the current state's margin and the motion from it to the segment's end, then the planned motions, each a
 //!   full motion check on the current map: collision, settling, anchors, stability), after each scan the whole
@@ -171,8 +166,7 @@
 //!   from the tracked pose is not integrated (`scans_rejected`); counters in `MissionStatus` and
 //!   [`MissionCounters`].
 //! - Parameters (`config::mission`): `TRACK_SEGMENT_M` 0.5, `HEADING_TOLERANCE_RAD` 0.03, `SEGMENT_DONE_M` 0.08,
-//!   `MAX_REPLANS` 8, `REPLAN_PROGRESS_M` 0.5, `MIN_APPROXIMATE_PROGRESS_M` 0.25, `STOP_CHECK_M` 0.08,
-//!   `STOP_BACKOFF_STEPS` 8, `MAX_STALLS` 2,
+//!   `MAX_REPLANS` 8, `REPLAN_PROGRESS_M` 0.5, `MIN_APPROXIMATE_PROGRESS_M` 0.25, `MAX_STALLS` 2,
 //!   `POSE_JUMP_BASE_M` 0.5, `POSE_JUMP_PER_M` 0.5, `POSE_JUMP_YAW_RAD` 0.6,
 //!   `MAX_POSE_JUMPS` 3, `SCAN_POSE_TOLERANCE_M` 2.0, `MAX_SCAN_REJECTS` 3, `MAX_PAYOUT_RATE_M_PER_S` 1.0,
 //!   `PAYOUT_JUMP_SLACK_M` 0.3, `RECHECK_AFTER_MOTION` 2, `EXECUTED_CAPACITY` 64, `REESTIMATE_PER_STEP` 4,

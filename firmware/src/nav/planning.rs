@@ -18,7 +18,7 @@ use crate::plan::space::{
     Budget, GoalState, MotionCheck, MotionValidator, Planner, PlannerStatus, ProblemDefinition, Termination,
 };
 use crate::plan::tethered::{
-    tether_pull_anchor, MarginEscape, MotionFailure, MotionPlan, MotionStats, PlanBounds, RoverState, SettleFailure, StartEscape,
+    tether_pull_anchor, MarginEscape, MotionPlan, MotionStats, PlanBounds, RoverState, SettleFailure, StartEscape,
     TetherMotionValidator, TetherObjective, TetherSpace, TetherSpaceParams, TetherValidity,
 };
 use crate::rover::check_pose_stability;
@@ -678,8 +678,7 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
             state = PlanState::NoSolutionWithinBudget;
             store.path.clear();
         } else {
-            let stops_short = state == PlanState::ApproximateSolution;
-            problem.cut = fill_plan(&space, problem, &mut store.path, &mut store.motions, stats, plan, stops_short);
+            problem.cut = fill_plan(&space, problem, &mut store.path, &mut store.motions, stats, plan);
             if store.path.len() < 2 {
                 log::warn!("nav: no waypoint after the start passes the margin and payout checks");
                 state = PlanState::NoSolutionWithinBudget;
@@ -733,9 +732,7 @@ fn finished(problem: &Problem, state: PlanState) -> PlanProgress {
 /// Waypoints (with stability margins from the map) and motion primitives of the stored path. The path is cut
 /// before its first on-map state whose stability margin on the map is below `min_margin_n` (or fails the check),
 /// or whose tether (its anchor history to the axle) is longer than `max_payout_m`: such a waypoint is never sent
-/// nor driven. A plan that stops short of the goal (`stops_short`, or cut here) also loses its last states while
-/// the rover would not hold [`STOP_CHECK_M`](crate::config::mission::STOP_CHECK_M) ahead of or behind where it
-/// stops ([`fails_around_stop`]). Returns the number of states cut.
+/// nor driven. Returns the number of states cut.
 fn fill_plan<D: DistanceField>(
     space: &TetherSpace<'_, D>,
     problem: &Problem,
@@ -743,7 +740,6 @@ fn fill_plan<D: DistanceField>(
     motions: &mut heapless::Vec<Motion, { cfg::MOTION_CAPACITY }>,
     stats: &mut NavPlanStats,
     plan: &mut PlanBuffer,
-    stops_short: bool,
 ) -> u32 {
     plan.clear();
     motions.clear();
@@ -775,37 +771,6 @@ fn fill_plan<D: DistanceField>(
             break;
         }
     }
-    if stops_short || keep < path.len() {
-        // bounded by the path's length
-        while keep > 1 {
-            let (Some((s, h)), Some((p, ph))) = (path.get(keep - 1), path.get(keep - 2)) else { break };
-            if s.off_map {
-                break;
-            }
-            let Some(f) = fails_around_stop(space, s, h) else { break };
-            let earlier = if p.off_map { None } else { earlier_stop(space, p, ph, s) }
-                .filter(|(_, _, m)| m * problem.weight_n >= problem.min_margin_n);
-            let on_map_before = path.iter().take(keep - 1).filter(|(s, _)| !s.off_map).count();
-            plan.truncate(on_map_before);
-            match earlier {
-                Some((e, eh, margin)) => {
-                    log::warn!(
-                        "nav: plan's last state {} moved back along its segment: a little further on is {f:?}",
-                        keep - 1
-                    );
-                    let _ = plan.push(waypoint(&e, &eh, margin, &mut stats.anchors_truncated));
-                    if let Some(last) = path.get_mut(keep - 1) {
-                        *last = (e, eh);
-                    }
-                    break;
-                }
-                None => {
-                    log::warn!("nav: plan cut at state {}: it stops short of the goal where a little further on is {f:?}", keep - 1);
-                    keep -= 1;
-                }
-            }
-        }
-    }
     let cut = path.len().saturating_sub(keep) as u32;
     path.truncate(keep);
     let mut prev: Option<&RoverState> = None;
@@ -820,66 +785,6 @@ fn fill_plan<D: DistanceField>(
         prev = Some(s);
     }
     cut
-}
-
-/// Where a plan stops short of the goal, does the rover fail to hold a little further on or back? The first
-/// failure of the state [`STOP_CHECK_M`](crate::config::mission::STOP_CHECK_M) ahead of `s`, then behind it, along
-/// its heading (settled like the interpolated states of a motion, from `s`'s ground point): no ground under it, or,
-/// on the motion from `s` (with anchor history `h`) to it, a state below the stability margin or without a reliable
-/// stability answer. A steep contact there (where observed ground ends at a lip, the map's edge reads as one),
-/// unobserved space, a collision (the rover stalls, it does not fall) or a tether failure say nothing about
-/// holding: `None`, the stop is kept.
-fn fails_around_stop<D: DistanceField>(space: &TetherSpace<'_, D>, s: &RoverState, h: &AnchorHistory) -> Option<MotionFailure> {
-    let th = s.heading();
-    let d = crate::config::mission::STOP_CHECK_M;
-    let falls = |f: &MotionFailure| {
-        matches!(
-            f,
-            MotionFailure::Unstable
-                | MotionFailure::Unknown
-                | MotionFailure::Settle(SettleFailure::NoSurface | SettleFailure::NoGround)
-        )
-    };
-    [d, -d].iter().find_map(|&d| {
-        let (x, y) = (s.ground.x + d * libm::cosf(th), s.ground.y + d * libm::sinf(th));
-        let f = match space.settle_state(x, y, s.theta) {
-            Ok(to) => space.check(s, h, &to).err(),
-            Err(e) => Some(MotionFailure::Settle(e)),
-        };
-        let f = f?;
-        falls(&f).then_some(f)
-    })
-}
-
-/// A stop on the segment from `p` (anchor history `ph`) to `s`, backed off from `s` by multiples of
-/// [`STOP_CHECK_M`](crate::config::mission::STOP_CHECK_M) (at most `STOP_BACKOFF_STEPS` of them) until the rover
-/// holds a little further on ([`fails_around_stop`]) and the motion from `p` to it passes the motion check with the
-/// planning margin: the state, its anchor history and its stability margin (as [`waypoint`] takes it).
-fn earlier_stop<D: DistanceField>(
-    space: &TetherSpace<'_, D>,
-    p: &RoverState,
-    ph: &AnchorHistory,
-    s: &RoverState,
-) -> Option<(RoverState, AnchorHistory, f32)> {
-    let d = crate::config::mission::STOP_CHECK_M;
-    let (dx, dy) = (s.ground.x - p.ground.x, s.ground.y - p.ground.y);
-    let len = libm::hypotf(dx, dy);
-    (1..=crate::config::mission::STOP_BACKOFF_STEPS).map(|k| k as Real * d).take_while(|&back| back < len).find_map(|back| {
-        let t = 1.0 - back / len;
-        let e = space.settle_state(p.ground.x + t * dx, p.ground.y + t * dy, s.theta).ok()?;
-        // the rover itself (its axle) moves back as far as the ground point: a state leaning over an edge stands
-        // far ahead of its ground point
-        let (a, b) = (s.axle(), e.axle());
-        if ((a.x - b.x) * dx + (a.y - b.y) * dy) / len < back {
-            return None;
-        }
-        let eh = space.check(p, ph, &e).ok()?;
-        if fails_around_stop(space, &e, &eh).is_some() {
-            return None;
-        }
-        let margin = space.stable_with(&e.settled, &eh).ok()?;
-        Some((e, eh, margin as f32))
-    })
 }
 
 /// Cut the stored plan after state `last` (the states up to it and the motions of their segments stay): the mission
