@@ -348,14 +348,21 @@ pub fn run_scenarios(map: &GridMap, scens: &[Scenario], mut filter: impl FnMut(u
                 None
             }
         };
-        match planned {
-            Some(c) if (c - s.optimal).abs() <= tolerance(s.decimals) => {
-                summary.max_abs_error = summary.max_abs_error.max((c - s.optimal).abs());
-            }
-            _ => summary.mismatches.push(Mismatch { scenario: s.clone(), planned }),
-        }
+        summary.record(s, planned);
     }
     Ok(summary)
+}
+
+impl RunSummary {
+    /// Compares a planned cost (`None`: no path) with the scenario's published optimum.
+    fn record(&mut self, s: &Scenario, planned: Option<f64>) {
+        match planned {
+            Some(c) if (c - s.optimal).abs() <= tolerance(s.decimals) => {
+                self.max_abs_error = self.max_abs_error.max((c - s.optimal).abs());
+            }
+            _ => self.mismatches.push(Mismatch { scenario: s.clone(), planned }),
+        }
+    }
 }
 
 /// Fixed-point unit of [`run_astar_reference`]'s path costs: 1e9 per straight step (the `pathfinding` crate wants
@@ -383,22 +390,21 @@ pub fn run_astar_reference(map: &GridMap, scens: &[Scenario], mut filter: impl F
             &(s.start_x as i64, s.start_y as i64),
             |&(x, y)| {
                 expansions += 1;
-                let mut next = Vec::with_capacity(8);
+                // on the stack: the reference is timed, an allocation per expansion would slow it
+                let mut next = [((0i64, 0i64), 0u64); 8];
+                let mut n = 0;
                 for dy in -1..=1i64 {
                     for dx in -1..=1i64 {
-                        if (dx, dy) == (0, 0) || !free(x + dx, y + dy) {
-                            continue;
-                        }
-                        if dx != 0 && dy != 0 {
-                            if free(x + dx, y) && free(x, y + dy) {
-                                next.push(((x + dx, y + dy), diagonal));
-                            }
-                        } else {
-                            next.push(((x + dx, y + dy), straight));
+                        let ok = (dx, dy) != (0, 0)
+                            && free(x + dx, y + dy)
+                            && (dx == 0 || dy == 0 || (free(x + dx, y) && free(x, y + dy)));
+                        if ok {
+                            next[n] = ((x + dx, y + dy), if dx != 0 && dy != 0 { diagonal } else { straight });
+                            n += 1;
                         }
                     }
                 }
-                next
+                next.into_iter().take(n)
             },
             |&(x, y)| {
                 let (ax, ay) = ((x - goal.0).unsigned_abs(), (y - goal.1).unsigned_abs());
@@ -408,13 +414,7 @@ pub fn run_astar_reference(map: &GridMap, scens: &[Scenario], mut filter: impl F
             |&p| p == goal,
         );
         summary.expansions += expansions;
-        let planned = found.map(|(_, c)| c as f64 / ASTAR_UNIT);
-        match planned {
-            Some(c) if (c - s.optimal).abs() <= tolerance(s.decimals) => {
-                summary.max_abs_error = summary.max_abs_error.max((c - s.optimal).abs());
-            }
-            _ => summary.mismatches.push(Mismatch { scenario: s.clone(), planned }),
-        }
+        summary.record(s, found.map(|(_, c)| c as f64 / ASTAR_UNIT));
     }
     summary
 }

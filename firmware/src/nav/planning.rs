@@ -588,7 +588,13 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
         return finished(problem, PlanState::InvalidInput);
     };
     let again = || goal_in_region(&space, problem.requested_goal, problem.requested_tolerance, problem.start.axle());
-    let goal_state = match space.goal_or_unobserved(problem.goal, 0.0).map(|g| (g, problem.goal, problem.tolerance)).or_else(|_| again()) {
+    // the region's goal position first, when there is one (`goal_in_region` begins at the requested position)
+    let resolved = if problem.goal == problem.requested_goal {
+        again()
+    } else {
+        space.goal_or_unobserved(problem.goal, 0.0).map(|g| (g, problem.goal, problem.tolerance)).or_else(|_| again())
+    };
+    let goal_state = match resolved {
         Ok((g, at, region)) => {
             (problem.goal, problem.tolerance) = (at, region);
             g
