@@ -13,7 +13,7 @@ use crate::terrain::npy::{load_npy, FirstRow, NpyOptions};
 use crate::terrain::obj::{load_obj, ObjOptions};
 use crate::world::crater::{CraterWall, CraterWallParams};
 use crate::world::heightmap::HeightmapWorld;
-use crate::world::ledge::LedgeWorld;
+use crate::world::ledge::{LedgeError, LedgeParams, LedgeShape, LedgeWorld, Pole};
 use crate::world::mesh::MeshWorld;
 use crate::world::World;
 use firmware::config::map::MapConfig;
@@ -101,6 +101,9 @@ pub struct WorldSection {
     /// Parameters when `kind = "crater_wall"` (all optional, defaults in [`CraterWallParams`]).
     #[serde(default)]
     pub crater_wall: Option<CraterWallParams>,
+    /// A variant of the ledge when `kind = "ledge"` or `"ledge_pole"` (all optional, defaults in [`LedgeParams`]).
+    #[serde(default)]
+    pub ledge: Option<LedgeParams>,
     /// The DEM when `kind = "terrain"`.
     #[serde(default)]
     pub terrain: Option<TerrainSection>,
@@ -375,10 +378,13 @@ pub struct Scenario {
 pub enum WorldSpec {
     /// The three-plane crater wall.
     CraterWall(CraterWallParams),
-    /// Paton et al.'s ledge.
-    Ledge,
-    /// The ledge with a pole.
-    LedgePole,
+    /// Paton et al.'s ledge or a variant of it: its shape and the poles on its top (test 3: one, [`Pole::TEST3`]).
+    Ledge {
+        /// The prism.
+        shape: LedgeShape,
+        /// The poles.
+        poles: Vec<Pole>,
+    },
     /// A DEM.
     Terrain(TerrainSection),
     /// A closed triangle mesh.
@@ -392,8 +398,8 @@ impl WorldSpec {
     pub fn by_name(name: &str) -> Option<WorldSpec> {
         Some(match name {
             "crater_wall" => WorldSpec::CraterWall(CraterWallParams::default()),
-            "ledge" => WorldSpec::Ledge,
-            "ledge_pole" => WorldSpec::LedgePole,
+            "ledge" => WorldSpec::Ledge { shape: LedgeShape::PATON, poles: vec![] },
+            "ledge_pole" => WorldSpec::Ledge { shape: LedgeShape::PATON, poles: vec![Pole::TEST3] },
             "marsyard" => WorldSpec::Terrain(TerrainSection {
                 file: PathBuf::from("terrain/erc_marsyard2021_hm.tif"),
                 format: None,
@@ -430,8 +436,9 @@ impl WorldSpec {
             WorldSpec::CraterWall(p) => CraterWall::new(p.clone())
                 .map(|w| Box::new(w) as Box<dyn World>)
                 .map_err(|(f, r)| (format!("world.crater_wall.{f}"), r)),
-            WorldSpec::Ledge => Ok(Box::new(LedgeWorld::new())),
-            WorldSpec::LedgePole => Ok(Box::new(LedgeWorld::with_pole())),
+            WorldSpec::Ledge { shape, poles } => LedgeWorld::custom(*shape, poles)
+                .map(|w| Box::new(w) as Box<dyn World>)
+                .map_err(|e| ledge_error(&e)),
             WorldSpec::Terrain(t) => {
                 let f = |r: String| ("world.terrain".to_string(), r);
                 let path = base.join(&t.file);
@@ -530,6 +537,15 @@ impl WorldSpec {
     }
 }
 
+/// A ledge variant's error as `(field, reason)`: `world.ledge.slope_deg`, `world.ledge.poles[1].radius_m`.
+fn ledge_error(e: &LedgeError) -> (String, String) {
+    let field = match e.pole {
+        Some(i) => format!("world.ledge.poles[{i}].{}", e.field),
+        None => format!("world.ledge.{}", e.field),
+    };
+    (field, e.reason.to_string())
+}
+
 impl Scenario {
     /// The world kind as written.
     pub fn world_kind(&self) -> String {
@@ -556,10 +572,18 @@ impl Scenario {
     /// The world spec of this scenario.
     pub fn world_spec(&self) -> Result<WorldSpec, ScenarioError> {
         let w = &self.world;
-        match w.kind.as_str() {
+        let spec = match w.kind.as_str() {
             "crater_wall" => Ok(WorldSpec::CraterWall(w.crater_wall.clone().unwrap_or_default())),
-            "ledge" => Ok(WorldSpec::Ledge),
-            "ledge_pole" => Ok(WorldSpec::LedgePole),
+            "ledge" | "ledge_pole" => {
+                let default_poles: &[Pole] = if w.kind == "ledge" { &[] } else { &[Pole::TEST3] };
+                let (shape, poles) = w.ledge.clone().unwrap_or_default().resolve(default_poles);
+                // refused here, with the field, rather than when the world is built
+                LedgeWorld::custom(shape, &poles).map_err(|e| {
+                    let (field, reason) = ledge_error(&e);
+                    self.err(&field, reason)
+                })?;
+                Ok(WorldSpec::Ledge { shape, poles })
+            }
             "terrain" => w
                 .terrain
                 .clone()
@@ -574,7 +598,19 @@ impl Scenario {
                 "world.kind",
                 format!("unknown world kind {other:?}: use crater_wall, ledge, ledge_pole, terrain or mesh"),
             )),
+        }?;
+        // a table for another kind would be read and then ignored
+        for (table, given, kinds) in [
+            ("world.crater_wall", w.crater_wall.is_some(), &["crater_wall"][..]),
+            ("world.ledge", w.ledge.is_some(), &["ledge", "ledge_pole"][..]),
+            ("world.terrain", w.terrain.is_some(), &["terrain"][..]),
+            ("world.mesh", w.mesh.is_some(), &["mesh"][..]),
+        ] {
+            if given && !kinds.contains(&w.kind.as_str()) {
+                return Err(self.err(table, format!("applies to kind = {:?}, not {:?}", kinds.join(" or "), w.kind)));
+            }
         }
+        Ok(spec)
     }
 
     /// Builds the world (terrain paths relative to the scenario file).
@@ -754,6 +790,80 @@ position = [7.0, 0.0, 0.4]
         PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenarios")
     }
 
+    /// The shipped scenario files: `scenarios/*.toml` and the ledge variants `scenarios/variants/*.toml`.
+    pub(super) fn shipped() -> Vec<PathBuf> {
+        let mut files = Vec::new();
+        for d in [dir(), dir().join("variants")] {
+            for entry in std::fs::read_dir(d).unwrap() {
+                let p = entry.unwrap().path();
+                if p.extension().is_some_and(|e| e == "toml") {
+                    files.push(p);
+                }
+            }
+        }
+        files.sort();
+        files
+    }
+
+    const LEDGE: &str = r#"
+name = "ledge variant"
+[world]
+kind = "ledge"
+[world.ledge]
+slope_deg = 45.0
+height_m = 3.0
+[[world.ledge.poles]]
+centre_xy = [-2.5, 1.0]
+radius_m = 0.4
+[[world.ledge.poles]]
+centre_xy = [-1.0, -1.5]
+radius_m = 0.1
+height_m = 3.0
+[rover]
+start = [-4.0, 0.0, 3.35]
+[tether]
+root_anchor = [6.0, 0.0, 5.0]
+[goal]
+position = [6.0, 0.0, 0.35]
+"#;
+
+    /// A ledge variant is a file: its slope, height and poles are the world's; impossible variants and a table
+    /// for another kind are refused with the field.
+    #[test]
+    fn ledge_variants_are_files() {
+        let sc = check_text(LEDGE).unwrap();
+        let w = sc.build_world().unwrap();
+        let h = |x: f64, y: f64| f64::from(w.height_at(x as Real, y as Real).unwrap());
+        assert_eq!(h(-4.0, 0.0), 3.0);
+        assert_eq!(h(-2.5, 1.0), 9.0); // the first pole: the default height, 6 m
+        assert_eq!(h(-1.0, -1.5), 6.0);
+        assert!((h(1.0, 0.0) - 2.0).abs() < 1e-6, "45 degrees: {}", h(1.0, 0.0));
+        assert_eq!(w.name(), "ledge45-2poles");
+        let WorldSpec::Ledge { poles, .. } = sc.world_spec().unwrap() else { panic!("a ledge") };
+        assert_eq!(poles.len(), 2);
+        // kind = "ledge_pole" without poles is test 3's pole; with `[world.ledge]` poles, those
+        let pole = check_text(&LEDGE.replace("kind = \"ledge\"", "kind = \"ledge_pole\"")).unwrap();
+        assert_eq!(pole.world_spec().unwrap(), sc.world_spec().unwrap());
+        let no_table = LEDGE.split("[world.ledge]").next().unwrap().to_string() + "[rover]\nstart = [-4.0, 0.0, 4.35]\n[tether]\nroot_anchor = [6.0, 0.0, 5.0]\n[goal]\nposition = [6.0, 0.0, 0.35]\n";
+        let paton = check_text(&no_table.replace("kind = \"ledge\"", "kind = \"ledge_pole\"")).unwrap();
+        assert_eq!(paton.world_spec().unwrap(), WorldSpec::by_name("ledge_pole").unwrap());
+        let cases: Vec<(String, &str, &str)> = vec![
+            (LEDGE.replace("slope_deg = 45.0", "slope_deg = 90.0"), "world.ledge.slope_deg", "between 5 and 85"),
+            (LEDGE.replace("height_m = 3.0\n[[", "height_m = -3.0\n[["), "world.ledge.height_m", "above 0"),
+            (LEDGE.replace("centre_xy = [-1.0, -1.5]", "centre_xy = [-2.5, 0.6]"), "world.ledge.poles[1].centre_xy", "earlier pole"),
+            (LEDGE.replace("centre_xy = [-1.0, -1.5]", "centre_xy = [1.0, -1.5]"), "world.ledge.poles[1].centre_xy", "inside the ledge top"),
+            (LEDGE.replace("radius_m = 0.1", "radius_m = nan"), "world.ledge.poles[1].radius_m", "finite"),
+            (LEDGE.replace("radius_m = 0.4", "radius = 0.4"), "(syntax)", "unknown field"),
+            (LEDGE.replace("kind = \"ledge\"", "kind = \"crater_wall\""), "world.ledge", "applies to kind"),
+            (CRATER.replace("kind = \"crater_wall\"", "kind = \"ledge\""), "world.crater_wall", "applies to kind"),
+        ];
+        for (text, field, reason) in cases {
+            let e = check_text(&text).unwrap_err();
+            assert_eq!(e.field, field, "{e}");
+            assert!(e.reason.contains(reason), "{e}");
+        }
+    }
+
     fn check_text(text: &str) -> Result<Scenario, ScenarioError> {
         let sc = parse(text, &dir().join("inline.toml"))?;
         let w = sc.build_world()?;
@@ -791,7 +901,10 @@ position = [7.0, 0.0, 0.4]
             (format!("{CRATER}[faults.down]\nseed = 3\n"), "faults.down.seed", "[faults] section"),
             (format!("{CRATER}[faults.down]\ndrops = 1e-4\n"), "(syntax)", "unknown field"),
             (
-                CRATER.replace("kind = \"crater_wall\"", "kind = \"terrain\"\n[world.terrain]\nfile = \"no/such.tif\""),
+                // (without the crater's table, which would be refused first: it applies to another kind)
+                CRATER
+                    .replace("[world.crater_wall]\nwall_angle_deg = 55.0\nrocks = 4\n", "")
+                    .replace("kind = \"crater_wall\"", "kind = \"terrain\"\n[world.terrain]\nfile = \"no/such.tif\""),
                 "world.terrain.file",
                 "no such file",
             ),
@@ -917,12 +1030,9 @@ position = [10.0, 10.0, 21.67]
     #[test]
     fn shipped_scenarios_load() {
         let mut n = 0;
-        for entry in std::fs::read_dir(dir()).unwrap() {
-            let p = entry.unwrap().path();
-            if p.extension().is_some_and(|e| e == "toml") {
-                load(&p).unwrap_or_else(|e| panic!("{e}"));
-                n += 1;
-            }
+        for p in shipped() {
+            load(&p).unwrap_or_else(|e| panic!("{e}"));
+            n += 1;
         }
         assert!(n >= 4, "{n} scenarios");
     }
@@ -936,12 +1046,7 @@ mod placement {
     /// within 1 m of it.
     #[test]
     fn shipped_scenarios_start_and_goal_are_on_the_ground() {
-        let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenarios");
-        for entry in std::fs::read_dir(dir).unwrap() {
-            let p = entry.unwrap().path();
-            if p.extension().is_none_or(|e| e != "toml") {
-                continue;
-            }
+        for p in super::tests::shipped() {
             let text = std::fs::read_to_string(&p).unwrap();
             let sc = parse(&text, &p).unwrap();
             let w = sc.build_world().unwrap();

@@ -14,6 +14,10 @@
 //! - the slope: the face from the lip `x = 0, z = 4` down to the toe `x = 4 / tan(55 deg) = 2.8008 m, z = 0`
 //!   ([`toe_x`]), descending towards +x, inclined [`SLOPE_DEG`] = 55 degrees to the horizontal.
 //!
+//! Variants ([`Ledge::custom`], the scenario file's `[world.ledge]`): any slope angle, height, depth and length
+//! ([`LedgeShape`]; the lip stays at `x = 0`, the top at `z = height`) and up to [`MAX_POLES`] poles ([`Pole`]:
+//! position, radius, height), each inside the top and clear of the others.
+//!
 //! With the pole ([`Ledge::with_pole`], test 3): a vertical cylinder of radius [`POLE_RADIUS_M`] = 0.25 m
 //! standing on the top face at [`POLE_CENTRE_XY`] = (-2.5, 0) (the middle of the ledge top) and rising
 //! [`POLE_HEIGHT_M`] = 6 m above it (to z = 10 m). Assumptions, since the paper gives no numbers: "tall" is taken as
@@ -22,7 +26,7 @@
 //!
 //! # Distance, gradient, rays
 //! The terrain's boundary is a union of planar faces (ground outside the ledge's footprint, top, back, two sides,
-//! slope) plus, with the pole, the pole's side and cap (and the top face gets a hole under the pole). The unsigned
+//! slope) plus each pole's side and cap (and the top face gets a hole under each pole; the holes are disjoint). The unsigned
 //! distance is the exact minimum over these faces (computed in f64); its sign comes from an exact inside test;
 //! the gradient is `(q - c) / |q - c|` (outside) or `(c - q) / |q - c|` (inside), with `c` the closest boundary
 //! point, so it always points away from the terrain; on the surface itself it is the face normal.
@@ -46,6 +50,61 @@ pub const POLE_RADIUS_M: f64 = 0.25;
 pub const POLE_HEIGHT_M: f64 = 6.0;
 /// Centre of the test-3 pole on the ledge top, (x, y) metres.
 pub const POLE_CENTRE_XY: [f64; 2] = [-2.5, 0.0];
+/// Most poles a ledge world stands on its top. Default 4 (a fixed array: the field stays `Copy` and heap-free).
+pub const MAX_POLES: usize = 4;
+
+/// The prism's dimensions: a variant of Paton et al.'s ledge ([`LedgeShape::PATON`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LedgeShape {
+    /// Slope angle of the front face, degrees from the horizontal. Paton: 55.
+    pub slope_deg: f64,
+    /// Height of the top above the ground, metres. Paton: 4.
+    pub height_m: f64,
+    /// Depth of the top along x, from the back wall to the lip at x = 0, metres. Paton: 5.
+    pub depth_m: f64,
+    /// Half of the ledge's length along y, metres. Paton: 5 (10 m long).
+    pub half_width_m: f64,
+}
+
+impl LedgeShape {
+    /// Paton et al.'s ledge: 55 degrees, 4 m high, 5 m deep, 10 m long.
+    pub const PATON: LedgeShape =
+        LedgeShape { slope_deg: SLOPE_DEG, height_m: LEDGE_HEIGHT_M, depth_m: LEDGE_DEPTH_M, half_width_m: LEDGE_HALF_WIDTH_M };
+}
+
+/// A vertical cylindrical pole standing on the ledge top.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pole {
+    /// Axis position on the top, (x, y) metres.
+    pub centre_xy: [f64; 2],
+    /// Radius, metres.
+    pub radius_m: f64,
+    /// Height above the top, metres.
+    pub height_m: f64,
+}
+
+impl Pole {
+    /// The test-3 pole ([`POLE_CENTRE_XY`], [`POLE_RADIUS_M`], [`POLE_HEIGHT_M`]).
+    pub const TEST3: Pole = Pole { centre_xy: POLE_CENTRE_XY, radius_m: POLE_RADIUS_M, height_m: POLE_HEIGHT_M };
+
+    /// Squared horizontal distance of `(x, y)` from the axis.
+    fn rho2(&self, x: f64, y: f64) -> f64 {
+        let (dx, dy) = (x - self.centre_xy[0], y - self.centre_xy[1]);
+        dx * dx + dy * dy
+    }
+}
+
+/// Why a [`LedgeShape`] and its poles do not make a world: the field (`slope_deg`, `poles[1].radius_m`, ...) and
+/// what it must be.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LedgeError {
+    /// The parameter at fault (`poles` for the list as a whole).
+    pub field: &'static str,
+    /// Which pole, for a pole's field.
+    pub pole: Option<usize>,
+    /// What it must be.
+    pub reason: &'static str,
+}
 
 /// A point or vector in f64, metres.
 type P = P3;
@@ -56,14 +115,9 @@ fn dist2(a: P, b: P) -> f64 {
     dot(v, v)
 }
 
-/// `tan(55 deg)`.
-fn slope_tan() -> f64 {
-    libm::tan(SLOPE_DEG.to_radians())
-}
-
-/// x of the slope's toe (where the slope meets the ground), metres.
+/// x of Paton's slope's toe (where the slope meets the ground), metres: [`Ledge::toe_x`] of [`Ledge::new`].
 pub fn toe_x() -> f64 {
-    LEDGE_HEIGHT_M / slope_tan()
+    LEDGE_HEIGHT_M / libm::tan(SLOPE_DEG.to_radians())
 }
 
 /// A planar quadrilateral face of the ledge.
@@ -164,13 +218,15 @@ fn closest_outside_rect(q: P, x0: f64, x1: f64, w: f64) -> P {
     [best.1[0], best.1[1], 0.0]
 }
 
-/// The ledge, optionally with the test-3 pole: an exact [`DistanceField`] (see the module docs).
+/// The ledge, optionally with poles on its top: an exact [`DistanceField`] (see the module docs).
 #[derive(Debug, Clone, Copy)]
 pub struct Ledge {
     faces: [Face; 4],
     toe_x: f64,
     slope_tan: f64,
-    pole: bool,
+    shape: LedgeShape,
+    poles: [Pole; MAX_POLES],
+    pole_count: usize,
 }
 
 impl Default for Ledge {
@@ -182,19 +238,62 @@ impl Default for Ledge {
 impl Ledge {
     /// Flat ground plus the ledge with its 55-degree slope (tests 1 and 2).
     pub fn new() -> Self {
-        Self::build(false)
+        Self::build(LedgeShape::PATON, &[])
     }
 
     /// The ledge plus the tall pole in the middle of its top (test 3).
     pub fn with_pole() -> Self {
-        Self::build(true)
+        Self::build(LedgeShape::PATON, &[Pole::TEST3])
     }
 
-    fn build(pole: bool) -> Self {
-        let h = LEDGE_HEIGHT_M;
-        let w = LEDGE_HALF_WIDTH_M;
-        let xb = -LEDGE_DEPTH_M;
-        let xt = toe_x();
+    /// A variant: any slope, height, depth and length, and up to [`MAX_POLES`] poles. Each value finite; the slope
+    /// within 5-85 degrees; the dimensions and the poles' radii and heights positive; each pole's disk inside the
+    /// top and clear of the others (disjoint disks keep the distance exact, see the module docs).
+    pub fn custom(shape: LedgeShape, poles: &[Pole]) -> Result<Self, LedgeError> {
+        let bad = |field, reason| Err(LedgeError { field, pole: None, reason });
+        let LedgeShape { slope_deg, height_m, depth_m, half_width_m } = shape;
+        if !(slope_deg.is_finite() && (5.0..=85.0).contains(&slope_deg)) {
+            return bad("slope_deg", "must be between 5 and 85 degrees");
+        }
+        for (field, v) in [("height_m", height_m), ("depth_m", depth_m), ("half_width_m", half_width_m)] {
+            if !(v.is_finite() && v > 0.0 && v <= 1000.0) {
+                return bad(field, "must be finite, above 0 and at most 1000 m");
+            }
+        }
+        if poles.len() > MAX_POLES {
+            return bad("poles", "at most 4 poles (MAX_POLES)");
+        }
+        for (i, p) in poles.iter().enumerate() {
+            let pole_err = |field, reason| Err(LedgeError { field, pole: Some(i), reason });
+            let [x, y] = p.centre_xy;
+            if !(x.is_finite() && y.is_finite()) {
+                return pole_err("centre_xy", "must be finite");
+            }
+            for (field, v) in [("radius_m", p.radius_m), ("height_m", p.height_m)] {
+                if !(v.is_finite() && v > 0.0 && v <= 1000.0) {
+                    return pole_err(field, "must be finite, above 0 and at most 1000 m");
+                }
+            }
+            let r = p.radius_m;
+            if x - r <= -depth_m || x + r >= 0.0 || y - r <= -half_width_m || y + r >= half_width_m {
+                return pole_err("centre_xy", "the pole's disk must lie inside the ledge top (x from -depth_m to 0, |y| below half_width_m)");
+            }
+            for q in poles.iter().take(i) {
+                let reach = r + q.radius_m;
+                if p.rho2(q.centre_xy[0], q.centre_xy[1]) <= reach * reach {
+                    return pole_err("centre_xy", "the pole touches an earlier pole: poles must stand apart");
+                }
+            }
+        }
+        Ok(Self::build(shape, poles))
+    }
+
+    fn build(shape: LedgeShape, poles: &[Pole]) -> Self {
+        let h = shape.height_m;
+        let w = shape.half_width_m;
+        let xb = -shape.depth_m;
+        let slope_tan = libm::tan(shape.slope_deg.to_radians());
+        let xt = h / slope_tan;
         let faces = [
             // slope (normal +x, +z)
             Face::new([[0.0, w, h], [0.0, -w, h], [xt, -w, 0.0], [xt, w, 0.0]]),
@@ -205,12 +304,37 @@ impl Ledge {
             // side y = -w (normal -y)
             Face::new([[0.0, -w, h], [xb, -w, h], [xb, -w, 0.0], [xt, -w, 0.0]]),
         ];
-        Ledge { faces, toe_x: xt, slope_tan: slope_tan(), pole }
+        let mut stood = [Pole::TEST3; MAX_POLES];
+        let pole_count = poles.len().min(MAX_POLES);
+        for (slot, p) in stood.iter_mut().zip(poles) {
+            *slot = *p;
+        }
+        Ledge { faces, toe_x: xt, slope_tan, shape, poles: stood, pole_count }
     }
 
-    /// True when the ledge has the test-3 pole.
+    /// The prism's dimensions.
+    pub fn shape(&self) -> LedgeShape {
+        self.shape
+    }
+
+    /// The poles on the top.
+    pub fn poles(&self) -> &[Pole] {
+        self.poles.get(..self.pole_count).unwrap_or(&self.poles)
+    }
+
+    /// True when the ledge has at least one pole.
     pub fn has_pole(&self) -> bool {
-        self.pole
+        self.pole_count > 0
+    }
+
+    /// x of the slope's toe (where the slope meets the ground), metres.
+    pub fn toe_x(&self) -> f64 {
+        self.toe_x
+    }
+
+    /// The highest point of the world: the top of the tallest pole, or the ledge top.
+    pub fn top_z(&self) -> f64 {
+        self.poles().iter().fold(self.shape.height_m, |z, p| z.max(self.shape.height_m + p.height_m))
     }
 
     /// The four planar faces of the prism (slope, back wall, side `y = +w`, side `y = -w`); the ground and the
@@ -224,12 +348,13 @@ impl Ledge {
         if q[2] <= 0.0 {
             return true;
         }
-        if self.pole && in_pole(q) {
+        let h = self.shape.height_m;
+        if self.poles().iter().any(|p| in_pole(p, h, q)) {
             return true;
         }
-        let in_y = q[1].abs() <= LEDGE_HALF_WIDTH_M;
-        let in_x = q[0] >= -LEDGE_DEPTH_M;
-        let under = q[2] <= LEDGE_HEIGHT_M && q[2] <= LEDGE_HEIGHT_M - q[0] * self.slope_tan;
+        let in_y = q[1].abs() <= self.shape.half_width_m;
+        let in_x = q[0] >= -self.shape.depth_m;
+        let under = q[2] <= h && q[2] <= h - q[0] * self.slope_tan;
         in_y && in_x && under
     }
 
@@ -249,31 +374,34 @@ impl Ledge {
             consider(f.closest(q), f.normal);
         }
         // Ground outside the footprint rectangle [xb, xt] x [-w, w].
-        let (xb, xt, w) = (-LEDGE_DEPTH_M, self.toe_x, LEDGE_HALF_WIDTH_M);
+        let (xb, xt, w) = (-self.shape.depth_m, self.toe_x, self.shape.half_width_m);
         consider(closest_outside_rect(q, xb, xt, w), [0.0, 0.0, 1.0]);
-        // Top rectangle [xb, 0] x [-w, w] at z = h, minus the pole's disk.
-        let h = LEDGE_HEIGHT_M;
-        let top = [q[0].clamp(xb, 0.0), q[1].clamp(-w, w), h];
-        let [cx, cy] = POLE_CENTRE_XY;
-        let r = POLE_RADIUS_M;
-        let (dx, dy) = (top[0] - cx, top[1] - cy);
-        let rho = libm::sqrt(dx * dx + dy * dy);
-        if self.pole && rho < r {
-            let (ux, uy) = if rho > 1e-12 { (dx / rho, dy / rho) } else { (1.0, 0.0) };
-            consider([cx + r * ux, cy + r * uy, h], [0.0, 0.0, 1.0]);
-        } else {
-            consider(top, [0.0, 0.0, 1.0]);
+        // Top rectangle [xb, 0] x [-w, w] at z = h, minus the poles' disks (disjoint and inside it, so a point
+        // whose projection falls in one disk is nearest to that disk's rim).
+        let h = self.shape.height_m;
+        // max / min, not clamp: the bounds are parameters now, and clamp has a panic path for crossed bounds
+        let top = [q[0].max(xb).min(0.0), q[1].max(-w).min(w), h];
+        match self.poles().iter().find(|p| p.rho2(top[0], top[1]) < p.radius_m * p.radius_m) {
+            Some(p) => {
+                let [cx, cy] = p.centre_xy;
+                let (dx, dy) = (top[0] - cx, top[1] - cy);
+                let rho = libm::sqrt(dx * dx + dy * dy);
+                let (ux, uy) = if rho > 1e-12 { (dx / rho, dy / rho) } else { (1.0, 0.0) };
+                consider([cx + p.radius_m * ux, cy + p.radius_m * uy, h], [0.0, 0.0, 1.0]);
+            }
+            None => consider(top, [0.0, 0.0, 1.0]),
         }
-        if self.pole {
+        for p in self.poles() {
+            let ([cx, cy], r) = (p.centre_xy, p.radius_m);
             let (dx, dy) = (q[0] - cx, q[1] - cy);
             let rho = libm::sqrt(dx * dx + dy * dy);
             let (ux, uy) = if rho > 1e-12 { (dx / rho, dy / rho) } else { (1.0, 0.0) };
             // side
-            let z = q[2].clamp(h, h + POLE_HEIGHT_M);
+            let z = q[2].max(h).min(h + p.height_m);
             consider([cx + r * ux, cy + r * uy, z], [ux, uy, 0.0]);
             // cap
             let s = rho.min(r);
-            consider([cx + s * ux, cy + s * uy, h + POLE_HEIGHT_M], [0.0, 0.0, 1.0]);
+            consider([cx + s * ux, cy + s * uy, h + p.height_m], [0.0, 0.0, 1.0]);
         }
         best
     }
@@ -302,7 +430,7 @@ impl Ledge {
                 best = best.min(t);
             }
         }
-        let (xb, xt, w, h) = (-LEDGE_DEPTH_M, self.toe_x, LEDGE_HALF_WIDTH_M, LEDGE_HEIGHT_M);
+        let (xb, xt, w, h) = (-self.shape.depth_m, self.toe_x, self.shape.half_width_m, self.shape.height_m);
         // ground plane (outside the footprint) and top face
         for (z, on) in [(0.0, false), (h, true)] {
             if d[2].abs() > 1e-15 {
@@ -320,9 +448,8 @@ impl Ledge {
                 }
             }
         }
-        if self.pole {
-            let [cx, cy] = POLE_CENTRE_XY;
-            let r = POLE_RADIUS_M;
+        for p in self.poles() {
+            let ([cx, cy], r, top) = (p.centre_xy, p.radius_m, h + p.height_m);
             let (ox, oy) = (o[0] - cx, o[1] - cy);
             let a = d[0] * d[0] + d[1] * d[1];
             if a > 1e-15 {
@@ -332,13 +459,13 @@ impl Ledge {
                 if disc >= 0.0 {
                     let t = (-b - libm::sqrt(disc)) / (2.0 * a);
                     let z = o[2] + t * d[2];
-                    if t >= 0.0 && z >= h && z <= h + POLE_HEIGHT_M {
+                    if t >= 0.0 && z >= h && z <= top {
                         best = best.min(t);
                     }
                 }
             }
             if d[2].abs() > 1e-15 {
-                let t = (h + POLE_HEIGHT_M - o[2]) / d[2];
+                let t = (top - o[2]) / d[2];
                 let (x, y) = (o[0] + t * d[0] - cx, o[1] + t * d[1] - cy);
                 if t >= 0.0 && x * x + y * y <= r * r {
                     best = best.min(t);
@@ -350,29 +477,24 @@ impl Ledge {
 
     /// Top-surface height under (x, y), f64.
     pub fn height(&self, x: f64, y: f64) -> f64 {
-        let [cx, cy] = POLE_CENTRE_XY;
-        let (dx, dy) = (x - cx, y - cy);
-        if self.pole && dx * dx + dy * dy <= POLE_RADIUS_M * POLE_RADIUS_M {
-            return LEDGE_HEIGHT_M + POLE_HEIGHT_M;
+        let h = self.shape.height_m;
+        if let Some(p) = self.poles().iter().find(|p| p.rho2(x, y) <= p.radius_m * p.radius_m) {
+            return h + p.height_m;
         }
-        if y.abs() > LEDGE_HALF_WIDTH_M || x < -LEDGE_DEPTH_M {
+        if y.abs() > self.shape.half_width_m || x < -self.shape.depth_m {
             return 0.0;
         }
         if x <= 0.0 {
-            LEDGE_HEIGHT_M
+            h
         } else {
-            (LEDGE_HEIGHT_M - x * self.slope_tan).max(0.0)
+            (h - x * self.slope_tan).max(0.0)
         }
     }
 }
 
-/// Inside the test-3 pole (closed cylinder)?
-fn in_pole(q: P) -> bool {
-    let dx = q[0] - POLE_CENTRE_XY[0];
-    let dy = q[1] - POLE_CENTRE_XY[1];
-    dx * dx + dy * dy <= POLE_RADIUS_M * POLE_RADIUS_M
-        && q[2] >= LEDGE_HEIGHT_M
-        && q[2] <= LEDGE_HEIGHT_M + POLE_HEIGHT_M
+/// Inside `pole` (a closed cylinder standing on a top at height `h`)?
+fn in_pole(pole: &Pole, h: f64, q: P) -> bool {
+    pole.rho2(q[0], q[1]) <= pole.radius_m * pole.radius_m && q[2] >= h && q[2] <= h + pole.height_m
 }
 
 impl DistanceField for Ledge {
@@ -401,17 +523,14 @@ mod tests {
         w.sdf(q).0
     }
 
-    /// The bound the field declares (`lipschitz_bound`, which lets the tether's sweep lines skip samples) holds:
-    /// 200 000 pairs of points 1 mm to 1 m apart, over the whole world and packed round the lip and the pole.
-    #[test]
-    fn the_field_is_one_lipschitz() {
-        let w = Ledge::with_pole();
+    /// Largest `|d(p) - d(q)| / |p - q|` over 200 000 pairs of points 1 mm to 1 m apart, half spread over the
+    /// whole world and half packed round `centres`.
+    fn worst_lipschitz(w: &Ledge, centres: &[P]) -> f64 {
         let mut state: u64 = 0x9E37_79B9_7F4A_7C15;
         let mut unit = move || {
             state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
             (state >> 11) as f64 / (1u64 << 53) as f64
         };
-        let centres = [[0.0, 0.0, 4.0], [-2.5, 0.0, 5.0], [-2.5, 0.25, 4.1], [3.0, 0.0, 0.0], [-6.0, 3.0, 4.0]];
         let mut worst: f64 = 0.0;
         for k in 0..200_000 {
             let c = centres[k % centres.len()];
@@ -421,9 +540,94 @@ mod tests {
             let dir = [unit() - 0.5, unit() - 0.5, unit() - 0.5];
             let n = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt().max(1e-9);
             let q = [p[0] + step * dir[0] / n, p[1] + step * dir[1] / n, p[2] + step * dir[2] / n];
-            worst = worst.max((d(&w, p) - d(&w, q)).abs() / step);
+            worst = worst.max((d(w, p) - d(w, q)).abs() / step);
         }
+        worst
+    }
+
+    /// The bound the field declares (`lipschitz_bound`, which lets the tether's sweep lines skip samples) holds:
+    /// 200 000 pairs of points 1 mm to 1 m apart, over the whole world and packed round the lip and the pole.
+    #[test]
+    fn the_field_is_one_lipschitz() {
+        let w = Ledge::with_pole();
+        let centres = [[0.0, 0.0, 4.0], [-2.5, 0.0, 5.0], [-2.5, 0.25, 4.1], [3.0, 0.0, 0.0], [-6.0, 3.0, 4.0]];
+        let worst = worst_lipschitz(&w, &centres);
         assert!(worst <= 1.0 + 1e-9, "|d(p) - d(q)| / |p - q| reached {worst}");
+    }
+
+    /// Two poles of different sizes on a 40-degree, 3 m ledge.
+    fn two_pole_variant() -> Ledge {
+        let shape = LedgeShape { slope_deg: 40.0, height_m: 3.0, depth_m: 6.0, half_width_m: 4.0 };
+        let poles = [
+            Pole { centre_xy: [-2.0, 1.5], radius_m: 0.4, height_m: 5.0 },
+            Pole { centre_xy: [-3.0, -1.0], radius_m: 0.1, height_m: 2.0 },
+        ];
+        Ledge::custom(shape, &poles).expect("a valid variant")
+    }
+
+    /// A variant's field is exact where the nearest face is obvious, 1-Lipschitz, signed by its inside test, and
+    /// its ray casts agree with its distances: a ray down the negative gradient from an outside point hits at the
+    /// point's distance.
+    #[test]
+    fn a_variant_with_two_poles_is_an_exact_field() {
+        let w = two_pole_variant();
+        let e = 1e-12;
+        assert!((d(&w, [-2.0, 1.5, 9.5]) - 1.5).abs() < e); // above the big pole's cap (top 3 + 5 = 8)
+        assert!((d(&w, [-2.0, 2.9, 6.0]) - 1.0).abs() < e); // beside it: 1.4 m from its axis
+        assert!((d(&w, [-3.0, -1.0, 5.5]) - 0.5).abs() < e); // above the thin pole's cap (top 5)
+        assert!((d(&w, [-3.0, -0.6, 4.0]) - 0.3).abs() < e); // beside the thin pole
+        assert!((d(&w, [-5.0, -3.0, 3.7]) - 0.7).abs() < e); // above the top, away from the poles
+        assert!((d(&w, [-7.0, 0.0, 1.0]) - 1.0).abs() < e); // behind the back wall at x = -6
+        let a = 40f64.to_radians();
+        assert!((d(&w, [1.0, 0.0, 3.0]) - libm::sin(a)).abs() < 1e-9); // the 40-degree slope through the lip
+        assert!((w.toe_x() - 3.0 / libm::tan(a)).abs() < e);
+        assert!((w.height(-2.0, 1.5) - 8.0).abs() < e && (w.height(-3.0, -1.0) - 5.0).abs() < e);
+        assert!((w.top_z() - 8.0).abs() < e);
+        let centres = [[0.0, 0.0, 3.0], [-2.0, 1.5, 4.0], [-3.0, -1.0, 3.2], [-2.5, 0.2, 3.5], [3.5, 0.0, 0.0]];
+        let worst = worst_lipschitz(&w, &centres);
+        assert!(worst <= 1.0 + 1e-9, "|d(p) - d(q)| / |p - q| reached {worst}");
+        // sign and ray casts at 2 000 points round the poles and the lip
+        let mut state: u64 = 0x2545_F491_4F6C_DD1D;
+        let mut unit = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut rays = 0;
+        for k in 0..2000 {
+            let c = centres[k % centres.len()];
+            let q = [c[0] + 3.0 * (unit() - 0.5), c[1] + 3.0 * (unit() - 0.5), c[2] + 3.0 * (unit() - 0.5)];
+            let (dq, g) = w.sdf(q);
+            assert_eq!(dq <= 0.0, w.inside(q), "sign at {q:?}: {dq}");
+            if dq > 1e-3 {
+                let hit = w.raycast(q, [-g[0], -g[1], -g[2]], 100.0).expect("the nearest point is on the surface");
+                assert!((hit - dq).abs() < 1e-9, "ray {hit} vs distance {dq} at {q:?}");
+                rays += 1;
+            }
+        }
+        assert!(rays > 500, "only {rays} outside points");
+    }
+
+    /// Variants that are not a world are refused with the field at fault.
+    #[test]
+    fn impossible_variants_are_refused_with_the_field() {
+        let ok = LedgeShape::PATON;
+        let field = |shape: LedgeShape, poles: &[Pole]| Ledge::custom(shape, poles).err().map(|e| (e.field, e.pole));
+        assert_eq!(field(LedgeShape { slope_deg: 90.0, ..ok }, &[]), Some(("slope_deg", None)));
+        assert_eq!(field(LedgeShape { height_m: f64::NAN, ..ok }, &[]), Some(("height_m", None)));
+        assert_eq!(field(LedgeShape { depth_m: 0.0, ..ok }, &[]), Some(("depth_m", None)));
+        let pole = |x: f64, y: f64, r: f64| Pole { centre_xy: [x, y], radius_m: r, height_m: 6.0 };
+        // off the top (over the lip), touching another, too many, a zero radius
+        assert_eq!(field(ok, &[pole(-0.1, 0.0, 0.25)]), Some(("centre_xy", Some(0))));
+        assert_eq!(field(ok, &[pole(-2.5, 0.0, 0.25), pole(-2.5, 0.5, 0.25)]), Some(("centre_xy", Some(1))));
+        assert_eq!(field(ok, &[pole(-1.0, 0.0, 0.1); 5]), Some(("poles", None)));
+        assert_eq!(field(ok, &[pole(-2.5, 0.0, 0.0)]), Some(("radius_m", Some(0))));
+        // Paton's test-3 world as a variant is the same field
+        let (v, t3) = (Ledge::custom(ok, &[Pole::TEST3]).expect("valid"), Ledge::with_pole());
+        for q in [[0.3, 0.2, 4.1], [-2.5, 0.3, 6.0], [-4.0, 4.0, 1.0]] {
+            assert_eq!(v.sdf(q), t3.sdf(q));
+        }
     }
 
     /// Hand-computed distances at points whose nearest face is obvious.

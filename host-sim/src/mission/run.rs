@@ -338,8 +338,7 @@ pub fn mission_configure(sc: &Scenario, opts: &MissionOptions) -> Configure {
 pub fn truth_for(sc: &Scenario, cfg: &Configure, m: &MissionSection) -> Result<MissionTruth, MissionError> {
     let base = sc.build_world().map_err(|e| MissionError::Setup(e.to_string()))?;
     let ledge = match sc.world_spec().map_err(|e| MissionError::Setup(e.to_string()))? {
-        WorldSpec::Ledge => Some(crate::world::ledge::LedgeWorld::new()),
-        WorldSpec::LedgePole => Some(crate::world::ledge::LedgeWorld::with_pole()),
+        WorldSpec::Ledge { shape, poles } => crate::world::ledge::LedgeWorld::custom(shape, &poles).ok(),
         _ => None,
     };
     let world = MissionWorld::new(base, ledge, m.obstacles.clone());

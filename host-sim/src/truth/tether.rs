@@ -5,19 +5,20 @@
 //! ESDF, only closed-form shortest paths:
 //! - **Straight**: the segment root -> rover, if it stays out of the terrain (checked against the exact signed
 //!   distance every 5 mm).
-//! - **Over an edge** (the lip `x = 0, z = 4`, or the back edge `x = -5, z = 4`): the shortest path through a point of
+//! - **Over an edge** (the lip `x = 0, z = h`, or the back edge `x = -depth, z = h`; Paton's `h = 4`, `depth = 5`): the shortest path through a point of
 //!   a straight edge is found by unfolding: with `d_A`, `d_R` the distances of root and rover from the edge line and
 //!   `y_A`, `y_R` their coordinates along it, the contact is at `y_A + (y_R - y_A) d_A / (d_A + d_R)`.
-//! - **Around the pole** (vertical cylinder, radius `r`): in the horizontal projection the path is tangent segment,
+//! - **Around a pole** (vertical cylinder, radius `r`; a variant's poles one at a time, so a tether that wraps two
+//!   poles is not among the candidates: the general true tether, `crate::truth::taut`, has it): in the horizontal projection the path is tangent segment,
 //!   arc, tangent segment; the 3D shortest path is a straight line in the cylinder's unrolled development, so the
 //!   height grows linearly with the projected length. The wrap direction (counter-clockwise or clockwise seen from
 //!   above) is the homotopy class, an input.
 //!
 //! Of the candidates that are collision-free, the shortest is the true tether.
 
-use crate::world::ledge::{
-    toe_x, LedgeWorld, LEDGE_DEPTH_M, LEDGE_HEIGHT_M, POLE_CENTRE_XY, POLE_HEIGHT_M, POLE_RADIUS_M,
-};
+use crate::world::ledge::{LedgeWorld, Pole};
+#[cfg(test)]
+use crate::world::ledge::{POLE_CENTRE_XY, POLE_RADIUS_M};
 
 use firmware::geom::p3::{lerp, norm, sub, P3 as P};
 
@@ -64,15 +65,21 @@ pub fn over_edge(a: P, b: P, e0: P, u: P) -> (P, f64) {
     (e, norm(sub(e, a)) + norm(sub(b, e)))
 }
 
-/// The tether wrapped around the pole in direction `wrap`; `None` if the pole is absent, if the wrap would turn more
-/// than half way round (then the tether does not touch the pole in that class), or if the contact helix leaves the
-/// pole's height range.
+/// The tether wrapped around the world's one pole in direction `wrap`; `None` unless the world has exactly one
+/// pole (see [`around`] for a variant's), or as [`around`].
 pub fn around_pole(world: &LedgeWorld, a: P, b: P, wrap: Wrap) -> Option<TrueTether> {
-    if !world.has_pole() {
-        return None;
+    match world.ledge().poles() {
+        [pole] => around(world, pole, a, b, wrap),
+        _ => None,
     }
-    let [cx, cy] = POLE_CENTRE_XY;
-    let r = POLE_RADIUS_M;
+}
+
+/// The tether wrapped around `pole` in direction `wrap`; `None` if the wrap would turn more than half way round
+/// (then the tether does not touch the pole in that class), or if the contact helix leaves the pole's height range.
+pub fn around(world: &LedgeWorld, pole: &Pole, a: P, b: P, wrap: Wrap) -> Option<TrueTether> {
+    let [cx, cy] = pole.centre_xy;
+    let r = pole.radius_m;
+    let top = world.ledge().shape().height_m;
     let (ax, ay) = (a[0] - cx, a[1] - cy);
     let (bx, by) = (b[0] - cx, b[1] - cy);
     let (da, db) = ((ax * ax + ay * ay).sqrt(), (bx * bx + by * by).sqrt());
@@ -101,8 +108,8 @@ pub fn around_pole(world: &LedgeWorld, a: P, b: P, wrap: Wrap) -> Option<TrueTet
     let s = la + r * delta + lb;
     let z1 = a[2] + (b[2] - a[2]) * la / s;
     let z2 = a[2] + (b[2] - a[2]) * (la + r * delta) / s;
-    let zmax = LEDGE_HEIGHT_M + POLE_HEIGHT_M;
-    if z1.min(z2) < LEDGE_HEIGHT_M || z1.max(z2) > zmax {
+    let zmax = top + pole.height_m;
+    if z1.min(z2) < top || z1.max(z2) > zmax {
         return None;
     }
     let p1 = [cx + r * t1.cos(), cy + r * t1.sin(), z1];
@@ -111,8 +118,8 @@ pub fn around_pole(world: &LedgeWorld, a: P, b: P, wrap: Wrap) -> Option<TrueTet
 }
 
 /// The true tether from `root` to `rover` on a ledge world: the shortest collision-free candidate among straight,
-/// over the lip, over the back edge, and (with the pole, in wrap class `wrap`) around the pole. `None` if no
-/// candidate is collision-free.
+/// over the lip, over the back edge, and (in wrap class `wrap`) around one of the poles. `None` if no candidate is
+/// collision-free.
 pub fn true_tether(world: &LedgeWorld, root: P, rover: P, wrap: Option<Wrap>) -> Option<TrueTether> {
     let mut best: Option<TrueTether> = None;
     let mut consider = |t: TrueTether| {
@@ -123,10 +130,11 @@ pub fn true_tether(world: &LedgeWorld, root: P, rover: P, wrap: Option<Wrap>) ->
     if wrap.is_none() && segment_free(world, root, rover) {
         consider(TrueTether { contacts: vec![], length: norm(sub(rover, root)) });
     }
+    let shape = world.ledge().shape();
     if wrap.is_none() {
-        for e0 in [[0.0, 0.0, LEDGE_HEIGHT_M], [-LEDGE_DEPTH_M, 0.0, LEDGE_HEIGHT_M]] {
+        for e0 in [[0.0, 0.0, shape.height_m], [-shape.depth_m, 0.0, shape.height_m]] {
             let (e, len) = over_edge(root, rover, e0, [0.0, 1.0, 0.0]);
-            if e[1].abs() <= crate::world::ledge::LEDGE_HALF_WIDTH_M
+            if e[1].abs() <= shape.half_width_m
                 && segment_free(world, root, e)
                 && segment_free(world, e, rover)
             {
@@ -135,14 +143,15 @@ pub fn true_tether(world: &LedgeWorld, root: P, rover: P, wrap: Option<Wrap>) ->
         }
     }
     if let Some(w) = wrap {
-        if let Some(t) = around_pole(world, root, rover, w) {
-            let (p1, p2) = (t.contacts[0], t.contacts[1]);
-            if segment_free(world, root, p1) && segment_free(world, p2, rover) {
-                consider(t);
+        for pole in world.ledge().poles() {
+            if let Some(t) = around(world, pole, root, rover, w) {
+                let (p1, p2) = (t.contacts[0], t.contacts[1]);
+                if segment_free(world, root, p1) && segment_free(world, p2, rover) {
+                    consider(t);
+                }
             }
         }
     }
-    let _ = toe_x();
     best
 }
 

@@ -15,6 +15,12 @@
 //!   (6.7, 0, 6.35), above the flat ground beyond the slope.
 //!
 //! The world's bounds are x in [-10, 12], y in [-10, 10], z from 0 to the ledge top (the pole's top with the pole).
+//!
+//! # Variants
+//! A scenario's `[world.ledge]` table ([`LedgeParams`]) gives another slope, height, depth or length and any poles
+//! (up to [`MAX_POLES`], each with position, radius and height), so variants of Paton's experiment are files:
+//! `host-sim/scenarios/variants/`. Tests 1-3's start, goal and root anchors above are Paton's; a variant's file
+//! gives its own.
 
 use super::{Aabb, World};
 use firmware::geom::{Real, Vec3};
@@ -25,7 +31,8 @@ use workloads::ledge::Ledge;
 use crate::truth::solid::{ExactGeometry, Solid};
 
 pub use workloads::ledge::{
-    toe_x, LEDGE_DEPTH_M, LEDGE_HALF_WIDTH_M, LEDGE_HEIGHT_M, POLE_CENTRE_XY, POLE_HEIGHT_M, POLE_RADIUS_M, SLOPE_DEG,
+    toe_x, LedgeError, LedgeShape, Pole, LEDGE_DEPTH_M, LEDGE_HALF_WIDTH_M, LEDGE_HEIGHT_M, MAX_POLES, POLE_CENTRE_XY,
+    POLE_HEIGHT_M, POLE_RADIUS_M, SLOPE_DEG,
 };
 
 /// Start ground point of tests 1-3 (on the ledge top, facing +x).
@@ -41,22 +48,102 @@ pub const ROOT_ANCHOR_TEST2: [f64; 3] = [6.7, 0.0, 6.35];
 
 type P = [f64; 3];
 
-/// The ledge world, optionally with the test-3 pole. See the module docs for the geometry.
+/// `[world.ledge]` of a scenario file: a variant of the ledge (Paton et al.'s when the table is absent). Every
+/// field optional; defaults are Paton's ([`LedgeShape::PATON`]), and `poles` defaults to none for `kind = "ledge"`
+/// and to the test-3 pole ([`Pole::TEST3`]) for `kind = "ledge_pole"`.
+#[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LedgeParams {
+    /// Slope of the front face, degrees from the horizontal (5-85). Default 55.
+    pub slope_deg: f64,
+    /// Height of the top above the ground, metres. Default 4.
+    pub height_m: f64,
+    /// Depth of the top from the back wall to the lip (at x = 0), metres. Default 5.
+    pub depth_m: f64,
+    /// Half the ledge's length along y, metres. Default 5.
+    pub half_width_m: f64,
+    /// Poles on the top (at most [`MAX_POLES`]); `None`: the kind's default.
+    pub poles: Option<Vec<PoleParams>>,
+}
+
+/// One `[[world.ledge.poles]]` entry.
+#[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PoleParams {
+    /// Axis position on the top, (x, y) metres.
+    pub centre_xy: [f64; 2],
+    /// Radius, metres. Default 0.25 (the test-3 pole's).
+    #[serde(default = "test3_radius")]
+    pub radius_m: f64,
+    /// Height above the top, metres. Default 6 (the test-3 pole's).
+    #[serde(default = "test3_height")]
+    pub height_m: f64,
+}
+
+fn test3_radius() -> f64 {
+    POLE_RADIUS_M
+}
+
+fn test3_height() -> f64 {
+    POLE_HEIGHT_M
+}
+
+impl Default for LedgeParams {
+    fn default() -> Self {
+        let LedgeShape { slope_deg, height_m, depth_m, half_width_m } = LedgeShape::PATON;
+        LedgeParams { slope_deg, height_m, depth_m, half_width_m, poles: None }
+    }
+}
+
+impl LedgeParams {
+    /// The shape and poles, with `default_poles` where the table names none.
+    pub fn resolve(&self, default_poles: &[Pole]) -> (LedgeShape, Vec<Pole>) {
+        let shape = LedgeShape {
+            slope_deg: self.slope_deg,
+            height_m: self.height_m,
+            depth_m: self.depth_m,
+            half_width_m: self.half_width_m,
+        };
+        let poles = match &self.poles {
+            Some(ps) => ps
+                .iter()
+                .map(|p| Pole { centre_xy: p.centre_xy, radius_m: p.radius_m, height_m: p.height_m })
+                .collect(),
+            None => default_poles.to_vec(),
+        };
+        (shape, poles)
+    }
+}
+
+/// The ledge world, optionally with poles on its top. See the module docs for the geometry.
 #[derive(Debug, Clone)]
 pub struct LedgeWorld {
-    name: &'static str,
+    name: String,
     ledge: Ledge,
 }
 
 impl LedgeWorld {
     /// Flat ground plus the ledge with its 55-degree slope (tests 1 and 2).
     pub fn new() -> Self {
-        LedgeWorld { name: "ledge55", ledge: Ledge::new() }
+        LedgeWorld { name: "ledge55".into(), ledge: Ledge::new() }
     }
 
     /// The ledge plus a tall pole in the middle of its top (test 3).
     pub fn with_pole() -> Self {
-        LedgeWorld { name: "ledge55-pole", ledge: Ledge::with_pole() }
+        LedgeWorld { name: "ledge55-pole".into(), ledge: Ledge::with_pole() }
+    }
+
+    /// A variant ([`Ledge::custom`]'s rules); Paton's two worlds keep their names, a variant is named by its
+    /// slope and pole count (`ledge40-2poles`).
+    pub fn custom(shape: LedgeShape, poles: &[Pole]) -> Result<Self, LedgeError> {
+        let ledge = Ledge::custom(shape, poles)?;
+        let name = match poles {
+            _ if shape != LedgeShape::PATON => format!("ledge{}-{}poles", shape.slope_deg, poles.len()),
+            [] => "ledge55".into(),
+            [p] if *p == Pole::TEST3 => "ledge55-pole".into(),
+            _ => format!("ledge55-{}poles", poles.len()),
+        };
+        Ok(LedgeWorld { name, ledge })
     }
 
     /// The analytic geometry this world wraps.
@@ -64,7 +151,7 @@ impl LedgeWorld {
         &self.ledge
     }
 
-    /// True when the world has the test-3 pole.
+    /// True when the world has a pole.
     pub fn has_pole(&self) -> bool {
         self.ledge.has_pole()
     }
@@ -108,12 +195,18 @@ impl DistanceField for LedgeWorld {
 
 impl World for LedgeWorld {
     fn name(&self) -> &str {
-        self.name
+        &self.name
     }
 
+    /// Paton's worlds: x in [-10, 12], y in [-10, 10]; a variant: at least 5 m of ground behind the back wall,
+    /// 9 m in front of the toe and 5 m beside the sides.
     fn bounds(&self) -> Aabb {
-        let top = if self.has_pole() { LEDGE_HEIGHT_M + POLE_HEIGHT_M } else { LEDGE_HEIGHT_M };
-        Aabb { min: Vec3::new(-10.0, -10.0, 0.0), max: Vec3::new(12.0, 10.0, top as Real) }
+        let shape = self.ledge.shape();
+        let x0 = (-shape.depth_m - 5.0).min(-10.0);
+        let x1 = (self.ledge.toe_x() + 9.0).max(12.0);
+        let y = (shape.half_width_m + 5.0).max(10.0);
+        let top = self.ledge.top_z();
+        Aabb { min: Vec3::new(x0 as Real, -y as Real, 0.0), max: Vec3::new(x1 as Real, y as Real, top as Real) }
     }
 
     fn raycast(&self, origin: &Vec3, dir: &Vec3, max_range: Real) -> Option<Real> {
@@ -125,14 +218,15 @@ impl World for LedgeWorld {
     }
 
     fn exact_geometry(&self) -> ExactGeometry {
-        // The ground, the ledge body (its x-z section: back wall, top, lip, slope, toe) and the pole.
-        let (h, xb, w) = (LEDGE_HEIGHT_M, -LEDGE_DEPTH_M, LEDGE_HALF_WIDTH_M);
+        // The ground, the ledge body (its x-z section: back wall, top, lip, slope, toe) and the poles.
+        let shape = self.ledge.shape();
+        let (h, xb, w) = (shape.height_m, -shape.depth_m, shape.half_width_m);
         let mut solids = vec![
             Solid::Ground { z: 0.0 },
-            Solid::xz_prism(&[[xb, 0.0], [toe_x(), 0.0], [0.0, h], [xb, h]], -w, w),
+            Solid::xz_prism(&[[xb, 0.0], [self.ledge.toe_x(), 0.0], [0.0, h], [xb, h]], -w, w),
         ];
-        if self.has_pole() {
-            solids.push(Solid::Cylinder { centre: POLE_CENTRE_XY, radius: POLE_RADIUS_M, z0: h, z1: h + POLE_HEIGHT_M });
+        for p in self.ledge.poles() {
+            solids.push(Solid::Cylinder { centre: p.centre_xy, radius: p.radius_m, z0: h, z1: h + p.height_m });
         }
         ExactGeometry { solids }
     }
