@@ -110,6 +110,11 @@ pub struct WorldSection {
     /// The mesh when `kind = "mesh"`.
     #[serde(default)]
     pub mesh: Option<MeshSection>,
+    /// Render the analytic world (`crater_wall`, `ledge`, `ledge_pole`) as a DEM with this post spacing, metres,
+    /// and use the DEM as the world ([`HeightmapWorld::render`]): the same experiment on a height field. Default:
+    /// the analytic world itself.
+    #[serde(default)]
+    pub dem_spacing_m: Option<f64>,
 }
 
 /// `[rover]`.
@@ -389,6 +394,13 @@ pub enum WorldSpec {
     Terrain(TerrainSection),
     /// A closed triangle mesh.
     Mesh(MeshSection),
+    /// An analytic world rendered as a DEM (`[world] dem_spacing_m`).
+    Rendered {
+        /// The analytic world.
+        of: Box<WorldSpec>,
+        /// Post spacing, metres.
+        spacing_m: f64,
+    },
 }
 
 impl WorldSpec {
@@ -439,6 +451,13 @@ impl WorldSpec {
             WorldSpec::Ledge { shape, poles } => LedgeWorld::custom(*shape, poles)
                 .map(|w| Box::new(w) as Box<dyn World>)
                 .map_err(|e| ledge_error(&e)),
+            WorldSpec::Rendered { of, spacing_m } => {
+                let analytic = of.build(base)?;
+                let name = format!("{}-dem{spacing_m}", analytic.name());
+                HeightmapWorld::render(&name, analytic.as_ref(), *spacing_m)
+                    .map(|w| Box::new(w) as Box<dyn World>)
+                    .map_err(|e| ("world.dem_spacing_m".to_string(), e.0))
+            }
             WorldSpec::Terrain(t) => {
                 let f = |r: String| ("world.terrain".to_string(), r);
                 let path = base.join(&t.file);
@@ -610,7 +629,14 @@ impl Scenario {
                 return Err(self.err(table, format!("applies to kind = {:?}, not {:?}", kinds.join(" or "), w.kind)));
             }
         }
-        Ok(spec)
+        match w.dem_spacing_m {
+            None => Ok(spec),
+            Some(_) if matches!(spec, WorldSpec::Terrain(_) | WorldSpec::Mesh(_)) => Err(self.err(
+                "world.dem_spacing_m",
+                format!("renders an analytic world (crater_wall, ledge, ledge_pole) as a DEM, not kind = {:?}", w.kind),
+            )),
+            Some(spacing_m) => Ok(WorldSpec::Rendered { of: Box::new(spec), spacing_m }),
+        }
     }
 
     /// Builds the world (terrain paths relative to the scenario file).
@@ -856,6 +882,32 @@ position = [6.0, 0.0, 0.35]
             (LEDGE.replace("radius_m = 0.4", "radius = 0.4"), "(syntax)", "unknown field"),
             (LEDGE.replace("kind = \"ledge\"", "kind = \"crater_wall\""), "world.ledge", "applies to kind"),
             (CRATER.replace("kind = \"crater_wall\"", "kind = \"ledge\""), "world.crater_wall", "applies to kind"),
+        ];
+        for (text, field, reason) in cases {
+            let e = check_text(&text).unwrap_err();
+            assert_eq!(e.field, field, "{e}");
+            assert!(e.reason.contains(reason), "{e}");
+        }
+    }
+
+    /// `dem_spacing_m` renders the analytic world as a DEM: the same heights at the posts, a height-field world.
+    #[test]
+    fn an_analytic_world_rendered_as_a_dem() {
+        let text = LEDGE.replace("kind = \"ledge\"", "kind = \"ledge\"\ndem_spacing_m = 0.05");
+        let sc = check_text(&text).unwrap();
+        assert!(matches!(sc.world_spec().unwrap(), WorldSpec::Rendered { spacing_m: 0.05, .. }));
+        let (dem, exact) = (sc.build_world().unwrap(), check_text(LEDGE).unwrap().build_world().unwrap());
+        assert_eq!(dem.name(), "ledge45-2poles-dem0.05");
+        assert!(dem.exact_geometry().solids.iter().any(|s| matches!(s, crate::truth::solid::Solid::HeightGrid { .. })));
+        // at posts (multiples of 0.05 m) the DEM is the analytic height, the off-centre poles included
+        for (x, y) in [(-4.0, 0.0), (-2.5, 1.0), (-1.0, -1.5), (1.0, 0.0), (0.0, 2.0), (6.0, -3.0)] {
+            let (a, b) = (dem.height_at(x, y).unwrap(), exact.height_at(x, y).unwrap());
+            assert!((a - b).abs() < 1e-5, "({x}, {y}): DEM {a} vs analytic {b}");
+        }
+        let cases: Vec<(String, &str, &str)> = vec![
+            (text.replace("dem_spacing_m = 0.05", "dem_spacing_m = 0.0"), "world.dem_spacing_m", "at least"),
+            (text.replace("dem_spacing_m = 0.05", "dem_spacing_m = 0.002"), "world.dem_spacing_m", "coarser"),
+            (HIRISE.replace("kind = \"terrain\"", "kind = \"terrain\"\ndem_spacing_m = 0.5"), "world.dem_spacing_m", "analytic"),
         ];
         for (text, field, reason) in cases {
             let e = check_text(&text).unwrap_err();

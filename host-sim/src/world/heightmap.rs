@@ -61,7 +61,15 @@ pub struct HeightmapWorld {
     z_max: f64,
     /// Distances up to this are exact (see the module docs). Default 4.0 m.
     pub exact_radius_m: f64,
+    /// Height range `(lowest, highest)` of the posts of each block of [`BLOCK`] x [`BLOCK`] cells, row by row
+    /// (`(inf, -inf)`: no post): the distance search skips a block whose box is farther than the best triangle.
+    block_z: Vec<(f64, f64)>,
+    /// Blocks along x.
+    blocks_x: usize,
 }
+
+/// Cells per side of a block of the distance search (see `block_z`). Default 8.
+const BLOCK: usize = 8;
 
 /// Why a heightmap cannot become a world.
 #[derive(Debug, Clone, PartialEq)]
@@ -75,7 +83,48 @@ impl core::fmt::Display for HeightmapWorldError {
 
 impl core::error::Error for HeightmapWorldError {}
 
+/// Most posts of a rendering ([`HeightmapWorld::render`]). Default 16 M (24 m x 20 m at 0.01 m; 128 MiB of
+/// heights on the host).
+pub const MAX_RENDER_POSTS: usize = 16 << 20;
+
 impl HeightmapWorld {
+    /// `world` sampled as a DEM with posts `spacing_m` apart (a scenario's `[world] dem_spacing_m`): a square grid
+    /// centred on the origin, posts on both axes (so the ledge's lip at x = 0 is a row of posts), covering the
+    /// world's bounds; each post the world's `height_at`. A DEM's lowest post is z = 0, so the rendering keeps the
+    /// world's coordinates when its lowest ground is z = 0 (the ledge and the crater wall); otherwise refused.
+    pub fn render(name: &str, world: &dyn World, spacing_m: f64) -> Result<HeightmapWorld, HeightmapWorldError> {
+        let bad = |s: String| Err(HeightmapWorldError(s));
+        if !(spacing_m.is_finite() && spacing_m >= MIN_POST_SPACING_M) {
+            return bad(format!("dem_spacing_m must be finite and at least {MIN_POST_SPACING_M} m, got {spacing_m}"));
+        }
+        let b = world.bounds();
+        let half = |lo: Real, hi: Real| f64::from(lo.abs().max(hi.abs()));
+        let (nx, ny) = ((half(b.min.x, b.max.x) / spacing_m).ceil(), (half(b.min.y, b.max.y) / spacing_m).ceil());
+        let posts = (2.0 * nx + 1.0) * (2.0 * ny + 1.0);
+        if posts.is_nan() || posts > MAX_RENDER_POSTS as f64 {
+            return bad(format!(
+                "a rendering at {spacing_m} m needs {posts:.3e} posts, above {MAX_RENDER_POSTS}: use a coarser dem_spacing_m"
+            ));
+        }
+        let (nx, ny) = (nx as usize, ny as usize);
+        let (w, h) = (2 * nx + 1, 2 * ny + 1);
+        let mut heights = Vec::with_capacity(w * h);
+        for j in 0..h {
+            for i in 0..w {
+                let (x, y) = ((i as f64 - nx as f64) * spacing_m, (j as f64 - ny as f64) * spacing_m);
+                heights.push(world.height_at(x as Real, y as Real).map(f64::from));
+            }
+        }
+        let lowest = heights.iter().flatten().copied().fold(f64::INFINITY, f64::min);
+        if lowest != 0.0 {
+            return bad(format!(
+                "the world's lowest ground in its bounds is z = {lowest}, not 0: a DEM starts at z = 0, so the rendering \
+                 would move the terrain"
+            ));
+        }
+        HeightmapWorld::new(name, &Heightmap { width: w, height: h, spacing_m, heights_m: heights }, 1.0, 1.0)
+    }
+
     /// Builds the world from `hm`, multiplying post spacing by `horizontal_scale` and heights by
     /// `vertical_scale`, and subtracting the minimum height so the lowest post is at z = 0.
     pub fn new(
@@ -135,7 +184,25 @@ impl HeightmapWorld {
                  march steps, above the ray-cast budget of {RAYCAST_MAX_STEPS}: check horizontal_scale / vertical_scale"
             ));
         }
-        let heights = raw.iter().map(|h| h - lo).collect();
+        let heights: Vec<f64> = raw.iter().map(|h| h - lo).collect();
+        let (blocks_x, blocks_y) = ((hm.width - 1).div_ceil(BLOCK), (hm.height - 1).div_ceil(BLOCK));
+        let mut block_z = vec![(f64::INFINITY, f64::NEG_INFINITY); blocks_x * blocks_y];
+        // a block's posts: its cells' corners, so the shared row and column on its far sides count in both
+        for j in 0..hm.height {
+            for i in 0..hm.width {
+                let h = heights[j * hm.width + i];
+                if !h.is_finite() {
+                    continue;
+                }
+                for bj in [j / BLOCK, j.saturating_sub(1) / BLOCK] {
+                    for bi in [i / BLOCK, i.saturating_sub(1) / BLOCK] {
+                        if let Some(z) = block_z.get_mut(bj.min(blocks_y - 1) * blocks_x + bi.min(blocks_x - 1)) {
+                            *z = (z.0.min(h), z.1.max(h));
+                        }
+                    }
+                }
+            }
+        }
         Ok(HeightmapWorld {
             name: name.to_string(),
             nx: hm.width,
@@ -147,6 +214,8 @@ impl HeightmapWorld {
             z_min: 0.0,
             z_max: hi - lo,
             exact_radius_m: 4.0,
+            block_z,
+            blocks_x,
         })
     }
 
@@ -202,6 +271,11 @@ impl HeightmapWorld {
     }
 
     /// [`Self::sdf_closest_within`] with the closest triangle's unit normal (pointing up, out of the terrain).
+    ///
+    /// The triangles of the cells in square rings round `p`'s cell, out to the ring the radius reaches, and the
+    /// nearest of them; among equally near ones the first in ring order (ring, then row, then column, then the
+    /// cell's first triangle). Blocks of cells, and cells, whose bounding box lies farther than the nearest
+    /// triangle so far are skipped, and so are rings of blocks beyond it: the answer is the full scan's.
     fn closest_within(&self, p: P3, radius: f64) -> Option<(f64, P3, P3)> {
         let ci = (((p[0] - self.x0) / self.spacing).floor() as i64).clamp(0, self.nx as i64 - 2);
         let cj = (((p[1] - self.y0) / self.spacing).floor() as i64).clamp(0, self.ny as i64 - 2);
@@ -210,34 +284,68 @@ impl HeightmapWorld {
         let gy = (self.y0 + cj as f64 * self.spacing - p[1]).max(p[1] - (self.y0 + (cj + 1) as f64 * self.spacing)).max(0.0);
         let outside = (gx * gx + gy * gy).sqrt();
         let max_ring = ((radius + outside) / self.spacing).ceil() as i64 + 1;
-        let mut best: Option<(f64, P3, [P3; 3])> = None;
-        for k in 0..=max_ring.min(self.nx.max(self.ny) as i64) {
-            if let Some((d, _, _)) = best {
-                if (k - 1) as f64 * self.spacing > d + outside {
+        let kmax = max_ring.min(self.nx.max(self.ny) as i64);
+        let (ilo, ihi) = ((ci - kmax).max(0), (ci + kmax).min(self.nx as i64 - 2));
+        let (jlo, jhi) = ((cj - kmax).max(0), (cj + kmax).min(self.ny as i64 - 2));
+        let b = BLOCK as i64;
+        let (bci, bcj) = (ci / b, cj / b);
+        let block_rings = (bci - ilo / b).max(ihi / b - bci).max(bcj - jlo / b).max(jhi / b - bcj);
+        // distance from p to a box, a lower bound of every triangle's in it; skip only when clearly farther, so
+        // an equally near triangle is never skipped
+        let box_dist = |x: [f64; 2], y: [f64; 2], z: (f64, f64)| {
+            let ax = (x[0] - p[0]).max(p[0] - x[1]).max(0.0);
+            let ay = (y[0] - p[1]).max(p[1] - y[1]).max(0.0);
+            let az = (z.0 - p[2]).max(p[2] - z.1).max(0.0);
+            (ax * ax + ay * ay + az * az).sqrt()
+        };
+        let farther = |lb: f64, d: f64| lb > d * (1.0 + 1e-9) + 1e-12;
+        // (distance, ring-order key, closest point, triangle)
+        let mut best: Option<(f64, [i64; 4], P3, [P3; 3])> = None;
+        for r in 0..=block_rings {
+            if let Some((d, ..)) = best {
+                // every cell of block ring r is at least (r - 1) B cells from p's cell
+                if farther(((r - 1) * b) as f64 * self.spacing - outside, d) {
                     break;
                 }
             }
-            for dj in -k..=k {
-                for di in -k..=k {
-                    if di.abs() != k && dj.abs() != k {
+            for bj in (bcj - r).max(jlo / b)..=(bcj + r).min(jhi / b) {
+                for bi in (bci - r).max(ilo / b)..=(bci + r).min(ihi / b) {
+                    if (bi - bci).abs() != r && (bj - bcj).abs() != r {
                         continue;
                     }
-                    let (i, j) = (ci + di, cj + dj);
-                    if i < 0 || j < 0 || i > self.nx as i64 - 2 || j > self.ny as i64 - 2 {
+                    let Some(&z) = self.block_z.get(bj as usize * self.blocks_x + bi as usize) else { continue };
+                    let (x0, y0) = (self.x0 + (bi * b) as f64 * self.spacing, self.y0 + (bj * b) as f64 * self.spacing);
+                    let (x1, y1) = (x0 + b as f64 * self.spacing, y0 + b as f64 * self.spacing);
+                    if z.0 > z.1 || best.is_some_and(|(d, ..)| farther(box_dist([x0, x1], [y0, y1], z), d)) {
                         continue;
                     }
-                    let Some(tris) = self.cell_triangles(i as usize, j as usize) else { continue };
-                    for t in tris {
-                        let q = closest_point_on_triangle(p, t[0], t[1], t[2]);
-                        let d = norm(sub(p, q));
-                        if best.is_none_or(|(b, _, _)| d < b) {
-                            best = Some((d, q, t));
+                    for j in (bj * b).max(jlo)..=((bj + 1) * b - 1).min(jhi) {
+                        for i in (bi * b).max(ilo)..=((bi + 1) * b - 1).min(ihi) {
+                            let Some(tris) = self.cell_triangles(i as usize, j as usize) else { continue };
+                            if let Some((d, ..)) = best {
+                                let [a, c, e] = tris[0];
+                                let f = tris[1][2];
+                                let zr = (a[2].min(c[2]).min(e[2]).min(f[2]), a[2].max(c[2]).max(e[2]).max(f[2]));
+                                if farther(box_dist([a[0], c[0]], [a[1], f[1]], zr), d) {
+                                    continue;
+                                }
+                            }
+                            let (di, dj) = (i - ci, j - cj);
+                            let k = di.abs().max(dj.abs());
+                            for (ti, t) in tris.into_iter().enumerate() {
+                                let q = closest_point_on_triangle(p, t[0], t[1], t[2]);
+                                let d = norm(sub(p, q));
+                                let key = [k, dj, di, ti as i64];
+                                if best.is_none_or(|(bd, bk, ..)| d < bd || (d == bd && key < bk)) {
+                                    best = Some((d, key, q, t));
+                                }
+                            }
                         }
                     }
                 }
             }
         }
-        let (d, q, t) = best?;
+        let (d, _, q, t) = best?;
         let above = match self.height(p[0].clamp(self.x0, -self.x0), p[1].clamp(self.y0, -self.y0)) {
             Some(h) => p[2] >= h,
             None => {
@@ -379,6 +487,87 @@ impl World for HeightmapWorld {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The distance search without blocks or pruning: every cell of every ring out to the radius, in ring order
+    /// (the search before the blocks, kept here as the oracle).
+    fn full_scan(w: &HeightmapWorld, p: P3, radius: f64) -> Option<(f64, P3, [P3; 3])> {
+        let ci = (((p[0] - w.x0) / w.spacing).floor() as i64).clamp(0, w.nx as i64 - 2);
+        let cj = (((p[1] - w.y0) / w.spacing).floor() as i64).clamp(0, w.ny as i64 - 2);
+        let gx = (w.x0 + ci as f64 * w.spacing - p[0]).max(p[0] - (w.x0 + (ci + 1) as f64 * w.spacing)).max(0.0);
+        let gy = (w.y0 + cj as f64 * w.spacing - p[1]).max(p[1] - (w.y0 + (cj + 1) as f64 * w.spacing)).max(0.0);
+        let outside = (gx * gx + gy * gy).sqrt();
+        let max_ring = ((radius + outside) / w.spacing).ceil() as i64 + 1;
+        let mut best: Option<(f64, P3, [P3; 3])> = None;
+        for k in 0..=max_ring.min(w.nx.max(w.ny) as i64) {
+            for dj in -k..=k {
+                for di in -k..=k {
+                    let (i, j) = (ci + di, cj + dj);
+                    if (di.abs() != k && dj.abs() != k) || i < 0 || j < 0 || i > w.nx as i64 - 2 || j > w.ny as i64 - 2 {
+                        continue;
+                    }
+                    for t in w.cell_triangles(i as usize, j as usize).into_iter().flatten() {
+                        let q = closest_point_on_triangle(p, t[0], t[1], t[2]);
+                        let d = norm(sub(p, q));
+                        if best.is_none_or(|(b, _, _)| d < b) {
+                            best = Some((d, q, t));
+                        }
+                    }
+                }
+            }
+        }
+        best
+    }
+
+    /// The block-pruned search gives the full scan's answer to the bit (distance, closest point and triangle, so
+    /// the same normal), on a rough DEM with flat patches (ties), a hole and a cliff, near and far from it, inside
+    /// and outside the grid, with the default radius and a short one.
+    #[test]
+    fn the_pruned_search_is_the_full_scan() {
+        let (nx, ny) = (53, 41);
+        let mut state: u64 = 0x853c_49e6_748f_ea9b;
+        let mut unit = move || {
+            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut heights = Vec::with_capacity(nx * ny);
+        for j in 0..ny {
+            for i in 0..nx {
+                let h = match (i, j) {
+                    (10..=14, 8..=12) => None,                       // a hole
+                    (20..=30, _) => Some(1.0),                       // a flat band: many equal distances
+                    (31.., _) => Some(3.0 + 0.2 * unit()),           // above a cliff
+                    _ => Some(0.5 * unit() + 0.02 * (i + j) as f64), // rough
+                };
+                heights.push(h);
+            }
+        }
+        let w = HeightmapWorld::new("rough", &Heightmap { width: nx, height: ny, spacing_m: 0.1, heights_m: heights }, 1.0, 1.0)
+            .expect("dem");
+        let mut n = 0;
+        for k in 0..3000 {
+            let p = [6.0 * (unit() - 0.5), 5.0 * (unit() - 0.5), 5.0 * unit() - 0.5];
+            // some exactly above posts and cell edges of the flat band (ties between triangles and cells)
+            let p = if k % 5 == 0 { [w.x0 + 0.1 * (20 + k % 11) as f64, w.y0 + 0.1 * (k % 40) as f64, 1.0 + 0.3 * unit()] } else { p };
+            for radius in [w.exact_radius_m, 0.35] {
+                let got = w.closest_within(p, radius);
+                let want = full_scan(&w, p, radius);
+                match (got, want) {
+                    (Some((d, q, up)), Some((wd, wq, t))) => {
+                        let nrm = cross(sub(t[1], t[0]), sub(t[2], t[0]));
+                        let l = norm(nrm);
+                        let wup = if l > 0.0 { [nrm[0] / l, nrm[1] / l, nrm[2] / l] } else { [0.0, 0.0, 1.0] };
+                        let wup = if wup[2] < 0.0 { [-wup[0], -wup[1], -wup[2]] } else { wup };
+                        let bits = |d: f64, q: P3, u: P3| (d.to_bits(), q.map(f64::to_bits), u.map(f64::to_bits));
+                        assert_eq!(bits(d.abs(), q, up), bits(wd, wq, wup), "{p:?} r {radius}");
+                        n += 1;
+                    }
+                    (None, None) => {}
+                    other => panic!("{p:?} r {radius}: {other:?}"),
+                }
+            }
+        }
+        assert!(n > 5000, "{n}");
+    }
 
     /// A tilted plane z = 0.3 x + 0.1 y as a DEM: distance is analytic.
     fn plane() -> HeightmapWorld {
