@@ -144,3 +144,20 @@ fn just_over_the_lip_the_boom_reaches_back_past_it_and_the_tether_runs_to_the_ro
     let to_lip = j.hold(pose, &TetherSpec { anchor: lip, free_length_m: None });
     assert_eq!(to_lip.outcome, HoldOutcome::Falls, "{to_lip:?}");
 }
+
+/// Regression: on the 0.05 m DEM rendering of the ledge (`scenarios/variants/ledge_test1_dem.toml`) the judge
+/// could not place the rover at x = -1.25 or -1.2 on the flat top (parry's height-field ray cast missed the
+/// vertical rays along those post columns), so every test-1 path on the rendering was counted unstable at its
+/// sixth pose. Every post position along test 1's start row now places, at the top's height.
+#[test]
+fn the_rover_is_placed_on_a_dem_rendering_at_every_post() {
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/variants/ledge_test1_dem.toml");
+    let world = crate::scenario::load(&file).expect("scenario").build_world().expect("world");
+    let j = judge(world.as_ref());
+    for k in 0..=40 {
+        let x = -2.0 + 0.05 * f64::from(k);
+        let axle = j.axle_at(GroundPose { x, y: 0.0, yaw: 0.0 });
+        let z = axle.unwrap_or_else(|| panic!("no placement at x = {x}"))[2];
+        assert!((z - 4.35).abs() < 0.01, "x = {x}: axle at z = {z}");
+    }
+}
