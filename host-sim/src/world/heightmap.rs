@@ -270,6 +270,17 @@ impl HeightmapWorld {
         self.closest_within(p, radius).map(|(d, q, _)| (d, q))
     }
 
+    /// Where the distance search starts: `p`'s cell (clamped into the grid), `p`'s horizontal distance from it
+    /// (`p` may be outside the grid) and the last ring of cells within `radius`.
+    fn search_start(&self, p: P3, radius: f64) -> (i64, i64, f64, i64) {
+        let ci = (((p[0] - self.x0) / self.spacing).floor() as i64).clamp(0, self.nx as i64 - 2);
+        let cj = (((p[1] - self.y0) / self.spacing).floor() as i64).clamp(0, self.ny as i64 - 2);
+        let gx = (self.x0 + ci as f64 * self.spacing - p[0]).max(p[0] - (self.x0 + (ci + 1) as f64 * self.spacing)).max(0.0);
+        let gy = (self.y0 + cj as f64 * self.spacing - p[1]).max(p[1] - (self.y0 + (cj + 1) as f64 * self.spacing)).max(0.0);
+        let outside = (gx * gx + gy * gy).sqrt();
+        (ci, cj, outside, ((radius + outside) / self.spacing).ceil() as i64 + 1)
+    }
+
     /// [`Self::sdf_closest_within`] with the closest triangle's unit normal (pointing up, out of the terrain).
     ///
     /// The triangles of the cells in square rings round `p`'s cell, out to the ring the radius reaches, and the
@@ -277,13 +288,7 @@ impl HeightmapWorld {
     /// cell's first triangle). Blocks of cells, and cells, whose bounding box lies farther than the nearest
     /// triangle so far are skipped, and so are rings of blocks beyond it: the answer is the full scan's.
     fn closest_within(&self, p: P3, radius: f64) -> Option<(f64, P3, P3)> {
-        let ci = (((p[0] - self.x0) / self.spacing).floor() as i64).clamp(0, self.nx as i64 - 2);
-        let cj = (((p[1] - self.y0) / self.spacing).floor() as i64).clamp(0, self.ny as i64 - 2);
-        // Horizontal distance from p to the clamped cell (p may be outside the grid).
-        let gx = (self.x0 + ci as f64 * self.spacing - p[0]).max(p[0] - (self.x0 + (ci + 1) as f64 * self.spacing)).max(0.0);
-        let gy = (self.y0 + cj as f64 * self.spacing - p[1]).max(p[1] - (self.y0 + (cj + 1) as f64 * self.spacing)).max(0.0);
-        let outside = (gx * gx + gy * gy).sqrt();
-        let max_ring = ((radius + outside) / self.spacing).ceil() as i64 + 1;
+        let (ci, cj, outside, max_ring) = self.search_start(p, radius);
         let kmax = max_ring.min(self.nx.max(self.ny) as i64);
         let (ilo, ihi) = ((ci - kmax).max(0), (ci + kmax).min(self.nx as i64 - 2));
         let (jlo, jhi) = ((cj - kmax).max(0), (cj + kmax).min(self.ny as i64 - 2));
@@ -491,12 +496,7 @@ mod tests {
     /// The distance search without blocks or pruning: every cell of every ring out to the radius, in ring order
     /// (the search before the blocks, kept here as the oracle).
     fn full_scan(w: &HeightmapWorld, p: P3, radius: f64) -> Option<(f64, P3, [P3; 3])> {
-        let ci = (((p[0] - w.x0) / w.spacing).floor() as i64).clamp(0, w.nx as i64 - 2);
-        let cj = (((p[1] - w.y0) / w.spacing).floor() as i64).clamp(0, w.ny as i64 - 2);
-        let gx = (w.x0 + ci as f64 * w.spacing - p[0]).max(p[0] - (w.x0 + (ci + 1) as f64 * w.spacing)).max(0.0);
-        let gy = (w.y0 + cj as f64 * w.spacing - p[1]).max(p[1] - (w.y0 + (cj + 1) as f64 * w.spacing)).max(0.0);
-        let outside = (gx * gx + gy * gy).sqrt();
-        let max_ring = ((radius + outside) / w.spacing).ceil() as i64 + 1;
+        let (ci, cj, _, max_ring) = w.search_start(p, radius);
         let mut best: Option<(f64, P3, [P3; 3])> = None;
         for k in 0..=max_ring.min(w.nx.max(w.ny) as i64) {
             for dj in -k..=k {
