@@ -533,3 +533,33 @@ fn team_over_the_link_equals_direct_on_the_crevasse_reroute() {
     assert_eq!(l.walls, vec![((1, 2), (1, 3))]);
     assert_eq!(l.visited, vec![(1, 1), (1, 2), (2, 2), (2, 3), (1, 3)]);
 }
+
+/// The in-process executive hands its team storage back when its run ends, and the next run on the thread gets it
+/// (a board lends its statics once, so one lending must serve mission after mission): three runs on one thread
+/// make one storage, not three, and a run on storage that served another world first (the crevasse, another grid)
+/// is identical to the run on fresh storage.
+#[test]
+fn in_process_team_runs_reuse_one_team_storage_and_the_reuse_changes_nothing() {
+    let run = |world: &str, fail: Option<(usize, usize)>, seed: u64| {
+        let (surf, start, mut cfg, _, _) = team_scenario(world, &data(""), fail, seed).unwrap();
+        cfg.grip = GripModel::never_slips(cfg.params.h_max as f64);
+        simulate_over(surf.as_ref(), &start, &cfg, &mut team_rng(seed), TeamLink::Inproc).unwrap()
+    };
+    // the 8 MiB stack of `direct_and_link`, for the unoptimised test profile
+    let (first, second, third, made) = std::thread::Builder::new()
+        .stack_size(8 << 20)
+        .spawn(move || {
+            let made_before = host_sim::team::flight::team_lends_made();
+            let first = run("itokawa", Some((1, 2)), 3);
+            let second = run("crevasse", None, 1);
+            let third = run("itokawa", Some((1, 2)), 3);
+            (first, second, third, host_sim::team::flight::team_lends_made() - made_before)
+        })
+        .unwrap()
+        .join()
+        .unwrap();
+    assert_eq!(made, 1, "each in-process run made its own team storage");
+    assert_same_run("itokawa", 3, &first, &third);
+    assert_eq!(first.outcome, Some(MissionOutcome::GoalReached), "{:?}", first.stats);
+    assert_eq!(second.visited, vec![(1, 1), (1, 2), (2, 2), (2, 3), (1, 3)]);
+}

@@ -13,10 +13,14 @@
 //! The mission borrows its D* Lite arena (`GLOBAL_GRID_MAX_CELLS` = 4096 scenes, ~190 KiB), the local planner
 //! (`DefaultLocalPlanner`, ~0.6 MiB) and the scan reassembly (`TEAM_SCAN_POINTS_CAPACITY` = 4096 points, 48 KiB) for
 //! its whole run, and the mission itself (~7 KiB) lives beside them; so they are lent to the executive for good as a
-//! [`TeamLend`] of `&'static mut` parts
-//! ([`Executive::lend_team`]): the board's `.psram` statics, the host's leaked boxes. A mission keeps its storage
-//! after it ends (`TeamMission` has no way to hand it back), so **one team mission per lending**: a later team goal
-//! is answered `PlannerUnavailable`. Without a lending every team goal is `PlannerUnavailable`.
+//! [`TeamLend`] of `'static` parts ([`Executive::lend_team`]): the board's `.psram` statics, the host's boxes. An
+//! ended mission stays readable (its scene and hop graph, for the host's pictures) until the next team goal, which
+//! takes the storage back from it ([`TeamMission::into_storage`]) and starts on it; so a lending serves any number of
+//! missions, one at a time. [`Executive::reclaim_team`] hands the storage back to the lender while no mission runs
+//! (the host reuses it for its next in-process executive). Without a lending every team goal is
+//! `PlannerUnavailable`; a grid larger than the lent D* Lite storage is `InvalidInput`, the storage kept.
+//!
+//! [`TeamMission::into_storage`]: crate::plan::team::mission::TeamMission::into_storage
 //!
 //! ## Order and duplicates
 //! A scan chunk or report must answer the pending order's `command_id` (`Nack(UnknownCommand)` otherwise), name
@@ -34,9 +38,9 @@ use hal::{ByteLink, Instant, MonotonicClock, Watchdog};
 use super::{Autonomy, ExecStorage, Executive, Reply};
 use crate::config::exec::TEAM_COMMAND_RESEND_US;
 use crate::config::protocol::TEAM_SCAN_POINTS_CAPACITY;
-use crate::config::team::{MissionParams, TeamParams, GLOBAL_GRID_MAX_CELLS, TEAM_SIZE};
+use crate::config::team::{MissionParams, TeamParams, TEAM_SIZE};
 use crate::geom::Vec3;
-use crate::plan::team::dstar_lite::DStarArena;
+use crate::plan::team::dstar_lite::DStarStorage;
 use crate::plan::team::mission::{
     Blocked, Budget, Command, DefaultTeamMission, LossCause, MissionOutcome, Report, SceneGrid,
 };
@@ -48,8 +52,9 @@ use crate::protocol::{
 
 /// The team mission's storage, lent for good (module docs).
 pub struct TeamLend {
-    /// D* Lite's arena over the grid of scenes.
-    pub dstar: &'static mut DStarArena<GLOBAL_GRID_MAX_CELLS>,
+    /// D* Lite's storage over the grid of scenes (a `DStarArena<GLOBAL_GRID_MAX_CELLS>`'s `storage()`: a smaller
+    /// one refuses larger grids).
+    pub dstar: DStarStorage<'static>,
     /// The bounded-leg A* local planner.
     pub planner: &'static mut DefaultLocalPlanner,
     /// Team scan reassembly.
@@ -73,7 +78,8 @@ struct ScanIn {
 
 /// A running (or finished) mission.
 pub(super) struct TeamRun {
-    mission: &'static mut DefaultTeamMission<'static>,
+    /// The lent mission slot, `Some` for the run's whole life (`None` only once [`TeamRun::into_lend`] took it).
+    slot: &'static mut Option<DefaultTeamMission<'static>>,
     points: &'static mut [Vec3; TEAM_SCAN_POINTS_CAPACITY],
     goal_id: u32,
     /// The pending order, its id and when it was last sent.
@@ -124,6 +130,11 @@ fn robot(r: u8) -> usize {
     usize::from(r)
 }
 
+/// Steps the mission in `slot` (always there while its run lives; an empty slot ends the run).
+fn step_mission(slot: &mut Option<DefaultTeamMission<'static>>, report: Report<'_>) -> Command {
+    slot.as_mut().map_or(Command::Done(MissionOutcome::LeftGrid), |m| m.step(report))
+}
+
 impl TeamRun {
     /// The order for `cmd` (a robot index from the mission is below `TEAM_SIZE`, so it fits a `u8`).
     fn order(&self, cmd: Command) -> TeamOrder {
@@ -133,11 +144,11 @@ impl TeamRun {
             Command::Hop { robot, target } => TeamOrder::Hop {
                 robot: idx(robot),
                 target: p3(&target),
-                scene_normal: p3(&self.mission.planner().scene.frame.n),
+                scene_normal: p3(&self.mission().map_or(Vec3::z(), |m| m.planner().scene.frame.n)),
             },
             Command::MoveHub { to } => TeamOrder::MoveHub { to: p3(&to) },
             Command::Done(o) => {
-                let s = self.mission.stats();
+                let s = self.mission().map(|m| m.stats()).unwrap_or_default();
                 TeamOrder::Done { outcome: outcome(o), rounds: s.rounds, hops: s.hops, walls: s.walls }
             }
         }
@@ -145,27 +156,49 @@ impl TeamRun {
 
     /// Ended: the mission's outcome is in, or it was stopped.
     fn ended(&self) -> bool {
-        self.aborted || self.mission.outcome().is_some()
+        self.aborted || self.mission().is_none_or(|m| m.outcome().is_some())
     }
 
     /// The mission, for the host's pictures and reports (in-process only).
-    pub(super) fn mission(&self) -> &DefaultTeamMission<'static> {
-        self.mission
+    pub(super) fn mission(&self) -> Option<&DefaultTeamMission<'static>> {
+        self.slot.as_ref()
+    }
+
+    /// The run's storage, taken back from its mission (which ends here) for the next one.
+    fn into_lend(self) -> Option<TeamLend> {
+        let (dstar, planner) = self.slot.take()?.into_storage();
+        Some(TeamLend { dstar, planner, points: self.points, mission: self.slot })
     }
 }
 
 impl<L: ByteLink, C: MonotonicClock, W: Watchdog, A: Autonomy, S: BorrowMut<ExecStorage>> Executive<L, C, W, A, S> {
-    /// Lends the team mission's storage for good (module docs). A second lending replaces an unused first one.
-    pub fn lend_team(&mut self, lend: TeamLend) {
-        if !matches!(self.team, TeamSlot::Run(_)) {
-            self.team = TeamSlot::Free(lend);
+    /// Lends the team mission's storage for good (module docs). A second lending replaces an unused first one
+    /// (and is refused, handed back, while a mission runs or its storage holds the last one's results).
+    pub fn lend_team(&mut self, lend: TeamLend) -> Result<(), TeamLend> {
+        if matches!(self.team, TeamSlot::Run(_)) {
+            return Err(lend);
+        }
+        self.team = TeamSlot::Free(lend);
+        Ok(())
+    }
+
+    /// The team storage handed back (module docs), unless a mission is running; the last mission's results go
+    /// with it. Team goals are `PlannerUnavailable` until the next lending.
+    pub fn reclaim_team(&mut self) -> Option<TeamLend> {
+        if self.team_running() {
+            return None;
+        }
+        match core::mem::take(&mut self.team) {
+            TeamSlot::Unlent => None,
+            TeamSlot::Free(lend) => Some(lend),
+            TeamSlot::Run(run) => run.into_lend(),
         }
     }
 
     /// The team mission (running or ended), if one was started.
     pub fn team_mission(&self) -> Option<&DefaultTeamMission<'static>> {
         match &self.team {
-            TeamSlot::Run(r) => Some(r.mission()),
+            TeamSlot::Run(r) => r.mission(),
             _ => None,
         }
     }
@@ -195,8 +228,14 @@ impl<L: ByteLink, C: MonotonicClock, W: Watchdog, A: Autonomy, S: BorrowMut<Exec
         if self.team_running() {
             return Err(NackReason::NoTeam);
         }
-        let TeamSlot::Free(lend) = core::mem::take(&mut self.team) else {
-            self.note(LogLevel::Warn, format_args!("team goal {}: no team storage free", g.goal_id));
+        let lend = match core::mem::take(&mut self.team) {
+            TeamSlot::Free(lend) => Some(lend),
+            // the last mission ended: its storage serves this one
+            TeamSlot::Run(run) => run.into_lend(),
+            TeamSlot::Unlent => None,
+        };
+        let Some(lend) = lend else {
+            self.note(LogLevel::Warn, format_args!("team goal {}: no team storage lent", g.goal_id));
             return Ok(PlanState::PlannerUnavailable);
         };
         let grid = SceneGrid {
@@ -210,10 +249,20 @@ impl<L: ByteLink, C: MonotonicClock, W: Watchdog, A: Autonomy, S: BorrowMut<Exec
         let goal = v3(&g.position);
         let start: [Vec3; TEAM_SIZE] = cfg.start.map(|p| v3(&p));
         let hub = start.iter().fold(Vec3::zeros(), |a, p| a + p) / TEAM_SIZE as f32;
+        // checked before the storage is handed over, so it stays free
         if grid.cell_of(&goal).is_none() || grid.cell_of(&hub).is_none() {
-            // checked before the storage is handed over, so it stays free
             self.team = TeamSlot::Free(lend);
             self.note(LogLevel::Warn, format_args!("team goal {}: goal or start outside the scenes", g.goal_id));
+            return Ok(PlanState::InvalidInput);
+        }
+        let cells = usize::from(cfg.grid.width).saturating_mul(usize::from(cfg.grid.height));
+        if cells > lend.dstar.cells() {
+            let have = lend.dstar.cells();
+            self.team = TeamSlot::Free(lend);
+            self.note(
+                LogLevel::Warn,
+                format_args!("team goal {}: {cells} scenes, the team storage holds {have}", g.goal_id),
+            );
             return Ok(PlanState::InvalidInput);
         }
         let TeamLend { dstar, planner, points, mission: slot } = lend;
@@ -224,12 +273,13 @@ impl<L: ByteLink, C: MonotonicClock, W: Watchdog, A: Autonomy, S: BorrowMut<Exec
             start,
             TeamParams::from(cfg.planner),
             MissionParams::from(cfg.mission),
-            dstar.storage(),
+            dstar,
             planner,
         );
         let mission = match made {
             Ok(m) => slot.insert(m),
             Err(e) => {
+                // not reached: every cause was checked above or on decode
                 self.note(LogLevel::Error, format_args!("team goal {}: {e:?}; team storage spent", g.goal_id));
                 return Ok(PlanState::InvalidInput);
             }
@@ -240,7 +290,7 @@ impl<L: ByteLink, C: MonotonicClock, W: Watchdog, A: Autonomy, S: BorrowMut<Exec
         }
         let first = mission.begin();
         let mut run = TeamRun {
-            mission,
+            slot,
             points,
             goal_id: g.goal_id,
             command: TeamCommand { command_id: 0, goal_id: g.goal_id, order: TeamOrder::Scan { robot: 0 } },
@@ -343,7 +393,7 @@ impl<L: ByteLink, C: MonotonicClock, W: Watchdog, A: Autonomy, S: BorrowMut<Exec
                 && matches!(run.command.order, TeamOrder::Scan { robot } | TeamOrder::Hop { robot, .. } if robot == m));
             return Ok(self.team_step(answers, |run| {
                 run.scan = None;
-                run.mission.step(Report::Lost { robot: robot(m), cause })
+                step_mission(run.slot, Report::Lost { robot: robot(m), cause })
             }));
         }
         if !self.team_pending(r.command_id)? {
@@ -360,7 +410,7 @@ impl<L: ByteLink, C: MonotonicClock, W: Watchdog, A: Autonomy, S: BorrowMut<Exec
             (TeamOrder::MoveHub { .. }, TeamEvent::HubAt { pos }) => Report::HubAt { pos: v3(&pos) },
             _ => return Err(NackReason::UnknownCommand),
         };
-        Ok(self.team_step(true, |run| run.mission.step(report)))
+        Ok(self.team_step(true, |run| step_mission(run.slot, report)))
     }
 
     /// `TeamScanChunk`: reassembled in order; the last chunk steps the mission with the whole scan.
@@ -415,7 +465,7 @@ impl<L: ByteLink, C: MonotonicClock, W: Watchdog, A: Autonomy, S: BorrowMut<Exec
         run.scan = None;
         Ok(self.team_step(true, |run| {
             let points = run.points.get(..s.points).unwrap_or(&[]);
-            run.mission.step(Report::Scan {
+            step_mission(run.slot, Report::Scan {
                 robot: robot(s.robot),
                 pos: v3(&s.grip),
                 up: v3(&s.up),

@@ -1012,9 +1012,14 @@ fn team_goal() -> GoalRequest {
 }
 
 fn team_lend() -> TeamLend {
+    team_lend_of(Box::leak(Box::<crate::plan::team::dstar_lite::DStarArena<{ crate::config::team::GLOBAL_GRID_MAX_CELLS }>>::default()).storage())
+}
+
+/// Team storage with the D* Lite storage `dstar`.
+fn team_lend_of(dstar: crate::plan::team::dstar_lite::DStarStorage<'static>) -> TeamLend {
     use crate::config::protocol::TEAM_SCAN_POINTS_CAPACITY;
     TeamLend {
-        dstar: Box::leak(Box::default()),
+        dstar,
         planner: Box::leak(Box::default()),
         points: Box::leak(Box::new([crate::geom::Vec3::zeros(); TEAM_SCAN_POINTS_CAPACITY])),
         mission: Box::leak(Box::new(None)),
@@ -1078,7 +1083,7 @@ fn a_team_goal_without_a_team_configuration_is_refused_clearly() {
 #[test]
 fn the_executive_runs_the_team_mission_and_refuses_answers_out_of_order() {
     let mut e = exec(NoAutonomy);
-    e.lend_team(team_lend());
+    assert!(e.lend_team(team_lend()).is_ok());
     let r = exchange(&mut e, &[Message::TeamConfigure(team_configure()), Message::GoalRequest(team_goal())]);
     assert!(nacks(&r).is_empty(), "{r:?}");
     assert!(r.iter().any(|m| matches!(m, Message::PlanStatus(s) if s.state == PlanState::Accepted)));
@@ -1137,4 +1142,71 @@ fn the_executive_runs_the_team_mission_and_refuses_answers_out_of_order() {
     assert!(after[0].command_id != next[0].command_id);
     assert!(!matches!(after[0].order, TeamOrder::Scan { robot } | TeamOrder::Hop { robot, .. } if robot == lost_robot));
     assert!(e.team_mission().is_some_and(|m| m.lost()[usize::from(lost_robot)].is_some()));
+}
+
+/// Loses every robot of the running team mission (answering its pending order first): the mission ends
+/// `TeamLost`; the frames from `seq`.
+fn lose_the_team(e: &mut Exec<NoAutonomy>, seq: u32, first: TeamCommand) -> StdVec<Message> {
+    let state = TeamState { grip: [GripState::Gripping; 4], legs_m: [5.66; 4] };
+    let mut out = StdVec::new();
+    let mut pending = first.command_id;
+    for (k, robot) in (0..4u8).enumerate() {
+        let lost = TeamReport { command_id: pending, event: TeamEvent::Lost { robot, cause: TeamLoss::GripFailure }, state };
+        let r = exchange_from(e, seq + 10 * k as u32, &[Message::TeamReport(lost)]);
+        if let Some(c) = team_orders(&r).last() {
+            pending = c.command_id;
+        }
+        out.extend(r);
+    }
+    out
+}
+
+/// One lending serves mission after mission: once a team mission has ended, the next team goal takes its storage
+/// back and starts on it (the same configuration gives the same first order), and `reclaim_team` hands the storage
+/// back to the lender only while no mission runs; a grid larger than the lent D* Lite storage is `InvalidInput`
+/// and keeps the storage.
+#[test]
+fn a_team_lending_serves_one_mission_after_another_and_comes_back() {
+    let mut e = exec(NoAutonomy);
+    assert!(e.lend_team(team_lend()).is_ok());
+    let r = exchange(&mut e, &[Message::TeamConfigure(team_configure()), Message::GoalRequest(team_goal())]);
+    assert!(r.iter().any(|m| matches!(m, Message::PlanStatus(s) if s.state == PlanState::Accepted)), "{r:?}");
+    let first = team_orders(&r)[0];
+    // running: neither a second lending nor a reclaim takes the storage away
+    assert!(e.lend_team(team_lend()).is_err());
+    assert!(e.reclaim_team().is_none());
+    let r = lose_the_team(&mut e, 100, first);
+    assert!(
+        team_orders(&r).iter().any(|c| matches!(c.order, TeamOrder::Done { outcome: TeamOutcome::TeamLost, .. })),
+        "{r:?}"
+    );
+    assert!(e.team_mission().is_some_and(|m| m.outcome().is_some()), "the ended mission stays readable");
+    // a second goal on the same lending: accepted, and it starts as the first did
+    let second_goal = GoalRequest { goal_id: team_goal().goal_id + 1, ..team_goal() };
+    let r = exchange_from(&mut e, 200, &[Message::GoalRequest(second_goal)]);
+    assert!(r.iter().any(|m| matches!(m, Message::PlanStatus(s) if s.state == PlanState::Accepted)), "{r:?}");
+    let again = team_orders(&r);
+    assert_eq!(again.len(), 1);
+    assert_eq!(again[0].order, first.order);
+    assert!(e.reclaim_team().is_none());
+    lose_the_team(&mut e, 300, again[0]);
+    // ended: the storage comes back, and team goals wait for a lending
+    let lend = e.reclaim_team().expect("the ended mission's storage");
+    assert!(e.team_mission().is_none());
+    let third = GoalRequest { goal_id: team_goal().goal_id + 2, ..team_goal() };
+    let r = exchange_from(&mut e, 400, &[Message::GoalRequest(third.clone())]);
+    assert!(r.iter().any(|m| matches!(m, Message::PlanStatus(s) if s.state == PlanState::PlannerUnavailable)), "{r:?}");
+    // lent again to another executive, it runs a mission there
+    let mut other = exec(NoAutonomy);
+    assert!(other.lend_team(lend).is_ok());
+    let r = exchange(&mut other, &[Message::TeamConfigure(team_configure()), Message::GoalRequest(team_goal())]);
+    assert_eq!(team_orders(&r)[0].order, first.order);
+    // a D* Lite storage of 4 scenes refuses the example's larger grid and keeps the storage
+    let small: &'static mut crate::plan::team::dstar_lite::DStarArena<4> = Box::leak(Box::default());
+    let mut e = exec(NoAutonomy);
+    assert!(e.lend_team(team_lend_of(small.storage())).is_ok());
+    let r = exchange(&mut e, &[Message::TeamConfigure(team_configure()), Message::GoalRequest(team_goal())]);
+    assert!(r.iter().any(|m| matches!(m, Message::PlanStatus(s) if s.state == PlanState::InvalidInput)), "{r:?}");
+    assert!(team_orders(&r).is_empty());
+    assert!(e.reclaim_team().is_some_and(|l| l.dstar.cells() == 4));
 }

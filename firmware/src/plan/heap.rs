@@ -204,6 +204,11 @@ impl<'a> Heap<LentIds<'a>> {
     pub fn capacity(&self) -> usize {
         self.ids.capacity()
     }
+
+    /// The lent slots, handed back (the heap's contents are dropped).
+    pub fn into_slots(self) -> &'a mut [u32] {
+        self.ids.slots
+    }
 }
 
 impl<S: HeapIds> Heap<S> {

@@ -6,6 +6,8 @@
 
 use firmware::config::protocol::MAX_POINTS_PER_CHUNK;
 use firmware::config::team::{GLOBAL_GRID_MAX_CELLS, TEAM_SIZE};
+use std::cell::{Cell, RefCell};
+
 use firmware::exec::TeamLend;
 use firmware::geom::Vec3;
 use firmware::plan::team::dstar_lite::DStarArena;
@@ -54,15 +56,37 @@ impl TeamFlight for DirectFlight<'_> {
     }
 }
 
-/// The team storage an in-process executive gets: leaked boxes, as a board's statics (one mission per lending,
-/// `firmware/src/exec/team.rs`; about 0.85 MiB per in-process team run).
-pub fn leaked_team_lend() -> TeamLend {
-    TeamLend {
-        dstar: Box::leak(dstar_arena()),
-        planner: Box::leak(local_planner()),
-        mission: Box::leak(Box::new(None)),
-        points: Box::leak(vec![Vec3::zeros(); firmware::config::protocol::TEAM_SCAN_POINTS_CAPACITY].into_boxed_slice().try_into().unwrap_or_else(|_| unreachable!("sized above"))),
-    }
+thread_local! {
+    /// Team storage handed back by in-process executives on this thread, for the next one.
+    static SPARE_LENDS: RefCell<Vec<TeamLend>> = const { RefCell::new(Vec::new()) };
+    /// Team storages made on this thread.
+    static LENDS_MADE: Cell<usize> = const { Cell::new(0) };
+}
+
+/// The team storage an in-process executive gets (about 0.85 MiB, `firmware/src/exec/team.rs`): one handed back
+/// by an earlier executive on this thread ([`give_back_team_lend`]; [`LinkFlight`] does it when dropped), else a
+/// new one, leaked as a board's statics live for the program. So a thread holds at most as many as it runs at
+/// once, whatever the number of team missions it runs one after another.
+pub fn team_lend() -> TeamLend {
+    SPARE_LENDS.with_borrow_mut(Vec::pop).unwrap_or_else(|| {
+        LENDS_MADE.set(LENDS_MADE.get() + 1);
+        TeamLend {
+            dstar: Box::leak(dstar_arena()).storage(),
+            planner: Box::leak(local_planner()),
+            mission: Box::leak(Box::new(None)),
+            points: Box::leak(vec![Vec3::zeros(); firmware::config::protocol::TEAM_SCAN_POINTS_CAPACITY].into_boxed_slice().try_into().unwrap_or_else(|_| unreachable!("sized above"))),
+        }
+    })
+}
+
+/// Hands team storage back for the next in-process executive on this thread.
+pub fn give_back_team_lend(lend: TeamLend) {
+    SPARE_LENDS.with_borrow_mut(|v| v.push(lend));
+}
+
+/// Team storages [`team_lend`] has made on this thread.
+pub fn team_lends_made() -> usize {
+    LENDS_MADE.get()
 }
 
 // Large storages pass through the stack on their way to the heap: one function each, never inlined.
@@ -80,6 +104,8 @@ fn local_planner() -> Box<DefaultLocalPlanner> {
 pub struct LinkFlight<L: FlightLink> {
     session: HostSession<L>,
     peek: fn(&L) -> Option<&DefaultTeamMission<'static>>,
+    /// Takes the team storage back from the flight software when this is dropped (in-process only).
+    reclaim: fn(&mut L) -> Option<TeamLend>,
     setup: TeamConfigure,
     goal: Point3,
     goal_tol: f32,
@@ -96,8 +122,12 @@ impl LinkFlight<InProcLink> {
     /// The in-process executive (booted as the board's, with team storage lent) for `cfg` from `start`.
     pub fn inproc(cfg: &SimConfig, start: [Vec3; TEAM_SIZE]) -> Result<Self, SimError> {
         let mut link = InProcLink::new(DEFAULT_STEP_US);
-        link.executive_mut().lend_team(leaked_team_lend());
-        Self::new(link, |l| l.executive().team_mission(), cfg, start)
+        if let Err(lend) = link.executive_mut().lend_team(team_lend()) {
+            give_back_team_lend(lend);
+        }
+        let mut me = Self::new(link, |l| l.executive().team_mission(), cfg, start)?;
+        me.reclaim = |l| l.executive_mut().reclaim_team();
+        Ok(me)
     }
 }
 
@@ -134,6 +164,7 @@ impl<L: FlightLink> LinkFlight<L> {
         Ok(Self {
             session: HostSession::new(link),
             peek,
+            reclaim: |_| None,
             setup,
             goal: Point3::new(cfg.goal[0] as f32, cfg.goal[1] as f32, cfg.goal[2] as f32),
             goal_tol: cfg.goal_tol as f32,
@@ -200,6 +231,14 @@ impl<L: FlightLink> LinkFlight<L> {
         let command_id = self.command.map_or(0, |c| c.command_id);
         let order = self.exchange(Message::TeamReport(TeamReport { command_id, event, state: self.state() }))?;
         self.next(order)
+    }
+}
+
+impl<L: FlightLink> Drop for LinkFlight<L> {
+    fn drop(&mut self) {
+        if let Some(lend) = (self.reclaim)(self.session.link_mut()) {
+            give_back_team_lend(lend);
+        }
     }
 }
 

@@ -154,6 +154,26 @@ pub struct DStarStorage<'a> {
     pub moves: &'a mut [u8],
 }
 
+impl DStarStorage<'_> {
+    /// The cells this storage holds (its shortest slice).
+    pub fn cells(&self) -> usize {
+        [
+            self.g.len(),
+            self.rhs.len(),
+            self.stamp.len(),
+            self.key.len(),
+            self.heap_pos.len(),
+            self.heap.len(),
+            self.blocked.len(),
+            self.walls.len(),
+            self.moves.len(),
+        ]
+        .into_iter()
+        .min()
+        .unwrap_or(0)
+    }
+}
+
 /// Fixed arena for a board: `N` cells.
 pub struct DStarArena<const N: usize> {
     g: [Cost; N],
@@ -351,20 +371,7 @@ impl<'a> DStarLite<'a> {
             return Err(DStarError::BadSize);
         }
         let cells = cells as usize;
-        let have = [
-            storage.g.len(),
-            storage.rhs.len(),
-            storage.stamp.len(),
-            storage.key.len(),
-            storage.heap_pos.len(),
-            storage.heap.len(),
-            storage.blocked.len(),
-            storage.walls.len(),
-            storage.moves.len(),
-        ]
-        .into_iter()
-        .min()
-        .unwrap_or(0);
+        let have = storage.cells();
         if have < cells {
             return Err(DStarError::StorageTooSmall { needed: cells, have });
         }
@@ -380,6 +387,13 @@ impl<'a> DStarLite<'a> {
         me.clear_map();
         me.new_epoch();
         Ok(me)
+    }
+
+    /// The lent storage, handed back for the next planner (its contents are stale: [`Self::new`] clears what it
+    /// must).
+    pub fn into_storage(self) -> DStarStorage<'a> {
+        let Cells { g, rhs, stamp, key, heap_pos, blocked, walls, moves, epoch: _ } = self.s;
+        DStarStorage { g, rhs, stamp, key, heap_pos, heap: self.open.into_slots(), blocked, walls, moves }
     }
 
     /// Grid width (columns).

@@ -633,6 +633,11 @@ impl<'a, const N: usize, const P: usize, const V: usize, const E: usize> TeamMis
     pub fn planner(&self) -> &LocalPlanner<P, V, E> {
         self.planner
     }
+
+    /// Ends the mission and hands its lent storage back, for the next mission.
+    pub fn into_storage(self) -> (DStarStorage<'a>, &'a mut LocalPlanner<P, V, E>) {
+        (self.dstar.into_storage(), self.planner)
+    }
 }
 
 /// The mission with the default capacities of [`crate::config::team`].
