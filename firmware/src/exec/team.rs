@@ -173,13 +173,14 @@ impl TeamRun {
 
 impl<L: ByteLink, C: MonotonicClock, W: Watchdog, A: Autonomy, S: BorrowMut<ExecStorage>> Executive<L, C, W, A, S> {
     /// Lends the team mission's storage for good (module docs). A second lending replaces an unused first one
-    /// (and is refused, handed back, while a mission runs or its storage holds the last one's results).
-    pub fn lend_team(&mut self, lend: TeamLend) -> Result<(), TeamLend> {
+    /// (and is refused, handed back as `Some`, while a mission runs or its storage holds the last one's results).
+    #[must_use = "a refused lending comes back"]
+    pub fn lend_team(&mut self, lend: TeamLend) -> Option<TeamLend> {
         if matches!(self.team, TeamSlot::Run(_)) {
-            return Err(lend);
+            return Some(lend);
         }
         self.team = TeamSlot::Free(lend);
-        Ok(())
+        None
     }
 
     /// The team storage handed back (module docs), unless a mission is running; the last mission's results go

@@ -6,7 +6,7 @@
 
 use firmware::config::protocol::MAX_POINTS_PER_CHUNK;
 use firmware::config::team::{GLOBAL_GRID_MAX_CELLS, TEAM_SIZE};
-use std::cell::{Cell, RefCell};
+use core::cell::{Cell, RefCell};
 
 use firmware::exec::TeamLend;
 use firmware::geom::Vec3;
@@ -122,7 +122,7 @@ impl LinkFlight<InProcLink> {
     /// The in-process executive (booted as the board's, with team storage lent) for `cfg` from `start`.
     pub fn inproc(cfg: &SimConfig, start: [Vec3; TEAM_SIZE]) -> Result<Self, SimError> {
         let mut link = InProcLink::new(DEFAULT_STEP_US);
-        if let Err(lend) = link.executive_mut().lend_team(team_lend()) {
+        if let Some(lend) = link.executive_mut().lend_team(team_lend()) {
             give_back_team_lend(lend);
         }
         let mut me = Self::new(link, |l| l.executive().team_mission(), cfg, start)?;
