@@ -108,8 +108,10 @@ pub struct TeamArgs {
     /// Grips never slip (the grip model's slip probability set to 0; isolates the route from node losses).
     #[arg(long)]
     pub no_slip: bool,
-    /// Where the hub's flight code runs: `inproc` (the flight executive, over protocol v8's team messages) or
-    /// `direct` (the flight crate's mission called as a library, the simulation before v8; the same run).
+    /// Where the hub's flight code runs: `inproc` (the flight executive, over protocol v8's team messages),
+    /// `direct` (the flight crate's mission called as a library, the simulation before v8; the same run) or `qemu`
+    /// (the flight executive on the emulated board, booted per seed with instruction counting; the same run, plus
+    /// the board's instruction counts and resource report; builds the board binary if it is missing).
     #[arg(long, value_enum, default_value_t = crate::team::TeamLink::Inproc)]
     pub link: crate::team::TeamLink,
 }
@@ -154,7 +156,25 @@ pub fn team(args: &TeamArgs) -> Result<bool, String> {
         }
         let mut rng = team_rng(seed);
         let t = Instant::now();
-        let rep = crate::team::simulate_over(surf.as_ref(), &start, &cfg, &mut rng, args.link).map_err(|e| e.to_string())?;
+        let rep = if args.link == crate::team::TeamLink::Qemu {
+            let elf = super::board::board_elf(None, false).map_err(|e| e.to_string())?;
+            let (rep, board) = crate::team::simulate_on_board(surf.as_ref(), &start, &cfg, &mut rng, &elf, true).map_err(|e| e.to_string())?;
+            let per_tick = board.figure("instructions_per_tick_under_icount").unwrap_or(0);
+            let fig = |k: &str| board.figure(k).unwrap_or(0);
+            println!(
+                "board seed {seed}: {} lockstep executive steps, the costliest {} instructions, all {} instructions (-icount shift=0); boot to ready {:.1} ms",
+                fig("lockstep_steps"),
+                fig("lockstep_step_ticks_max") * per_tick,
+                fig("lockstep_step_ticks_total") * per_tick,
+                board.boot.as_secs_f64() * 1e3
+            );
+            for l in &board.report {
+                println!("{l}");
+            }
+            rep
+        } else {
+            crate::team::simulate_over(surf.as_ref(), &start, &cfg, &mut rng, args.link).map_err(|e| e.to_string())?
+        };
         let secs = t.elapsed().as_secs_f64();
         let mut times = rep.plan_times.clone();
         let med = median(&mut times);
@@ -173,7 +193,7 @@ pub fn team(args: &TeamArgs) -> Result<bool, String> {
             rep.reached,
             rep.hops.len(),
             rep.rounds,
-            rep.walls.len(),
+            rep.walls.len().max(rep.stats.walls as usize),
             rep.walls.iter().map(|(a, b)| format!("{}-{}", fmt_cells(&[*a]), fmt_cells(&[*b]))).collect::<Vec<_>>().join(" "),
             fmt_cells(&rep.visited),
             rep.lost,
@@ -193,7 +213,7 @@ pub fn team(args: &TeamArgs) -> Result<bool, String> {
         runs += 1;
         reached += usize::from(rep.success());
         hops.push(rep.hops.len() as f64);
-        walls += rep.walls.len();
+        walls += rep.walls.len().max(rep.stats.walls as usize);
         lost += rep.lost.len();
         violations += rep.violations.len();
         plan_times.extend(rep.plan_times);

@@ -33,6 +33,10 @@ pub trait TeamFlight {
     fn hop_normal(&self) -> Vec3;
     /// The flight code's mission, where the host can see it (direct and in-process; `None` over a real link).
     fn mission(&self) -> Option<&DefaultTeamMission<'_>>;
+    /// The counters the `Done` order carried (rounds, hops, walls), over a link.
+    fn done_counts(&self) -> Option<(u32, u32, u32)> {
+        None
+    }
 }
 
 /// The mission called as a library.
@@ -116,6 +120,8 @@ pub struct LinkFlight<L: FlightLink> {
     hub: Vec3,
     grip: [GripState; TEAM_SIZE],
     normal: Vec3,
+    /// The `Done` order's rounds, hops and walls.
+    done: Option<(u32, u32, u32)>,
 }
 
 impl LinkFlight<InProcLink> {
@@ -173,6 +179,7 @@ impl<L: FlightLink> LinkFlight<L> {
             hub,
             grip: [GripState::Gripping; TEAM_SIZE],
             normal: Vec3::z(),
+            done: None,
         })
     }
 
@@ -213,7 +220,9 @@ impl<L: FlightLink> LinkFlight<L> {
                 Command::Hop { robot: usize::from(robot), target: v3(&target) }
             }
             TeamOrder::MoveHub { to } => Command::MoveHub { to: v3(&to) },
-            TeamOrder::Done { outcome, .. } => Command::Done(match outcome {
+            TeamOrder::Done { outcome, rounds, hops, walls } => Command::Done({
+                self.done = Some((rounds, hops, walls));
+                match outcome {
                 TeamOutcome::GoalReached => MissionOutcome::GoalReached,
                 TeamOutcome::NoRoute => MissionOutcome::Blocked(Blocked::NoRoute),
                 TeamOutcome::GoalUnreachable => MissionOutcome::Blocked(Blocked::GoalUnreachable),
@@ -223,6 +232,7 @@ impl<L: FlightLink> LinkFlight<L> {
                 TeamOutcome::GlobalPlannerExhausted => MissionOutcome::BudgetExhausted(Budget::GlobalPlanner),
                 TeamOutcome::LeftGrid => MissionOutcome::LeftGrid,
                 TeamOutcome::Aborted => return Err(link_err("the flight software stopped the team mission")),
+                }
             }),
         })
     }
@@ -309,5 +319,9 @@ impl<L: FlightLink> TeamFlight for LinkFlight<L> {
 
     fn mission(&self) -> Option<&DefaultTeamMission<'_>> {
         (self.peek)(self.session.link())
+    }
+
+    fn done_counts(&self) -> Option<(u32, u32, u32)> {
+        self.done
     }
 }

@@ -234,6 +234,59 @@ pub enum TeamLink {
     Inproc,
     /// The flight crate's mission called as a library (the simulation before protocol v8; the same run).
     Direct,
+    /// The flight executive on the emulated board (QEMU, lockstep, `-icount shift=0`), over protocol v8: the same
+    /// run, with the board's instruction counts ([`simulate_on_board`]).
+    Qemu,
+}
+
+/// What the emulated board said about a team run ([`simulate_on_board`]).
+#[derive(Debug, Clone)]
+pub struct BoardTeamRun {
+    /// The board's resource report (`board: key=value ...` lines; `lockstep_step_ticks_max` times
+    /// `instructions_per_tick_under_icount` is the costliest executive step in instructions).
+    pub report: Vec<String>,
+    /// Host wall time from spawning QEMU to the board's hello.
+    pub boot: core::time::Duration,
+}
+
+impl BoardTeamRun {
+    /// A `key=value` figure of the board's report.
+    pub fn figure(&self, key: &str) -> Option<u64> {
+        self.report
+            .iter()
+            .flat_map(|l| l.split_whitespace())
+            .find_map(|kv| kv.strip_prefix(key)?.strip_prefix('=')?.parse().ok())
+    }
+}
+
+/// [`simulate`] with the flight executive on the emulated board `elf` (booted for this run, in lockstep; with
+/// `icount`, QEMU counts instructions, about 4x slower): the run and the board's report.
+pub fn simulate_on_board<R: Rng>(
+    surface: &dyn Surface,
+    start: &[P3; 4],
+    cfg: &SimConfig,
+    rng: &mut R,
+    elf: &std::path::Path,
+    icount: bool,
+) -> Result<(SimReport, BoardTeamRun), SimError> {
+    let mut q = crate::qemu::QemuConfig::new(elf.to_path_buf());
+    q.icount = icount;
+    q.boot_words = Some("tetherbot.clock=lockstep".into());
+    let mut link = crate::link::qemu::QemuLink::with_config(&q, crate::link::inproc::DEFAULT_STEP_US)
+        .map_err(|e| SimError::Link(format!("the emulated board did not start: {e}")))?;
+    let boot = link.boot_to_ready().unwrap_or_default();
+    let rep = {
+        let mut flight = flight::LinkFlight::new(&mut link, |_| None, cfg, start.map(to_vec3))?;
+        simulate_with(surface, start, cfg, rng, &mut flight)?
+    };
+    let exit = link
+        .quit(core::time::Duration::from_secs(10))
+        .map_err(|e| SimError::Link(format!("the emulated board did not shut down: {e}")))?;
+    if !exit.status.success() {
+        return Err(SimError::Link(format!("the emulated board failed: {:?}\n{}", exit.status, exit.output.both())));
+    }
+    let report = exit.output.stdout.lines().filter(|l| l.starts_with("board:")).map(str::to_owned).collect();
+    Ok((rep, BoardTeamRun { report, boot }))
 }
 
 /// Run the team mission from `start` (one grip point per robot) to `cfg.goal` on `surface`: the flight code
@@ -265,6 +318,16 @@ pub fn simulate_over<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimCo
             simulate_with(surface, start, cfg, rng, &mut flight::DirectFlight { mission })
         }
         TeamLink::Inproc => simulate_with(surface, start, cfg, rng, &mut flight::LinkFlight::inproc(cfg, start.map(to_vec3))?),
+        TeamLink::Qemu => {
+            let elf = crate::qemu::board_elf_path();
+            if !elf.is_file() {
+                return Err(SimError::Link(format!(
+                    "the board binary {} is missing (`tetherbot team --link qemu` builds it)",
+                    elf.display()
+                )));
+            }
+            simulate_on_board(surface, start, cfg, rng, &elf, true).map(|(r, _)| r)
+        }
     }
 }
 
@@ -355,6 +418,19 @@ pub fn simulate_with<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimCo
         rep.visited = m.visited().to_vec();
         rep.routes.1 = route(m);
         rep.stats = m.stats();
+    } else {
+        // over a link the host cannot look into (the board): the counters the `Done` order carried, and the scenes
+        // the hub stood in, from its own path (the walls themselves are not on the wire)
+        if let Some((rounds, hops, walls)) = mission.done_counts() {
+            rep.stats = MissionStats { rounds, hops, walls, ..MissionStats::default() };
+        }
+        for h in &rep.hub_path {
+            if let Some(c) = cfg.grid.cell_of(&to_vec3(*h)) {
+                if rep.visited.last() != Some(&c) {
+                    rep.visited.push(c);
+                }
+            }
+        }
     }
     Ok(rep)
 }

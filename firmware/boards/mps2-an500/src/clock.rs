@@ -27,7 +27,6 @@ use cortex_m::peripheral::{syst::SystClkSource, SYST};
 /// Core clock of the mps2 boards in QEMU, Hz.
 pub const CORE_HZ: u64 = 25_000_000;
 /// Instructions per SysTick tick under `-icount shift=0` (1 ns per instruction, 40 ns per 25 MHz tick).
-#[cfg(feature = "bench")]
 pub const INSTRUCTIONS_PER_TICK: u64 = 1_000_000_000 / CORE_HZ;
 /// SysTick reload: one wrap per millisecond.
 const RELOAD: u32 = (CORE_HZ / 1000) as u32 - 1;

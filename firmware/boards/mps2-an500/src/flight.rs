@@ -34,13 +34,16 @@
 use cortex_m::peripheral::NVIC;
 use cortex_m_semihosting::debug;
 use firmware::config::map::{MapConfig, FLIGHT_BLOCKS, FLIGHT_INDEX};
-use firmware::exec::{ExecStorage, Executive};
+use firmware::config::protocol::TEAM_SCAN_POINTS_CAPACITY;
+use firmware::exec::{ExecStorage, Executive, TeamLend};
+use firmware::geom::Vec3;
+use firmware::plan::team::mission::DefaultTeamMission;
 use firmware::map::Block;
 use firmware::nav::{HomotopyStorage, NavPlanStorage, Navigator};
 use hal::{ByteLink, Instant};
 
-use crate::clock::{BoardClock, SysTickClock};
-use crate::storage::{take_retained, Lent, EXEC_STORAGE};
+use crate::clock::{BoardClock, SysTickClock, INSTRUCTIONS_PER_TICK};
+use crate::storage::{take_retained, Lent, EXEC_STORAGE, TEAM_DSTAR, TEAM_PLANNER};
 use firmware::exec::Autonomy;
 use firmware::nav::retained::RetainedBlock;
 use crate::uart::{Uart, UART0_BASE, UART1_BASE, UART_IRQS};
@@ -62,6 +65,14 @@ static NAV_PLAN: Lent<NavPlanStorage> = Lent::new(NavPlanStorage::new());
 /// The global planner's storage (homotopy goals on an uploaded tile, `HomotopyStorage`, ~0.66 MiB) in SRAM: its
 /// empty BTM and A* arena are not all zero bytes, so it is in `.data` (its image in flash).
 static NAV_HOMOTOPY: Lent<HomotopyStorage> = Lent::new(HomotopyStorage::new());
+
+/// The climbing team's scan reassembly (all zero bytes when empty: `.psram`) and the team mission itself (~7 KiB;
+/// its empty `Option` is not all zero bytes: SRAM). With `storage::TEAM_PLANNER` and `TEAM_DSTAR` they are the
+/// executive's team storage (`firmware::exec::TeamLend`), lent once at boot; one lending serves mission after
+/// mission.
+#[link_section = ".psram"]
+static TEAM_POINTS: Lent<[Vec3; TEAM_SCAN_POINTS_CAPACITY]> = Lent::new([Vec3::new(0.0, 0.0, 0.0); TEAM_SCAN_POINTS_CAPACITY]);
+static TEAM_MISSION: Lent<Option<DefaultTeamMission<'static>>> = Lent::new(None);
 
 /// The flight software's autonomy, the same as the host's in-process `FlightAutonomy` (so outputs are equal).
 type BoardAutonomy =
@@ -185,8 +196,31 @@ fn le_u64(b: &[u8], at: usize) -> u64 {
     u64::from_le_bytes(w)
 }
 
+/// What the lockstep executive steps cost in core-clock ticks (SysTick): under QEMU's `-icount shift=0` one tick
+/// is [`INSTRUCTIONS_PER_TICK`] instructions, so these are instruction counts of the flight code's work (a team
+/// mission's local plans, a navigator's planning) on the emulated board; without icount they follow the host's
+/// wall clock and mean little. A step includes the wait for its announced bytes to cross the emulated UART.
+#[derive(Default)]
+struct StepCost {
+    steps: u64,
+    total_ticks: u64,
+    max_ticks: u64,
+}
+
+impl StepCost {
+    fn step(&mut self, exec: &mut BoardExecutive) -> firmware::exec::StepReport {
+        let t0 = exec.clock_mut().systick.ticks();
+        let report = exec.step();
+        let dt = exec.clock_mut().systick.ticks().saturating_sub(t0);
+        self.steps += 1;
+        self.total_ticks = self.total_ticks.saturating_add(dt);
+        self.max_ticks = self.max_ticks.max(dt);
+        report
+    }
+}
+
 /// Prints the resource report and ends the run successfully.
-fn quit(exec: &BoardExecutive) -> ! {
+fn quit(exec: &BoardExecutive, cost: &StepCost) -> ! {
     let stack = crate::stack::usage();
     let handler_stack = crate::stack::handler_usage();
     let t = exec.telemetry();
@@ -196,7 +230,8 @@ fn quit(exec: &BoardExecutive) -> ! {
          handler_stack_size_bytes={} exec_storage_bytes={} scan_points_peak={} \
          scan_points_capacity={} tx_queue_peak={} tx_queue_capacity={} rx_staging_peak={} frame_len_peak={} \
          log_queue_peak={} map_blocks_peak={} map_blocks_capacity={} map_storage_bytes={} nav_plan_storage_bytes={} \
-         steps={} frames_accepted={} frames_sent={}",
+         steps={} frames_accepted={} frames_sent={} lockstep_steps={} lockstep_step_ticks_total={} \
+         lockstep_step_ticks_max={} instructions_per_tick_under_icount={}",
         stack.high_water_bytes,
         stack.size_bytes,
         handler_stack.high_water_bytes,
@@ -215,7 +250,11 @@ fn quit(exec: &BoardExecutive) -> ! {
         NavPlanStorage::bytes(),
         t.steps,
         t.frames_accepted,
-        t.frames_sent
+        t.frames_sent,
+        cost.steps,
+        cost.total_ticks,
+        cost.max_ticks,
+        INSTRUCTIONS_PER_TICK
     );
     if stack.high_water_bytes >= stack.size_bytes
         || handler_stack.high_water_bytes >= handler_stack.size_bytes
@@ -299,6 +338,12 @@ pub fn run(systick: SysTickClock, lockstep: bool) -> ! {
     // before the first step: what a reset left (the flight software comes back Safe with its tether state)
     autonomy.recover_retained(retained);
     let mut exec: BoardExecutive = Executive::new(link, clock, wdog, autonomy, storage);
+    if let (Some(dstar), Some(planner), Some(points), Some(mission)) =
+        (TEAM_DSTAR.take_init(), TEAM_PLANNER.take_init(), TEAM_POINTS.take(), TEAM_MISSION.take())
+    {
+        // a new executive has no team storage, so it takes this
+        let _ = exec.lend_team(TeamLend { dstar: dstar.storage(), planner, points, mission });
+    }
     // The harness handshake; in free-running mode the executive's first step also sends the boot Telemetry.
     write_control(&mut ctl, b"H");
     if lockstep {
@@ -311,7 +356,7 @@ pub fn run(systick: SysTickClock, lockstep: bool) -> ! {
             let mut tag = [0u8; 1];
             let _ = ctl.read(&mut tag);
             if tag == *b"Q" {
-                quit(&exec);
+                quit(&exec, &StepCost::default());
             }
             if tag == *b"B" {
                 cortex_m::peripheral::SCB::sys_reset();
@@ -346,11 +391,12 @@ fn watchdog_bite() -> ! {
 }
 
 fn run_lockstep(exec: &mut BoardExecutive, ctl: &mut Uart, retained: &mut RetainedBlock) -> ! {
+    let mut cost = StepCost::default();
     loop {
         let mut tag = [0u8; 1];
         read_control(ctl, &mut tag);
         match &tag {
-            b"Q" => quit(exec),
+            b"Q" => quit(exec, &cost),
             b"B" => cortex_m::peripheral::SCB::sys_reset(),
             #[cfg(feature = "test-probes")]
             b"W" => watchdog_bite(),
@@ -377,7 +423,7 @@ fn run_lockstep(exec: &mut BoardExecutive, ctl: &mut Uart, retained: &mut Retain
         let mut t = t_start;
         for _ in 0..max_steps {
             exec.clock_mut().lockstep_now = Some(Instant::from_micros(t));
-            let report = exec.step();
+            let report = cost.step(exec);
             exec.autonomy_mut().keep_retained(retained);
             steps += 1;
             busy = report.busy;

@@ -8,12 +8,31 @@ use core::cell::UnsafeCell;
 use core::mem::MaybeUninit;
 use core::sync::atomic::{AtomicBool, Ordering};
 
+use firmware::config::team::GLOBAL_GRID_MAX_CELLS;
 use firmware::exec::ExecStorage;
+use firmware::plan::team::dstar_lite::DStarArena;
+use firmware::plan::team::DefaultLocalPlanner;
 use firmware::nav::retained::{RetainedBlock, RETAINED_BYTES};
 
 /// The executive's large buffers (scan reassembly, plan), lent once: to the flight loop, or in bench mode to the
 /// executive benchmark. ~130 KiB of `.bss` in SRAM.
 pub static EXEC_STORAGE: Lent<ExecStorage> = Lent::new(ExecStorage::new());
+
+/// The climbing team's local planner (`DefaultLocalPlanner`, ~0.6 MiB) and D* Lite arena over the scenes
+/// (`GLOBAL_GRID_MAX_CELLS` = 4096, ~190 KiB), in `.psram`, initialised in place when taken: the flight loop lends
+/// them to the executive's team mission (`firmware::exec::TeamLend`), or in bench mode the planning workloads take
+/// them. The mode is chosen at boot, so one memory serves both.
+#[link_section = ".psram"]
+pub static TEAM_PLANNER: UninitSlot<DefaultLocalPlanner> = UninitSlot::new();
+#[link_section = ".psram"]
+pub static TEAM_DSTAR: UninitSlot<DStarArena<GLOBAL_GRID_MAX_CELLS>> = UninitSlot::new();
+
+impl ConstInit for DefaultLocalPlanner {
+    const INIT: Self = DefaultLocalPlanner::new();
+}
+impl ConstInit for DStarArena<GLOBAL_GRID_MAX_CELLS> {
+    const INIT: Self = DStarArena::new();
+}
 
 /// The tether checkpoint's block (`firmware::nav::retained`, ~1.6 KiB) in SRAM's `.uninit`: neither loaded nor
 /// zeroed at boot, and not reloaded by QEMU's system reset (the watchdog-reset probe's mark shows it survives), so
@@ -73,16 +92,14 @@ impl<T> Lent<T> {
     }
 }
 
-#[cfg(feature = "bench")]
 /// A value with a compile-time initial state (the empty arena), copied into an [`UninitSlot`] on first use.
 pub trait ConstInit: Sized {
     /// The initial value.
     const INIT: Self;
 }
 
-#[cfg(feature = "bench")]
-/// A static that starts uninitialised and is lent once, initialised in place when taken, so the flight mode's boot
-/// never pays for the benchmark's arenas:
+/// A static that starts uninitialised and is lent once, initialised in place when taken, so a boot pays only for the
+/// arenas its mode takes (the flight loop's or the benchmarks'):
 /// - in `.psram` (NOLOAD, zeroed at boot) for a value whose initial state is not all zero bytes:
 ///   [`UninitSlot::take_init`] writes `T::INIT` into it from its `const` image in flash (`.rodata`) — a `memcpy`,
 ///   not a stack temporary (checked by the bench run's stack high-water mark);
@@ -93,11 +110,9 @@ pub struct UninitSlot<T> {
     value: UnsafeCell<MaybeUninit<T>>,
 }
 
-#[cfg(feature = "bench")]
 // SAFETY: as for `Lent`: the memory is reachable only through the single `&'static mut` handed out by `claim`.
 unsafe impl<T: Send> Sync for UninitSlot<T> {}
 
-#[cfg(feature = "bench")]
 impl<T> UninitSlot<T> {
     /// An unused slot (all-zero bytes, as `.psram` requires).
     pub const fn new() -> Self {
@@ -134,6 +149,7 @@ impl<T> UninitSlot<T> {
     }
 
     /// The one mutable borrow, zeroed (the empty `T`); `None` if it was already taken.
+    #[cfg(feature = "bench")]
     #[allow(clippy::mut_from_ref)] // unique: `claim`
     pub fn take_zeroed(&'static self) -> Option<&'static mut T>
     where

@@ -11,27 +11,20 @@
 //! those of a board without these workloads (the opt-in ledge-with-pole workload's storage is in SRAM's `.uninit`
 //! instead: `ledge_pole.rs`). The ABIT* arena (~1.7 MiB) and the scan start all-zero (`Lent`);
 //! the local planner, D* Lite arena, BTM and homotopy workspace have non-zero empty states and are initialised in
-//! place from their `const` images in flash when the bench takes them (`UninitSlot::take_init`).
+//! place from their `const` images in flash when the bench takes them (`UninitSlot::take_init`). The local planner
+//! and the D* Lite arena are the flight loop's team storage (`storage::TEAM_PLANNER`, `TEAM_DSTAR`), which a bench
+//! boot does not use otherwise.
 
-use firmware::config::team::GLOBAL_GRID_MAX_CELLS;
 use firmware::geom::Vec3;
 use firmware::plan::homotopy::control::ControlGrid;
 use firmware::plan::homotopy::{Btm, SearchArena, Workspace};
-use firmware::plan::team::dstar_lite::DStarArena;
-use firmware::plan::team::DefaultLocalPlanner;
 use workloads::homotopy_tile::{self, TileStorage, CELLS};
 use workloads::{Arenas, WallGapArena, SCAN_POINTS};
 
 use super::measure::Board;
 use crate::clock::SysTickClock;
-use crate::storage::{ConstInit, Lent, UninitSlot};
+use crate::storage::{ConstInit, Lent, UninitSlot, TEAM_DSTAR, TEAM_PLANNER};
 
-impl ConstInit for DefaultLocalPlanner {
-    const INIT: Self = DefaultLocalPlanner::new();
-}
-impl ConstInit for DStarArena<GLOBAL_GRID_MAX_CELLS> {
-    const INIT: Self = DStarArena::new();
-}
 impl ConstInit for Btm {
     const INIT: Self = Btm::new();
 }
@@ -48,10 +41,8 @@ impl ConstInit for Workspace {
 static ABIT: Lent<WallGapArena> = Lent::new(WallGapArena::new());
 #[link_section = ".psram"]
 static SCAN: Lent<[Vec3; SCAN_POINTS]> = Lent::new([Vec3::new(0.0, 0.0, 0.0); SCAN_POINTS]);
-#[link_section = ".psram"]
-static LOCAL: UninitSlot<DefaultLocalPlanner> = UninitSlot::new();
-#[link_section = ".psram"]
-static DSTAR: UninitSlot<DStarArena<GLOBAL_GRID_MAX_CELLS>> = UninitSlot::new();
+// The local planner and D* Lite arena are the flight loop's team storage (`storage::TEAM_PLANNER`, `TEAM_DSTAR`):
+// a bench boot never runs the flight loop.
 #[link_section = ".psram"]
 static BTM: UninitSlot<Btm> = UninitSlot::new();
 #[link_section = ".psram"]
@@ -70,9 +61,9 @@ static TILE_BYTES: &[u8; CELLS * 4] = include_bytes!("../../data/hirise_tile_80x
 pub fn run(clock: &mut SysTickClock) {
     let (Some(abit), Some(local), Some(scan), Some(dstar), Some(btm), Some(homotopy)) = (
         ABIT.take(),
-        LOCAL.take_init(),
+        TEAM_PLANNER.take_init(),
         SCAN.take(),
-        DSTAR.take_init(),
+        TEAM_DSTAR.take_init(),
         BTM.take_init(),
         HOMOTOPY.take_init(),
     ) else {
