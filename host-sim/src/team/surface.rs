@@ -25,6 +25,12 @@ pub trait Surface: Sync {
     fn scan(&self, o: P3, dirs: &[P3], max: f64) -> Vec<Option<f64>> {
         dirs.iter().map(|&d| self.raycast(o, d, max)).collect()
     }
+    /// "Up" where a hop ends: the direction a robot comes down onto the ground from, given the scene normal the hop
+    /// was planned in. By default the scene normal (a small body's surface, where "down" is towards the body);
+    /// a height field has gravity along -z.
+    fn landing_up(&self, scene_normal: P3) -> P3 {
+        scene_normal
+    }
 }
 
 /// A height field z = h(x, y), bilinear between posts, x east = column * spacing, y north = row * spacing.
@@ -66,6 +72,10 @@ impl HeightSurface {
 }
 
 impl Surface for HeightSurface {
+    fn landing_up(&self, _scene_normal: P3) -> P3 {
+        [0.0, 0.0, 1.0]
+    }
+
     fn name(&self) -> &str {
         &self.name
     }
