@@ -6,11 +6,10 @@
 //! - **Scan**: range rays from the robot's *true* grip point (0.3 m above it along the normal of the true ground
 //!   under its footprint, [`grip::GripModel::footprint`]: its attitude), with noise.
 //! - **Hop**: the robot aims within `landing_error` of the commanded anchor (seeded, uniform in the true tangent
-//!   plane) and comes down onto the true surface within 3 m either side of the aim along the landing's "up"
-//!   ([`surface::Surface::landing_up`]: vertical on a DEM, the scene normal on a shape model); then its grip may
-//!   slip with the probability of [`grip::GripModel`] (from the true surface around the grip point), which is a
-//!   grip failure: the tether is cut. With no ground there (an anchor the map filled in over a gap) the hop fails:
-//!   the tether catches the robot and it is back where it stood.
+//!   plane) and grips the true surface at the point nearest to its aim, within [`LANDING_REACH_M`] (3 m); then its
+//!   grip may slip with the probability of [`grip::GripModel`] (from the true surface around the grip point), which
+//!   is a grip failure: the tether is cut. With no ground within reach (an anchor the map filled in over a gap) the
+//!   hop fails: the tether catches the robot and it is back where it stood.
 //! - **Hub**: the winches put the hub where commanded.
 //! - A scripted node failure (`fail`) cuts a robot's tether at its n-th turn; the others continue.
 //!
@@ -382,8 +381,7 @@ pub fn simulate_with<R: Rng>(surface: &dyn Surface, start: &[P3; 4], cfg: &SimCo
             Command::Hop { robot: m, target } => {
                 let from = truth.pos[m];
                 let commanded = from_vec3(&target);
-                let up = surface.landing_up(from_vec3(&mission.hop_normal()));
-                let to = land(surface, commanded, up, cfg.landing_error, rng).unwrap_or(from);
+                let to = land(surface, commanded, cfg.landing_error, rng).unwrap_or(from);
                 referee.hop(&mut rep, m, from, to, truth.hub);
                 let grip_q = cfg.grip.quality(surface, to);
                 let slipped = uniform(rng) < cfg.grip.p_slip(grip_q);
@@ -459,23 +457,25 @@ fn graph_of(p: &DefaultLocalPlanner) -> (Vec<P3>, Vec<(usize, usize)>) {
     (verts, edges)
 }
 
+/// How far from its aim a landing robot finds ground to grip, metres: the reach of the earlier projection (3 m
+/// either side of the aim), which covers the anchors a map puts off the true surface.
+pub const LANDING_REACH_M: f64 = 3.0;
+
 /// Where a hop commanded to `target` really grips: a uniform error within `err` metres in the true tangent plane,
-/// then onto the true surface along `n` (the landing's "up"), within 3 m either side; `None` over a void. Until
-/// 2026-12-06 this projected along the scene normal, then along the true normal near the anchor; at the crevasse's
+/// then the true surface's nearest point within [`LANDING_REACH_M`]; `None` over a void. Until 2026-12-06 this
+/// projected along the scene normal, then along the true normal near the anchor; at the crevasse's
 /// end both can be nearly horizontal (a scene normal tilted by the far wall's points, the end wall's normal), and
 /// the ray from an anchor over the crevasse skimmed the ground and put the robot 2.7 m from its anchor and 10.7 m
-/// from where it stood, a hop no robot can make (the referee's violations on report seeds 1001 and 1003).
-fn land<R: Rng>(surface: &dyn Surface, target: P3, n: P3, err: f64, rng: &mut R) -> Option<P3> {
+/// from where it stood, a hop no robot can make (the referee's violations on report seeds 1001 and 1003). Coming
+/// down vertically instead put a robot on the steep cliff 10.4 m from where it stood (report seed 2004, a cliff
+/// face's vertical offset from the aim is the normal offset over the cosine of its slope): not kept.
+fn land<R: Rng>(surface: &dyn Surface, target: P3, err: f64, rng: &mut R) -> Option<P3> {
     let nt = surface.normal_near(target);
     let a = unit(if nt[2].abs() < 0.9 { cross(nt, [0.0, 0.0, 1.0]) } else { cross(nt, [1.0, 0.0, 0.0]) });
     let b = cross(nt, a);
     let (r, th) = (err * uniform(rng).sqrt(), 2.0 * core::f64::consts::PI * uniform(rng));
     let aim = add(target, add(scale(a, r * th.cos()), scale(b, r * th.sin())));
-    let o = add(aim, scale(n, 3.0));
-    if let Some(t) = surface.raycast(o, scale(n, -1.0), 6.0) {
-        return Some(add(o, scale(n, -t)));
-    }
-    surface.raycast(aim, n, 3.0).map(|t| add(aim, scale(n, t)))
+    surface.closest_point(aim, LANDING_REACH_M)
 }
 
 /// The steepest `win` x `win` window of the HiRISE crop, horizontal spacing times `h_scale` and heights times

@@ -25,12 +25,8 @@ pub trait Surface: Sync {
     fn scan(&self, o: P3, dirs: &[P3], max: f64) -> Vec<Option<f64>> {
         dirs.iter().map(|&d| self.raycast(o, d, max)).collect()
     }
-    /// "Up" where a hop ends: the direction a robot comes down onto the ground from, given the scene normal the hop
-    /// was planned in. By default the scene normal (a small body's surface, where "down" is towards the body);
-    /// a height field has gravity along -z.
-    fn landing_up(&self, scene_normal: P3) -> P3 {
-        scene_normal
-    }
+    /// The point of the surface nearest to `p`, if one lies within `reach` (to about 1 % of `reach`).
+    fn closest_point(&self, p: P3, reach: f64) -> Option<P3>;
 }
 
 /// A height field z = h(x, y), bilinear between posts, x east = column * spacing, y north = row * spacing.
@@ -72,9 +68,37 @@ impl HeightSurface {
 }
 
 impl Surface for HeightSurface {
-    fn landing_up(&self, _scene_normal: P3) -> P3 {
-        [0.0, 0.0, 1.0]
+    /// Sampled: heights on a grid of `reach / 30` (at most a quarter post) over the square within `reach` of `p`,
+    /// then a grid ten times finer around the best sample.
+    fn closest_point(&self, p: P3, reach: f64) -> Option<P3> {
+        let mut step = (reach / 30.0).min(self.hm.spacing_m * 0.25);
+        if !(step > 0.0 && reach.is_finite()) {
+            return None;
+        }
+        let mut best: Option<(f64, P3)> = None;
+        let mut centre = [p[0], p[1]];
+        let mut half = (reach / step).ceil() as i64;
+        for _ in 0..2 {
+            for i in -half..=half {
+                for j in -half..=half {
+                    let (x, y) = (centre[0] + i as f64 * step, centre[1] + j as f64 * step);
+                    if let Some(z) = self.height(x, y) {
+                        let q = [x, y, z];
+                        let d = dist(q, p);
+                        if best.is_none_or(|(b, _)| d < b) {
+                            best = Some((d, q));
+                        }
+                    }
+                }
+            }
+            let (_, q) = best?;
+            centre = [q[0], q[1]];
+            step /= 10.0;
+            half = 10;
+        }
+        best.filter(|(d, _)| *d <= reach).map(|(_, q)| q)
     }
+
 
     fn name(&self) -> &str {
         &self.name
@@ -205,10 +229,54 @@ impl Surface for MeshSurface {
         dirs.iter().map(|&d| self.raycast_in(&c, o, d, max)).collect()
     }
 
+    fn closest_point(&self, p: P3, reach: f64) -> Option<P3> {
+        self.near(p, reach)
+            .into_iter()
+            .filter_map(|t| self.mesh.triangle(t))
+            .map(|tri| closest_on_triangle(p, tri))
+            .map(|q| (dist(q, p), q))
+            .filter(|(d, _)| *d <= reach)
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, q)| q)
+    }
+
     fn normal_near(&self, p: P3) -> P3 {
         match self.closest_triangle(p).and_then(|t| self.mesh.triangle(t)) {
             Some([a, b, c]) => unit(cross(sub(b, a), sub(c, a))),
             None => [0.0, 0.0, 1.0],
         }
     }
+}
+
+/// The point of triangle `[a, b, c]` nearest to `p` (Ericson, Real-Time Collision Detection, 5.1.5).
+pub fn closest_on_triangle(p: P3, [a, b, c]: [P3; 3]) -> P3 {
+    let (ab, ac, ap) = (sub(b, a), sub(c, a), sub(p, a));
+    let (d1, d2) = (dot(ab, ap), dot(ac, ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = sub(p, b);
+    let (d3, d4) = (dot(ab, bp), dot(ac, bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return add(a, scale(ab, d1 / (d1 - d3)));
+    }
+    let cp = sub(p, c);
+    let (d5, d6) = (dot(ab, cp), dot(ac, cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return add(a, scale(ac, d2 / (d2 - d6)));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return add(b, scale(sub(c, b), (d4 - d3) / ((d4 - d3) + (d5 - d6))));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    add(a, add(scale(ab, vb * denom), scale(ac, vc * denom)))
 }
