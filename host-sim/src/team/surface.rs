@@ -280,3 +280,56 @@ pub fn closest_on_triangle(p: P3, [a, b, c]: [P3; 3]) -> P3 {
     let denom = 1.0 / (va + vb + vc);
     add(a, add(scale(ab, vb * denom), scale(ac, vc * denom)))
 }
+
+#[cfg(test)]
+mod closest_tests {
+    use super::*;
+    use crate::team::worlds::team_rng;
+    use rand_core::Rng;
+
+    fn uniform(rng: &mut impl Rng) -> f64 {
+        (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Against brute force: the nearest of ~20 k points spread over the triangle (barycentric lattice).
+    #[test]
+    fn the_closest_point_on_a_triangle_is_the_nearest_of_a_dense_lattice() {
+        let mut rng = team_rng(5);
+        let tri = [[0.0, 0.0, 0.0], [3.0, 0.5, 0.2], [1.0, 2.5, -0.4]];
+        let n = 200;
+        for _ in 0..40 {
+            let p = [uniform(&mut rng) * 6.0 - 1.5, uniform(&mut rng) * 6.0 - 1.5, uniform(&mut rng) * 4.0 - 2.0];
+            let q = closest_on_triangle(p, tri);
+            let mut best = f64::INFINITY;
+            for i in 0..=n {
+                for j in 0..=n - i {
+                    let (u, v) = (i as f64 / n as f64, j as f64 / n as f64);
+                    let s = add(tri[0], add(scale(sub(tri[1], tri[0]), u), scale(sub(tri[2], tri[0]), v)));
+                    best = best.min(dist(s, p));
+                }
+            }
+            assert!(dist(q, p) <= best + 1e-12 && dist(q, p) >= best - 0.02, "{p:?}: {} vs lattice {best}", dist(q, p));
+        }
+    }
+
+    /// On a plane z = 0.7 x (35 degrees) as a 1 m DEM the nearest point is the orthogonal projection (closed
+    /// form), to 1 % of the reach; beyond the reach there is none.
+    #[test]
+    fn the_closest_point_on_a_sloped_dem_is_the_orthogonal_projection() {
+        let n = 30;
+        let heights_m = (0..n * n).map(|i| Some(0.7 * (i % n) as f64)).collect();
+        let s = HeightSurface::new("slope", Heightmap { width: n, height: n, spacing_m: 1.0, heights_m });
+        let normal = unit([-0.7, 0.0, 1.0]);
+        let mut rng = team_rng(6);
+        for _ in 0..40 {
+            let foot = [10.0 + 8.0 * uniform(&mut rng), 10.0 + 8.0 * uniform(&mut rng), 0.0];
+            let foot = [foot[0], foot[1], 0.7 * foot[0]];
+            let off = 2.5 * uniform(&mut rng) - 1.25;
+            let p = add(foot, scale(normal, off));
+            let q = s.closest_point(p, 3.0).expect("within reach");
+            assert!(dist(q, foot) <= 0.03, "{p:?}: {q:?} vs {foot:?}");
+        }
+        let far = add([15.0, 15.0, 10.5], scale(normal, 3.5));
+        assert_eq!(s.closest_point(far, 3.0), None);
+    }
+}
