@@ -172,15 +172,18 @@ impl TeamRun {
 }
 
 impl<L: ByteLink, C: MonotonicClock, W: Watchdog, A: Autonomy, S: BorrowMut<ExecStorage>> Executive<L, C, W, A, S> {
-    /// Lends the team mission's storage for good (module docs). A second lending replaces an unused first one
-    /// (and is refused, handed back as `Some`, while a mission runs or its storage holds the last one's results).
-    #[must_use = "a refused lending comes back"]
+    /// Lends the team mission's storage for good (module docs). Whatever is not kept comes back as `Some`: a
+    /// second lending replaces an unused first one (which comes back), and is itself refused while a mission runs
+    /// or its storage holds the last one's results.
+    #[must_use = "a lending not kept comes back"]
     pub fn lend_team(&mut self, lend: TeamLend) -> Option<TeamLend> {
         if matches!(self.team, TeamSlot::Run(_)) {
             return Some(lend);
         }
-        self.team = TeamSlot::Free(lend);
-        None
+        match core::mem::replace(&mut self.team, TeamSlot::Free(lend)) {
+            TeamSlot::Free(old) => Some(old),
+            _ => None,
+        }
     }
 
     /// The team storage handed back (module docs), unless a mission is running; the last mission's results go

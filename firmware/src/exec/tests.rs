@@ -1169,6 +1169,10 @@ fn lose_the_team(e: &mut Exec<NoAutonomy>, seq: u32, first: TeamCommand) -> StdV
 fn a_team_lending_serves_one_mission_after_another_and_comes_back() {
     let mut e = exec(NoAutonomy);
     assert!(e.lend_team(team_lend()).is_none());
+    // a second lending before any mission replaces the first, which comes back (nothing is dropped)
+    let small: &'static mut crate::plan::team::dstar_lite::DStarArena<4> = Box::leak(Box::default());
+    assert!(e.lend_team(team_lend_of(small.storage())).is_some_and(|old| old.dstar.cells() > 4));
+    assert!(e.lend_team(team_lend()).is_some_and(|old| old.dstar.cells() == 4));
     let r = exchange(&mut e, &[Message::TeamConfigure(team_configure()), Message::GoalRequest(team_goal())]);
     assert!(r.iter().any(|m| matches!(m, Message::PlanStatus(s) if s.state == PlanState::Accepted)), "{r:?}");
     let first = team_orders(&r)[0];

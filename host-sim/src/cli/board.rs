@@ -258,10 +258,7 @@ fn bench_workload_cmd(
         .find(|r| r.name == name)
         .map(|r| r.instructions)
         .ok_or("the board printed no instruction count for the workload")?;
-    let field = |s: &str, k: &str| -> Option<u64> {
-        s.split_whitespace()
-            .find_map(|w| w.strip_prefix(k)?.strip_prefix('=')?.parse().ok())
-    };
+    let field = |s: &str, k: &str| -> Option<u64> { report::field(s, k)?.parse().ok() };
     let summary = board_summary.clone().unwrap_or_default();
     let per = |k: &str| {
         field(&summary, k)
@@ -314,11 +311,7 @@ fn bench_workload_cmd(
 /// The board's per-phase profile of the test-3 workload (`bench: phases` line: SysTick ticks per phase, and the
 /// distance-field queries), as instructions and shares of the workload's `total`.
 fn print_phases(line: &str, total: u64) {
-    let get = |k: &str| {
-        line.split_whitespace()
-            .find_map(|w| w.strip_prefix(k)?.strip_prefix('=')?.parse::<u64>().ok())
-            .unwrap_or(0)
-    };
+    let get = |k: &str| report::field(line, k).and_then(|v| v.parse::<u64>().ok()).unwrap_or(0);
     let ins = |k: &str| get(k).saturating_mul(report::INSTRUCTIONS_PER_TICK);
     let share = |n: u64| if total > 0 { 100.0 * n as f64 / total as f64 } else { 0.0 };
     let (settle, stability, anchors) = (ins("settle_ticks"), ins("stability_ticks"), ins("anchors_ticks"));

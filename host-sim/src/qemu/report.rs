@@ -172,6 +172,11 @@ pub fn run_bench(elf: &Path, timeout: Duration) -> Result<(Vec<BenchResult>, Str
     run_bench_with(elf, "tetherbot.mode=bench", timeout)
 }
 
+/// The value of `key=value` among the whitespace-separated words of `text` (the board's report and bench lines).
+pub fn field<'a>(text: &'a str, key: &str) -> Option<&'a str> {
+    text.split_whitespace().find_map(|w| w.strip_prefix(key)?.strip_prefix('='))
+}
+
 /// [`run_bench`] with other boot words (e.g. `tetherbot.mode=bench tetherbot.workload=tethered_test3`).
 pub fn run_bench_with(
     elf: &Path,
@@ -188,20 +193,13 @@ pub fn run_bench_with(
     }
     let mut results = Vec::new();
     for line in text.lines().filter(|l| l.starts_with("bench: name=")) {
-        let field = |k: &str| {
-            line.split_whitespace().find_map(|w| {
-                w.strip_prefix(k)
-                    .and_then(|v| v.strip_prefix('='))
-                    .map(str::to_owned)
-            })
-        };
         let (Some(name), Some(it), Some(ins)) =
-            (field("name"), field("iterations"), field("instructions"))
+            (field(line, "name"), field(line, "iterations"), field(line, "instructions"))
         else {
             continue;
         };
         results.push(BenchResult {
-            name,
+            name: name.to_owned(),
             iterations: it.parse().unwrap_or(0),
             instructions: ins.parse().unwrap_or(0),
         });

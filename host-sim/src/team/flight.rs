@@ -29,8 +29,6 @@ pub trait TeamFlight {
     fn begin(&mut self) -> Result<Command, SimError>;
     /// Answers the pending order (or reports a loss); the next order.
     fn step(&mut self, report: Report<'_>) -> Result<Command, SimError>;
-    /// The normal of the scene the last hop was planned in (the landing projects along it).
-    fn hop_normal(&self) -> Vec3;
     /// The flight code's mission, where the host can see it (direct and in-process; `None` over a real link).
     fn mission(&self) -> Option<&DefaultTeamMission<'_>>;
     /// The counters the `Done` order carried (rounds, hops, walls), over a link.
@@ -51,9 +49,6 @@ impl TeamFlight for DirectFlight<'_> {
     }
     fn step(&mut self, report: Report<'_>) -> Result<Command, SimError> {
         Ok(self.mission.step(report))
-    }
-    fn hop_normal(&self) -> Vec3 {
-        self.mission.planner().scene.frame.n
     }
     fn mission(&self) -> Option<&DefaultTeamMission<'_>> {
         Some(&self.mission)
@@ -119,7 +114,6 @@ pub struct LinkFlight<L: FlightLink> {
     pos: [Vec3; TEAM_SIZE],
     hub: Vec3,
     grip: [GripState; TEAM_SIZE],
-    normal: Vec3,
     /// The `Done` order's rounds, hops and walls.
     done: Option<(u32, u32, u32)>,
 }
@@ -178,7 +172,6 @@ impl<L: FlightLink> LinkFlight<L> {
             pos: start,
             hub,
             grip: [GripState::Gripping; TEAM_SIZE],
-            normal: Vec3::z(),
             done: None,
         })
     }
@@ -215,10 +208,7 @@ impl<L: FlightLink> LinkFlight<L> {
         self.command = Some(c);
         Ok(match c.order {
             TeamOrder::Scan { robot } => Command::Scan { robot: usize::from(robot) },
-            TeamOrder::Hop { robot, target, scene_normal } => {
-                self.normal = v3(&scene_normal);
-                Command::Hop { robot: usize::from(robot), target: v3(&target) }
-            }
+            TeamOrder::Hop { robot, target, .. } => Command::Hop { robot: usize::from(robot), target: v3(&target) },
             TeamOrder::MoveHub { to } => Command::MoveHub { to: v3(&to) },
             TeamOrder::Done { outcome, rounds, hops, walls } => Command::Done({
                 self.done = Some((rounds, hops, walls));
@@ -311,10 +301,6 @@ impl<L: FlightLink> TeamFlight for LinkFlight<L> {
                 self.report(TeamEvent::Lost { robot: u8::try_from(robot).map_err(link_err)?, cause })
             }
         }
-    }
-
-    fn hop_normal(&self) -> Vec3 {
-        self.normal
     }
 
     fn mission(&self) -> Option<&DefaultTeamMission<'_>> {

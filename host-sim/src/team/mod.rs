@@ -254,10 +254,7 @@ pub struct BoardTeamRun {
 impl BoardTeamRun {
     /// A `key=value` figure of the board's report.
     pub fn figure(&self, key: &str) -> Option<u64> {
-        self.report
-            .iter()
-            .flat_map(|l| l.split_whitespace())
-            .find_map(|kv| kv.strip_prefix(key)?.strip_prefix('=')?.parse().ok())
+        self.report.iter().find_map(|l| crate::qemu::report::field(l, key)?.parse().ok())
     }
 }
 
