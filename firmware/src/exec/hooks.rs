@@ -154,6 +154,11 @@ pub trait Autonomy {
     fn cancel(&mut self, _goal_id: u32, _now: Instant) -> Result<(), Refused> {
         Err(Refused)
     }
+    /// Why the current goal was refused or its planning stopped with `InvalidInput`: a sentence a person can act on,
+    /// which the executive forwards to the ground in a `Log` record with the `PlanStatus`. Default `None`.
+    fn refusal(&self) -> Option<&'static str> {
+        None
+    }
     /// The mission's state for `MissionStatus` frames; `None` (the default) sends none.
     fn mission_status(&self) -> Option<MissionStatus> {
         None

@@ -611,10 +611,16 @@ where
             }
             other => other,
         };
-        self.note(
-            LogLevel::Info,
-            format_args!("goal {}: {state:?}", g.goal_id),
-        );
+        match self.autonomy.refusal().filter(|_| state == PlanState::InvalidInput) {
+            Some(why) => self.note(
+                LogLevel::Warn,
+                format_args!("goal {} refused: {why}", g.goal_id),
+            ),
+            None => self.note(
+                LogLevel::Info,
+                format_args!("goal {}: {state:?}", g.goal_id),
+            ),
+        }
         if replacing && state != PlanState::Accepted {
             self.set_mode(Mode::Mapping);
         }
@@ -721,6 +727,12 @@ where
                 };
                 self.goal = Some(g);
                 self.send_plan_status();
+                if let Some(why) = self.autonomy.refusal().filter(|_| g.state == PlanState::InvalidInput) {
+                    self.note(
+                        LogLevel::Warn,
+                        format_args!("goal {}: planning stopped: {why}", g.goal_id),
+                    );
+                }
                 if solved && waypoints > 0 {
                     let parts = waypoints.div_ceil(MAX_WAYPOINTS_PER_PLAN_FRAME) as u16;
                     self.plan_tx = Some(PlanTx {

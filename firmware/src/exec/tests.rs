@@ -172,6 +172,52 @@ fn boot_telemetry_then_goal_without_planner_is_reported_honestly() {
     assert!(r[3..].iter().all(|m| matches!(m, Message::Log(_))));
 }
 
+/// Refuses every goal, or (with `at_step`) accepts it and stops its planning with `InvalidInput`, giving a reason.
+struct Refuser {
+    at_step: bool,
+}
+
+impl Autonomy for Refuser {
+    fn goal(&mut self, _g: &GoalRequest, _now: Instant) -> PlanState {
+        if self.at_step { PlanState::Accepted } else { PlanState::InvalidInput }
+    }
+    fn plan_step(&mut self, _now: Instant, _iterations: u32, _plan: &mut PlanBuffer) -> PlanProgress {
+        PlanProgress::Finished { state: PlanState::InvalidInput, iterations: 0, best_cost: None }
+    }
+    fn refusal(&self) -> Option<&'static str> {
+        Some("the rover does not settle on the map at its pose")
+    }
+}
+
+/// The ground learns why: a refused goal's reason, and the reason a planning stopped with `InvalidInput`, come in a
+/// `Warn` log record with the `PlanStatus` (before, only "goal 9: InvalidInput").
+#[test]
+fn a_refused_goal_and_a_refused_plan_are_reported_with_their_reason() {
+    for (at_step, want) in [
+        (false, "goal 9 refused: the rover does not settle on the map at its pose"),
+        (true, "goal 9: planning stopped: the rover does not settle on the map at its pose"),
+    ] {
+        let mut e = exec(Refuser { at_step });
+        let r = exchange(&mut e, &[Message::Configure(configure()), Message::GoalRequest(goal())]);
+        assert!(
+            r.iter().any(|m| matches!(m, Message::PlanStatus(p) if p.state == PlanState::InvalidInput)),
+            "{r:?}"
+        );
+        let said: StdVec<_> = r
+            .iter()
+            .filter_map(|m| match m {
+                Message::Log(l) if l.level == LogLevel::Warn => Some(l.text.as_str()),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(said, [want], "at_step {at_step}: {r:?}");
+    }
+    // an autonomy that gives no reason keeps the plain record
+    let mut e = exec(NoAutonomy);
+    let r = exchange(&mut e, &[Message::Configure(configure()), Message::GoalRequest(goal())]);
+    assert!(r.iter().any(|m| matches!(m, Message::Log(l) if l.text.as_str() == "goal 9: PlannerUnavailable")));
+}
+
 /// A scripted planner: searches for two steps, then returns a 14-waypoint plan and two motions.
 #[derive(Default)]
 struct Scripted {

@@ -437,9 +437,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
     }
 
     fn refuse(&mut self, why: GoalRefusal) -> PlanState {
-        if let Some(n) = self.stats.refusals.get_mut(why as usize) {
-            *n = n.saturating_add(1);
-        }
+        self.stats.refused(why);
         log::warn!("nav: goal refused: {}", why.reason());
         PlanState::InvalidInput
     }
@@ -685,10 +683,10 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
     }
 
     fn goal(&mut self, goal: &GoalRequest, now: Instant) -> PlanState {
+        self.stats.last_refusal = None;
         if self.mission.tether_state_lost() {
             // the mission stays Safe (TetherStateLost): planning needs the anchor history the reset lost
-            log::error!("goal {} refused: the tether state was lost in a reset", goal.goal_id);
-            return PlanState::InvalidInput;
+            return self.refuse(GoalRefusal::TetherStateLost);
         }
         self.problem = None;
         self.next_motion = 0;
@@ -789,6 +787,10 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
     fn cancel(&mut self, _goal_id: u32, _now: Instant) -> Result<(), Refused> {
         self.mission_cancel();
         Ok(())
+    }
+
+    fn refusal(&self) -> Option<&'static str> {
+        self.stats.last_refusal.map(GoalRefusal::reason)
     }
 
     fn mission_status(&self) -> Option<MissionStatus> {

@@ -111,11 +111,14 @@ pub enum GoalRefusal {
     /// The route touches an obstacle on the corridor's edge, cannot be folded back onto the tile, or needs more
     /// legs than `HOMOTOPY_MAX_LEGS`.
     RouteRefused,
+    /// A reset lost the tether state (no retained anchor history survived): planning from a straight tether would
+    /// be unsafe, so every goal is refused until the ground recovers the rover.
+    TetherStateLost,
 }
 
 impl GoalRefusal {
     /// Number of reasons.
-    pub const COUNT: usize = 12;
+    pub const COUNT: usize = 13;
     /// A sentence a person can act on.
     pub fn reason(self) -> &'static str {
         match self {
@@ -133,6 +136,7 @@ impl GoalRefusal {
             Self::NoRoute => "no homotopy route on the tile is feasible for the rover: move the goal or the root anchor",
             Self::PayoutExceeded => "the homotopy route needs more tether than max_payout_m: move the goal or use a longer tether",
             Self::RouteRefused => "the homotopy route touches the corridor's edge obstacles or has too many legs (see the log)",
+            Self::TetherStateLost => "the tether state was lost in a reset: recover the anchor history before a new goal",
         }
     }
 }
@@ -144,6 +148,9 @@ pub struct NavPlanStats {
     pub goals_accepted: u32,
     /// Goals refused, by [`GoalRefusal`] discriminant.
     pub refusals: [u32; GoalRefusal::COUNT],
+    /// Why the current goal was refused or its planning stopped with `InvalidInput` (`None` while it is accepted
+    /// and planning); sent to the ground with the refusal (`Autonomy::refusal`).
+    pub last_refusal: Option<GoalRefusal>,
     /// `plan_step` calls.
     pub steps: u32,
     /// Planner iterations run.
@@ -168,6 +175,16 @@ pub struct NavPlanStats {
     /// Search rounds added to a mission's search that had spent its budget with nothing the mission could drive
     /// ([`Problem::extend`]).
     pub search_extensions: u32,
+}
+
+impl NavPlanStats {
+    /// Counts a refusal and keeps it as the current goal's reason.
+    pub(crate) fn refused(&mut self, why: GoalRefusal) {
+        if let Some(n) = self.refusals.get_mut(why as usize) {
+            *n = n.saturating_add(1);
+        }
+        self.last_refusal = Some(why);
+    }
 }
 
 /// What the navigator keeps from `Configure` for planning.
@@ -584,6 +601,7 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
     // With no time left, only the best solution so far is restored (no new iterations).
     let target = if out_of_time { problem.done } else { problem.done.saturating_add(iterations).min(problem.budget) };
     let Some(mut space) = problem.space(map) else {
+        stats.refused(GoalRefusal::PlannerRejected);
         problem.finished = Some(PlanState::InvalidInput);
         return finished(problem, PlanState::InvalidInput);
     };
@@ -602,6 +620,7 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
         Err(_) => {
             // The map changed under the goal since it was accepted.
             log::warn!("nav: {}", GoalRefusal::GoalNotSettled.reason());
+            stats.refused(GoalRefusal::GoalNotSettled);
             problem.finished = Some(PlanState::InvalidInput);
             return finished(problem, PlanState::InvalidInput);
         }

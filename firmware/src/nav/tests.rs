@@ -379,9 +379,11 @@ mod planning {
         let mut n = nav();
         // not configured
         assert_eq!(n.goal(&goal(3.0, 0.0, 10), now), PlanState::InvalidInput);
+        assert_eq!(n.refusal(), Some(GoalRefusal::NotConfigured.reason()), "the reason goes to the ground");
         n.configure(&configure(1)).unwrap();
         // no scan yet: no pose
         assert_eq!(n.goal(&goal(3.0, 0.0, 10), now), PlanState::InvalidInput);
+        assert_eq!(n.refusal(), Some(GoalRefusal::NoPose.reason()));
         // a pose but an empty map (a scan without returns)
         scan_down(&mut n, 1, 0.0, 0.5, 0.5, &|_, _| None);
         assert_eq!(n.goal(&goal(3.0, 0.0, 10), now), PlanState::InvalidInput);
@@ -393,6 +395,7 @@ mod planning {
         let gap = |x: f32, _: f32| (!(1.2..=2.4).contains(&x)).then_some(Z0);
         map_world(&mut n, -1.0, 5.0, 1.8, &gap);
         assert_eq!(n.goal(&goal(3.5, 0.0, 10), now), PlanState::InvalidInput);
+        assert_eq!(n.refusal(), Some(GoalRefusal::StartNotSettled.reason()));
         // start fine again (the goal over the gap is planned towards: `a_goal_over_unobserved_ground_is_planned_towards`;
         // a goal on observed ground that does not settle: `an_unobserved_goal_is_approached_and_an_unsettled_one_refused`)
         scan_down(&mut n, 50, 0.0, 0.5, 2.0, &gap);
@@ -412,8 +415,9 @@ mod planning {
             assert!(!why.reason().is_empty());
         }
         assert_eq!(n.plan_stats().goals_accepted, 0);
-        // and a good goal after all that is accepted
+        // and a good goal after all that is accepted, with no reason left over
         assert_eq!(n.goal(&goal(3.5, 0.0, 10), now), PlanState::Accepted);
+        assert_eq!(n.refusal(), None);
     }
 
     #[test]

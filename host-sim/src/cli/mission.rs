@@ -258,6 +258,9 @@ pub fn summary(rep: &MissionReport) -> String {
     });
     s.push_str(&format!("mission {} seed {} ({}): {}\n", rep.scenario, rep.seed, rep.tracking, rep.verdict.name()));
     s.push_str(&format!("  {status}\n"));
+    if let Some(w) = rep.flight_warning.as_ref().filter(|_| !matches!(rep.verdict, Verdict::Arrived)) {
+        s.push_str(&format!("  flight software's last warning: {w}\n"));
+    }
     s.push_str(&format!(
         "  truth: {:.2} m driven, {:.2} m from the goal (tolerance {:.2} m), {} motions ({} stalled, {} slipped)\n",
         rep.distance_m, rep.goal_error_m, rep.tolerance_m, rep.motions, rep.stalls, rep.slips

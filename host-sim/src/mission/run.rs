@@ -25,7 +25,7 @@ use firmware::config::rover::RoverParams;
 use firmware::geom::p3::{dist, from_vec3, P3};
 use firmware::geom::Real;
 use firmware::protocol::{
-    Configure, GoalRequest, MapSettings, Message, MessageKind, MissionConfig, MissionState, MissionStatus,
+    Configure, GoalRequest, LogLevel, MapSettings, Message, MessageKind, MissionConfig, MissionState, MissionStatus,
     Motion, MotionOutcome, MotionReport, PlanState, PlannerChoice, Point3, StopReason, Tracking,
 };
 use rand_core::Rng;
@@ -236,6 +236,9 @@ pub struct MissionReport {
     pub physics_blocked: u32,
     /// The physics judge's verdict that ended the mission as a fall, in words.
     pub physics_fall: Option<String>,
+    /// The last warning or error the flight software forwarded (`Log` at `Warn` or `Error`): a refused goal's
+    /// reason, a planning stop's, a safe stop's.
+    pub flight_warning: Option<String>,
 }
 
 impl MissionReport {
@@ -550,6 +553,9 @@ impl<L: FlightLink> Sim<'_, L> {
                     self.rep.step_slips = self.rep.step_slips.max(t.cycle.slips);
                 }
                 Message::Nack(_) => self.rep.nacks += 1,
+                Message::Log(l) if matches!(l.level, LogLevel::Warn | LogLevel::Error) => {
+                    self.rep.flight_warning = Some(l.text.as_str().to_string());
+                }
                 _ => {}
             }
         }
@@ -958,6 +964,7 @@ pub fn run_mission_from(
         physics_checks: 0,
         physics_blocked: 0,
         physics_fall: None,
+        flight_warning: None,
     };
     let estimate = rover.state.settled.pose;
     let judge = if m.physics_falls {
