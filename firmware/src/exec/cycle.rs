@@ -152,8 +152,8 @@ where
             return false;
         }
         let mut text: String<MAX_LOG_TEXT> = String::new();
-        // A full string stops formatting; the text written so far is kept.
-        let _ = text.write_fmt(args);
+        // A full string stops formatting; the text written so far is kept, up to the last whole character.
+        let _ = CutAtCapacity(&mut text).write_fmt(args);
         if self.log_queue.push_back(Log { level, text }).is_err() {
             self.counters.log_dropped += 1;
             return false;
@@ -384,5 +384,18 @@ where
             }
         }
         sent
+    }
+}
+
+/// Formats into a log text, keeping as many whole characters of each piece as fit: heapless's own `write_str` drops a
+/// piece that does not fit whole, which lost a long refusal reason after its "goal 1 refused: " prefix.
+struct CutAtCapacity<'a>(&'a mut String<MAX_LOG_TEXT>);
+
+impl core::fmt::Write for CutAtCapacity<'_> {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        for c in s.chars() {
+            self.0.push(c).map_err(|_| core::fmt::Error)?;
+        }
+        Ok(())
     }
 }

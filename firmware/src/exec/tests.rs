@@ -175,7 +175,12 @@ fn boot_telemetry_then_goal_without_planner_is_reported_honestly() {
 /// Refuses every goal, or (with `at_step`) accepts it and stops its planning with `InvalidInput`, giving a reason.
 struct Refuser {
     at_step: bool,
+    why: &'static str,
 }
+
+const SHORT_REASON: &str = "the rover does not settle on the map at its pose";
+const LONG_REASON: &str = "the tile's descent from the root anchor to the goal was not segmented (see the log): move \
+                           the goal or upload a tile covering the corridor";
 
 impl Autonomy for Refuser {
     fn goal(&mut self, _g: &GoalRequest, _now: Instant) -> PlanState {
@@ -185,7 +190,7 @@ impl Autonomy for Refuser {
         PlanProgress::Finished { state: PlanState::InvalidInput, iterations: 0, best_cost: None }
     }
     fn refusal(&self) -> Option<&'static str> {
-        Some("the rover does not settle on the map at its pose")
+        Some(self.why)
     }
 }
 
@@ -197,7 +202,7 @@ fn a_refused_goal_and_a_refused_plan_are_reported_with_their_reason() {
         (false, "goal 9 refused: the rover does not settle on the map at its pose"),
         (true, "goal 9: planning stopped: the rover does not settle on the map at its pose"),
     ] {
-        let mut e = exec(Refuser { at_step });
+        let mut e = exec(Refuser { at_step, why: SHORT_REASON });
         let r = exchange(&mut e, &[Message::Configure(configure()), Message::GoalRequest(goal())]);
         assert!(
             r.iter().any(|m| matches!(m, Message::PlanStatus(p) if p.state == PlanState::InvalidInput)),
@@ -212,6 +217,18 @@ fn a_refused_goal_and_a_refused_plan_are_reported_with_their_reason() {
             .collect();
         assert_eq!(said, [want], "at_step {at_step}: {r:?}");
     }
+    // a reason longer than a log record is cut at the record's capacity, not dropped
+    let mut e = exec(Refuser { at_step: false, why: LONG_REASON });
+    let r = exchange(&mut e, &[Message::Configure(configure()), Message::GoalRequest(goal())]);
+    let text = r
+        .iter()
+        .find_map(|m| match m {
+            Message::Log(l) if l.level == LogLevel::Warn => Some(l.text.as_str()),
+            _ => None,
+        })
+        .unwrap();
+    assert_eq!(text.len(), crate::config::protocol::MAX_LOG_TEXT, "{text}");
+    assert!(text.starts_with("goal 9 refused: the tile's descent"), "{text}");
     // an autonomy that gives no reason keeps the plain record
     let mut e = exec(NoAutonomy);
     let r = exchange(&mut e, &[Message::Configure(configure()), Message::GoalRequest(goal())]);
