@@ -93,7 +93,9 @@ pub enum GoalRefusal {
     MapEmpty,
     /// No block of the map is known to contain the surface (e.g. scattered returns): no planning bounds.
     NoSurface,
-    /// The rover does not settle on the map at its pose (unobserved ground, collision, no ground).
+    /// The rover does not settle on the map at its pose: no ground within reach, or the settler found no pose
+    /// (unobserved ground and a collision have their own reasons: [`Self::StartUnobserved`],
+    /// [`Self::StartInCollision`]).
     StartNotSettled,
     /// The goal lies inside the mapped area but the rover does not settle there.
     GoalNotSettled,
@@ -114,11 +116,17 @@ pub enum GoalRefusal {
     /// A reset lost the tether state (no retained anchor history survived): planning from a straight tether would
     /// be unsafe, so every goal is refused until the ground recovers the rover.
     TetherStateLost,
+    /// On the map, the ground or the space under the rover at its pose is unobserved (`SettleFailure::UnknownSpace`
+    /// or `NoSurface`): at a frontier, e.g. a wheel over a lip whose face no ray has reached.
+    StartUnobserved,
+    /// On the map, the rover at its pose collides with the terrain or has a wheel against a steep face
+    /// (`SettleFailure::Collision` or `SteepContact`, with the start's escape zone too).
+    StartInCollision,
 }
 
 impl GoalRefusal {
     /// Number of reasons.
-    pub const COUNT: usize = 13;
+    pub const COUNT: usize = 15;
     /// A sentence a person can act on.
     pub fn reason(self) -> &'static str {
         match self {
@@ -126,7 +134,7 @@ impl GoalRefusal {
             Self::NoPose => "no scan received yet: the rover's pose is unknown",
             Self::MapEmpty => "the onboard map is empty: send scans first",
             Self::NoSurface => "no observed surface in the map to plan on: scan the terrain around the rover densely",
-            Self::StartNotSettled => "the rover does not settle on the map at its pose (ground under it unobserved?)",
+            Self::StartNotSettled => "the rover does not settle on the map at its pose (no ground within reach, or no settled pose)",
             Self::GoalNotSettled => "the goal is inside the mapped area but the rover does not settle there",
             Self::PlannerRejected => "the planner rejected the problem (parameters or arena)",
             Self::NoTile => "homotopy goal without a terrain tile: upload one (TileChunk) first",
@@ -137,6 +145,8 @@ impl GoalRefusal {
             Self::PayoutExceeded => "the homotopy route needs more tether than max_payout_m: move the goal or use a longer tether",
             Self::RouteRefused => "the homotopy route touches the corridor's edge obstacles or has too many legs (see the log)",
             Self::TetherStateLost => "the tether state was lost in a reset: recover the anchor history before a new goal",
+            Self::StartUnobserved => "the ground under the rover is unobserved on the map at its pose: scan around the rover",
+            Self::StartInCollision => "on the map the rover collides at its pose or has a wheel on a steep face: drive it clear",
         }
     }
 }
@@ -433,7 +443,11 @@ pub(crate) fn set_up(
     }
     .map_err(|e| {
         log::warn!("nav: the start does not settle at ({}, {}): {:?}", p.x, p.y, e);
-        GoalRefusal::StartNotSettled
+        match e {
+            SettleFailure::UnknownSpace | SettleFailure::NoSurface => GoalRefusal::StartUnobserved,
+            SettleFailure::Collision | SettleFailure::SteepContact => GoalRefusal::StartInCollision,
+            SettleFailure::NoGround | SettleFailure::Budget | SettleFailure::InvalidInput => GoalRefusal::StartNotSettled,
+        }
     })?;
     let tolerance = f64::from(goal.tolerance_m);
     let (goal_state, goal_at, region) = goal_in_region(&space, g, tolerance, start.axle()).map_err(|e| {

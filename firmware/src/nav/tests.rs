@@ -364,7 +364,7 @@ mod planning {
             map_world(&mut n, -1.0, 4.0, 0.0, &rock);
             let want = if accepted { PlanState::Accepted } else { PlanState::InvalidInput };
             assert_eq!(n.goal(&goal(3.0, 0.0, 10), now), want, "rock top {top} m, body clearance {clearance} m");
-            let refused = n.plan_stats().refusals[GoalRefusal::StartNotSettled as usize];
+            let refused = n.plan_stats().refusals[GoalRefusal::StartInCollision as usize];
             assert_eq!(refused, u32::from(!accepted));
             if accepted {
                 let start = n.plan_start().unwrap().axle();
@@ -395,7 +395,7 @@ mod planning {
         let gap = |x: f32, _: f32| (!(1.2..=2.4).contains(&x)).then_some(Z0);
         map_world(&mut n, -1.0, 5.0, 1.8, &gap);
         assert_eq!(n.goal(&goal(3.5, 0.0, 10), now), PlanState::InvalidInput);
-        assert_eq!(n.refusal(), Some(GoalRefusal::StartNotSettled.reason()));
+        assert_eq!(n.refusal(), Some(GoalRefusal::StartUnobserved.reason()));
         // start fine again (the goal over the gap is planned towards: `a_goal_over_unobserved_ground_is_planned_towards`;
         // a goal on observed ground that does not settle: `an_unobserved_goal_is_approached_and_an_unsettled_one_refused`)
         scan_down(&mut n, 50, 0.0, 0.5, 2.0, &gap);
@@ -409,7 +409,7 @@ mod planning {
             GoalRefusal::NoPose,
             GoalRefusal::MapEmpty,
             GoalRefusal::NoSurface,
-            GoalRefusal::StartNotSettled,
+            GoalRefusal::StartUnobserved,
         ] {
             assert_eq!(r[why as usize], 1, "{why:?}: {r:?}");
             assert!(!why.reason().is_empty());

@@ -450,7 +450,7 @@ pub fn campaign_paths(out: &Path, name: &str, shard: Option<Shard>) -> (PathBuf,
 /// One mission's line of a campaign's listing.
 fn row_line(r: &MissionRow) -> String {
     let f = |x: Option<f64>, w: usize, p: usize| x.map_or(format!("{:>w$}", "-"), |v| format!("{v:w$.p$}"));
-    format!(
+    let line = format!(
         "  seed {:>4}: {:<28} {} m, {} replans, min margin {} N, goal error {} m",
         r.seed,
         r.verdict,
@@ -458,7 +458,11 @@ fn row_line(r: &MissionRow) -> String {
         r.replans,
         f(r.min_true_margin_n, 7, 1),
         f(r.goal_error_m, 0, 2)
-    )
+    );
+    match &r.flight_warning {
+        Some(w) => format!("{line}\n             flight software: {w}"),
+        None => line,
+    }
 }
 
 /// Whether a campaign file holds a fall, a false arrival or a mission that could not run.

@@ -305,6 +305,9 @@ pub struct MissionRow {
     /// The physics judge's words when it ended the mission as a fall (`--physics-falls`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub physics_fall: Option<String>,
+    /// The flight software's last warning when the mission did not arrive (a refused goal's reason, ...).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flight_warning: Option<String>,
 }
 
 impl MissionRow {
@@ -325,6 +328,7 @@ impl MissionRow {
             plans: r.plans.len(),
             map_blocks: r.map_blocks,
             physics_fall: r.physics_fall.clone(),
+            flight_warning: r.flight_warning.clone().filter(|_| r.verdict != Verdict::Arrived),
         }
     }
 }
