@@ -132,8 +132,9 @@ pub struct MissionArgs {
     /// No live progress line.
     #[arg(long)]
     pub quiet: bool,
-    /// Falls are judged by the physics judge too (rapier3d, `host-sim/src/physics`): after every motion it holds
-    /// the rover at its true pose with the true tether, and a pose it cannot hold is a fall. Sets the scenario's
+    /// Falls are judged by the physics judge (rapier3d, `host-sim/src/physics`): after every motion it holds the
+    /// rover at its true pose with the true tether, and a pose it cannot hold is a fall; where the simple statics
+    /// cannot hold an increment, the judge decides (a pose it holds goes on, counted). Sets the scenario's
     /// `[mission] physics_falls`.
     #[arg(long)]
     pub physics_falls: bool,

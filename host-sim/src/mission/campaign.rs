@@ -184,9 +184,10 @@ pub fn table(name: &str, reports: &[MissionReport]) -> String {
     if checks > 0 {
         let blocked: u32 = reports.iter().map(|r| r.physics_blocked).sum();
         let by_physics = reports.iter().filter(|r| r.physics_fall.is_some()).count();
+        let overruled: u32 = reports.iter().map(|r| r.statics_overruled).sum();
         let _ = writeln!(
             s,
-            "  falls                        {falls} ({by_physics} by the physics judge: {checks} rest poses judged, {blocked} not placeable)"
+            "  falls                        {falls} ({by_physics} by the physics judge: {checks} poses judged, {blocked} not placeable; {overruled} increments the simple statics could not hold and the judge held)"
         );
     } else {
         let _ = writeln!(s, "  falls                        {falls} (simple statics; --physics-falls for the physics judge)");

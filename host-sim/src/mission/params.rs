@@ -88,8 +88,10 @@ pub struct MissionSection {
     /// Allow the flight software to drive an approximate solution up to its last safe state. Default false.
     pub allow_approximate: bool,
     /// After every motion, the physics judge (`crate::physics`, rapier3d, independent of the flight software's
-    /// model) holds the rover at its true pose with the true tether; a pose it cannot hold is a **fall**, as is
-    /// one the simple statics cannot hold (`tetherbot mission --physics-falls`). Default false: with it the
+    /// model) holds the rover at its true pose with the true tether; a pose it cannot hold is a **fall**. An
+    /// increment the simple statics cannot hold is a fall only if the judge cannot hold it (or cannot place the
+    /// rover) either; the ones it holds are counted (`MissionReport::statics_overruled`) and the motion goes on
+    /// (`tetherbot mission --physics-falls`). Default false: with it the
     /// development missions fall where the planner's wheel-patch model is optimistic (`host-sim/doc/mission.md`,
     /// 2026-12-05), an open defect of the planner, not of the judge.
     pub physics_falls: bool,

@@ -236,6 +236,8 @@ pub struct MissionReport {
     pub physics_blocked: u32,
     /// The physics judge's verdict that ended the mission as a fall, in words.
     pub physics_fall: Option<String>,
+    /// Increments the simple statics could not hold and the physics judge held (`physics_falls`): not falls.
+    pub statics_overruled: u32,
     /// The last warning or error the flight software forwarded (`Log` at `Warn` or `Error`): a refused goal's
     /// reason, a planning stop's, a safe stop's.
     pub flight_warning: Option<String>,
@@ -420,6 +422,15 @@ impl<L: FlightLink> Sim<'_, L> {
     /// is aimed at the tether's last anchor and the true tether re-computed to that tip
     /// ([`PhysicsJudge::aim_tether`]), as [`crate::physics::path::judge_path`] does.
     fn physics_fall(&mut self) -> Option<String> {
+        match self.physics_hold()? {
+            (HoldOutcome::Falls, words) => Some(words),
+            _ => None,
+        }
+    }
+
+    /// The physics judge's hold test at the rover's true pose now, with its words when it does not hold; `None`
+    /// without the judge. Counts the pose judged (and an unplaceable one).
+    fn physics_hold(&mut self) -> Option<(HoldOutcome, String)> {
         let judge = self.judge.as_ref()?;
         let a = self.rover.axle();
         let pose = GroundPose { x: a[0], y: a[1], yaw: f64::from(self.rover.state.heading()) };
@@ -432,12 +443,12 @@ impl<L: FlightLink> Sim<'_, L> {
         let v = judge.hold(pose, &TetherSpec { anchor, free_length_m: None });
         self.rep.physics_checks += 1;
         match v.outcome {
-            HoldOutcome::Holds => None,
+            HoldOutcome::Holds => Some((HoldOutcome::Holds, String::new())),
             HoldOutcome::Blocked => {
                 self.rep.physics_blocked += 1;
-                None
+                Some((HoldOutcome::Blocked, String::new()))
             }
-            HoldOutcome::Falls => Some(format!(
+            HoldOutcome::Falls => Some((HoldOutcome::Falls, format!(
                 "the physics judge does not hold the rover at ({:.2}, {:.2}, {:.2}) heading {:.1} deg after motion {}: slides {:.3} m, tilts {:.1} deg, {:.3} m/s at the end",
                 a[0],
                 a[1],
@@ -447,7 +458,7 @@ impl<L: FlightLink> Sim<'_, L> {
                 v.slide_m,
                 v.tilt_deg,
                 v.end_speed_mps
-            )),
+            ))),
         }
     }
 
@@ -765,7 +776,24 @@ impl<L: FlightLink> Sim<'_, L> {
                 break (TrueOutcome::Stalled, Some(Blocked::StopCommanded));
             }
             let before = self.rover.driven_m;
-            let progress = ex.step(&self.truth, &mut self.rover, self.m.slip_threshold_m);
+            let progress = match ex.step(&self.truth, &mut self.rover, self.m.slip_threshold_m) {
+                // With the physics judge, it decides what the simple statics cannot hold (issue 19: the physical
+                // judge, where it has landed, says what is a fall): a pose it holds is not a fall, and the motion
+                // goes on; one it cannot hold, or cannot place, is.
+                Progress::Ended(TrueOutcome::Fell, b) => match self.physics_hold() {
+                    Some((HoldOutcome::Holds, _)) => {
+                        self.rep.statics_overruled += 1;
+                        Progress::Moving
+                    }
+                    Some((HoldOutcome::Falls, why)) => {
+                        log::warn!("fall: {why}");
+                        self.rep.physics_fall = Some(why);
+                        Progress::Ended(TrueOutcome::Fell, b)
+                    }
+                    _ => Progress::Ended(TrueOutcome::Fell, b),
+                },
+                p => p,
+            };
             stepped = true;
             self.loc.moved(self.rover.driven_m - before);
             if self.truth.world.advance(self.rover.driven_m) > 0 {
@@ -965,6 +993,7 @@ pub fn run_mission_from(
         physics_blocked: 0,
         physics_fall: None,
         flight_warning: None,
+        statics_overruled: 0,
     };
     let estimate = rover.state.settled.pose;
     let judge = if m.physics_falls {
