@@ -106,3 +106,25 @@ fn a_motion_report_for_an_unknown_command_is_refused_and_counted() {
     assert_eq!(after.frames_rejected[k], before.frames_rejected[k] + 1);
     assert_eq!(after.mode, before.mode, "nothing else changed");
 }
+
+/// Issue 19, the mission's fall judge: on the HiRISE scarp's 50 m descent the simple statics (one friction cone for
+/// the whole rover, the tether from the axle, the winch's best tension) cannot hold this pose, where a mission
+/// (`mission_homotopy_hirise_long.toml`, seed 2) ended "Fell" before the physics judge decided such increments; the
+/// physics judge (wheels with width, the boom, the tether from the boom tip) holds it. With `physics_falls` the mission
+/// goes on from such an increment and counts it (`MissionReport::statics_overruled`).
+#[test]
+fn where_the_simple_statics_cannot_hold_the_physics_judge_decides() {
+    let sc = load("mission_homotopy_hirise_long.toml");
+    let opts = MissionOptions { seed: 2, tracking: Tracking::ClosedLoop, noiseless: true, live: false, reset: None };
+    let cfg = host_sim::mission::run::mission_configure(&sc, &opts);
+    let truth = host_sim::mission::run::truth_for(&sc, &cfg, &sc.mission).unwrap();
+    // the pose the seed-2 mission reached after 11.2 m: ground point and yaw about the normal
+    let state = truth.settle(9.570316, 30.449808, -0.69978184).expect("settles on the DEM");
+    let rover = truth.place(state, None, 0.0).expect("placed");
+    assert!(rover.tether.contacts.is_empty(), "the true tether runs straight from the root: {:?}", rover.tether);
+    assert!(!rover.statics.holds(), "the simple statics holds it after all: {:?}", rover.statics);
+    assert!(rover.statics.margin_n > -2.0, "only just: {:?}", rover.statics);
+    let judge = host_sim::physics::PhysicsJudge::new(&truth.world.truth(), truth.rover).unwrap();
+    let v = host_sim::mission::run::judge_hold(&judge, &truth, &rover);
+    assert_eq!(v.outcome, host_sim::physics::HoldOutcome::Holds, "{v:?}");
+}

@@ -38,7 +38,7 @@ use super::sensing::{
 };
 use super::truth::{true_tether, Body};
 use super::world::MissionWorld;
-use crate::physics::{GroundPose, HoldOutcome, PhysicsJudge, TetherSpec};
+use crate::physics::{GroundPose, HoldOutcome, HoldVerdict, PhysicsJudge, TetherSpec};
 use crate::link::{FlightLink, ResetCause};
 use crate::scenario::{Scenario, WorldSpec};
 use crate::sensor::{to_wire_pose, RangeSensorParams, Scan};
@@ -368,6 +368,23 @@ pub fn truth_for(sc: &Scenario, cfg: &Configure, m: &MissionSection) -> Result<M
     })
 }
 
+/// The physics judge's hold test of the true rover where it stands, with the true tether taut from its last anchor.
+///
+/// The tether leaves the rover at the boom tip, not at the axle the executor's tether ends at: the inline boom is
+/// aimed at the tether's last anchor and the true tether re-computed to that tip ([`PhysicsJudge::aim_tether`]), as
+/// [`crate::physics::path::judge_path`] does.
+pub fn judge_hold(judge: &PhysicsJudge, truth: &MissionTruth, rover: &TrueRover) -> HoldVerdict {
+    let a = rover.axle();
+    let pose = GroundPose { x: a[0], y: a[1], yaw: f64::from(rover.state.heading()) };
+    let root = truth.root;
+    let first = rover.tether.last_anchor(root);
+    let (world, prev) = (&truth.world, &rover.tether);
+    let aimed = judge.aim_tether(pose, first, |tip| Ok::<_, ()>(true_tether(world, root, tip, Some(prev)).last_anchor(root)));
+    // unplaceable: the hold says so (Blocked)
+    let anchor = aimed.ok().flatten().unwrap_or(first);
+    judge.hold(pose, &TetherSpec { anchor, free_length_m: None })
+}
+
 /// The state of one mission on the host side.
 struct Sim<'a, L: FlightLink> {
     s: HostSession<L>,
@@ -415,12 +432,8 @@ struct Sim<'a, L: FlightLink> {
 }
 
 impl<L: FlightLink> Sim<'_, L> {
-    /// The physics judge holds the rover where it stands after a motion, with the true tether (taut from its last
-    /// anchor). `Some(words)` when it does not hold: a fall.
-    ///
-    /// The tether leaves the rover at the boom tip, not at the axle the executor's tether ends at: the inline boom
-    /// is aimed at the tether's last anchor and the true tether re-computed to that tip
-    /// ([`PhysicsJudge::aim_tether`]), as [`crate::physics::path::judge_path`] does.
+    /// The physics judge holds the rover where it stands after a motion ([`judge_hold`]). `Some(words)` when it does
+    /// not hold: a fall.
     fn physics_fall(&mut self) -> Option<String> {
         match self.physics_hold()? {
             (HoldOutcome::Falls, words) => Some(words),
@@ -428,19 +441,11 @@ impl<L: FlightLink> Sim<'_, L> {
         }
     }
 
-    /// The physics judge's hold test at the rover's true pose now, with its words when it does not hold; `None`
-    /// without the judge. Counts the pose judged (and an unplaceable one).
+    /// The physics judge's hold test at the rover's true pose now ([`judge_hold`]), with its words when it does not
+    /// hold; `None` without the judge. Counts the pose judged (and an unplaceable one).
     fn physics_hold(&mut self) -> Option<(HoldOutcome, String)> {
         let judge = self.judge.as_ref()?;
-        let a = self.rover.axle();
-        let pose = GroundPose { x: a[0], y: a[1], yaw: f64::from(self.rover.state.heading()) };
-        let root = self.truth.root;
-        let first = self.rover.tether.last_anchor(root);
-        let (world, prev) = (&self.truth.world, &self.rover.tether);
-        let aimed = judge.aim_tether(pose, first, |tip| Ok::<_, ()>(true_tether(world, root, tip, Some(prev)).last_anchor(root)));
-        // unplaceable: the hold below says so (Blocked)
-        let anchor = aimed.ok().flatten().unwrap_or(first);
-        let v = judge.hold(pose, &TetherSpec { anchor, free_length_m: None });
+        let v = judge_hold(judge, &self.truth, &self.rover);
         self.rep.physics_checks += 1;
         match v.outcome {
             HoldOutcome::Holds => Some((HoldOutcome::Holds, String::new())),
@@ -448,17 +453,20 @@ impl<L: FlightLink> Sim<'_, L> {
                 self.rep.physics_blocked += 1;
                 Some((HoldOutcome::Blocked, String::new()))
             }
-            HoldOutcome::Falls => Some((HoldOutcome::Falls, format!(
-                "the physics judge does not hold the rover at ({:.2}, {:.2}, {:.2}) heading {:.1} deg after motion {}: slides {:.3} m, tilts {:.1} deg, {:.3} m/s at the end",
-                a[0],
-                a[1],
-                a[2],
-                pose.yaw.to_degrees(),
-                self.rep.motions,
-                v.slide_m,
-                v.tilt_deg,
-                v.end_speed_mps
-            ))),
+            HoldOutcome::Falls => {
+                let a = self.rover.axle();
+                Some((HoldOutcome::Falls, format!(
+                    "the physics judge does not hold the rover at ({:.2}, {:.2}, {:.2}) heading {:.1} deg after {} motions: slides {:.3} m, tilts {:.1} deg, {:.3} m/s at the end",
+                    a[0],
+                    a[1],
+                    a[2],
+                    f64::from(self.rover.state.heading()).to_degrees(),
+                    self.rep.motions,
+                    v.slide_m,
+                    v.tilt_deg,
+                    v.end_speed_mps
+                )))
+            }
         }
     }
 
