@@ -94,3 +94,16 @@ pub const HOMOTOPY_BLOCK_RADIUS_M: f64 = 1.0;
 /// goal's tolerance (`nav::planning`, `goal_in_region`): ring k at `k * tolerance / 4`, 8 positions each. Default 2
 /// (out to half the tolerance, 16 positions of up to `GOAL_SETTLE_YAWS` settles each): a bound on the work.
 pub const GOAL_REGION_RINGS: u32 = 2;
+
+/// Fill of the map's block pool, in eighths, at which a scan makes room before its next batch of points
+/// (`Map::forget_beyond`): the map of a long traverse forgets what lies far from the rover instead of dropping every
+/// new voxel once full (a 50 m descent fills the 12 MiB pool at 10 cm, `host-sim/doc/homotopy.md`). Default 7 (7/8
+/// full).
+pub const MAP_FORGET_AT_EIGHTHS: usize = 7;
+/// Fill, in eighths, that forgetting aims for. Default 6 (3/4): room for several scans before the next forgetting.
+pub const MAP_FORGET_TO_EIGHTHS: usize = 6;
+/// Radii round the rover (horizontal, metres) beyond which blocks are forgotten, tried in turn until the pool is at
+/// most [`MAP_FORGET_TO_EIGHTHS`] full. Default 40 m down to 8 m: the sensor's default range is 20 m, and within 8 m
+/// the map is never forgotten (if that is still too full, the scan's voxels beyond the pool are dropped and
+/// counted, as before).
+pub const MAP_FORGET_RADII_M: [Real; 7] = [40.0, 32.0, 24.0, 20.0, 16.0, 12.0, 8.0];

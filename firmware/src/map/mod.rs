@@ -137,6 +137,8 @@ const FLAG_REGION: u8 = 16;
 const FLAG_SITES_CHANGED: u8 = 32;
 /// Some voxel lost its site in this ESDF update (its offset holds `esdf::RESET`) and is still to be pulled.
 const FLAG_RESET: u8 = 64;
+/// To be forgotten by the running [`Map::forget_beyond`] (never set outside it).
+const FLAG_FORGET: u8 = 128;
 
 /// Words of a block's `queued` bit set.
 const QUEUED_WORDS: usize = BLOCK_VOXELS.div_ceil(64);
@@ -358,6 +360,118 @@ impl<'a> Map<'a> {
         self.blocks.len()
     }
 
+    /// Forgets every block whose centre lies farther than `radius_m` from `centre` in the horizontal plane: its
+    /// voxels become unknown and its slot is free again (the last block in use moves into it). The map of a long
+    /// traverse keeps what lies round the rover when its pool fills (the navigator calls this, `nav`), instead of
+    /// dropping every new voxel. The ESDF is repaired by the next [`Map::update_esdf`]: the blocks next to a
+    /// forgotten one are marked as if their sites had moved, so every voxel whose site was forgotten (it lies within
+    /// `esdf_max_distance` of it) is reset and pulled again. Returns the blocks forgotten. Bounded: three passes over
+    /// the blocks in use, 26 index lookups per forgotten block, and one backward-shift delete in the index each.
+    pub fn forget_beyond(&mut self, centre: &Vec3, radius_m: Real) -> usize {
+        let edge = BLOCK_EDGE as Real * self.cfg.voxel_size;
+        let r2 = radius_m * radius_m;
+        let mut marked = 0;
+        for b in self.blocks.iter_mut().take(self.used) {
+            let cx = (b.coord[0] as Real + 0.5) * edge - centre.x;
+            let cy = (b.coord[1] as Real + 0.5) * edge - centre.y;
+            if !(cx * cx + cy * cy <= r2) {
+                b.flags |= FLAG_FORGET;
+                marked += 1;
+            }
+        }
+        if marked == 0 {
+            return 0;
+        }
+        // the kept neighbours of forgotten blocks: their regions cover every voxel that may hold a forgotten site
+        for s in 0..self.used {
+            let Some(b) = self.blocks.get(s) else { break };
+            if b.flags & FLAG_FORGET == 0 {
+                continue;
+            }
+            let c = b.coord;
+            for j in 0..27 {
+                let n = [c[0] + (j % 3) as i32 - 1, c[1] + ((j / 3) % 3) as i32 - 1, c[2] + (j / 9) as i32 - 1];
+                if let Some(nb) = self.find_block(n).and_then(|k| self.blocks.get_mut(k)) {
+                    if nb.flags & FLAG_FORGET == 0 {
+                        nb.flags |= FLAG_SITES_CHANGED;
+                    }
+                }
+            }
+        }
+        // remove from the last slot down: the block moved into a freed slot has been looked at already
+        let mut forgotten = 0;
+        for s in (0..self.used).rev() {
+            if self.blocks.get(s).is_some_and(|b| b.flags & FLAG_FORGET != 0) && self.remove_block(s) {
+                forgotten += 1;
+            }
+        }
+        forgotten
+    }
+
+    /// Removes the block in `slot` (its index entry by backward shift, which keeps every other entry within its probe
+    /// sequence) and moves the last block in use into the slot. `false` if the block is not in the index (storage no
+    /// `Map` built): nothing changes.
+    fn remove_block(&mut self, slot: usize) -> bool {
+        let Some(c) = self.blocks.get(slot).map(|b| b.coord) else { return false };
+        let Some(pos) = self.index_position(c) else { return false };
+        let mask = self.index.len() - 1;
+        let mut hole = pos;
+        let mut j = pos;
+        for _ in 0..self.index.len() {
+            j = (j + 1) & mask;
+            let e = self.index.get(j).copied().unwrap_or(0);
+            if e == 0 {
+                break;
+            }
+            let Some(home) = self.blocks.get((e - 1) as usize).map(|b| hash(b.coord) & mask) else { break };
+            // the entry at j may fill the hole unless its home lies cyclically in (hole, j]
+            if (j.wrapping_sub(home) & mask) >= (j.wrapping_sub(hole) & mask) {
+                if let Some(h) = self.index.get_mut(hole) {
+                    *h = e;
+                }
+                hole = j;
+            }
+        }
+        if let Some(h) = self.index.get_mut(hole) {
+            *h = 0;
+        }
+        let Some(last) = self.used.checked_sub(1) else { return false };
+        if slot != last {
+            let Some(moved) = self.blocks.get(last).copied() else { return false };
+            if let Some(p) = self.index_position(moved.coord) {
+                if let Some(e) = self.index.get_mut(p) {
+                    *e = slot as u32 + 1;
+                }
+            }
+            if let Some(b) = self.blocks.get_mut(slot) {
+                *b = moved;
+            }
+        }
+        if let Some(b) = self.blocks.get_mut(last) {
+            b.flags = 0;
+        }
+        self.used = last;
+        true
+    }
+
+    /// Position in the index of the entry of block `c`.
+    fn index_position(&self, c: [i32; 3]) -> Option<usize> {
+        let mask = self.index.len() - 1;
+        let mut h = hash(c) & mask;
+        for _ in 0..MAX_PROBE.min(self.index.len()) {
+            match self.index.get(h).copied() {
+                Some(0) | None => return None,
+                Some(e) => {
+                    if self.blocks.get((e - 1) as usize).is_some_and(|b| b.coord == c) {
+                        return Some(h);
+                    }
+                }
+            }
+            h = (h + 1) & mask;
+        }
+        None
+    }
+
     /// Forget everything (the storage stays lent).
     pub fn clear(&mut self) {
         self.index.iter_mut().for_each(|e| *e = 0);
@@ -387,21 +501,8 @@ impl<'a> Map<'a> {
     }
 
     pub(crate) fn find_block(&self, c: [i32; 3]) -> Option<usize> {
-        let mask = self.index.len() - 1;
-        let mut h = hash(c) & mask;
-        for _ in 0..MAX_PROBE.min(self.index.len()) {
-            match self.index.get(h).copied() {
-                Some(0) | None => return None,
-                Some(e) => {
-                    let slot = (e - 1) as usize;
-                    if self.blocks.get(slot).is_some_and(|b| b.coord == c) {
-                        return Some(slot);
-                    }
-                }
-            }
-            h = (h + 1) & mask;
-        }
-        None
+        let h = self.index_position(c)?;
+        self.index.get(h).map(|e| (e - 1) as usize)
     }
 
     pub(crate) fn find_or_alloc_block(&mut self, c: [i32; 3]) -> Result<usize, MapError> {

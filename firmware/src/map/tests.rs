@@ -610,3 +610,52 @@ fn compact_boxes_of_blocks_fit_an_index_twice_their_size() {
     }
     assert!(worst > 10_000, "{worst}");
 }
+
+/// A long traverse keeps the map round the rover when its pool fills (`Map::forget_beyond`): the blocks beyond the
+/// radius are gone from the index and the pool (their slots reused, every kept block still found at its slot), and
+/// after the next ESDF update every kept voxel's distance is the brute force's over the kept sites only: no voxel
+/// keeps a forgotten site.
+#[test]
+fn forgetting_far_blocks_keeps_the_index_and_the_esdf_exact_for_what_stays() {
+    let mut rng = rand_pcg::Pcg32::new(17, 23);
+    for trial in 0..4 {
+        let (mut b, mut i) = slices(256, 512);
+        let mut map = Map::from_slices(brute_force_config(), &mut b, &mut i).unwrap();
+        let n = 24;
+        let sites = random_site_map(&mut map, &mut rng, n, 12 + 4 * trial);
+        assert!(map.update_esdf().converged);
+        let before = map.blocks_used();
+        let edge = BLOCK_EDGE as Real * map.config().voxel_size;
+        let centre = Vec3::new(0.3 * trial as Real, -0.2, 5.0);
+        let radius = 0.9 + 0.1 * trial as Real;
+        let kept = |c: [i32; 3]| {
+            let (x, y) = ((c[0] as Real + 0.5) * edge - centre.x, (c[1] as Real + 0.5) * edge - centre.y);
+            x * x + y * y <= radius * radius
+        };
+        let block_of = |g: [i32; 3]| [split(g[0]).0, split(g[1]).0, split(g[2]).0];
+        let coords: Vec<[i32; 3]> = (0..before).filter_map(|s| map.block_coord(s)).collect();
+        let forgotten = map.forget_beyond(&centre, radius);
+        assert!(forgotten > 0 && forgotten < before, "trial {trial}: {forgotten} of {before}");
+        assert_eq!(map.blocks_used(), before - forgotten);
+        assert_eq!(coords.iter().filter(|c| !kept(**c)).count(), forgotten);
+        for s in 0..map.blocks_used() {
+            let c = map.block_coord(s).unwrap();
+            assert!(kept(c), "block {c:?} should be gone");
+            assert_eq!(map.find_block(c), Some(s), "block {c:?} not found at its slot");
+        }
+        for c in coords.iter().filter(|c| !kept(**c)) {
+            assert_eq!(map.find_block(*c), None, "forgotten block {c:?} still indexed");
+        }
+        assert!(map.update_esdf().converged);
+        let left: Vec<_> = sites.iter().copied().filter(|(g, _)| kept(block_of(*g))).collect();
+        let dmax = map.config().esdf_max_distance / map.config().voxel_size;
+        let (max_err, inexact, total) =
+            compare_over_cube(&map, n, |g| if kept(block_of(g)) { brute_force(&left, g, dmax) } else { None });
+        assert!(max_err < 0.1, "trial {trial}: max error {max_err} voxels");
+        assert!(inexact * 100 <= total, "trial {trial}: {inexact} of {total} voxels inexact");
+        // and the map goes on: a voxel can be observed again where a block was forgotten
+        let far = coords.iter().copied().find(|c| !kept(*c)).unwrap();
+        map.set_voxel([far[0] * BLOCK_EDGE as i32, far[1] * BLOCK_EDGE as i32, far[2] * BLOCK_EDGE as i32], 0.0, 1.0).unwrap();
+        assert!(map.find_block(far).is_some());
+    }
+}

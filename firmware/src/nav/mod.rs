@@ -281,7 +281,7 @@ use core::borrow::BorrowMut;
 use hal::Instant;
 
 use crate::config::map::{MapConfig, NAV_POINT_BATCH};
-use crate::config::nav::MAX_PLAN_ITERATIONS;
+use crate::config::nav::{MAP_FORGET_AT_EIGHTHS, MAP_FORGET_RADII_M, MAP_FORGET_TO_EIGHTHS, MAX_PLAN_ITERATIONS};
 use crate::exec::{Autonomy, DriveStep, PlanBuffer, PlanProgress, Refused, Scan};
 use crate::geom::Vec3;
 use crate::map::{Block, Map, MapError};
@@ -552,6 +552,28 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
     }
 }
 
+/// Before each batch of a scan's points, when the map's pool is [`MAP_FORGET_AT_EIGHTHS`] full: forgets the blocks farther from the rover
+/// than the first of [`MAP_FORGET_RADII_M`] that brings it down to [`MAP_FORGET_TO_EIGHTHS`] (the module docs).
+fn make_room(map: &mut Map<'_>, rover: &Vec3) {
+    let capacity = map.blocks_capacity();
+    if map.blocks_used() * 8 < capacity * MAP_FORGET_AT_EIGHTHS {
+        return;
+    }
+    let before = map.blocks_used();
+    for r in MAP_FORGET_RADII_M {
+        map.forget_beyond(rover, r);
+        if map.blocks_used() * 8 <= capacity * MAP_FORGET_TO_EIGHTHS {
+            break;
+        }
+    }
+    log::info!(
+        "map: the pool was {} of {} blocks full: forgot {} blocks far from the rover",
+        before,
+        capacity,
+        before.saturating_sub(map.blocks_used())
+    );
+}
+
 /// Adds `n` to a telemetry counter, saturating at `u32::MAX` (a counter never wraps back to small values).
 fn count_up(counter: &mut u32, n: u32) {
     *counter = counter.saturating_add(n);
@@ -612,9 +634,12 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
             self.status = status;
             return;
         };
+        let p = part.sensor_pose.position;
+        let rover = Vec3::new(p.x, p.y, p.z);
         let mut batch = [Vec3::zeros(); NAV_POINT_BATCH];
         let mut pool_error = false;
         for chunk in part.points.chunks(NAV_POINT_BATCH) {
+            make_room(&mut map, &rover);
             for (dst, p) in batch.iter_mut().zip(chunk) {
                 *dst = Vec3::new(p.x, p.y, p.z);
             }

@@ -182,6 +182,29 @@ mod planning {
         assert_eq!(nav.map_status().pool_errors, 0, "test map pool too small");
     }
 
+    /// A traverse longer than the map's pool holds (issue 20's 50 m descent filled 12 MiB at 10 cm): before each
+    /// scan, a pool 7/8 full forgets the blocks far from the rover, so no scan's voxels are dropped, the ground round
+    /// the rover stays mapped and the start of the traverse is forgotten (unknown again).
+    #[test]
+    fn a_long_traverse_forgets_the_map_far_behind_instead_of_dropping_new_scans() {
+        let mut n: TestNav =
+            Navigator::new(MapConfig::with_voxel_size(VOXEL), vec![Block::EMPTY; 2048], vec![0u32; 4096], Box::default())
+                .unwrap();
+        n.configure(&configure(1)).unwrap();
+        for k in 0..40 {
+            scan_down(&mut n, k + 1, 2.0 * k as f32, 1.0, 2.0, &flat);
+        }
+        let status = n.map_status();
+        assert_eq!(status.pool_errors, 0, "no scan met a full pool: {status:?}");
+        assert_eq!(status.voxels_dropped, 0, "{status:?}");
+        let map = n.map().unwrap();
+        let known = |x: f32| {
+            matches!(crate::map::DistanceField::query(&map, &Vec3::new(x, 0.0, Z0 + 0.2)), crate::map::DistanceQuery::Known { .. })
+        };
+        assert!(known(78.0) && known(74.0), "the ground round the rover (x = 78) is mapped");
+        assert!(!known(0.0) && !known(40.0), "the start of the traverse is forgotten");
+    }
+
     /// Ground height of the flat world: off the voxel boundaries (a surface exactly on a voxel face leaves the
     /// voxels behind it barely observed).
     const Z0: f32 = 0.03;
