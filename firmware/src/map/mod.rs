@@ -368,13 +368,16 @@ impl<'a> Map<'a> {
     /// `esdf_max_distance` of it) is reset and pulled again. Returns the blocks forgotten. Bounded: three passes over
     /// the blocks in use, 26 index lookups per forgotten block, and one backward-shift delete in the index each.
     pub fn forget_beyond(&mut self, centre: &Vec3, radius_m: Real) -> usize {
+        if !(crate::geom::is_finite3(centre) && radius_m.is_finite() && radius_m >= 0.0) {
+            return 0;
+        }
         let edge = BLOCK_EDGE as Real * self.cfg.voxel_size;
         let r2 = radius_m * radius_m;
         let mut marked = 0;
         for b in self.blocks.iter_mut().take(self.used) {
             let cx = (b.coord[0] as Real + 0.5) * edge - centre.x;
             let cy = (b.coord[1] as Real + 0.5) * edge - centre.y;
-            if !(cx * cx + cy * cy <= r2) {
+            if cx * cx + cy * cy > r2 {
                 b.flags |= FLAG_FORGET;
                 marked += 1;
             }
@@ -390,7 +393,7 @@ impl<'a> Map<'a> {
             }
             let c = b.coord;
             for j in 0..27 {
-                let n = [c[0] + (j % 3) as i32 - 1, c[1] + ((j / 3) % 3) as i32 - 1, c[2] + (j / 9) as i32 - 1];
+                let n = [c[0] + (j % 3) - 1, c[1] + ((j / 3) % 3) - 1, c[2] + (j / 9) - 1];
                 if let Some(nb) = self.find_block(n).and_then(|k| self.blocks.get_mut(k)) {
                     if nb.flags & FLAG_FORGET == 0 {
                         nb.flags |= FLAG_SITES_CHANGED;

@@ -634,6 +634,10 @@ fn forgetting_far_blocks_keeps_the_index_and_the_esdf_exact_for_what_stays() {
         };
         let block_of = |g: [i32; 3]| [split(g[0]).0, split(g[1]).0, split(g[2]).0];
         let coords: Vec<[i32; 3]> = (0..before).filter_map(|s| map.block_coord(s)).collect();
+        // a centre or radius that is not a number forgets nothing (it would otherwise be farther than everything)
+        assert_eq!(map.forget_beyond(&Vec3::new(Real::NAN, 0.0, 0.0), radius), 0);
+        assert_eq!(map.forget_beyond(&centre, Real::NAN), 0);
+        assert_eq!(map.blocks_used(), before);
         let forgotten = map.forget_beyond(&centre, radius);
         assert!(forgotten > 0 && forgotten < before, "trial {trial}: {forgotten} of {before}");
         assert_eq!(map.blocks_used(), before - forgotten);
