@@ -6,6 +6,9 @@
 //! brought up to date ([`Map::update_esdf`]) within the map's own budgets ([`Autonomy::scan_complete`]); the map's
 //! state goes out in every `Telemetry` frame ([`MapStatus`]). The map's configuration comes with `Configure.map`
 //! (protocol v3; the navigator boots with [`MapConfig::DEFAULT`]); another resolution rebuilds the map empty.
+//! When the block pool is 7/8 full, a scan first forgets the blocks far from the rover ([`Map::forget_beyond`]; the
+//! radii and fills are `config::nav`'s `MAP_FORGET_*`), so a traverse longer than the pool holds keeps the map round
+//! the rover instead of dropping every new voxel.
 //!
 //! ## Goals: tethered ABIT* on the onboard map (Paton et al. V)
 //! A `GoalRequest` for [`PlannerChoice::Abit`] sets up the problem of [`crate::plan::tethered`] on the onboard map
@@ -552,8 +555,9 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
     }
 }
 
-/// Before each batch of a scan's points, when the map's pool is [`MAP_FORGET_AT_EIGHTHS`] full: forgets the blocks farther from the rover
-/// than the first of [`MAP_FORGET_RADII_M`] that brings it down to [`MAP_FORGET_TO_EIGHTHS`] (the module docs).
+/// Before each batch of a scan's points, when the map's pool is [`MAP_FORGET_AT_EIGHTHS`] full: forgets the blocks
+/// farther from the rover than the first of [`MAP_FORGET_RADII_M`] that brings it down to [`MAP_FORGET_TO_EIGHTHS`]
+/// (the module docs).
 fn make_room(map: &mut Map<'_>, rover: &Vec3) {
     let capacity = map.blocks_capacity();
     if map.blocks_used() * 8 < capacity * MAP_FORGET_AT_EIGHTHS {
