@@ -14,9 +14,10 @@
 //!   default edge, 32 B of it header).
 //! - [`MapStorage`]: the block pool plus the block index, owned by the caller (`static` on the board, `Box` on the
 //!   host) and lent to [`Map::new`]. The index is open addressing with linear probing, bounded by
-//!   [`MAX_PROBE`](crate::config::map::MAX_PROBE). Blocks are allocated on demand and never evicted: a full pool
-//!   or an exhausted probe is reported in [`IntegrationOutcome::pool_error`], and the voxels that fell into
-//!   unallocated blocks are counted in [`IntegrationOutcome::voxels_dropped`] (the rest of the frame still lands).
+//!   [`MAX_PROBE`](crate::config::map::MAX_PROBE). Blocks are allocated on demand and freed only by
+//!   [`Map::forget_beyond`] (the navigator's room-making on long traverses): a full pool or an exhausted probe is
+//!   reported in [`IntegrationOutcome::pool_error`], and the voxels that fell into unallocated blocks are counted in
+//!   [`IntegrationOutcome::voxels_dropped`] (the rest of the frame still lands).
 //!
 //! ## TSDF integration ([`Map::integrate_points`], Voxblox's ray-casting integrator)
 //! Each point of a sensor frame is a ray from the sensor origin. Voxels along the ray from `depth -

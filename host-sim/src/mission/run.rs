@@ -183,7 +183,8 @@ pub struct MissionReport {
     pub mean_cross_track_m: f64,
     /// Plans received.
     pub plans: Vec<PlanSeen>,
-    /// Map blocks in use at the last telemetry (high water: blocks are never freed).
+    /// Largest count of map blocks in use in any telemetry frame (the high water; the map forgets blocks far from
+    /// the rover when its pool fills).
     pub map_blocks: u32,
     /// Map block capacity.
     pub map_blocks_capacity: u32,
