@@ -367,7 +367,7 @@ impl<'a> Map<'a> {
     /// dropping every new voxel. The ESDF is repaired by the next [`Map::update_esdf`]: the blocks next to a
     /// forgotten one are marked as if their sites had moved, so every voxel whose site was forgotten (it lies within
     /// `esdf_max_distance` of it) is reset and pulled again. Returns the blocks forgotten. Bounded: three passes over
-    /// the blocks in use, 26 index lookups per forgotten block, and one backward-shift delete in the index each.
+    /// the blocks in use, 27 index lookups per forgotten block, and one backward-shift delete in the index each.
     pub fn forget_beyond(&mut self, centre: &Vec3, radius_m: Real) -> usize {
         if !(crate::geom::is_finite3(centre) && radius_m.is_finite() && radius_m >= 0.0) {
             return 0;
@@ -405,8 +405,13 @@ impl<'a> Map<'a> {
         // remove from the last slot down: the block moved into a freed slot has been looked at already
         let mut forgotten = 0;
         for s in (0..self.used).rev() {
-            if self.blocks.get(s).is_some_and(|b| b.flags & FLAG_FORGET != 0) && self.remove_block(s) {
-                forgotten += 1;
+            if self.blocks.get(s).is_some_and(|b| b.flags & FLAG_FORGET != 0) {
+                if self.remove_block(s) {
+                    forgotten += 1;
+                } else if let Some(b) = self.blocks.get_mut(s) {
+                    // not in the index (storage no `Map` built): kept, and the mark must not outlive this call
+                    b.flags &= !FLAG_FORGET;
+                }
             }
         }
         forgotten
