@@ -10,11 +10,15 @@
 //!    is pushed onto the lower queue.
 //! 2. Raise (done directly, as each voxel stores the offset of its site): in every block within
 //!    `esdf_max_distance` of a block whose sites moved or vanished, a voxel whose site is no longer a fixed-band
-//!    voxel with the same value is reset, and so is a fixed-band site that left the band; a reset voxel's unused
-//!    offset holds the marker `RESET` until it is pulled. Voxels that changed sign (marked by the integration), and
-//!    in a newly allocated block the voxels next to a block that existed before this update, are marked by pull
-//!    cells in the block's `pending` mask (64 bits in the lent storage; a cell is one voxel at the default edge of
-//!    4, 2x2x2 voxels at 8). The other voxels of a new block hear of every site through the queue.
+//!    voxel is reset, and so is a fixed-band site that left the band; a reset voxel's unused offset holds the
+//!    marker `RESET` until it is pulled. A voxel whose site only changed value keeps it with the new value (its
+//!    distance moves by the change, within `esdf_max_distance` or it is reset): farther now, its cell is marked for
+//!    a pull (a neighbour's site may be better); nearer, it is queued to offer the site again. That keeps the
+//!    fixed point below, and visits each such voxel once instead of resetting and re-deriving it. Voxels that
+//!    changed sign (marked by the integration), and in a newly allocated block the voxels next to a block that
+//!    existed before this update, are marked by pull cells in the block's `pending` mask (64 bits in the lent
+//!    storage; a cell is one voxel at the default edge of 4, 2x2x2 voxels at 8). The other voxels of a new block
+//!    hear of every site through the queue.
 //! 3. Lower: every reset voxel and every voxel of a marked cell is **pulled** (takes the best site of its 26
 //!    neighbours) and queued if it improved; then the queue runs: each pop offers the voxel's site to its 26
 //!    neighbours and queues those it improves (strictly better by 1e-5 voxel, within `esdf_max_distance`).
@@ -212,9 +216,6 @@ impl Map<'_> {
             out: EsdfOutcome::default(),
         };
         let used = self.used;
-        let vs = self.cfg.voxel_size;
-        let band = self.cfg.esdf_band * vs;
-        let tq = self.cfg.truncation / 32767.0;
         let dmax = wave.dmax;
 
         // Voxels left queued by a call that ran out of budget: their blocks join the FIFO in slot order.
@@ -223,161 +224,10 @@ impl Map<'_> {
                 self.append_block(&mut wave, s);
             }
         }
-        // A new block's voxels learn the sites of the blocks that were there before by a pull of the cells next to
-        // those blocks; the rest hear of every site through the queue (new sites and pulled voxels offer theirs).
-        for s in 0..used {
-            let Some(b) = self.blocks.get(s) else { break };
-            if b.flags & FLAG_ESDF_NEW == 0 {
-                continue;
-            }
-            let c = b.coord;
-            let mut pending = 0u64;
-            for (j, mask) in BORDER_CELLS.iter().enumerate() {
-                if j == 13 {
-                    continue;
-                }
-                let nc = [c[0] + (j % 3) as i32 - 1, c[1] + ((j / 3) % 3) as i32 - 1, c[2] + (j / 9) as i32 - 1];
-                let old = self.find_block(nc).and_then(|n| self.blocks.get(n));
-                if old.is_some_and(|nb| nb.flags & FLAG_ESDF_NEW == 0) {
-                    pending |= mask;
-                }
-            }
-            if let Some(b) = self.blocks.get_mut(s) {
-                b.pending |= pending;
-            }
-        }
-        // 1. Rebuild the fixed-band sites of blocks whose TSDF changed (values within the hysteresis are kept). New
-        // sites are queued; voxels that lost their site are marked for a pull.
-        let tol = self.site_tolerance();
-        for s in 0..used {
-            let Some(b) = self.blocks.get_mut(s) else { break };
-            if b.flags & FLAG_TSDF_DIRTY == 0 {
-                continue;
-            }
-            wave.out.blocks_rebuilt += 1;
-            let mut sites_changed = false;
-            let pending = b.pending;
-            for i in 0..BLOCK_VOXELS {
-                let Some(b) = self.blocks.get_mut(s) else { break };
-                let (Some(t), Some(w), Some(so), Some(sw)) =
-                    (b.tsdf.get(i), b.weight.get(i), b.site.get_mut(i), b.site_tsdf.get_mut(i))
-                else {
-                    break;
-                };
-                let nb = if *w > 0 { band_site(*t as Real * tq, band, vs) } else { NO_SITE };
-                let is_site = *sw != NO_SITE && *so == [0, 0, 0];
-                if nb != NO_SITE {
-                    if !(is_site && (nb as i32 - *sw as i32).abs() <= tol) {
-                        sites_changed |= is_site;
-                        *so = [0; 3];
-                        *sw = nb;
-                        wave.out.voxels_changed += 1;
-                        self.queue_or_spill(&mut wave, s, i);
-                    }
-                } else if is_site {
-                    *sw = NO_SITE;
-                    *so = RESET;
-                    sites_changed = true;
-                }
-            }
-            if let Some(b) = self.blocks.get_mut(s) {
-                b.pending |= pending;
-                b.flags &= !(FLAG_TSDF_DIRTY | FLAG_ESDF_NEW);
-                if sites_changed {
-                    b.flags |= FLAG_SITES_CHANGED | FLAG_RESET;
-                }
-            }
-        }
-
-        // 2. The raise region: every block within esdf_max_distance of a block whose sites moved or vanished.
-        let k = libm::ceilf(dmax / BLOCK_EDGE as Real) as i32;
-        let mut any_changed = false;
-        for s in 0..used {
-            let Some(b) = self.blocks.get(s) else { break };
-            if b.flags & FLAG_SITES_CHANGED == 0 {
-                continue;
-            }
-            any_changed = true;
-            let c = b.coord;
-            // The region of a block whose -x (-y, -z) neighbour's sites changed too already holds every block of
-            // this block's cube with dx < k (dy < k, dz < k): only the rest is looked up.
-            let changed = |d: [i32; 3]| {
-                self.find_block([c[0] - d[0], c[1] - d[1], c[2] - d[2]])
-                    .and_then(|n| self.blocks.get(n))
-                    .is_some_and(|nb| nb.flags & FLAG_SITES_CHANGED != 0)
-            };
-            let (hx, hy, hz) = (changed([1, 0, 0]), changed([0, 1, 0]), changed([0, 0, 1]));
-            for dz in -k..=k {
-                for dy in -k..=k {
-                    for dx in -k..=k {
-                        if (hx && dx < k) || (hy && dy < k) || (hz && dz < k) {
-                            continue;
-                        }
-                        if let Some(n) = self.find_block([c[0] + dx, c[1] + dy, c[2] + dz]) {
-                            if let Some(nb) = self.blocks.get_mut(n) {
-                                nb.flags |= FLAG_REGION;
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        // 3. Raise: forget every site that is no longer a fixed-band voxel with the same value; mark its cell.
-        if any_changed {
-            let e = BLOCK_EDGE as i32;
-            for s in 0..used {
-                let Some(b) = self.blocks.get(s) else { break };
-                if b.flags & FLAG_REGION == 0 {
-                    continue;
-                }
-                wave.out.blocks_in_region += 1;
-                let bc = b.coord;
-                let mut cache: Option<([i32; 3], Option<usize>)> = None;
-                let mut reset = false;
-                for i in 0..BLOCK_VOXELS {
-                    let Some(b) = self.blocks.get(s) else { break };
-                    let (Some(&w), Some(&off)) = (b.site_tsdf.get(i), b.site.get(i)) else { break };
-                    if w == NO_SITE || off == [0, 0, 0] {
-                        continue;
-                    }
-                    let l = local_coords(i);
-                    let sg = [
-                        bc[0] * e + l[0] as i32 + off[0] as i32,
-                        bc[1] * e + l[1] as i32 + off[1] as i32,
-                        bc[2] * e + l[2] as i32 + off[2] as i32,
-                    ];
-                    let (sbx, slx) = split(sg[0]);
-                    let (sby, sly) = split(sg[1]);
-                    let (sbz, slz) = split(sg[2]);
-                    let sb = [sbx, sby, sbz];
-                    let slot = match cache {
-                        Some((c, sl)) if c == sb => sl,
-                        _ => {
-                            let sl = self.find_block(sb);
-                            cache = Some((sb, sl));
-                            sl
-                        }
-                    };
-                    let si = local_index([slx, sly, slz]);
-                    let valid = slot.and_then(|n| self.blocks.get(n)).is_some_and(|nb| {
-                        nb.site_tsdf.get(si) == Some(&w) && nb.site.get(si) == Some(&[0, 0, 0])
-                    });
-                    if !valid {
-                        reset = true;
-                        if let Some(b) = self.blocks.get_mut(s) {
-                            if let (Some(sw), Some(so)) = (b.site_tsdf.get_mut(i), b.site.get_mut(i)) {
-                                *sw = NO_SITE;
-                                *so = RESET;
-                            }
-                        }
-                    }
-                }
-                if reset {
-                    if let Some(b) = self.blocks.get_mut(s) {
-                        b.flags |= FLAG_RESET;
-                    }
-                }
-            }
+        self.mark_new_block_borders();
+        self.rebuild_sites(&mut wave);
+        if self.mark_raise_region(dmax) {
+            self.raise(&mut wave);
         }
         for b in self.blocks.iter_mut().take(used) {
             b.flags &= !(FLAG_REGION | FLAG_SITES_CHANGED);
@@ -413,6 +263,211 @@ impl Map<'_> {
         wave.out.converged =
             !self.blocks.iter().take(used).any(|b| b.pending != 0 || b.flags & FLAG_QUEUED != 0);
         wave.out
+    }
+
+    /// A new block's voxels learn the sites of the blocks that were there before by a pull of the cells next to
+    /// those blocks; the rest hear of every site through the queue (new sites and pulled voxels offer theirs).
+    #[inline(never)]
+    fn mark_new_block_borders(&mut self) {
+        let used = self.used;
+        for s in 0..used {
+            let Some(b) = self.blocks.get(s) else { break };
+            if b.flags & FLAG_ESDF_NEW == 0 {
+                continue;
+            }
+            let c = b.coord;
+            let mut pending = 0u64;
+            for (j, mask) in BORDER_CELLS.iter().enumerate() {
+                if j == 13 {
+                    continue;
+                }
+                let nc = [c[0] + (j % 3) as i32 - 1, c[1] + ((j / 3) % 3) as i32 - 1, c[2] + (j / 9) as i32 - 1];
+                let old = self.find_block(nc).and_then(|n| self.blocks.get(n));
+                if old.is_some_and(|nb| nb.flags & FLAG_ESDF_NEW == 0) {
+                    pending |= mask;
+                }
+            }
+            if let Some(b) = self.blocks.get_mut(s) {
+                b.pending |= pending;
+            }
+        }
+    }
+
+    /// Step 1: rebuilds the fixed-band sites of blocks whose TSDF changed (values within the hysteresis are kept).
+    /// New sites are queued; voxels that lost their site are marked for a pull.
+    #[inline(never)]
+    fn rebuild_sites(&mut self, wave: &mut Wave<'_>) {
+        let used = self.used;
+        let vs = self.cfg.voxel_size;
+        let band = self.cfg.esdf_band * vs;
+        let tq = self.cfg.truncation / 32767.0;
+        let tol = self.site_tolerance();
+        for s in 0..used {
+            let Some(b) = self.blocks.get_mut(s) else { break };
+            if b.flags & FLAG_TSDF_DIRTY == 0 {
+                continue;
+            }
+            wave.out.blocks_rebuilt += 1;
+            let mut sites_changed = false;
+            let pending = b.pending;
+            for i in 0..BLOCK_VOXELS {
+                let Some(b) = self.blocks.get_mut(s) else { break };
+                let (Some(t), Some(w), Some(so), Some(sw)) =
+                    (b.tsdf.get(i), b.weight.get(i), b.site.get_mut(i), b.site_tsdf.get_mut(i))
+                else {
+                    break;
+                };
+                let nb = if *w > 0 { band_site(*t as Real * tq, band, vs) } else { NO_SITE };
+                let is_site = *sw != NO_SITE && *so == [0, 0, 0];
+                if nb != NO_SITE {
+                    if !(is_site && (nb as i32 - *sw as i32).abs() <= tol) {
+                        sites_changed |= is_site;
+                        *so = [0; 3];
+                        *sw = nb;
+                        wave.out.voxels_changed += 1;
+                        self.queue_or_spill(wave, s, i);
+                    }
+                } else if is_site {
+                    *sw = NO_SITE;
+                    *so = RESET;
+                    sites_changed = true;
+                }
+            }
+            if let Some(b) = self.blocks.get_mut(s) {
+                b.pending |= pending;
+                b.flags &= !(FLAG_TSDF_DIRTY | FLAG_ESDF_NEW);
+                if sites_changed {
+                    b.flags |= FLAG_SITES_CHANGED | FLAG_RESET;
+                }
+            }
+        }
+
+    }
+
+    /// Step 2: marks the raise region, every block within `esdf_max_distance` (`dmax` voxels) of a block whose sites
+    /// moved or vanished. False if there is none.
+    #[inline(never)]
+    fn mark_raise_region(&mut self, dmax: Real) -> bool {
+        let used = self.used;
+        let k = libm::ceilf(dmax / BLOCK_EDGE as Real) as i32;
+        let mut any_changed = false;
+        for s in 0..used {
+            let Some(b) = self.blocks.get(s) else { break };
+            if b.flags & FLAG_SITES_CHANGED == 0 {
+                continue;
+            }
+            any_changed = true;
+            let c = b.coord;
+            // The region of a block whose -x (-y, -z) neighbour's sites changed too already holds every block of
+            // this block's cube with dx < k (dy < k, dz < k): only the rest is looked up.
+            let changed = |d: [i32; 3]| {
+                self.find_block([c[0] - d[0], c[1] - d[1], c[2] - d[2]])
+                    .and_then(|n| self.blocks.get(n))
+                    .is_some_and(|nb| nb.flags & FLAG_SITES_CHANGED != 0)
+            };
+            let (hx, hy, hz) = (changed([1, 0, 0]), changed([0, 1, 0]), changed([0, 0, 1]));
+            for dz in -k..=k {
+                for dy in -k..=k {
+                    for dx in -k..=k {
+                        if (hx && dx < k) || (hy && dy < k) || (hz && dz < k) {
+                            continue;
+                        }
+                        if let Some(n) = self.find_block([c[0] + dx, c[1] + dy, c[2] + dz]) {
+                            if let Some(nb) = self.blocks.get_mut(n) {
+                                nb.flags |= FLAG_REGION;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        any_changed
+    }
+
+    /// Step 3, the raise: forgets every site that is no longer a fixed-band voxel (its voxels are reset and
+    /// pulled); a voxel whose site only changed value keeps it with the new value.
+    #[inline(never)]
+    fn raise(&mut self, wave: &mut Wave<'_>) {
+        let used = self.used;
+        let dmax = wave.dmax;
+        let e = BLOCK_EDGE as i32;
+        for s in 0..used {
+            let Some(b) = self.blocks.get(s) else { break };
+            if b.flags & FLAG_REGION == 0 {
+                continue;
+            }
+            wave.out.blocks_in_region += 1;
+            let bc = b.coord;
+            let mut cache: Option<([i32; 3], Option<usize>)> = None;
+            let mut reset = false;
+            for i in 0..BLOCK_VOXELS {
+                let Some(b) = self.blocks.get(s) else { break };
+                let (Some(&w), Some(&off)) = (b.site_tsdf.get(i), b.site.get(i)) else { break };
+                if w == NO_SITE || off == [0, 0, 0] {
+                    continue;
+                }
+                let l = local_coords(i);
+                let sg = [
+                    bc[0] * e + l[0] as i32 + off[0] as i32,
+                    bc[1] * e + l[1] as i32 + off[1] as i32,
+                    bc[2] * e + l[2] as i32 + off[2] as i32,
+                ];
+                let (sbx, slx) = split(sg[0]);
+                let (sby, sly) = split(sg[1]);
+                let (sbz, slz) = split(sg[2]);
+                let sb = [sbx, sby, sbz];
+                let slot = match cache {
+                    Some((c, sl)) if c == sb => sl,
+                    _ => {
+                        let sl = self.find_block(sb);
+                        cache = Some((sb, sl));
+                        sl
+                    }
+                };
+                let si = local_index([slx, sly, slz]);
+                // The site's value now, if it is still a fixed-band site.
+                let now = slot.and_then(|n| self.blocks.get(n)).and_then(|nb| {
+                    match (nb.site_tsdf.get(si), nb.site.get(si)) {
+                        (Some(&sw), Some(&[0, 0, 0])) if sw != NO_SITE => Some(sw),
+                        _ => None,
+                    }
+                });
+                let Some(b) = self.blocks.get_mut(s) else { break };
+                let (Some(sw), Some(so), Some(&t)) = (b.site_tsdf.get_mut(i), b.site.get_mut(i), b.tsdf.get(i))
+                else {
+                    break;
+                };
+                let inside = t < 0;
+                let off32 = [off[0] as i32, off[1] as i32, off[2] as i32];
+                let within = |now: i8| site_distance(now, off32, inside) <= dmax;
+                match now {
+                    Some(now) if now == w => {}
+                    Some(now) if within(now) => {
+                        // The site stays and only its value moved: the voxel keeps it. Farther now, it is pulled
+                        // (a neighbour's site may be better); nearer, it offers the site again.
+                        *sw = now;
+                        wave.out.voxels_changed += 1;
+                        let farther = if inside { now < w } else { now > w };
+                        if farther {
+                            b.pending |= cell_bit(i);
+                            wave.pending = true;
+                        } else {
+                            self.queue_or_spill(wave, s, i);
+                        }
+                    }
+                    _ => {
+                        reset = true;
+                        *sw = NO_SITE;
+                        *so = RESET;
+                    }
+                }
+            }
+            if reset {
+                if let Some(b) = self.blocks.get_mut(s) {
+                    b.flags |= FLAG_RESET;
+                }
+            }
+        }
     }
 
     /// Queues voxel `(s, i)` (its site improved), or sets its spill bit when the queue is full or spilled
