@@ -95,6 +95,23 @@ pub(crate) fn site_distance(w: i8, off: [i32; 3], inside: bool) -> Real {
     (libm::sqrtf(n2) + if inside { -t } else { t }).max(0.0)
 }
 
+/// Cells of the coarse bit map of [`Map::mark_raise_region`] (8 KiB on its stack).
+const REGION_CELLS: usize = 1 << 16;
+
+/// Sets bits `from..=to` of `bits` (bits past its end are ignored).
+fn set_bits(bits: &mut [u64], from: usize, to: usize) {
+    let mut i = from;
+    // One word per pass: bounded by the words between `from` and `to`.
+    while i <= to {
+        let Some(w) = bits.get_mut(i / 64) else { return };
+        let end = to.min(i | 63);
+        let n = end - i + 1;
+        let mask = if n >= 64 { u64::MAX } else { ((1u64 << n) - 1) << (i % 64) };
+        *w |= mask;
+        i = end + 1;
+    }
+}
+
 /// The 26 neighbour offsets.
 const NEIGHBOURS: [[i32; 3]; 26] = {
     let mut out = [[0i32; 3]; 26];
@@ -344,44 +361,71 @@ impl Map<'_> {
 
     }
 
-    /// Step 2: marks the raise region, every block within `esdf_max_distance` (`dmax` voxels) of a block whose sites
-    /// moved or vanished. False if there is none.
+    /// Step 2: marks the raise region, every block within `esdf_max_distance` (`dmax` voxels, `k` blocks) of a block
+    /// whose sites moved or vanished, and some blocks a little farther. False if there is none.
+    ///
+    /// A coarse bit map over the changed blocks' bounding box grown by `k` (cells of 2x2x2 blocks, coarser if the
+    /// box does not fit [`REGION_CELLS`]) gets every cell within `k` blocks of a changed block; every block in use
+    /// whose cell is set joins the region. The region so holds the exact one plus at most a cell's width round it,
+    /// for the price of one pass over the blocks in use instead of a block lookup per block of every changed
+    /// block's cube. (The raise only needs a region that holds every voxel whose site moved: a larger one costs
+    /// time, not correctness.)
     #[inline(never)]
     fn mark_raise_region(&mut self, dmax: Real) -> bool {
         let used = self.used;
         let k = libm::ceilf(dmax / BLOCK_EDGE as Real) as i32;
-        let mut any_changed = false;
-        for s in 0..used {
-            let Some(b) = self.blocks.get(s) else { break };
-            if b.flags & FLAG_SITES_CHANGED == 0 {
-                continue;
-            }
-            any_changed = true;
-            let c = b.coord;
-            // The region of a block whose -x (-y, -z) neighbour's sites changed too already holds every block of
-            // this block's cube with dx < k (dy < k, dz < k): only the rest is looked up.
-            let changed = |d: [i32; 3]| {
-                self.find_block([c[0] - d[0], c[1] - d[1], c[2] - d[2]])
-                    .and_then(|n| self.blocks.get(n))
-                    .is_some_and(|nb| nb.flags & FLAG_SITES_CHANGED != 0)
-            };
-            let (hx, hy, hz) = (changed([1, 0, 0]), changed([0, 1, 0]), changed([0, 0, 1]));
-            for dz in -k..=k {
-                for dy in -k..=k {
-                    for dx in -k..=k {
-                        if (hx && dx < k) || (hy && dy < k) || (hz && dz < k) {
-                            continue;
-                        }
-                        if let Some(n) = self.find_block([c[0] + dx, c[1] + dy, c[2] + dz]) {
-                            if let Some(nb) = self.blocks.get_mut(n) {
-                                nb.flags |= FLAG_REGION;
-                            }
-                        }
+        let (mut lo, mut hi) = ([i32::MAX; 3], [i32::MIN; 3]);
+        for b in self.blocks.iter().take(used) {
+            if b.flags & FLAG_SITES_CHANGED != 0 {
+                for a in 0..3 {
+                    if let (Some(l), Some(h), Some(&c)) = (lo.get_mut(a), hi.get_mut(a), b.coord.get(a)) {
+                        *l = (*l).min(c);
+                        *h = (*h).max(c);
                     }
                 }
             }
         }
-        any_changed
+        if lo[0] > hi[0] {
+            return false;
+        }
+        let lo = lo.map(|c| c.saturating_sub(k));
+        let hi = hi.map(|c| c.saturating_add(k));
+        // The finest cells (at least 2 blocks) whose grid over the box fits the bit map.
+        let mut shift = 1;
+        let dims = loop {
+            let d = [0, 1, 2].map(|a| ((hi[a] as i64 - lo[a] as i64) >> shift) + 1);
+            if d[0] * d[1] * d[2] <= REGION_CELLS as i64 || shift >= 40 {
+                break d;
+            }
+            shift += 1;
+        };
+        let mut bits = [0u64; REGION_CELLS / 64];
+        for b in self.blocks.iter().take(used) {
+            if b.flags & FLAG_SITES_CHANGED == 0 {
+                continue;
+            }
+            let c = b.coord;
+            let from = [0, 1, 2].map(|a| (c[a] as i64 - k as i64 - lo[a] as i64).max(0) >> shift);
+            let to = [0, 1, 2].map(|a| ((c[a] as i64 + k as i64 - lo[a] as i64) >> shift).min(dims[a] - 1));
+            for z in from[2]..=to[2] {
+                for y in from[1]..=to[1] {
+                    let row = (z * dims[1] + y) * dims[0];
+                    set_bits(&mut bits, (row + from[0]) as usize, (row + to[0]) as usize);
+                }
+            }
+        }
+        for b in self.blocks.iter_mut().take(used) {
+            let c = b.coord;
+            if (0..3).any(|a| c[a] < lo[a] || c[a] > hi[a]) {
+                continue;
+            }
+            let cell = [0, 1, 2].map(|a| (c[a] as i64 - lo[a] as i64) >> shift);
+            let i = ((cell[2] * dims[1] + cell[1]) * dims[0] + cell[0]) as usize;
+            if bits.get(i / 64).is_some_and(|w| w & (1 << (i % 64)) != 0) {
+                b.flags |= FLAG_REGION;
+            }
+        }
+        true
     }
 
     /// Step 3, the raise: forgets every site that is no longer a fixed-band voxel (its voxels are reset and
