@@ -98,6 +98,12 @@ pub(crate) fn site_distance(w: i8, off: [i32; 3], inside: bool) -> Real {
 /// Cells of the coarse bit map of [`Map::mark_raise_region`] (8 KiB on its stack).
 const REGION_CELLS: usize = 1 << 16;
 
+/// `f` of the three pairs of coordinates of `a` and `b`.
+#[inline]
+fn zip3<T>(a: [i32; 3], b: [i32; 3], f: impl Fn(i32, i32) -> T) -> [T; 3] {
+    [f(a[0], b[0]), f(a[1], b[1]), f(a[2], b[2])]
+}
+
 /// Sets bits `from..=to` of `bits` (bits past its end are ignored).
 fn set_bits(bits: &mut [u64], from: usize, to: usize) {
     let mut i = from;
@@ -377,12 +383,8 @@ impl Map<'_> {
         let (mut lo, mut hi) = ([i32::MAX; 3], [i32::MIN; 3]);
         for b in self.blocks.iter().take(used) {
             if b.flags & FLAG_SITES_CHANGED != 0 {
-                for a in 0..3 {
-                    if let (Some(l), Some(h), Some(&c)) = (lo.get_mut(a), hi.get_mut(a), b.coord.get(a)) {
-                        *l = (*l).min(c);
-                        *h = (*h).max(c);
-                    }
-                }
+                lo = zip3(lo, b.coord, i32::min);
+                hi = zip3(hi, b.coord, i32::max);
             }
         }
         if lo[0] > hi[0] {
@@ -393,7 +395,7 @@ impl Map<'_> {
         // The finest cells (at least 2 blocks) whose grid over the box fits the bit map.
         let mut shift = 1;
         let dims = loop {
-            let d = [0, 1, 2].map(|a| ((hi[a] as i64 - lo[a] as i64) >> shift) + 1);
+            let d = zip3(hi, lo, |h, l| ((h as i64 - l as i64) >> shift) + 1);
             if d[0] * d[1] * d[2] <= REGION_CELLS as i64 || shift >= 40 {
                 break d;
             }
@@ -405,8 +407,9 @@ impl Map<'_> {
                 continue;
             }
             let c = b.coord;
-            let from = [0, 1, 2].map(|a| (c[a] as i64 - k as i64 - lo[a] as i64).max(0) >> shift);
-            let to = [0, 1, 2].map(|a| ((c[a] as i64 + k as i64 - lo[a] as i64) >> shift).min(dims[a] - 1));
+            let from = zip3(c, lo, |c, l| (c as i64 - k as i64 - l as i64).max(0) >> shift);
+            let to = zip3(c, lo, |c, l| (c as i64 + k as i64 - l as i64) >> shift);
+            let to = [to[0].min(dims[0] - 1), to[1].min(dims[1] - 1), to[2].min(dims[2] - 1)];
             for z in from[2]..=to[2] {
                 for y in from[1]..=to[1] {
                     let row = (z * dims[1] + y) * dims[0];
@@ -416,10 +419,10 @@ impl Map<'_> {
         }
         for b in self.blocks.iter_mut().take(used) {
             let c = b.coord;
-            if (0..3).any(|a| c[a] < lo[a] || c[a] > hi[a]) {
+            if zip3(c, lo, |c, l| c < l).contains(&true) || zip3(c, hi, |c, h| c > h).contains(&true) {
                 continue;
             }
-            let cell = [0, 1, 2].map(|a| (c[a] as i64 - lo[a] as i64) >> shift);
+            let cell = zip3(c, lo, |c, l| (c as i64 - l as i64) >> shift);
             let i = ((cell[2] * dims[1] + cell[1]) * dims[0] + cell[0]) as usize;
             if bits.get(i / 64).is_some_and(|w| w & (1 << (i % 64)) != 0) {
                 b.flags |= FLAG_REGION;
