@@ -48,8 +48,8 @@
 //! only (deterministic).
 
 use super::{
-    cell_bit, local_coords, local_index, split, Map, BLOCK_EDGE, BLOCK_VOXELS, FLAG_ESDF_NEW, FLAG_QUEUED, FLAG_REGION, FLAG_RESET,
-    FLAG_SITES_CHANGED, FLAG_TSDF_DIRTY, NO_SITE,
+    cell_bit, local_coords, local_index, split, Map, Site, BLOCK_EDGE, BLOCK_VOXELS, FLAG_ESDF_NEW, FLAG_QUEUED,
+    FLAG_REGION, FLAG_RESET, FLAG_SITES_CHANGED, FLAG_TSDF_DIRTY, NO_SITE,
 };
 use crate::config::map::{ESDF_QUEUE_CAPACITY, ESDF_VISITS_PER_BLOCK};
 use crate::geom::Real;
@@ -145,7 +145,7 @@ struct Ring<'q> {
 }
 
 /// The site offset of a voxel that lost its site in the current update and is still to be pulled (with
-/// `site_tsdf == NO_SITE`, whose offset is otherwise unused).
+/// a site value of `NO_SITE`, whose offset is otherwise unused).
 const RESET: [i8; 3] = [i8::MIN; 3];
 
 /// Bits of a queue entry for the local voxel index.
@@ -335,8 +335,8 @@ impl Map<'_> {
             let pending = b.pending;
             for i in 0..BLOCK_VOXELS {
                 let Some(b) = self.blocks.get_mut(s) else { break };
-                let (Some(t), Some(w), Some(so), Some(sw)) =
-                    (b.tsdf.get(i), b.weight.get(i), b.site.get_mut(i), b.site_tsdf.get_mut(i))
+                let (Some(t), Some(w), Some(Site { off: so, w: sw })) =
+                    (b.tsdf.get(i), b.weight.get(i), b.esdf.get_mut(i))
                 else {
                     break;
                 };
@@ -449,7 +449,7 @@ impl Map<'_> {
             let mut reset = false;
             for i in 0..BLOCK_VOXELS {
                 let Some(b) = self.blocks.get(s) else { break };
-                let (Some(&w), Some(&off)) = (b.site_tsdf.get(i), b.site.get(i)) else { break };
+                let Some(&Site { off, w }) = b.esdf.get(i) else { break };
                 if w == NO_SITE || off == [0, 0, 0] {
                     continue;
                 }
@@ -473,17 +473,12 @@ impl Map<'_> {
                 };
                 let si = local_index([slx, sly, slz]);
                 // The site's value now, if it is still a fixed-band site.
-                let now = slot.and_then(|n| self.blocks.get(n)).and_then(|nb| {
-                    match (nb.site_tsdf.get(si), nb.site.get(si)) {
-                        (Some(&sw), Some(&[0, 0, 0])) if sw != NO_SITE => Some(sw),
-                        _ => None,
-                    }
+                let now = slot.and_then(|n| self.blocks.get(n)).and_then(|nb| match nb.esdf.get(si) {
+                    Some(&Site { off: [0, 0, 0], w }) if w != NO_SITE => Some(w),
+                    _ => None,
                 });
                 let Some(b) = self.blocks.get_mut(s) else { break };
-                let (Some(sw), Some(so), Some(&t)) = (b.site_tsdf.get_mut(i), b.site.get_mut(i), b.tsdf.get(i))
-                else {
-                    break;
-                };
+                let (Some(Site { off: so, w: sw }), Some(&t)) = (b.esdf.get_mut(i), b.tsdf.get(i)) else { break };
                 let inside = t < 0;
                 let off32 = [off[0] as i32, off[1] as i32, off[2] as i32];
                 let within = |now: i8| site_distance(now, off32, inside) <= dmax;
@@ -665,7 +660,8 @@ impl Map<'_> {
             b.flags &= !FLAG_RESET;
             for i in 0..BLOCK_VOXELS {
                 let Some(b) = self.blocks.get_mut(s) else { break };
-                let (Some(&w), Some(so)) = (b.site_tsdf.get(i), b.site.get_mut(i)) else { break };
+                let Some(Site { off: so, w }) = b.esdf.get_mut(i) else { break };
+                let w = *w;
                 if w != NO_SITE || *so != RESET {
                     continue;
                 }
@@ -689,7 +685,7 @@ impl Map<'_> {
     fn pull(&mut self, wave: &mut Wave<'_>, s: usize, i: usize) -> bool {
         let l = local_coords(i);
         let Some(b) = self.blocks.get(s) else { return false };
-        let (Some(&w0), Some(&o0), Some(&t0)) = (b.site_tsdf.get(i), b.site.get(i), b.tsdf.get(i)) else {
+        let (Some(&Site { off: o0, w: w0 }), Some(&t0)) = (b.esdf.get(i), b.tsdf.get(i)) else {
             return false;
         };
         if w0 != NO_SITE && o0 == [0, 0, 0] {
@@ -700,7 +696,7 @@ impl Map<'_> {
         if interior {
             for (d, delta) in NEIGHBOURS.iter().zip(NEIGHBOUR_DELTAS.iter()) {
                 let ni = (i as isize + delta) as usize;
-                if let (Some(&w), Some(&so)) = (b.site_tsdf.get(ni), b.site.get(ni)) {
+                if let Some(&Site { off: so, w }) = b.esdf.get(ni) {
                     cand.consider(w, so, d, wave.dmax);
                 }
             }
@@ -712,16 +708,15 @@ impl Map<'_> {
                 let Some(ns) = self.resolve(slots, s, j as usize) else { continue };
                 let Some(nb) = self.blocks.get(ns) else { continue };
                 let ni = ni as usize;
-                if let (Some(&w), Some(&so)) = (nb.site_tsdf.get(ni), nb.site.get(ni)) {
+                if let Some(&Site { off: so, w }) = nb.esdf.get(ni) {
                     cand.consider(w, so, d, wave.dmax);
                 }
             }
         }
         let Some((off, w)) = cand.best else { return false };
         let Some(b) = self.blocks.get_mut(s) else { return false };
-        if let (Some(sw), Some(so)) = (b.site_tsdf.get_mut(i), b.site.get_mut(i)) {
-            *sw = w;
-            *so = off;
+        if let Some(e) = b.esdf.get_mut(i) {
+            *e = Site { off, w };
             return true;
         }
         false
@@ -732,7 +727,7 @@ impl Map<'_> {
         wave.out.voxels_popped += 1;
         let l = local_coords(i);
         let Some(b) = self.blocks.get(s) else { return };
-        let (Some(&wu), Some(&ou)) = (b.site_tsdf.get(i), b.site.get(i)) else { return };
+        let Some(&Site { off: ou, w: wu }) = b.esdf.get(i) else { return };
         if wu == NO_SITE {
             return;
         }
@@ -759,10 +754,7 @@ impl Map<'_> {
             }
             let off8 = [off[0] as i8, off[1] as i8, off[2] as i8];
             let Some(nb) = self.blocks.get_mut(ns) else { continue };
-            let (Some(sw), Some(so), Some(&t)) = (nb.site_tsdf.get_mut(ni), nb.site.get_mut(ni), nb.tsdf.get(ni))
-            else {
-                continue;
-            };
+            let (Some(Site { off: so, w: sw }), Some(&t)) = (nb.esdf.get_mut(ni), nb.tsdf.get(ni)) else { continue };
             if *sw != NO_SITE && (*so == [0, 0, 0] || (*so == off8 && *sw == wu)) {
                 continue; // a fixed-band site keeps its own value; or the neighbour has this site already
             }

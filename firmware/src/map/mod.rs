@@ -175,8 +175,16 @@ pub struct Block {
     qnext: [u8; 3],
     tsdf: [i16; BLOCK_VOXELS],
     weight: [u16; BLOCK_VOXELS],
-    site: [[i8; 3]; BLOCK_VOXELS],
-    site_tsdf: [i8; BLOCK_VOXELS],
+    /// Each voxel's ESDF site: offset and value together, as the wavefront reads and writes them together.
+    esdf: [Site; BLOCK_VOXELS],
+}
+
+/// A voxel's ESDF site: the offset (voxels) from the voxel to its site, and the site's signed value in hundredths of
+/// a voxel ([`NO_SITE`]: none).
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Site {
+    pub(crate) off: [i8; 3],
+    pub(crate) w: i8,
 }
 
 impl Block {
@@ -189,8 +197,7 @@ impl Block {
         qnext: [0; 3],
         tsdf: [0; BLOCK_VOXELS],
         weight: [0; BLOCK_VOXELS],
-        site: [[0; 3]; BLOCK_VOXELS],
-        site_tsdf: [NO_SITE; BLOCK_VOXELS],
+        esdf: [Site { off: [0; 3], w: NO_SITE }; BLOCK_VOXELS],
     };
 
     /// An unused block whose bytes are all zero: the initial value of storage in memory the board zeroes itself
@@ -204,8 +211,7 @@ impl Block {
         qnext: [0; 3],
         tsdf: [0; BLOCK_VOXELS],
         weight: [0; BLOCK_VOXELS],
-        site: [[0; 3]; BLOCK_VOXELS],
-        site_tsdf: [0; BLOCK_VOXELS],
+        esdf: [Site { off: [0; 3], w: 0 }; BLOCK_VOXELS],
     };
 }
 

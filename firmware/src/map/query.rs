@@ -2,7 +2,8 @@
 
 use super::esdf::site_distance;
 use super::{
-    local_coords, local_index, split, DistanceField, DistanceQuery, Map, VoxelIndex, BLOCK_EDGE, BLOCK_VOXELS, NO_SITE,
+    local_coords, local_index, split, DistanceField, DistanceQuery, Map, Site, VoxelIndex, BLOCK_EDGE, BLOCK_VOXELS,
+    NO_SITE,
 };
 use crate::config::map::BELOW_SURFACE_FILL_VOXELS;
 use crate::geom::{floor_i32, normalize3, Real, Vec3};
@@ -79,11 +80,10 @@ impl Map<'_> {
     pub fn site_distance_voxels(&self, g: VoxelIndex) -> Option<Real> {
         let (s, i) = self.locate(g)?;
         let b = self.blocks.get(s)?;
-        let w = *b.site_tsdf.get(i)?;
+        let Site { off: o, w } = *b.esdf.get(i)?;
         if w == NO_SITE {
             return None;
         }
-        let o = b.site.get(i)?;
         Some(site_distance(w, [o[0] as i32, o[1] as i32, o[2] as i32], *b.tsdf.get(i)? < 0))
     }
 
@@ -93,11 +93,10 @@ impl Map<'_> {
             return None;
         }
         let dmax = self.cfg.esdf_max_distance;
-        let w = *b.site_tsdf.get(i)?;
+        let Site { off: o, w } = *b.esdf.get(i)?;
         let d = if w == NO_SITE {
             dmax
         } else {
-            let o = b.site.get(i)?;
             let inside = *b.tsdf.get(i)? < 0;
             (site_distance(w, [o[0] as i32, o[1] as i32, o[2] as i32], inside) * self.cfg.voxel_size).min(dmax)
         };

@@ -6,7 +6,9 @@
 //! index. The ray walk steps voxel indices with checked arithmetic and stops rather than wrap.
 
 use super::esdf::band_site;
-use super::{cell_bit, quantize_weight, NO_SITE, split, local_index, Map, MapError, FLAG_TSDF_DIRTY, WEIGHT_SCALE};
+use super::{
+    cell_bit, local_index, quantize_weight, split, Map, MapError, Site, FLAG_TSDF_DIRTY, NO_SITE, WEIGHT_SCALE,
+};
 use crate::config::map::{MAX_VOXEL_COORD, MIN_INCIDENCE_COSINE};
 use crate::geom::{norm3, Pose3, Real, Vec3};
 
@@ -192,8 +194,8 @@ impl Map<'_> {
         let band = self.cfg.esdf_band * vs;
         let tol = self.site_tolerance();
         let Some(b) = self.blocks.get_mut(slot) else { return };
-        let (Some(tq), Some(wq), Some(&sw), Some(&so)) =
-            (b.tsdf.get_mut(li), b.weight.get_mut(li), b.site_tsdf.get(li), b.site.get(li))
+        let (Some(tq), Some(wq), Some(&Site { off: so, w: sw })) =
+            (b.tsdf.get_mut(li), b.weight.get_mut(li), b.esdf.get(li))
         else {
             return;
         };
