@@ -663,3 +663,66 @@ fn forgetting_far_blocks_keeps_the_index_and_the_esdf_exact_for_what_stays() {
         assert!(map.find_block(far).is_some());
     }
 }
+
+/// The raise region is marked on a coarse bit map over the changed blocks' bounding box, with coarser cells when the
+/// box is large: two clusters of sites ~120 blocks apart on every axis (cells of 4 blocks), each with sites that
+/// vanish, move and appear; after the update every voxel of both clusters matches the brute force over its own
+/// cluster's sites (a region that missed a changed block would leave its voxels on vanished sites).
+#[test]
+fn far_apart_changes_are_raised_exactly_through_the_coarse_region_map() {
+    let mut rng = rand_pcg::Pcg32::new(31, 4);
+    let (mut b, mut i) = slices(1024, 2048);
+    let mut map = Map::from_slices(brute_force_config(), &mut b, &mut i).unwrap();
+    let (vs, t) = (map.config().voxel_size, map.config().truncation);
+    let dmax = map.config().esdf_max_distance / vs;
+    let n = 16;
+    let origins = [[0, 0, 0], [480, 400, 440]];
+    let mut sites: Vec<Vec<([i32; 3], i8)>> = vec![Vec::new(), Vec::new()];
+    let at = |o: [i32; 3], g: [i32; 3]| [o[0] + g[0] - n / 2, o[1] + g[1] - n / 2, o[2] + g[2] - n / 2];
+    for (o, cluster) in origins.iter().zip(sites.iter_mut()) {
+        for k in 0..n * n * n {
+            map.set_voxel(at(*o, [k % n, (k / n) % n, k / (n * n)]), t, 1.0).unwrap();
+        }
+        for _ in 0..8 {
+            let g = at(*o, random_voxel(&mut rng, n).map(|c| c + n / 2));
+            let w = ((rng.next_u32() % 199) as i32 - 99) as i8;
+            map.set_voxel(g, w as Real * 0.01 * vs, 1.0).unwrap();
+            cluster.retain(|(s, _)| *s != g);
+            cluster.push((g, w));
+        }
+    }
+    assert!(map.update_esdf().converged);
+    for (o, cluster) in origins.iter().zip(sites.iter_mut()) {
+        for _ in 0..3 {
+            let (g, _) = cluster.remove(0);
+            map.set_voxel(g, t, 1.0).unwrap();
+        }
+        for (g, w) in cluster.iter_mut().take(2) {
+            *w = if *w > 0 { *w - 50 } else { *w + 50 };
+            map.set_voxel(*g, *w as Real * 0.01 * vs, 1.0).unwrap();
+        }
+        let g = at(*o, random_voxel(&mut rng, n).map(|c| c + n / 2));
+        map.set_voxel(g, 0.0, 1.0).unwrap();
+        cluster.retain(|(s, _)| *s != g);
+        cluster.push((g, 0));
+    }
+    let e = map.update_esdf();
+    assert!(e.converged, "{e:?}");
+    for (o, cluster) in origins.iter().zip(sites.iter()) {
+        let (mut max_err, mut inexact) = (0.0 as Real, 0);
+        for k in 0..n * n * n {
+            let g = at(*o, [k % n, (k / n) % n, k / (n * n)]);
+            let inside = map.tsdf_voxel(g).is_some_and(|(d, _)| d < 0.0);
+            match (brute_force_signed(cluster, g, inside, dmax), map.site_distance_voxels(g)) {
+                (Some(a), Some(b)) => {
+                    max_err = max_err.max((a - b).abs());
+                    inexact += usize::from((a - b).abs() > 1e-4);
+                }
+                (None, None) => {}
+                (a, b) => panic!("cluster at {o:?}, voxel {g:?}: brute force {a:?}, map {b:?}"),
+            }
+        }
+        std::eprintln!("cluster at {o:?}: {e:?}, max error {max_err} voxels, {inexact} inexact");
+        assert!(max_err < 1.0 && inexact * 100 <= (n * n * n) as usize, "cluster at {o:?}: {max_err} {inexact}");
+    }
+}
