@@ -220,6 +220,10 @@ pub struct MapSection {
     /// Free space carved along each ray in front of its return, metres (`MapConfig::max_carve_length`). Default
     /// 4.0; bounded by `budgets.max_ray_voxels` voxels per ray.
     pub max_carve_length_m: Option<f64>,
+    /// ESDF hysteresis, voxels (`MapConfig::esdf_site_tolerance`): a surface voxel whose TSDF moves by less keeps
+    /// its ESDF value. Default 0.1; at most 0.5. Larger is faster and adds at most this much ESDF error
+    /// (`host-sim/doc/map.md`).
+    pub esdf_site_tolerance_voxels: Option<f64>,
 }
 
 impl Default for MapSection {
@@ -230,6 +234,7 @@ impl Default for MapSection {
             esdf_max_distance_m: 1.5,
             pool_blocks: firmware::config::map::FLIGHT_BLOCKS,
             max_carve_length_m: None,
+            esdf_site_tolerance_voxels: None,
         }
     }
 }
@@ -655,6 +660,9 @@ impl Scenario {
         if let Some(l) = self.map.max_carve_length_m {
             c.max_carve_length = l as Real;
         }
+        if let Some(t) = self.map.esdf_site_tolerance_voxels {
+            c.esdf_site_tolerance = t as Real;
+        }
         c.esdf_max_sweeps = self.budgets.esdf_max_sweeps;
         c.max_ray_voxels = self.budgets.max_ray_voxels;
         c.validate().map_err(|e| {
@@ -665,6 +673,7 @@ impl Scenario {
                 "esdf_max_sweeps" => "budgets.esdf_max_sweeps".to_string(),
                 "max_ray_voxels" => "budgets.max_ray_voxels".to_string(),
                 "max_carve_length" => "map.max_carve_length_m".to_string(),
+                "esdf_site_tolerance" => "map.esdf_site_tolerance_voxels".to_string(),
                 f => format!("map.{f}"),
             };
             self.err(&field, e.reason)
@@ -932,6 +941,20 @@ position = [6.0, 0.0, 0.35]
         assert_eq!(sc.sensor, RangeSensorParams::default());
     }
 
+    /// The map section's keys reach the flight software's map configuration (not validated and then ignored).
+    #[test]
+    fn the_map_section_sets_the_map_configuration() {
+        let sc = parse(
+            &format!("{CRATER}[map]\nvoxel_size_m = 0.1\nesdf_site_tolerance_voxels = 0.25\nmax_carve_length_m = 6.0\n"),
+            Path::new("x.toml"),
+        )
+        .unwrap();
+        let c = sc.map_config().unwrap();
+        assert_eq!((c.voxel_size, c.esdf_site_tolerance, c.max_carve_length), (0.1, 0.25, 6.0));
+        let d = parse(CRATER, Path::new("x.toml")).unwrap().map_config().unwrap();
+        assert_eq!(d.esdf_site_tolerance, MapConfig::DEFAULT.esdf_site_tolerance);
+    }
+
     #[test]
     fn bad_scenarios_name_file_field_and_reason() {
         let cases: Vec<(String, &str, &str)> = vec![
@@ -945,6 +968,7 @@ position = [6.0, 0.0, 0.35]
             (CRATER.replace("root_anchor = [-5.0, 0.0, 8.0]", "root_anchor = [-5.0, 0.0, 3.0]"), "tether.root_anchor", "inside the terrain"),
             (format!("{CRATER}[sensor]\ndropout_probability = 1.5\n"), "sensor.dropout_probability", "[0, 1]"),
             (format!("{CRATER}[map]\nvoxel_size_m = 0.001\n"), "map.esdf_max_distance_m", "127 voxels"),
+            (format!("{CRATER}[map]\nesdf_site_tolerance_voxels = 0.7\n"), "map.esdf_site_tolerance_voxels", "[0, 0.5]"),
             (format!("{CRATER}[faults]\ndrop = 1.5\n"), "faults.drop", "[0, 1]"),
             (format!("{CRATER}[faults]\nall = nan\n"), "faults.all", "[0, 1]"),
             (format!("{CRATER}[faults]\ndrops = 1e-4\n"), "(syntax)", "unknown field"),

@@ -163,12 +163,13 @@ pub fn map_check(a: &MapCheckArgs) -> Result<(), String> {
     }
     let bb = Map::block_bytes();
     println!(
-        "world {} ({kind}), voxel {} m, truncation {} m, ESDF cap {} m, carving {} m",
+        "world {} ({kind}), voxel {} m, truncation {} m, ESDF cap {} m, carving {} m, ESDF hysteresis {} voxel",
         world.name(),
         cfg.map.voxel_size,
         cfg.map.truncation,
         cfg.map.esdf_max_distance,
-        cfg.map.max_carve_length
+        cfg.map.max_carve_length,
+        cfg.map.esdf_site_tolerance
     );
     println!("scans {}  points {}  sensor {} rays/scan  seed {}", rep.scans, rep.points, cfg.sensor.ray_count(), cfg.seed);
     if rep.non_finite_points > 0 || rep.scans_refused > 0 {
