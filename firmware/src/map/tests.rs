@@ -342,13 +342,23 @@ fn compare_with_brute_force(map: &Map<'_>, sites: &[([i32; 3], i8)], n: i32) -> 
 }
 
 /// Max error (voxels), count of inexact voxels and voxels compared: the map's site distance against `want` over the
-/// `n`^3 cube; a voxel that one side has and the other has not fails the test.
+/// `n`^3 cube centred on the origin; a voxel that one side has and the other has not fails the test.
 fn compare_over_cube(map: &Map<'_>, n: i32, want: impl Fn([i32; 3]) -> Option<Real>) -> (Real, usize, usize) {
+    compare_over_cube_at(map, [0, 0, 0], n, want)
+}
+
+/// [`compare_over_cube`] over the `n`^3 cube centred on voxel `o`.
+fn compare_over_cube_at(
+    map: &Map<'_>,
+    o: [i32; 3],
+    n: i32,
+    want: impl Fn([i32; 3]) -> Option<Real>,
+) -> (Real, usize, usize) {
     let (mut max_err, mut inexact, mut total) = (0.0 as Real, 0, 0);
     for z in 0..n {
         for y in 0..n {
             for x in 0..n {
-                let g = [x - n / 2, y - n / 2, z - n / 2];
+                let g = [o[0] + x - n / 2, o[1] + y - n / 2, o[2] + z - n / 2];
                 total += 1;
                 match (want(g), map.site_distance_voxels(g)) {
                     (Some(a), Some(b)) => {
@@ -709,20 +719,11 @@ fn far_apart_changes_are_raised_exactly_through_the_coarse_region_map() {
     let e = map.update_esdf();
     assert!(e.converged, "{e:?}");
     for (o, cluster) in origins.iter().zip(sites.iter()) {
-        let (mut max_err, mut inexact) = (0.0 as Real, 0);
-        for k in 0..n * n * n {
-            let g = at(*o, [k % n, (k / n) % n, k / (n * n)]);
+        let (max_err, inexact, total) = compare_over_cube_at(&map, *o, n, |g| {
             let inside = map.tsdf_voxel(g).is_some_and(|(d, _)| d < 0.0);
-            match (brute_force_signed(cluster, g, inside, dmax), map.site_distance_voxels(g)) {
-                (Some(a), Some(b)) => {
-                    max_err = max_err.max((a - b).abs());
-                    inexact += usize::from((a - b).abs() > 1e-4);
-                }
-                (None, None) => {}
-                (a, b) => panic!("cluster at {o:?}, voxel {g:?}: brute force {a:?}, map {b:?}"),
-            }
-        }
-        std::eprintln!("cluster at {o:?}: {e:?}, max error {max_err} voxels, {inexact} inexact");
-        assert!(max_err < 1.0 && inexact * 100 <= (n * n * n) as usize, "cluster at {o:?}: {max_err} {inexact}");
+            brute_force_signed(cluster, g, inside, dmax)
+        });
+        std::eprintln!("cluster at {o:?}: {e:?}, max error {max_err} voxels, {inexact} of {total} inexact");
+        assert!(max_err < 1.0 && inexact * 100 <= total, "cluster at {o:?}: {max_err} {inexact}");
     }
 }
