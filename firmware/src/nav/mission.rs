@@ -7,11 +7,12 @@ use core::borrow::BorrowMut;
 use hal::Instant;
 
 use crate::config::mission as mcfg;
+use crate::config::tether as tcfg;
 use crate::config::nav::MAX_PLAN_ITERATIONS;
 use crate::exec::DriveStep;
 use crate::geom::{norm3, wrap_angle, Real, Vec3};
-use crate::map::{Block, DistanceField, Map, UnobservedAsFree};
-use crate::plan::tethered::{MotionFailure, RoverState, TetherSpace, TetherSpaceParams};
+use crate::map::{Block, DistanceField, DistanceQuery, Map, UnobservedAsFree};
+use crate::plan::tethered::{surface_point, MotionFailure, RoverState, TetherSpace, TetherSpaceParams};
 use crate::stability::StabilityOutcome;
 use crate::protocol::{
     GoalRequest, MissionConfig, MissionState, MissionStatus, Motion, MotionOutcome, MotionReport, PlanState,
@@ -19,7 +20,7 @@ use crate::protocol::{
 };
 use crate::tether::{predict_anchors, Anchor, AnchorHistory};
 
-use super::retained::{Recovered, RetainedPose, TetherCheckpoint};
+use super::retained::{GroundPatch, Recovered, RetainedPose, TetherCheckpoint};
 
 use super::planning::{self, GoalRefusal, NavPlanStorage};
 use super::Navigator;
@@ -93,7 +94,7 @@ pub struct Mission {
     goal: Option<GoalRequest>,
     state: MissionState,
     reason: StopReason,
-    body: Option<BodyPose>,
+    pub(crate) body: Option<BodyPose>,
     in_flight: Option<InFlight>,
     /// A scan changed the map while a motion was in flight: check its segment once ([`Navigator::mission_stop_in_flight`]).
     flight_check_due: bool,
@@ -114,6 +115,11 @@ pub struct Mission {
     state_lost: bool,
     /// The body pose was recovered and no motion was reported since (scans are not checked against it).
     unmoved_since_recovery: bool,
+    /// The ground round the rover after its last complete scan with no motion in flight (checkpointed).
+    pub(crate) ground: Option<GroundPatch>,
+    /// A recovered ground patch for the navigator to write into the new map (taken at the `Configure` that
+    /// continues from the checkpoint).
+    pub(crate) ground_to_restore: Option<GroundPatch>,
     /// Re-estimate in progress: the next executed position to propagate to (0 = none), and the history so far.
     reestimate_at: usize,
     reestimate_h: AnchorHistory,
@@ -169,6 +175,8 @@ impl Mission {
             recovered: None,
             state_lost: false,
             unmoved_since_recovery: false,
+            ground: None,
+            ground_to_restore: None,
             reestimate_at: 0,
             reestimate_h: AnchorHistory::empty(),
             executed: heapless::Vec::new(),
@@ -249,6 +257,8 @@ impl Mission {
                     self.body = Some(BodyPose { position: p.position, yaw: p.yaw });
                     self.unmoved_since_recovery = true;
                 }
+                self.ground.clone_from(&cp.ground);
+                self.ground_to_restore = cp.ground;
             }
             Some(_) => log::warn!("mission: the recovered tether state has another root anchor: a new deployment"),
             None => {}
@@ -294,6 +304,7 @@ impl Mission {
             body: self.body.map(|b| RetainedPose { position: b.position, yaw: b.yaw }),
             payout_m: self.payout.map_or(0.0, |(p, _, _)| p),
             goal_id: self.goal.map_or(0, |g| g.goal_id),
+            ground: self.ground.clone(),
         })
     }
 
@@ -382,6 +393,58 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
     /// The mission (state, counters, tracked tether), for tests and pictures.
     pub fn mission(&self) -> &Mission {
         &self.mission
+    }
+
+    /// Takes the ground round the rover from the current map ([`GroundPatch`]: the checkpoint keeps it for a
+    /// reset), after each complete scan: centred under the scan's sensor (where the rover is now, also while a
+    /// motion is in flight), heights searched about the tracked axle's height (the sensor's before the first
+    /// motion report). A cell keeps the highest observed surface of its column when the map shows free space
+    /// `GROUND_PATCH_CLEAR_M` above it.
+    pub(super) fn take_ground_patch(&mut self, sensor: &Pose) {
+        let p = sensor.position;
+        let z = self.mission.body.map_or(p.z, |b| b.position.z);
+        let Ok(map) = Map::reattach(self.cfg, self.blocks.borrow_mut(), self.index.borrow_mut(), self.used) else {
+            return;
+        };
+        let mut g = GroundPatch::empty([p.x, p.y], z);
+        for k in 0..tcfg::GROUND_PATCH_CELLS {
+            let (x, y) = g.cell_xy(k);
+            let Some(p) = surface_point(&map, x, y, z + tcfg::GROUND_PATCH_ABOVE_M, z - tcfg::GROUND_PATCH_BELOW_M)
+            else {
+                continue;
+            };
+            let above = Vec3::new(p.x, p.y, p.z + tcfg::GROUND_PATCH_CLEAR_M);
+            // free space above the ground, not the inside of an obstacle the column starts in (a pole)
+            if matches!(map.query(&above), DistanceQuery::Known { distance, .. } if distance >= 0.5 * tcfg::GROUND_PATCH_CLEAR_M) {
+                g.set(k, p.z);
+            }
+        }
+        self.mission.ground = Some(g);
+    }
+
+    /// Writes the ground patch recovered after a reset into the new map: a vertical ray per cell from
+    /// `GROUND_PATCH_CLEAR_M` above its ground, so the ground under and round the rover is observed again where the
+    /// ground's survey cannot see it. Then the ESDF.
+    pub(super) fn restore_ground_patch(&mut self) {
+        let Some(g) = self.mission.ground_to_restore.take() else { return };
+        let mut status = self.status;
+        let Some(mut map) = self.map() else { return };
+        let down = [Vec3::new(0.0, 0.0, -tcfg::GROUND_PATCH_CLEAR_M)];
+        let mut cells = 0u32;
+        for p in g.points() {
+            let origin = crate::geom::Pose3::translation(p.x, p.y, p.z + tcfg::GROUND_PATCH_CLEAR_M);
+            let out = map.integrate_points(&origin, &down);
+            cells += out.points_integrated;
+            status.points_integrated = status.points_integrated.saturating_add(out.points_integrated);
+            status.voxels_dropped = status.voxels_dropped.saturating_add(out.voxels_dropped);
+        }
+        if !map.update_esdf().converged {
+            status.esdf_budget_exhausted = status.esdf_budget_exhausted.saturating_add(1);
+        }
+        self.used = map.blocks_used();
+        status.blocks_used = u32::try_from(self.used).unwrap_or(u32::MAX);
+        self.status = status;
+        log::info!("mission: the ground round the rover restored from the checkpoint: {cells} cells");
     }
 
     /// The pose the next plan starts from: the tracked body pose, else the last scan's sensor pose.

@@ -667,6 +667,43 @@ fn a_reset_recovers_the_wrapped_tether_and_never_plans_with_a_straight_one() {
 }
 
 #[test]
+fn after_a_reset_the_ground_under_the_rover_comes_back_from_the_checkpoint() {
+    // the rover stands at the origin of the mapped world; its last complete scan gives the checkpoint the ground
+    // round it (`retained::GroundPatch`)
+    let mut nav = mapped(ROOT, MissionConfig::DEFAULT);
+    nav.mission.body = Some(BodyPose { position: Vec3::new(0.0, 0.0, Z0 + AXLE_H), yaw: 0.0 });
+    scan_down(&mut nav, 100, 0.0);
+    let mut block = [0u8; retained::RETAINED_BYTES];
+    nav.keep_retained(&mut block);
+    let patch = nav.mission.ground.clone().expect("a patch after a complete scan");
+    let cells = patch.points().count();
+    assert!(cells >= crate::config::tether::GROUND_PATCH_CELLS * 9 / 10, "{cells} cells with ground");
+    for p in patch.points() {
+        assert!((p.z - Z0).abs() <= 0.5 * VOXEL, "ground at {p:?}, the flat world is at {Z0}");
+    }
+
+    // rebooted, configured again, no scan at all (the survey cannot see under the rover): the start settles on
+    // the ground the checkpoint brought back, and the goal is planned from the recovered state
+    let mut nav = rebooted(&block);
+    nav.configure(&configure(ROOT, MissionConfig::DEFAULT)).unwrap();
+    let restored = nav.map().map(|m| crate::plan::tethered::surface_point(&m, 0.0, 0.0, 1.0, -1.0));
+    assert!(restored.flatten().is_some_and(|p| (p.z - Z0).abs() <= 0.5 * VOXEL), "{restored:?}");
+    assert_eq!(nav.goal(&goal(2, 1.0, 0.0), Instant::from_micros(0)), PlanState::Accepted);
+
+    // the same checkpoint without its patch: the map is empty under the rover and the goal is refused
+    let mut bare = match retained::read(&block) {
+        retained::Recovered::Valid(cp) => cp,
+        other => panic!("{other:?}"),
+    };
+    bare.ground = None;
+    bare.generation += 1;
+    retained::write(&mut block, &bare);
+    let mut nav = rebooted(&block);
+    nav.configure(&configure(ROOT, MissionConfig::DEFAULT)).unwrap();
+    assert_eq!(nav.goal(&goal(3, 1.0, 0.0), Instant::from_micros(0)), PlanState::InvalidInput);
+}
+
+#[test]
 fn an_unreadable_checkpoint_stops_safe_and_refuses_goals() {
     let mut nav = mapped(ROOT, MissionConfig::DEFAULT);
     let mut block = [0u8; retained::RETAINED_BYTES];

@@ -610,6 +610,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
         }
         self.setup = Some(PlanSetup::from_configure(cfg));
         self.mission.configure(cfg);
+        self.restore_ground_patch();
         Ok(())
     }
 
@@ -681,6 +682,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
         }
         count_up(&mut status.scans_integrated, 1);
         self.status = status;
+        self.take_ground_patch(&scan.sensor_pose);
     }
 
     fn tile_part(&mut self, header: &TileHeader, offset: usize, heights: &[f32], _now: Instant) {

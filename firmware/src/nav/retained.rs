@@ -9,14 +9,25 @@
 //! root anchor continues from it; with a checkpoint that is present but unreadable it stays `Safe` with reason
 //! `TetherStateLost` and refuses goals.
 //!
+//! The checkpoint also keeps the ground round the rover as the map last showed it ([`GroundPatch`], 2 m x 2 m).
+//! The ground's survey after a reset may not see under the rover (behind the test-3 pole the lander's mast is in
+//! the pole's shadow, and the rover's own sensor looks ahead of its wheels): without the patch the rover could not
+//! settle its own pose on the new map and would refuse every goal (`StartUnobserved`). The patch is written back
+//! into the map at the `Configure` that continues from the checkpoint.
+//!
 //! ## Layout
 //! [`RETAINED_BYTES`] bytes: two slots of [`SLOT_BYTES`], written alternately (generation even: slot 0, odd: slot
 //! 1), so a reset in the middle of a write leaves the other slot, one generation older, intact. A slot is
 //! `magic u32 | generation u32 | root 3 x f32 | body flag u8 | body position 3 x f32 | body yaw f32 | payout f32 |
-//! goal id u32 | anchors n u8 | n x (point 3 x f32, gradient 3 x f32) | crc32`, little-endian, the CRC (the
-//! protocol's CRC-32/ISO-HDLC) over everything before it. Reading takes the valid slot with the higher generation.
+//! goal id u32 | patch flag u8 | patch centre 2 x f32 | patch z0 f32 | GROUND_PATCH_CELLS x i16 | anchors n u8 |
+//! n x (point 3 x f32, gradient 3 x f32) | crc32`, little-endian, the CRC (the protocol's CRC-32/ISO-HDLC) over
+//! everything before it. Reading takes the valid slot with the higher generation. The magic names the layout
+//! ("TCK2"; a "TCK1" checkpoint of the layout without the patch reads as none: a new deployment).
 
-use crate::config::tether::{ANCHOR_HISTORY_CAPACITY, RETAINED_SLOT_BYTES};
+use crate::config::tether::{
+    ANCHOR_HISTORY_CAPACITY, GROUND_PATCH_CELLS, GROUND_PATCH_HALF_CELLS, GROUND_PATCH_SIDE, GROUND_PATCH_SPACING_M,
+    RETAINED_SLOT_BYTES,
+};
 use crate::geom::{Real, Vec3};
 use crate::protocol::frame::CRC;
 use crate::tether::{Anchor, AnchorHistory};
@@ -30,10 +41,13 @@ pub struct RetainedPose {
     pub yaw: Real,
 }
 
-/// Marks a written slot ("TCK1"). Power-on RAM holding exactly this by chance is 1 in 2^32, and then its CRC too.
-const MAGIC: u32 = 0x314B_4354;
-/// Bytes before the anchors: magic, generation, root, body flag, body position and yaw, payout, goal id, count.
-const HEAD_BYTES: usize = 4 + 4 + 12 + 1 + 12 + 4 + 4 + 4 + 1;
+/// Marks a written slot ("TCK2"). Power-on RAM holding exactly this by chance is 1 in 2^32, and then its CRC too.
+const MAGIC: u32 = 0x324B_4354;
+/// Bytes before the anchors: magic, generation, root, body flag, body position and yaw, payout, goal id, the
+/// ground patch, count.
+const HEAD_BYTES: usize = 4 + 4 + 12 + 1 + 12 + 4 + 4 + 4 + PATCH_BYTES + 1;
+/// Bytes of the ground patch: flag, centre, height reference, heights.
+const PATCH_BYTES: usize = 1 + 8 + 4 + GROUND_PATCH_CELLS * 2;
 /// Bytes of one anchor: point and gradient.
 const ANCHOR_BYTES: usize = 24;
 /// Bytes of one slot (the largest history and the CRC; `config::tether::RETAINED_SLOT_BYTES`).
@@ -43,6 +57,52 @@ pub use crate::config::tether::RETAINED_BYTES;
 
 /// The retained block, as the board and the in-process link hold it.
 pub type RetainedBlock = [u8; RETAINED_BYTES];
+
+/// A patch cell without ground (the map showed none, or not with free space above it).
+pub const NO_GROUND: i16 = i16::MIN;
+
+/// The ground round the rover as the map showed it: a grid of [`GROUND_PATCH_SIDE`] x [`GROUND_PATCH_SIDE`] cells
+/// [`GROUND_PATCH_SPACING_M`] apart, centred on the axle, each the height of the highest observed surface of its
+/// column (with observed free space above it, `config::tether::GROUND_PATCH_CLEAR_M`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroundPatch {
+    /// Centre of the grid (x, y), world frame, metres.
+    pub centre: [Real; 2],
+    /// Height reference, metres (the axle's height when it was taken).
+    pub z0: Real,
+    /// Heights above `z0`, millimetres, x fastest; [`NO_GROUND`] where there is none.
+    pub heights_mm: [i16; GROUND_PATCH_CELLS],
+}
+
+impl GroundPatch {
+    /// A patch centred on `centre` at height reference `z0`, every cell without ground.
+    pub fn empty(centre: [Real; 2], z0: Real) -> Self {
+        GroundPatch { centre, z0, heights_mm: [NO_GROUND; GROUND_PATCH_CELLS] }
+    }
+
+    /// The (x, y) of cell `k` (x fastest), world frame.
+    pub fn cell_xy(&self, k: usize) -> (Real, Real) {
+        let h = GROUND_PATCH_HALF_CELLS as Real;
+        let (i, j) = ((k % GROUND_PATCH_SIDE) as Real, (k / GROUND_PATCH_SIDE) as Real);
+        (self.centre[0] + (i - h) * GROUND_PATCH_SPACING_M, self.centre[1] + (j - h) * GROUND_PATCH_SPACING_M)
+    }
+
+    /// Sets cell `k`'s ground height `z` (world, metres); a height beyond the millimetre range is left out.
+    pub fn set(&mut self, k: usize, z: Real) {
+        let mm = libm::roundf((z - self.z0) * 1000.0);
+        if let Some(c) = self.heights_mm.get_mut(k) {
+            *c = if mm.is_finite() && mm > Real::from(NO_GROUND) && mm <= Real::from(i16::MAX) { mm as i16 } else { NO_GROUND };
+        }
+    }
+
+    /// The ground points of the patch (world, metres), cell by cell.
+    pub fn points(&self) -> impl Iterator<Item = Vec3> + '_ {
+        self.heights_mm.iter().enumerate().filter(|(_, h)| **h != NO_GROUND).map(|(k, h)| {
+            let (x, y) = self.cell_xy(k);
+            Vec3::new(x, y, self.z0 + Real::from(*h) * 1e-3)
+        })
+    }
+}
 
 /// What the mission checkpoints.
 #[derive(Debug, Clone, PartialEq)]
@@ -59,6 +119,8 @@ pub struct TetherCheckpoint {
     pub payout_m: f32,
     /// The goal being pursued (0: none).
     pub goal_id: u32,
+    /// The ground round the rover when it last stood still with a map, if taken.
+    pub ground: Option<GroundPatch>,
 }
 
 /// What a boot finds in the retained block.
@@ -88,6 +150,15 @@ pub fn write(block: &mut RetainedBlock, cp: &TetherCheckpoint) {
     w.f32(body.yaw);
     w.f32(cp.payout_m);
     w.u32(cp.goal_id);
+    w.u8(u8::from(cp.ground.is_some()));
+    let none = GroundPatch::empty([0.0; 2], 0.0);
+    let g = cp.ground.as_ref().unwrap_or(&none);
+    w.f32(g.centre[0]);
+    w.f32(g.centre[1]);
+    w.f32(g.z0);
+    for h in g.heights_mm.iter() {
+        w.bytes(&h.to_le_bytes());
+    }
     let anchors = cp.anchors.as_slice();
     w.u8(u8::try_from(anchors.len()).unwrap_or(u8::MAX));
     for a in anchors {
@@ -133,8 +204,13 @@ fn read_slot(slot: &[u8]) -> Option<TetherCheckpoint> {
     let yaw = r.f32()?;
     let payout_m = r.f32()?;
     let goal_id = r.u32()?;
+    let has_ground = r.u8()?;
+    let mut ground = GroundPatch::empty([r.f32()?, r.f32()?], r.f32()?);
+    for h in ground.heights_mm.iter_mut() {
+        *h = i16::from_le_bytes(r.take::<2>()?);
+    }
     let n = usize::from(r.u8()?);
-    if n == 0 || n > ANCHOR_HISTORY_CAPACITY || has_body > 1 {
+    if n == 0 || n > ANCHOR_HISTORY_CAPACITY || has_body > 1 || has_ground > 1 {
         return None;
     }
     let mut anchors = AnchorHistory::empty();
@@ -151,11 +227,13 @@ fn read_slot(slot: &[u8]) -> Option<TetherCheckpoint> {
     // a CRC-valid slot is what this module wrote; finiteness is checked anyway, the planner must never see NaN
     let finite = root.iter().chain(position.iter()).all(|v| v.is_finite()) && yaw.is_finite() && payout_m.is_finite();
     let anchors_finite = anchors.as_slice().iter().all(|a| a.point.iter().chain(a.gradient.iter()).all(|v| v.is_finite()));
-    if !finite || !anchors_finite {
+    let ground_finite = ground.centre.iter().all(|v| v.is_finite()) && ground.z0.is_finite();
+    if !finite || !anchors_finite || !ground_finite {
         return None;
     }
     let body = (has_body == 1).then_some(RetainedPose { position, yaw });
-    Some(TetherCheckpoint { generation, root, anchors, body, payout_m, goal_id })
+    let ground = (has_ground == 1).then_some(ground);
+    Some(TetherCheckpoint { generation, root, anchors, body, payout_m, goal_id, ground })
 }
 
 struct Writer<'a> {
@@ -227,7 +305,20 @@ mod tests {
             body: Some(RetainedPose { position: Vec3::new(1.0, 2.0, 3.0), yaw: 0.25 }),
             payout_m: 7.5,
             goal_id: 2,
+            ground: None,
         }
+    }
+
+    /// A checkpoint with a ground patch: a 10-degree slope with a hole (cells without ground).
+    fn with_ground(generation: u32) -> TetherCheckpoint {
+        let mut g = GroundPatch::empty([-3.9, 0.1], 4.35);
+        for k in 0..GROUND_PATCH_CELLS {
+            let (x, _) = g.cell_xy(k);
+            if k % 7 != 3 {
+                g.set(k, 4.0 + 0.176 * (x + 3.9));
+            }
+        }
+        TetherCheckpoint { ground: Some(g), ..checkpoint(generation, 4) }
     }
 
     #[test]
@@ -240,6 +331,34 @@ mod tests {
         let full = checkpoint(6, ANCHOR_HISTORY_CAPACITY);
         write(&mut block, &full);
         assert_eq!(read(&block), Recovered::Valid(full));
+        let ground = TetherCheckpoint { anchors: checkpoint(7, ANCHOR_HISTORY_CAPACITY).anchors, ..with_ground(7) };
+        write(&mut block, &ground);
+        assert_eq!(read(&block), Recovered::Valid(ground));
+    }
+
+    #[test]
+    fn a_ground_patch_keeps_its_heights_to_the_millimetre_and_leaves_out_the_cells_without_ground() {
+        let cp = with_ground(3);
+        let g = cp.ground.as_ref().unwrap();
+        let pts: std::vec::Vec<Vec3> = g.points().collect();
+        assert_eq!(pts.len(), (0..GROUND_PATCH_CELLS).filter(|k| k % 7 != 3).count());
+        for p in &pts {
+            assert!((p.z - (4.0 + 0.176 * (p.x + 3.9))).abs() <= 0.0006, "{p:?}");
+            assert!((p.x + 3.9).abs() <= 1.0 + 1e-5 && (p.y - 0.1).abs() <= 1.0 + 1e-5);
+        }
+        // the corners are 1 m from the centre each way
+        let (x0, y0) = g.cell_xy(0);
+        assert!((x0 + 4.9).abs() < 1e-5 && (y0 + 0.9).abs() < 1e-5, "({x0}, {y0})");
+        let mut far = GroundPatch::empty([0.0, 0.0], 0.0);
+        far.set(0, 40.0);
+        far.set(1, f32::NAN);
+        far.set(2, -0.25);
+        assert_eq!(&far.heights_mm[..3], &[NO_GROUND, NO_GROUND, -250]);
+        // a bit flip in a height is caught by the CRC
+        let mut block = [0u8; RETAINED_BYTES];
+        write(&mut block, &cp);
+        block[SLOT_BYTES + 100] ^= 0x01; // generation 3 is in slot 1; byte 100 is in the patch
+        assert_eq!(read(&block), Recovered::Corrupt);
     }
 
     #[test]

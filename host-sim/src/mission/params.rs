@@ -114,7 +114,16 @@ pub struct MissionSection {
     /// Upload a tile of the terrain and ask for `PlannerChoice::Homotopy` (`[mission.homotopy]`, issue 20 item 4).
     /// Default none: the goal is an ABIT* goal.
     pub homotopy: Option<crate::homotopy::tile::TileSpec>,
+    /// Operator waypoints, world frame, metres: the ground sends each as a goal (with `[goal] tolerance_m`), the
+    /// next once the flight software reports `Arrived` at the one before, and `[goal]` after the last. The route
+    /// is then the operator's choice and each leg the planner's (e.g. round the ledge's pole, whose far side the
+    /// lander's mast cannot see). Default none; at most [`MAX_WAYPOINTS`]; not with `homotopy` (its route has
+    /// its own legs).
+    pub waypoints: Vec<[f64; 3]>,
 }
+
+/// Most operator waypoints of a mission (`MissionSection::waypoints`).
+pub const MAX_WAYPOINTS: usize = 16;
 
 impl Default for MissionSection {
     fn default() -> Self {
@@ -151,6 +160,7 @@ impl Default for MissionSection {
             arrival_slack_m: 0.25,
             friction: None,
             homotopy: None,
+            waypoints: Vec::new(),
         }
     }
 }
@@ -242,6 +252,15 @@ impl MissionSection {
                 return Err(("overview_eye".into(), format!("must be three finite numbers, got {e:?}")));
             }
         }
+        if self.waypoints.len() > MAX_WAYPOINTS {
+            return Err(("waypoints".into(), format!("at most {MAX_WAYPOINTS}, got {}", self.waypoints.len())));
+        }
+        if let Some(i) = self.waypoints.iter().position(|w| !w.iter().all(|v| v.is_finite())) {
+            return Err((format!("waypoints[{i}]"), format!("must be three finite numbers, got {:?}", self.waypoints[i])));
+        }
+        if !self.waypoints.is_empty() && self.homotopy.is_some() {
+            return Err(("waypoints".into(), "a homotopy goal has its own legs; give waypoints or homotopy, not both".into()));
+        }
         for (i, o) in self.obstacles.iter().enumerate() {
             if !o.centre.iter().all(|v| v.is_finite()) {
                 return Err((format!("obstacles[{i}].centre"), format!("must be three finite numbers, got {:?}", o.centre)));
@@ -270,6 +289,8 @@ mod tests {
             (MissionSection { drive_step_m: 2.0, ..Default::default() }, "drive_step_m"),
             (MissionSection { overview_resolution_deg: 0.01, ..Default::default() }, "overview_resolution_deg"),
             (MissionSection { min_margin_n: Some(-1.0), ..Default::default() }, "min_margin_n"),
+            (MissionSection { waypoints: vec![[0.0; 3], [f64::NAN, 0.0, 0.0]], ..Default::default() }, "waypoints[1]"),
+            (MissionSection { waypoints: vec![[0.0; 3]; MAX_WAYPOINTS + 1], ..Default::default() }, "waypoints"),
             (
                 MissionSection {
                     obstacles: vec![ObstacleSpec { centre: [0.0, 0.0, 0.0], radius_m: -1.0, appears_after_m: 0.0, visible: true }],

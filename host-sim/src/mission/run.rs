@@ -242,6 +242,8 @@ pub struct MissionReport {
     /// The last warning or error the flight software forwarded (`Log` at `Warn` or `Error`): a refused goal's
     /// reason, a planning stop's, a safe stop's.
     pub flight_warning: Option<String>,
+    /// Operator waypoints (`[mission] waypoints`) the flight software arrived at (the goal not counted).
+    pub waypoints_reached: u32,
 }
 
 impl MissionReport {
@@ -422,6 +424,12 @@ struct Sim<'a, L: FlightLink> {
     reset: Option<ResetAt>,
     /// The flight software booted `Safe` with reason `Reset`: the ground configures it and sends the goal again.
     recovery_due: bool,
+    /// The operator waypoints (`[mission] waypoints`) and then the goal: what each goal sent asks for, in order.
+    legs: Vec<P3>,
+    /// The index in `legs` of the goal sent last.
+    leg: usize,
+    /// The flight software arrived at a waypoint: the ground sends the next goal from the main loop.
+    waypoint_due: bool,
     /// The id of the last drive command taken (none since boot).
     last_command_id: Option<u32>,
     /// The id of the last `Turn` / `Straight` taken (none since boot): a `Stop` of a newer one names a motion that
@@ -512,6 +520,18 @@ impl<L: FlightLink> Sim<'_, L> {
                         if let Some(r) = self.rep.resets.last_mut().filter(|r| r.anchors_recovered == 0) {
                             r.anchors_recovered = st.anchors;
                             r.reason = format!("{:?}", st.reason);
+                        }
+                    } else if st.state == MissionState::Arrived
+                        && self.leg + 1 < self.legs.len()
+                        && self.goal.is_some_and(|g| g.goal_id == st.goal_id)
+                    {
+                        // at an operator waypoint (its goal, not an earlier one's late status): the next goal
+                        // goes out from the main loop, unless the rover is not where the flight software thinks
+                        let at = self.legs.get(self.leg).copied().unwrap_or(self.sc.goal.position);
+                        if dist(self.rover.axle(), at) <= self.sc.goal.tolerance_m + self.m.arrival_slack_m {
+                            self.waypoint_due = true;
+                        } else if self.done.is_none() {
+                            self.done = Some(Verdict::FalseArrival);
                         }
                     } else if matches!(st.state, MissionState::Arrived | MissionState::Safe) && self.done.is_none() {
                         self.done = Some(match st.state {
@@ -745,6 +765,23 @@ impl<L: FlightLink> Sim<'_, L> {
             self.last_news_us = self.s.link().now_us();
             self.recv()?;
         }
+        Ok(())
+    }
+
+    /// The flight software arrived at an operator waypoint: the next waypoint (or the goal) as a new goal, with
+    /// the same budget, tolerance and planner.
+    fn next_waypoint(&mut self) -> Result<(), MissionError> {
+        self.waypoint_due = false;
+        let (Some(mut goal), Some(&next)) = (self.goal, self.legs.get(self.leg + 1)) else { return Ok(()) };
+        self.leg += 1;
+        self.rep.waypoints_reached += 1;
+        log::info!("mission: waypoint {} of {} reached; on to ({:.2}, {:.2}, {:.2})", self.leg, self.legs.len() - 1, next[0], next[1], next[2]);
+        goal.goal_id = goal.goal_id.wrapping_add(1);
+        goal.position = Point3::new(next[0] as Real, next[1] as Real, next[2] as Real);
+        self.goal = Some(goal);
+        self.s.send(&Message::GoalRequest(goal))?;
+        self.last_news_us = self.s.link().now_us();
+        self.recv()?;
         Ok(())
     }
 
@@ -1003,7 +1040,9 @@ pub fn run_mission_from(
         physics_fall: None,
         flight_warning: None,
         statics_overruled: 0,
+        waypoints_reached: 0,
     };
+    let m_legs: Vec<P3> = m.waypoints.iter().copied().chain([sc.goal.position]).collect();
     let estimate = rover.state.settled.pose;
     let judge = if m.physics_falls {
         Some(PhysicsJudge::new(&truth.world.truth(), truth.rover).map_err(|e| MissionError::Setup(format!("physics judge: {e}")))?)
@@ -1045,6 +1084,9 @@ pub fn run_mission_from(
         goal: None,
         reset: opts.reset,
         recovery_due: false,
+        legs: m_legs,
+        leg: 0,
+        waypoint_due: false,
         last_command_id: None,
         last_motion_id: None,
         judge,
@@ -1071,7 +1113,7 @@ pub fn run_mission_from(
         }
         None => PlannerChoice::Abit,
     };
-    let g = sc.goal.position;
+    let g = sim.legs.first().copied().unwrap_or(sc.goal.position);
     let goal = GoalRequest {
         goal_id: 1,
         position: Point3::new(g[0] as Real, g[1] as Real, g[2] as Real),
@@ -1099,6 +1141,10 @@ pub fn run_mission_from(
         }
         if sim.recovery_due {
             sim.recover()?;
+            continue;
+        }
+        if sim.waypoint_due {
+            sim.next_waypoint()?;
             continue;
         }
         if sim.pending.is_empty() && now > sim.last_news_us + quiet_us {
