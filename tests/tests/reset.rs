@@ -209,3 +209,72 @@ fn a_watchdog_bite_mid_descent_on_the_board_recovers_the_wrapped_tether_and_repl
     let out = replay(&log, &mut InProcLink::new(DEFAULT_STEP_US)).unwrap();
     assert!(matches!(out, ReplayOutcome::Identical { .. }), "{out:?}");
 }
+
+/// Paton et al.'s ledge test 3 with the operator's loop round the pole (`mission_ledge_test3_wrap.toml`, issue 24
+/// item 2: "in the middle of ledge test 3, tether wrapped on the pole"): the watchdog bites in the first motion that
+/// starts with the tether wrapped, which is behind the pole, where neither the lander's mast (the pole's shadow) nor
+/// the rover's forward-looking sensor sees the ground under the rover again. The rebooted flight software recovers
+/// the wrapped anchor history and the ground round the rover from its checkpoint (`firmware::nav::retained`), the
+/// ground sends the survey and the rover's recent scans again, and the mission goes on round the pole to the next
+/// waypoints; the log replays identically.
+const LEDGE3_SEED: u64 = 2;
+
+fn ledge3_wrap() -> (host_sim::scenario::Scenario, MissionOptions) {
+    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios/mission_ledge_test3_wrap.toml");
+    let sc = host_sim::scenario::load(&p).unwrap_or_else(|e| panic!("{e}"));
+    let opts = MissionOptions {
+        seed: LEDGE3_SEED,
+        tracking: firmware::protocol::Tracking::ClosedLoop,
+        noiseless: false,
+        live: false,
+        reset: Some(ResetAt::BiteWhenWrapped),
+    };
+    (sc, opts)
+}
+
+/// What the ledge-3 bite must show, on any link: the bite came with the true tether on the pole and the tracked
+/// history wrapped, the history came back whole, and after it the rover reached another waypoint and drove on.
+fn assert_ledge3_bite(rep: &host_sim::mission::run::MissionReport) {
+    let [r] = rep.resets.as_slice() else { panic!("one reset expected: {:?}", rep.resets) };
+    let (pole, radius) = (host_sim::world::ledge::POLE_CENTRE_XY, host_sim::world::ledge::POLE_RADIUS_M);
+    let on_pole = |p: &[f64; 3]| ((p[0] - pole[0]).hypot(p[1] - pole[1]) - radius).abs() <= 0.05;
+    assert!(r.anchors_before >= 2 && !r.true_contact_points.is_empty(), "not a wrapped tether at the bite: {r:?}");
+    assert!(r.true_contact_points.iter().all(on_pole), "the true tether is not on the pole: {r:?}");
+    assert_eq!((r.cause, r.reason.as_str(), r.anchors_recovered), ("watchdog", "Reset", r.anchors_before));
+    assert!(rep.waypoints_reached > r.waypoints_before, "no waypoint reached after the bite: {r:?}");
+    assert_went_on(rep, r);
+}
+
+#[test]
+fn a_watchdog_bite_behind_the_ledge_pole_recovers_the_wrap_and_the_ground_and_goes_on() {
+    let (sc, opts) = ledge3_wrap();
+    let writer = fieldlog::Writer::new(Vec::new(), &header(&sc.name, "inproc")).unwrap();
+    let mut link = RecordingLink::new(host_sim::mission::link::mission_link(&sc).unwrap(), writer);
+    let rep = run_mission(&mut link, &sc, &opts).unwrap();
+    let (_, bytes) = link.finish().unwrap();
+    assert_ledge3_bite(&rep);
+    assert!(rep.scans_resent > 0, "the ground sent none of the rover's scans again");
+    let log = fieldlog::parse(&bytes).unwrap();
+    let out = replay(&log, &mut InProcLink::new(DEFAULT_STEP_US)).unwrap();
+    assert!(matches!(out, ReplayOutcome::Identical { .. }), "{out:?}");
+}
+
+/// The same bite on the emulated board: the CMSDK watchdog reboots the Cortex-M7, the `.uninit` checkpoint brings
+/// the wrap and the ground back, and the board's log replays identically in-process.
+#[test]
+fn a_watchdog_bite_behind_the_ledge_pole_on_the_board_recovers_and_replays_in_process() {
+    let Some(elf) = host_sim::qemu::board_for_tests("ledge-3 bite on the board").unwrap_or_else(|e| panic!("{e}")) else {
+        return;
+    };
+    let (sc, opts) = ledge3_wrap();
+    let link = host_sim::link::qemu::QemuLink::start(&elf, DEFAULT_STEP_US).unwrap_or_else(|e| panic!("{e}"));
+    let mut rec = RecordingLink::new(link, fieldlog::Writer::new(Vec::new(), &header(&sc.name, "qemu")).unwrap());
+    let rep = run_mission(&mut rec, &sc, &opts).unwrap();
+    let (board, bytes) = rec.finish().unwrap();
+    assert_ledge3_bite(&rep);
+    let text = board.quit(core::time::Duration::from_secs(20)).unwrap_or_else(|e| panic!("{e}")).output.both();
+    assert!(text.contains("board: REBOOTED by the watchdog's reset output"), "board output: {text}");
+    let log = fieldlog::parse(&bytes).unwrap();
+    let out = replay(&log, &mut InProcLink::new(DEFAULT_STEP_US)).unwrap();
+    assert!(matches!(out, ReplayOutcome::Identical { .. }), "{out:?}");
+}

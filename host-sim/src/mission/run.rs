@@ -52,6 +52,13 @@ const IDLE_STEP_US: u64 = 100_000;
 pub const QUIET_LIMIT_S: f64 = 300.0;
 /// Trace points kept at most (the picture and the JSON), one per increment.
 const MAX_TRACE: usize = 20_000;
+/// The rover's scans the ground keeps for a recovery after a reset (the newest). Default 64.
+const KEPT_SCANS: usize = 64;
+/// After a reset the ground sends again the kept scans taken within this distance of the rover (horizontal), metres.
+/// Default 3 m: the ground a first plan from there checks.
+const RESEND_RADIUS_M: f64 = 3.0;
+/// ... at most this many of them, the newest. Default 16.
+const RESEND_SCANS: usize = 16;
 
 /// How a mission ended, by the simulator's verdict.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -140,6 +147,10 @@ pub struct ResetSeen {
     pub reason: String,
     /// Contacts of the true tether (the simulator's own, `truth::taut`) at the reset: a wrapped tether has some.
     pub true_contacts: usize,
+    /// Where they are (world, metres), from the root.
+    pub true_contact_points: Vec<P3>,
+    /// Operator waypoints reached before the reset (`MissionReport::waypoints_reached` then).
+    pub waypoints_before: u32,
     /// How: `command` (between motions) or `watchdog` (a bite during a motion).
     pub cause: &'static str,
 }
@@ -244,6 +255,8 @@ pub struct MissionReport {
     pub flight_warning: Option<String>,
     /// Operator waypoints (`[mission] waypoints`) the flight software arrived at (the goal not counted).
     pub waypoints_reached: u32,
+    /// The rover's earlier scans the ground sent again after resets (`Sim::recover`).
+    pub scans_resent: u32,
 }
 
 impl MissionReport {
@@ -424,12 +437,17 @@ struct Sim<'a, L: FlightLink> {
     reset: Option<ResetAt>,
     /// The flight software booted `Safe` with reason `Reset`: the ground configures it and sends the goal again.
     recovery_due: bool,
+    /// The ground's recovery procedure is running: a `Safe` (`Reset`) status repeated meanwhile (the periodic
+    /// status while the survey is sent) is the same reset, not another.
+    recovering: bool,
     /// The operator waypoints (`[mission] waypoints`) and then the goal: what each goal sent asks for, in order.
     legs: Vec<P3>,
     /// The index in `legs` of the goal sent last.
     leg: usize,
     /// The flight software arrived at a waypoint: the ground sends the next goal from the main loop.
     waypoint_due: bool,
+    /// The rover's last scans as the ground sent them (at most [`KEPT_SCANS`]), for the recovery after a reset.
+    kept_scans: std::collections::VecDeque<Scan>,
     /// The id of the last drive command taken (none since boot).
     last_command_id: Option<u32>,
     /// The id of the last `Turn` / `Straight` taken (none since boot): a `Stop` of a newer one names a motion that
@@ -513,7 +531,9 @@ impl<L: FlightLink> Sim<'_, L> {
                     if self.status.is_none_or(|old| old.state != st.state) {
                         self.last_news_us = now;
                     }
-                    if st.state == MissionState::Safe && st.reason == StopReason::Reset {
+                    if st.state == MissionState::Safe && st.reason == StopReason::Reset && self.recovering {
+                        // the reset being recovered from, reported again
+                    } else if st.state == MissionState::Safe && st.reason == StopReason::Reset {
                         // the flight computer rebooted and recovered its tether state: the ground's procedure
                         // (configure, scan, the goal again) runs from the main loop
                         self.recovery_due = true;
@@ -676,7 +696,17 @@ impl<L: FlightLink> Sim<'_, L> {
         let view = self.truth.world.sensed();
         let scan = rover_scan(&view, &self.sc.sensor, &pose, &self.estimate, &mut self.rng);
         self.last_scan_driven = self.rover.driven_m;
-        self.send_scan(&scan)
+        self.send_rover_scan(scan)
+    }
+
+    /// Sends one of the rover's own scans and keeps it for a recovery ([`Self::recover`]).
+    fn send_rover_scan(&mut self, scan: Scan) -> Result<(), MissionError> {
+        self.send_scan(&scan)?;
+        if self.kept_scans.len() == KEPT_SCANS {
+            self.kept_scans.pop_front();
+        }
+        self.kept_scans.push_back(scan);
+        Ok(())
     }
 
     fn trace(&mut self) {
@@ -727,6 +757,8 @@ impl<L: FlightLink> Sim<'_, L> {
             anchors_recovered: 0,
             reason: String::new(),
             true_contacts: self.rover.tether.contacts.len(),
+            true_contact_points: self.rover.tether.contacts.clone(),
+            waypoints_before: self.rep.waypoints_reached,
             cause: match cause {
                 ResetCause::Command => "command",
                 ResetCause::Watchdog => "watchdog",
@@ -751,12 +783,35 @@ impl<L: FlightLink> Sim<'_, L> {
     /// reset), and the goal again under a new id.
     fn recover(&mut self) -> Result<(), MissionError> {
         self.recovery_due = false;
+        self.recovering = true;
+        let r = self.recovery_procedure();
+        self.recovering = false;
+        r
+    }
+
+    fn recovery_procedure(&mut self) -> Result<(), MissionError> {
         self.pending.clear();
         self.s.send(&Message::Configure(self.cfg))?;
         self.recv()?;
         // the map went with the reset: the lander's survey again (as at the start), then the rover's own scan
         let here = self.rover.axle();
         self.overview(here)?;
+        // the rover's own recent scans taken near where it stands, oldest first (what its map held round it and the
+        // mast cannot see again, e.g. behind a pole), then a new one
+        let near: Vec<Scan> = self
+            .kept_scans
+            .iter()
+            .filter(|sc| {
+                let t = sc.sensor_pose.translation.vector;
+                (f64::from(t.x) - here[0]).hypot(f64::from(t.y) - here[1]) <= RESEND_RADIUS_M
+            })
+            .cloned()
+            .collect();
+        let skip = near.len().saturating_sub(RESEND_SCANS);
+        for scan in near.into_iter().skip(skip) {
+            self.rep.scans_resent += 1;
+            self.send_scan(&scan)?;
+        }
         self.scan_here()?;
         if let Some(mut goal) = self.goal {
             goal.goal_id += 1;
@@ -929,7 +984,7 @@ impl<L: FlightLink> Sim<'_, L> {
         let view = self.truth.world.sensed();
         let scan = rover_scan(&view, &self.sc.sensor, &pose, &self.estimate, &mut self.rng);
         self.last_scan_driven = self.rover.driven_m;
-        self.send_scan(&scan)?;
+        self.send_rover_scan(scan)?;
         Ok(true)
     }
 }
@@ -1041,6 +1096,7 @@ pub fn run_mission_from(
         flight_warning: None,
         statics_overruled: 0,
         waypoints_reached: 0,
+        scans_resent: 0,
     };
     let m_legs: Vec<P3> = m.waypoints.iter().copied().chain([sc.goal.position]).collect();
     let estimate = rover.state.settled.pose;
@@ -1084,9 +1140,11 @@ pub fn run_mission_from(
         goal: None,
         reset: opts.reset,
         recovery_due: false,
+        recovering: false,
         legs: m_legs,
         leg: 0,
         waypoint_due: false,
+        kept_scans: std::collections::VecDeque::new(),
         last_command_id: None,
         last_motion_id: None,
         judge,
