@@ -238,17 +238,30 @@ fn reader_seeds(protocol_log: &[u8]) -> Vec<(&'static str, String, Vec<u8>)> {
     out
 }
 
-/// A retained block after `writes` checkpoints of a tether wrapped once (root and one contact).
+/// A retained block after `writes` checkpoints of a tether wrapped once (root and one contact), with a ground patch
+/// (flat, a hole of cells without ground).
 fn retained_block(writes: u32) -> firmware::nav::retained::RetainedBlock {
     use firmware::geom::Vec3;
-    use firmware::nav::retained::{write, TetherCheckpoint, RETAINED_BYTES};
+    use firmware::nav::retained::{write, GroundPatch, TetherCheckpoint, RETAINED_BYTES};
     use firmware::tether::{Anchor, AnchorHistory};
     let mut block = [0u8; RETAINED_BYTES];
     let root = Vec3::new(6.7, 0.0, 6.35);
     let mut anchors = AnchorHistory::new(Anchor::root(root));
     anchors.push(Anchor { point: Vec3::new(-2.5, 0.1, 4.6), gradient: Vec3::new(0.0, 1.0, 0.0) }).unwrap();
+    let mut ground = GroundPatch::empty([-3.9, 0.1], 4.35);
+    for k in (0..firmware::config::tether::GROUND_PATCH_CELLS).filter(|k| k % 5 != 0) {
+        ground.set(k, 4.0);
+    }
     for generation in 1..=writes {
-        let cp = TetherCheckpoint { generation, root, anchors: anchors.clone(), body: None, payout_m: 9.5, goal_id: 1 };
+        let cp = TetherCheckpoint {
+            generation,
+            root,
+            anchors: anchors.clone(),
+            body: None,
+            payout_m: 9.5,
+            goal_id: 1,
+            ground: Some(ground.clone()),
+        };
         write(&mut block, &cp);
     }
     block

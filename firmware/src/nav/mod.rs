@@ -177,11 +177,14 @@
 //!   `MIN_DRIFT_SAMPLE_M` 0.05, `STANDARD_GRAVITY` 9.81, `RECOVERY_ROOT_TOLERANCE_M` 0.01;
 //!   `MissionConfig::DEFAULT`: ClosedLoop, 0.3 m, 0.5 m, 0 N.
 //! - Resets (issue 24 item 2, [`retained`]): after each step the navigator checkpoints the tether state (root,
-//!   tracked anchors, body pose, payout) into retained memory when it changed; at boot it reads it back. A
+//!   tracked anchors, body pose, payout) and the ground round the rover (a 2 m x 2 m height patch taken from the
+//!   map after each complete scan) into retained memory when it changed; at boot it reads it back. A
 //!   checkpoint makes the mission `Safe` (`Reset`) and the next `Configure` with the same root continues from the
 //!   recovered anchors (a re-estimate then starts from them, not from the root); an unreadable one makes it `Safe`
 //!   (`TetherStateLost`) and refuses goals. The recovered pose is the plan's start; scans are not checked against
-//!   it until the first motion report (the ground surveys again, from the lander's mast too).
+//!   it until the first motion report (the ground surveys again, from the lander's mast too). The recovered ground
+//!   patch is written into the new map at that `Configure` (where no survey sees under the rover, its start
+//!   still settles).
 //! - Bounds: each report does one Alg. 1 prediction; each `Verifying` step one settle, one stability check and one
 //!   motion check; each re-estimate step `REESTIMATE_PER_STEP` predictions; each closed-loop step one pass over
 //!   the path's segments (`PATH_CAPACITY`).
