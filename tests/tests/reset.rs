@@ -20,18 +20,23 @@ use host_sim::replay::{replay, ReplayOutcome};
 /// 2026-12-04; the precondition is asserted below either way).
 const SEED: u64 = 3;
 
-/// `mission_snag.toml`, seed [`SEED`], reset once the tether is wrapped.
-fn snag_with_reset() -> (host_sim::scenario::Scenario, MissionOptions) {
-    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios/mission_snag.toml");
+/// A shipped scenario file and the options of one mission of it with seed `seed` and reset `reset`.
+fn mission_setup(file: &str, seed: u64, reset: ResetAt) -> (host_sim::scenario::Scenario, MissionOptions) {
+    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios").join(file);
     let sc = host_sim::scenario::load(&p).unwrap_or_else(|e| panic!("{e}"));
     let opts = MissionOptions {
-        seed: SEED,
+        seed,
         tracking: firmware::protocol::Tracking::ClosedLoop,
         noiseless: false,
         live: false,
-        reset: Some(ResetAt::Wrapped),
+        reset: Some(reset),
     };
     (sc, opts)
+}
+
+/// `mission_snag.toml`, seed [`SEED`], reset once the tether is wrapped.
+fn snag_with_reset() -> (host_sim::scenario::Scenario, MissionOptions) {
+    mission_setup("mission_snag.toml", SEED, ResetAt::Wrapped)
 }
 
 fn header(scenario: &str, link: &str) -> fieldlog::Header {
@@ -220,16 +225,7 @@ fn a_watchdog_bite_mid_descent_on_the_board_recovers_the_wrapped_tether_and_repl
 const LEDGE3_SEED: u64 = 2;
 
 fn ledge3_wrap() -> (host_sim::scenario::Scenario, MissionOptions) {
-    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios/mission_ledge_test3_wrap.toml");
-    let sc = host_sim::scenario::load(&p).unwrap_or_else(|e| panic!("{e}"));
-    let opts = MissionOptions {
-        seed: LEDGE3_SEED,
-        tracking: firmware::protocol::Tracking::ClosedLoop,
-        noiseless: false,
-        live: false,
-        reset: Some(ResetAt::BiteWhenWrapped),
-    };
-    (sc, opts)
+    mission_setup("mission_ledge_test3_wrap.toml", LEDGE3_SEED, ResetAt::BiteWhenWrapped)
 }
 
 /// What the ledge-3 bite must show, on any link: the bite came with the true tether on the pole and the tracked
