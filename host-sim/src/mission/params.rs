@@ -293,6 +293,14 @@ mod tests {
             (MissionSection { waypoints: vec![[0.0; 3]; MAX_WAYPOINTS + 1], ..Default::default() }, "waypoints"),
             (
                 MissionSection {
+                    waypoints: vec![[1.0, 2.0, 3.0]],
+                    homotopy: Some(crate::homotopy::tile::TileSpec { origin: [0.0; 2], resolution_m: 0.5, posts: [8, 8] }),
+                    ..Default::default()
+                },
+                "waypoints",
+            ),
+            (
+                MissionSection {
                     obstacles: vec![ObstacleSpec { centre: [0.0, 0.0, 0.0], radius_m: -1.0, appears_after_m: 0.0, visible: true }],
                     ..Default::default()
                 },
