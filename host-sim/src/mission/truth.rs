@@ -6,9 +6,10 @@
 //! ## True tether
 //! - **Ledge worlds** (tests 1-3, no mission rocks): [`crate::truth::tether`]'s closed forms (straight, over the
 //!   lip or the back edge, around the pole in either wrap direction). Of the candidates that exist, the one whose
-//!   length is closest to the previous increment's is kept: the tether's length changes continuously along a
-//!   motion, so this follows its homotopy class (a wrap round the pole stays a wrap). At the first increment, the
-//!   shortest.
+//!   length is closest to the previous increment's, and whose first contact is closest to the previous one's, is
+//!   kept: the tether's length and its contacts move continuously along a motion, so this follows its homotopy
+//!   class (a wrap round the pole stays a wrap, on the side it came from: right behind the pole both directions
+//!   have nearly the same length). At the first increment, the shortest.
 //! - **Every other world** (DEMs, the crater wall, meshes, or a ledge with mission rocks): the taut tether in the
 //!   vertical plane through the root and the rover: the upper convex hull of the terrain profile under the
 //!   segment (sampled every `PROFILE_STEP_M`), from the root to the rover. Its interior vertices are the
@@ -110,8 +111,17 @@ pub fn true_tether(world: &MissionWorld, root: P3, end: P3, prev: Option<&TrueTe
                 cands.push(TrueTether { contacts: t.contacts, length_m: t.length });
             }
         }
+        // Continuity: the candidate whose length is nearest the previous one's, and, while both touch the terrain,
+        // whose first contact is nearest the previous first contact. Right behind a pole both wrap directions have
+        // almost the same length, and the tether cannot pass through the pole to its other side.
         let key = |t: &TrueTether| match prev {
-            Some(p) => (t.length_m - p.length_m).abs(),
+            Some(p) => {
+                let moved = match (t.contacts.first(), p.contacts.first()) {
+                    (Some(a), Some(b)) => dist(*a, *b),
+                    _ => 0.0,
+                };
+                (t.length_m - p.length_m).abs() + moved
+            }
             None => t.length_m,
         };
         if let Some(best) = cands.into_iter().min_by(|a, b| key(a).total_cmp(&key(b))) {
@@ -234,6 +244,27 @@ mod tests {
         let straight = profile_tether(&w, root, [-1.5, 0.0, 4.35]);
         assert!(straight.contacts.is_empty());
         assert!((straight.length_m - dist(root, [-1.5, 0.0, 4.35])).abs() < 1e-9);
+    }
+
+    /// A rover passing behind the test-3 pole from its -y side, a few centimetres past the root-pole line and back:
+    /// there both wrap directions have (nearly) the same length, and length continuity alone let the tether jump to
+    /// the pole's other side (through the pole). It stays on the side it came from, and comes off the pole again.
+    #[test]
+    fn the_tether_behind_the_pole_stays_on_the_side_it_came_from() {
+        let base: Box<dyn crate::world::World> = Box::new(LedgeWorld::with_pole());
+        let world = MissionWorld::new(base, Some(LedgeWorld::with_pole()), Vec::new());
+        let root = crate::world::ledge::ROOT_ANCHOR_TEST2;
+        let path = [[-3.6, -0.8], [-3.9, -0.3], [-4.0, -0.05], [-4.0, 0.0], [-4.0, 0.03], [-4.0, 0.06], [-3.95, -0.2], [-3.9, -0.45], [-3.8, -0.9]];
+        let mut prev: Option<TrueTether> = None;
+        let mut wrapped = false;
+        for [x, y] in path {
+            let t = true_tether(&world, root, [x, y, 4.35], prev.as_ref());
+            assert!(t.contacts.iter().all(|c| c[1] < 0.0), "at ({x}, {y}) the tether is on the pole's far side: {t:?}");
+            wrapped |= !t.contacts.is_empty();
+            prev = Some(t);
+        }
+        assert!(wrapped, "the path never wrapped the pole");
+        assert!(prev.unwrap().contacts.is_empty(), "back on the -y side the tether comes off the pole");
     }
 
     #[test]
