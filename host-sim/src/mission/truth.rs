@@ -10,6 +10,11 @@
 //!   kept: the tether's length and its contacts move continuously along a motion, so this follows its homotopy
 //!   class (a wrap round the pole stays a wrap, on the side it came from: right behind the pole both directions
 //!   have nearly the same length). At the first increment, the shortest.
+//!   **The gap**: one candidate shape at a time, and a pole wrap of at most half a turn
+//!   (`truth::tether::around`): the tether of Paton's test 3 after the loop (round the pole by ~220 degrees, then
+//!   over the lip) is none of them, so behind and past the pole the truth falls back to another candidate. The
+//!   general true tether (`truth::taut::TautTether`, used by the physics judge's path checks) has no such limit;
+//!   the mission does not use it yet.
 //! - **Every other world** (DEMs, the crater wall, meshes, or a ledge with mission rocks): the taut tether in the
 //!   vertical plane through the root and the rover: the upper convex hull of the terrain profile under the
 //!   segment (sampled every `PROFILE_STEP_M`), from the root to the rover. Its interior vertices are the
