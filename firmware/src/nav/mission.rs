@@ -115,7 +115,7 @@ pub struct Mission {
     state_lost: bool,
     /// The body pose was recovered and no motion was reported since (scans are not checked against it).
     unmoved_since_recovery: bool,
-    /// The ground round the rover after its last complete scan with no motion in flight (checkpointed).
+    /// The ground round the rover after its last complete scan (checkpointed).
     pub(crate) ground: Option<GroundPatch>,
     /// A recovered ground patch for the navigator to write into the new map (taken at the `Configure` that
     /// continues from the checkpoint).
@@ -396,13 +396,18 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
     }
 
     /// Takes the ground round the rover from the current map ([`GroundPatch`]: the checkpoint keeps it for a
-    /// reset), after each complete scan: centred under the scan's sensor (where the rover is now, also while a
-    /// motion is in flight), heights searched about the tracked axle's height (the sensor's before the first
-    /// motion report). A cell keeps the highest observed surface of its column when the map shows free space
-    /// `GROUND_PATCH_CLEAR_M` above it.
+    /// reset), after each complete scan: centred on the tracked axle, or under the scan's sensor while a motion is
+    /// in flight (the tracked pose is the motion's start; the scans along it are where the rover is) or before any
+    /// pose is tracked; heights searched about the tracked axle's height (the sensor's without one). A cell keeps
+    /// the highest observed surface of its column when the map shows free space `GROUND_PATCH_CLEAR_M` above it.
+    /// (A survey from the lander's mast is centred on the axle too, once one is tracked.)
     pub(super) fn take_ground_patch(&mut self, sensor: &Pose) {
-        let p = sensor.position;
-        let z = self.mission.body.map_or(p.z, |b| b.position.z);
+        let m = &self.mission;
+        let p = match m.body {
+            Some(b) if m.in_flight.is_none() => b.position,
+            _ => Vec3::new(sensor.position.x, sensor.position.y, sensor.position.z),
+        };
+        let z = m.body.map_or(p.z, |b| b.position.z);
         let Ok(map) = Map::reattach(self.cfg, self.blocks.borrow_mut(), self.index.borrow_mut(), self.used) else {
             return;
         };
