@@ -8,13 +8,18 @@
 //!    `MissionConfig` with the tracking mode and the `[mission]` overrides);
 //! 2. a tether reading, the overview scan from the root anchor's mast (`[mission] overview_scan`), a scan from the
 //!    rover at its start pose (with the localisation error);
-//! 3. the `GoalRequest` (with `allow_approximate`);
+//! 3. the `GoalRequest` (with `allow_approximate`), to the first of the `[mission] waypoints` if there are any; at
+//!    each waypoint's `Arrived` the next goal, the scenario's goal last;
 //! 4. link time runs; tether readings every `1 / tether_rate_hz` seconds; each `DriveCommand` is executed on the
 //!    true world ([`super::executor`]) increment by increment, each increment taking its link time (speed, turn
 //!    rate), with a scan at most every `scan_every_m` metres; at its end a `MotionReport` (outcome, achieved
 //!    turn and distance, the pose estimate) and a scan. A `Stop` while a motion runs ends it `Stalled`.
 //! 5. the verdict is the simulator's own ([`Verdict`]): the flight software's word plus the truth's (the rover
 //!    really within the goal tolerance plus `arrival_slack_m`, no fall).
+//!
+//! After a reset of the flight computer (`ResetAt`) the ground's recovery: `Configure` again, the mast's survey, the
+//! rover's own recent scans taken within `RESEND_RADIUS_M` of it (the ground keeps the last `KEPT_SCANS`), a new
+//! scan, and the goal again under a new id.
 //!
 //! Everything is seeded by the mission seed (planner, sensor noise, localisation, actuation, tether noise), so a
 //! mission is a pure function of (scenario, seed, tracking) and the link's bytes replay bit for bit.
@@ -779,8 +784,8 @@ impl<L: FlightLink> Sim<'_, L> {
     }
 
     /// The ground's procedure after the flight software booted `Safe` (`Reset`): the same `Configure` (so it
-    /// continues from the recovered tether), the survey and a scan where the rover stands (the map went with the
-    /// reset), and the goal again under a new id.
+    /// continues from the recovered tether), the survey, the rover's recent scans near where it stands and a new one
+    /// (the map went with the reset), and the goal again under a new id.
     fn recover(&mut self) -> Result<(), MissionError> {
         self.recovery_due = false;
         self.recovering = true;
