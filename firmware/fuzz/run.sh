@@ -14,7 +14,7 @@ secs="${1:-15}"
 shift || true
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
-    targets=(deframe_decode frame_decode fieldlog scenario geotiff asc npy obj ply pcd las movingai retained)
+    targets=(deframe_decode frame_decode fieldlog scenario geotiff asc npy obj ply pcd las movingai retained tile)
 fi
 if ! command -v c++ > /dev/null; then   # libFuzzer is C++
     SUDO=""; if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi

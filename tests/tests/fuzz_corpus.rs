@@ -235,6 +235,55 @@ fn reader_seeds(protocol_log: &[u8]) -> Vec<(&'static str, String, Vec<u8>)> {
     // retained tether checkpoint: a block with a wrapped tether written twice (both slots), and one slot only
     out.push(("retained", "two-slots".into(), retained_block(2).to_vec()));
     out.push(("retained", "one-slot".into(), retained_block(1).to_vec()));
+    // terrain tile: the wire frames of a 20 x 20 tile (two chunks), then of a second tile after it
+    out.push(("tile", "one-tile".into(), tile_frames(&[1])));
+    out.push(("tile", "two-tiles".into(), tile_frames(&[1, 2])));
+    out
+}
+
+/// What the `tile` target does with a seed (deframe, decode, reassemble in order, stage, load): at least one tile
+/// loads, each the tile in use once complete.
+fn tile_seed_loads(b: &[u8], what: &str) {
+    use firmware::exec::Autonomy;
+    let mut nav = firmware::nav::Navigator::new(
+        firmware::config::map::MapConfig::with_voxel_size(0.1),
+        vec![firmware::map::Block::EMPTY; 16],
+        vec![0u32; 64],
+        Box::default(),
+    )
+    .unwrap();
+    let (mut d, mut a, now) = (Deframer::new(), TileAssembler::new(), hal::Instant::from_micros(0));
+    let (mut rest, mut loaded) = (b, 0);
+    while !rest.is_empty() {
+        let (n, ev) = d.push(rest);
+        rest = &rest[n..];
+        let Some(Ok(frame)) = ev else { continue };
+        let (_, Message::TileChunk(c)) = decode_frame(frame).expect(what) else { panic!("{what}") };
+        c.validate().expect(what);
+        let acc = a.accept(&c).expect(what);
+        nav.tile_part(&acc.header, acc.offset, &c.heights, now);
+        if acc.complete {
+            nav.tile_complete(&acc.header, now).expect(what);
+            loaded += 1;
+            assert_eq!(nav.map_status().tile_id, acc.header.tile_id, "{what}");
+        }
+    }
+    assert!(loaded >= 1, "{what}: no tile loaded");
+}
+
+/// The wire frames (COBS, as the link carries them) of the `TileChunk`s of 20 x 20-post tiles with ids `ids`, a
+/// slope of 0.1 m per post along x.
+fn tile_frames(ids: &[u32]) -> Vec<u8> {
+    let spec = host_sim::homotopy::tile::TileSpec { origin: [-5.0, -5.0], resolution_m: 0.5, posts: [20, 20] };
+    let heights: Vec<f32> = (0..400).map(|k| 0.1 * (k % 20) as f32).collect();
+    let mut out = Vec::new();
+    for &id in ids {
+        for (i, c) in host_sim::homotopy::tile::tile_chunks(id, &spec, &heights).into_iter().enumerate() {
+            let mut buf = vec![0u8; MAX_ENCODED_FRAME_LEN];
+            let n = encode(i as u32, &Message::TileChunk(c), &mut buf).unwrap();
+            out.extend_from_slice(&buf[..n]);
+        }
+    }
     out
 }
 
@@ -380,6 +429,16 @@ fn every_reader_accepts_its_seeds() {
                 let block: firmware::nav::retained::RetainedBlock = b.as_slice().try_into().expect(&what);
                 let got = firmware::nav::retained::read(&block);
                 assert!(matches!(&got, firmware::nav::retained::Recovered::Valid(cp) if cp.anchors.len() == 2), "{what}: {got:?}");
+            }
+            "tile" => {
+                // a thread with room for the navigator's planning storage, which `Box::default()` builds on the stack
+                let (b, what) = (b.clone(), what.clone());
+                std::thread::Builder::new()
+                    .stack_size(64 << 20)
+                    .spawn(move || tile_seed_loads(&b, &what))
+                    .unwrap()
+                    .join()
+                    .unwrap();
             }
             other => panic!("seed for unknown target {other}"),
         }
