@@ -119,7 +119,7 @@ pub struct TetherCheckpoint {
     pub payout_m: f32,
     /// The goal being pursued (0: none).
     pub goal_id: u32,
-    /// The ground round the rover when it last stood still with a map, if taken.
+    /// The ground round the rover from the map after its last complete scan, if taken (`GroundPatch`).
     pub ground: Option<GroundPatch>,
 }
 
