@@ -29,7 +29,8 @@
 //! 6. **Obstacles.** A post (within the corridor grown by the footprint) is an obstacle when it protrudes from or
 //!    is hollow against its plane by more than `step_m` at the footprint's scale (its residual minus the mean
 //!    residual within 2 footprints, at most [`DEM_WINDOW_MAX`] posts: the smooth curvature a plane does not follow
-//!    is no obstacle; a rough patch shows up the same way), or when its local normal is tilted more than
+//!    is no obstacle; a rough patch shows up the same way; on a tile whose posts are more than 2 footprints apart
+//!    the residual is scaled by `2 footprint / spacing`, the share of it the wheels meet), or when its local normal is tilted more than
 //!    `max_tilt_rad` from every plane's (too steep; a post on a fold line carries both planes' slopes). 4-connected components become octagons (8-DOPs, directions k x 45 deg) around their
 //!    unfolded cell corners grown by `footprint_m` (the support of the cells' hull plus the footprint in each
 //!    direction, so every obstacle cell and everything within the footprint of it is inside). Overlapping octagons
@@ -956,6 +957,10 @@ impl DemDescent {
         // radius 2 x footprint (at least one post, at most DEM_WINDOW_MAX posts), so the smooth curvature a plane
         // does not follow is not an obstacle, a rock or a pit is; its edges are also rough and steep.
         let w = (libm::ceil(2.0 * params.footprint_m / res) as usize).clamp(1, DEM_WINDOW_MAX);
+        // The relief the wheels meet across the rover's own width: on a tile whose posts are more than two
+        // footprints apart, a residual `e` at one post rises over a whole post spacing (the surface is
+        // interpolated between posts), so two footprints of it see `e x 2 footprint / res`.
+        let relief_scale = (2.0 * params.footprint_m / res).min(1.0);
         for (i, m) in scratch.mask.iter_mut().enumerate().take(rows * cols) {
             *m = 0;
             let (r, c) = (i / cols, i % cols);
@@ -975,7 +980,7 @@ impl DemDescent {
                 let nl = libm::sqrt(gx * gx + gy * gy + 1.0);
                 d.planes.iter().all(|p| dot([-gx / nl, -gy / nl, 1.0 / nl], p.plane.normal) < cos_tilt)
             });
-            if e.abs() > params.step_m || steep {
+            if e.abs() * relief_scale > params.step_m || steep {
                 *m = OBST;
                 d.blocked_posts += 1;
             }
@@ -1365,6 +1370,41 @@ mod tests {
         for o in all {
             assert!(o.len() <= MAX_OBSTACLE_VERTICES && o.len() >= 3);
         }
+    }
+
+    /// On a tile coarser than the rover's footprint (4 m posts, the LOLA polar DEM at 1:400) a gentle undulation
+    /// across the wall (0.6 m over 16 m, 8.5 deg at its steepest) is no obstacle, though each crest's residual
+    /// against its 3 x 3 posts (0.4 m) is more than a wheel radius: between posts the surface is a facet, so the
+    /// wheels meet 1.22 / 4 of it across the footprint. A 3 m block on one post still is one.
+    #[test]
+    fn relief_is_judged_at_the_footprint_on_coarse_tiles() {
+        const R: f64 = 4.0;
+        let (rows, cols) = (40usize, 30usize);
+        let t = libm::tan(30f64.to_radians());
+        let tile = |block: Option<(usize, usize)>| {
+            let mut h = Vec::new();
+            for r in 0..rows {
+                for c in 0..cols {
+                    let (x, y) = (c as f64 * R, r as f64 * R);
+                    let wave = 0.6 * libm::sin(core::f64::consts::TAU * x / 16.0);
+                    let z = 40.0 - t * (100.0 - y.clamp(40.0, 100.0)) + if (40.0..=100.0).contains(&y) { wave } else { 0.0 };
+                    h.push((z + if block == Some((r, c)) { 3.0 } else { 0.0 }) as f32);
+                }
+            }
+            let mut tile = Box::new(HeightTile::new());
+            tile.load([0.0, 0.0], R, rows, cols, &h).unwrap();
+            tile
+        };
+        let p = DemParams::for_rover(&RoverParams::AXEL, 0.4, 12.0);
+        let segment = |tile: &HeightTile| DemDescent::segment(tile, [60.0, 130.0], [60.0, 20.0], &p, &mut Box::new(DemScratch::new())).unwrap();
+        let smooth = segment(&tile(None));
+        assert_eq!(smooth.planes.len(), 3);
+        assert_eq!(smooth.blocked_posts, 0, "the undulation is no obstacle: {:?}", smooth.edge_obstacles);
+        assert!(smooth.obstacles.is_empty() && smooth.edge_obstacles.is_empty());
+        let rock = segment(&tile(Some((17, 16))));
+        assert!(rock.blocked_posts >= 1, "the block is an obstacle");
+        let at = rock.unfold_xy([64.0, 68.0]).unwrap();
+        assert!(rock.obstacles.iter().chain(rock.edge_obstacles.iter()).any(|o| point_in_polygon(at, o, false)));
     }
 
     /// Bad tiles are refused with their reason, and the previous tile is kept.
