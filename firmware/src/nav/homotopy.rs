@@ -18,8 +18,12 @@ use crate::config::nav::{
     HOMOTOPY_CORRIDOR_HALF_WIDTH_M, HOMOTOPY_LEG_MAX_M, HOMOTOPY_LEG_MIN_M, HOMOTOPY_MAX_LEGS,
 };
 use crate::plan::homotopy::axel::axel_model;
+use crate::config::homotopy::MAX_OBSTACLES;
 use crate::plan::homotopy::btm::Btm;
-use crate::plan::homotopy::dem::{DemDescent, DemError, DemParams, DemScratch, HeightTile, RouteError, WorldRoute};
+use crate::plan::homotopy::geo::polygons_overlap;
+use crate::plan::homotopy::dem::{
+    dop_merge, dop_polygon, dop_support, DemDescent, DemError, DemParams, DemScratch, HeightTile, RouteError, WorldRoute,
+};
 use crate::plan::homotopy::planes::HoldModel;
 use crate::plan::homotopy::plan::{preplan, HomotopyParams, PlanReport, Workspace};
 use crate::protocol::{GoalRequest, Point3, Pose, Quat, Waypoint};
@@ -32,7 +36,7 @@ use super::planning::{GoalRefusal, PlanSetup};
 /// bytes, so a board's static of it is in `.data`.
 pub struct HomotopyStorage {
     scratch: DemScratch,
-    btm: Btm,
+    pub(crate) btm: Btm,
     ws: Workspace,
     descent: Option<DemDescent>,
     model: Option<HoldModel>,
@@ -282,9 +286,10 @@ fn route_phase(
 
 /// Tanner et al. Alg. 3 on board (reduced): the leg to `blocked` found no path on the onboard map, so the tile was
 /// wrong there. A regular octagon of radius `HOMOTOPY_BLOCK_RADIUS_M` round it (unfolded) is added to the BTM (a
-/// local update, Tanner Lemma 1) and the route planned again from the root anchor with Alg. 1; the legs then start
-/// after the route segment nearest to the rover. The tether the rover already paid out is not a constraint of the
-/// new plan (Alg. 3's plan from the tether's end is not done).
+/// local update, Tanner Lemma 1; merged with the obstacles it overlaps into one 8-DOP round them all) and the route
+/// planned again from the root anchor with Alg. 1; the legs then start after the route segment nearest to the
+/// rover. The tether the rover already paid out is not a constraint of the new plan (Alg. 3's plan from the
+/// tether's end is not done).
 pub(crate) fn replan_around(
     h: &mut HomotopyGoal,
     tile: &HeightTile,
@@ -302,7 +307,27 @@ pub(crate) fn replan_around(
         let a = (2 * k + 1) as f64 * core::f64::consts::FRAC_PI_8;
         let _ = corners.push(crate::plan::homotopy::geo::pt(c.x + r * libm::cos(a), c.y + r * libm::sin(a)));
     }
-    if let Err(e) = store.btm.add_obstacle(&corners) {
+    // Where the region overlaps obstacles already in the BTM (a region blocked before, an obstacle of the tile),
+    // they become one 8-DOP round all of them (bigger obstacles are conservative). Bounded: each pass takes in one
+    // more obstacle.
+    let mut hull = dop_support(&corners);
+    let mut merged: heapless::Vec<u8, MAX_OBSTACLES> = heapless::Vec::new();
+    for _ in 0..MAX_OBSTACLES {
+        let poly = dop_polygon(&hull);
+        let hit = store.btm.obstacles().find(|(k, o)| !merged.contains(k) && polygons_overlap(&poly, &o.corners));
+        let Some((k, o)) = hit else { break };
+        dop_merge(&mut hull, &dop_support(&o.corners));
+        if merged.push(k).is_err() {
+            break;
+        }
+    }
+    let joined = if merged.is_empty() {
+        store.btm.add_obstacle(&corners)
+    } else {
+        log::info!("homotopy: the blocked region at ({}, {}) merges with {} obstacles", blocked[0], blocked[1], merged.len());
+        store.btm.merge_obstacles(&merged, &dop_polygon(&hull))
+    };
+    if let Err(e) = joined {
         log::warn!("homotopy: the blocked region at ({}, {}) cannot join the BTM: {e:?}", blocked[0], blocked[1]);
         return PhaseOutcome::Refused(GoalRefusal::NoRoute);
     }

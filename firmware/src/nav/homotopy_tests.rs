@@ -217,6 +217,41 @@ fn a_bad_upload_keeps_the_tile_and_the_route() {
     assert_eq!(nav.homotopy_route().unwrap().tether_length_m, route_len);
 }
 
+/// A second blocked region that overlaps the first (the detour's first leg fails too, its goal within two block
+/// radii of the first blocked goal) merges with it into one obstacle and the route is planned again round both;
+/// before, the BTM refused the overlapping region (`OverlapsObstacle`) and the mission stopped.
+#[test]
+fn a_blocked_region_that_overlaps_an_earlier_one_merges_with_it() {
+    let mut nav = nav();
+    nav.configure(&configure(50.0)).unwrap();
+    upload(&mut nav, 1, &crater_z).unwrap();
+    scan_rim(&mut nav);
+    nav.goal(&goal(8.0, 3.0), Instant::from_micros(0));
+    run(&mut nav, 10);
+    assert_eq!(nav.drive_step(Instant::from_micros(10)), DriveStep::Replan);
+    let first = nav.homotopy_legs()[0];
+    let mut plan = PlanBuffer::new();
+    nav.homotopy_leg_failed(PlanState::NoSolutionWithinBudget, &mut plan).expect("the first global replan");
+    assert_eq!(nav.drive_step(Instant::from_micros(20)), DriveStep::Replan);
+    let second = nav.homotopy_legs()[0];
+    let apart = libm::hypotf(second[0] - first[0], second[1] - first[1]);
+    let r = crate::config::nav::HOMOTOPY_BLOCK_RADIUS_M as f32;
+    assert!(apart < 2.0 * r, "the test needs overlapping regions: {first:?} and {second:?} are {apart} m apart");
+    let obstacles = |nav: &TestNav| nav.global.global_ref().unwrap().btm.obstacles().count();
+    assert_eq!(obstacles(&nav), 1);
+    let p = nav.homotopy_leg_failed(PlanState::NoSolutionWithinBudget, &mut plan).expect("a second global replan");
+    assert!(matches!(p, PlanProgress::Finished { state: PlanState::ExactSolution, .. }), "{p:?}");
+    assert_eq!(nav.homotopy_stats().global_replans, 2);
+    assert_eq!(nav.homotopy_stats().global_replan_failures, 0);
+    assert_eq!(obstacles(&nav), 1, "the two regions are one obstacle");
+    for l in nav.homotopy_legs() {
+        for b in [first, second] {
+            let d = libm::hypotf(l[0] - b[0], l[1] - b[1]);
+            assert!(d >= 0.9, "leg goal {l:?} inside the blocked region round {b:?} ({d} m)");
+        }
+    }
+}
+
 /// Tanner et al. Alg. 3 on board (reduced): a leg whose ABIT* finds no path blocks its goal region in the BTM and
 /// the route is planned again, reported like the first (a new `Plan` of leg goals, none inside the blocked region),
 /// counted; the next drive step sets up the new route's first leg. The last leg is never blocked (it is the goal).

@@ -83,7 +83,9 @@
 //! - **Global replanning** (Tanner et al. Alg. 3, reduced): a leg other than the last whose ABIT* ends without a plan
 //!   the mission would drive (`NoSolutionWithinBudget`, or an approximate plan not allowed or short of
 //!   `MIN_APPROXIMATE_PROGRESS_M`) means the onboard map contradicts the tile there: a regular octagon of radius
-//!   `HOMOTOPY_BLOCK_RADIUS_M` (1 m) round the leg's goal joins the BTM (a local update) and the route is planned
+//!   `HOMOTOPY_BLOCK_RADIUS_M` (1 m) round the leg's goal joins the BTM (a local update; where it overlaps
+//!   obstacles already there, a region blocked before or a tile obstacle, they merge into one 8-DOP round all of
+//!   them, `Btm::merge_obstacles`) and the route is planned
 //!   again from the root anchor (Alg. 1), reported as a new route (`ExactSolution` and its `Plan`), its legs from
 //!   the rover on; at most `HOMOTOPY_MAX_GLOBAL_REPLANS` (3) per goal, counted with their one reason
 //!   ([`HomotopyStats::global_replans`], `global_replan_failures`) and logged. Not done: Alg. 3's plan from the

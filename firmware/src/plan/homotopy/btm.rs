@@ -495,7 +495,7 @@ impl Btm {
     /// position can simply be removed and replaced"). The new obstacle may get another slot.
     pub fn move_obstacle(&mut self, k: u8, corners: &[Pt]) -> Result<(u8, UpdateReport), BtmError> {
         // Validate against the others before touching anything.
-        let poly = self.validate_obstacle_except(corners, Some(k))?;
+        let poly = self.validate_obstacle_except(corners, &[k])?;
         let r1 = self.remove_obstacle(k)?;
         let (k2, r2) = self.add_obstacle(&poly)?;
         Ok((
@@ -508,15 +508,33 @@ impl Btm {
         ))
     }
 
+    /// Replaces obstacles `merged` by one obstacle `corners` that holds them (Tanner III-A: obstacles that came to
+    /// overlap are merged into one polygon), checked against the others before anything changes. Returns its slot.
+    pub fn merge_obstacles(&mut self, merged: &[u8], corners: &[Pt]) -> Result<(u8, UpdateReport), BtmError> {
+        let poly = self.validate_obstacle_except(corners, merged)?;
+        let mut total = UpdateReport { removed: 0, created: 0, region_vertices: 0 };
+        for &k in merged {
+            let r = self.remove_obstacle(k)?;
+            total.removed += r.removed;
+            total.created += r.created;
+            total.region_vertices += r.region_vertices;
+        }
+        let (k, r) = self.add_obstacle(&poly)?;
+        total.removed += r.removed;
+        total.created += r.created;
+        total.region_vertices += r.region_vertices;
+        Ok((k, total))
+    }
+
     /// Checks an obstacle polygon without adding it; returns it counter-clockwise.
     pub fn validate_obstacle(&self, corners: &[Pt]) -> Result<HVec<Pt, MAX_OBSTACLE_VERTICES>, BtmError> {
-        self.validate_obstacle_except(corners, None)
+        self.validate_obstacle_except(corners, &[])
     }
 
     fn validate_obstacle_except(
         &self,
         corners: &[Pt],
-        except: Option<u8>,
+        except: &[u8],
     ) -> Result<HVec<Pt, MAX_OBSTACLE_VERTICES>, BtmError> {
         use ObstacleReject as R;
         let rej = |r| Err(BtmError::InvalidObstacle(r));
@@ -546,7 +564,7 @@ impl Btm {
             return rej(R::OutsidePlane);
         }
         for (k, o) in self.obstacles() {
-            if Some(k) != except && polygons_overlap(&poly, &o.corners) {
+            if !except.contains(&k) && polygons_overlap(&poly, &o.corners) {
                 return rej(R::OverlapsObstacle(k));
             }
         }

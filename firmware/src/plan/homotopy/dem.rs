@@ -428,7 +428,18 @@ fn dop_overlap(a: &[f64; 8], b: &[f64; 8], gap: f64) -> bool {
     })
 }
 
-fn dop_merge(a: &mut [f64; 8], b: &[f64; 8]) {
+/// The 8-DOP support of `pts` (their extent along each of the eight directions).
+pub(crate) fn dop_support(pts: &[Pt]) -> [f64; 8] {
+    let mut h = [f64::MIN; 8];
+    for p in pts {
+        for (j, hj) in h.iter_mut().enumerate() {
+            *hj = hj.max(p.dot(dop_dir(j)));
+        }
+    }
+    h
+}
+
+pub(crate) fn dop_merge(a: &mut [f64; 8], b: &[f64; 8]) {
     for (x, y) in a.iter_mut().zip(b.iter()) {
         *x = x.max(*y);
     }
@@ -444,7 +455,8 @@ fn dop_gap(a: &[f64; 8], b: &[f64; 8]) -> f64 {
         .fold(f64::MIN, f64::max)
 }
 
-fn dop_polygon(h: &[f64; 8]) -> Octagon {
+/// The octagon of an 8-DOP support (coincident corners dropped).
+pub(crate) fn dop_polygon(h: &[f64; 8]) -> Octagon {
     let mut out = Octagon::new();
     for k in 0..8 {
         let (u, v) = (dop_dir(k), dop_dir((k + 1) % 8));
