@@ -217,11 +217,8 @@ fn a_bad_upload_keeps_the_tile_and_the_route() {
     assert_eq!(nav.homotopy_route().unwrap().tether_length_m, route_len);
 }
 
-/// A second blocked region that overlaps the first (the detour's first leg fails too, its goal within two block
-/// radii of the first blocked goal) merges with it into one obstacle and the route is planned again round both;
-/// before, the BTM refused the overlapping region (`OverlapsObstacle`) and the mission stopped.
-#[test]
-fn a_blocked_region_that_overlaps_an_earlier_one_merges_with_it() {
+/// A navigator with the crater's route planned (goal on the floor) and its first leg set up.
+fn first_leg_set_up() -> TestNav {
     let mut nav = nav();
     nav.configure(&configure(50.0)).unwrap();
     upload(&mut nav, 1, &crater_z).unwrap();
@@ -229,6 +226,15 @@ fn a_blocked_region_that_overlaps_an_earlier_one_merges_with_it() {
     nav.goal(&goal(8.0, 3.0), Instant::from_micros(0));
     run(&mut nav, 10);
     assert_eq!(nav.drive_step(Instant::from_micros(10)), DriveStep::Replan);
+    nav
+}
+
+/// A second blocked region that overlaps the first (the detour's first leg fails too, its goal within two block
+/// radii of the first blocked goal) merges with it into one obstacle and the route is planned again round both;
+/// before, the BTM refused the overlapping region (`OverlapsObstacle`) and the mission stopped.
+#[test]
+fn a_blocked_region_that_overlaps_an_earlier_one_merges_with_it() {
+    let mut nav = first_leg_set_up();
     let first = nav.homotopy_legs()[0];
     let mut plan = PlanBuffer::new();
     nav.homotopy_leg_failed(PlanState::NoSolutionWithinBudget, &mut plan).expect("the first global replan");
@@ -257,13 +263,7 @@ fn a_blocked_region_that_overlaps_an_earlier_one_merges_with_it() {
 /// counted; the next drive step sets up the new route's first leg. The last leg is never blocked (it is the goal).
 #[test]
 fn a_leg_without_a_path_blocks_its_region_and_the_route_is_planned_again() {
-    let mut nav = nav();
-    nav.configure(&configure(50.0)).unwrap();
-    upload(&mut nav, 1, &crater_z).unwrap();
-    scan_rim(&mut nav);
-    nav.goal(&goal(8.0, 3.0), Instant::from_micros(0));
-    run(&mut nav, 10);
-    assert_eq!(nav.drive_step(Instant::from_micros(10)), DriveStep::Replan);
+    let mut nav = first_leg_set_up();
     let blocked = nav.homotopy_legs()[0];
     let before = nav.homotopy_route().unwrap().tether_length_m;
     let mut plan = PlanBuffer::new();
