@@ -22,7 +22,8 @@ use crate::config::homotopy::MAX_OBSTACLES;
 use crate::plan::homotopy::btm::Btm;
 use crate::plan::homotopy::geo::polygons_overlap;
 use crate::plan::homotopy::dem::{
-    dop_merge, dop_polygon, dop_support, DemDescent, DemError, DemParams, DemScratch, HeightTile, RouteError, WorldRoute,
+    dop_merge, dop_polygon, dop_support, DemDescent, DemError, DemParams, DemScratch, HeightTile, RouteError,
+    WorldRoute,
 };
 use crate::plan::homotopy::planes::HoldModel;
 use crate::plan::homotopy::plan::{preplan, HomotopyParams, PlanReport, Workspace};
@@ -324,7 +325,8 @@ pub(crate) fn replan_around(
     let joined = if merged.is_empty() {
         store.btm.add_obstacle(&corners)
     } else {
-        log::info!("homotopy: the blocked region at ({}, {}) merges with {} obstacles", blocked[0], blocked[1], merged.len());
+        let n = merged.len();
+        log::info!("homotopy: the blocked region at ({}, {}) merges with {n} obstacles", blocked[0], blocked[1]);
         store.btm.merge_obstacles(&merged, &dop_polygon(&hull))
     };
     if let Err(e) = joined {

@@ -510,6 +510,8 @@ impl Btm {
 
     /// Replaces obstacles `merged` by one obstacle `corners` that holds them (Tanner III-A: obstacles that came to
     /// overlap are merged into one polygon), checked against the others before anything changes. Returns its slot.
+    /// An error after the check (an arena full, a degenerate region), like [`Self::move_obstacle`]'s, leaves a BTM
+    /// to be rebuilt.
     pub fn merge_obstacles(&mut self, merged: &[u8], corners: &[Pt]) -> Result<(u8, UpdateReport), BtmError> {
         let poly = self.validate_obstacle_except(corners, merged)?;
         let mut total = UpdateReport { removed: 0, created: 0, region_vertices: 0 };

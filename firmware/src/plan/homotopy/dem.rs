@@ -30,8 +30,9 @@
 //!    is hollow against its plane by more than `step_m` at the footprint's scale (its residual minus the mean
 //!    residual within 2 footprints, at most [`DEM_WINDOW_MAX`] posts: the smooth curvature a plane does not follow
 //!    is no obstacle; a rough patch shows up the same way; on a tile whose posts are more than 2 footprints apart
-//!    the residual is scaled by `2 footprint / spacing`, the share of it the wheels meet), or when its local normal is tilted more than
-//!    `max_tilt_rad` from every plane's (too steep; a post on a fold line carries both planes' slopes). 4-connected components become octagons (8-DOPs, directions k x 45 deg) around their
+//!    the residual is scaled by `2 footprint / spacing`, the share of it the wheels meet), or when its local
+//!    normal is tilted more than `max_tilt_rad` from every plane's (too steep; a post on a fold line carries both
+//!    planes' slopes). 4-connected components become octagons (8-DOPs, directions k x 45 deg) around their
 //!    unfolded cell corners grown by `footprint_m` (the support of the cells' hull plus the footprint in each
 //!    direction, so every obstacle cell and everything within the footprint of it is inside). Overlapping octagons
 //!    are merged (support-wise maximum); beyond [`MAX_DEM_OBSTACLES`] the closest pair is merged (bigger obstacles
@@ -1399,7 +1400,8 @@ mod tests {
                 for c in 0..cols {
                     let (x, y) = (c as f64 * R, r as f64 * R);
                     let wave = 0.6 * libm::sin(core::f64::consts::TAU * x / 16.0);
-                    let z = 40.0 - t * (100.0 - y.clamp(40.0, 100.0)) + if (40.0..=100.0).contains(&y) { wave } else { 0.0 };
+                    let on_wall = (40.0..=100.0).contains(&y);
+                    let z = 40.0 - t * (100.0 - y.clamp(40.0, 100.0)) + if on_wall { wave } else { 0.0 };
                     h.push((z + if block == Some((r, c)) { 3.0 } else { 0.0 }) as f32);
                 }
             }
@@ -1408,7 +1410,9 @@ mod tests {
             tile
         };
         let p = DemParams::for_rover(&RoverParams::AXEL, 0.4, 12.0);
-        let segment = |tile: &HeightTile| DemDescent::segment(tile, [60.0, 130.0], [60.0, 20.0], &p, &mut Box::new(DemScratch::new())).unwrap();
+        let segment = |tile: &HeightTile| {
+            DemDescent::segment(tile, [60.0, 130.0], [60.0, 20.0], &p, &mut Box::new(DemScratch::new())).unwrap()
+        };
         let smooth = segment(&tile(None));
         assert_eq!(smooth.planes.len(), 3);
         assert_eq!(smooth.blocked_posts, 0, "the undulation is no obstacle: {:?}", smooth.edge_obstacles);
