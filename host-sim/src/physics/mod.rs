@@ -27,8 +27,11 @@
 //! [`PhysicsJudge::place`]: `yaw` is the heading of the rolling direction, as the flight software's; the axle is
 //! horizontal across the frame's yaw that makes it so on the local ground ([`PhysicsJudge::frame_yaw`]) and rolled
 //! so both wheels rest at their own ground
-//! height (ray casts under each wheel, then each wheel's cylinder cast straight down onto the terrain, three
-//! rounds), [`PLACE_GAP_M`] (2 mm) above the first touch. The boom points at the anchor (inline, Paton IV-A) or
+//! height (ray casts under each wheel, then each wheel's cylinder cast straight down onto the terrain,
+//! [`PLACE_ROUNDS`] rounds), [`PLACE_GAP_M`] (2 mm) above the first touch. Where the rounds leave one wheel in
+//! the air (a wheel over a ledge's lip: the ground under its centre is far below where its rim rests), the rover is
+//! lowered level and pivoted about the wheel that touches first until the other touches (the roll bracketed in
+//! [`PLACE_PIVOT_STEP_DEG`] steps, then bisected); a pose with no such roll within 80 degrees is blocked. The boom points at the anchor (inline, Paton IV-A) or
 //! is swept from there in 1-degree steps (refined to 0.01 degrees) until it touches the terrain (resting); an
 //! inline boom that overlaps the terrain is raised in 1-degree steps until clear (at most 180). A pose whose
 //! wheels or body overlap the terrain after placement, or whose boom finds no clear angle, is
@@ -83,6 +86,17 @@ pub const WHEEL_MASS_KG: f64 = 10.0;
 pub const BOOM_RADIUS_M: f64 = 0.03;
 /// Gap above the terrain at which a pose is placed, metres.
 pub const PLACE_GAP_M: f64 = 0.002;
+/// Rounds of re-rolling the axle through both wheels' touch heights when placing a pose.
+pub const PLACE_ROUNDS: usize = 4;
+/// The wheels rest together when their drops differ by at most this after the rounds, metres; otherwise the
+/// placement pivots from level ([`PLACE_PIVOT_STEP_DEG`]).
+pub const PLACE_ROLL_TOLERANCE_M: f64 = 1e-3;
+/// Roll step of the pivot from level that brackets the roll at which both wheels touch, degrees.
+pub const PLACE_PIVOT_STEP_DEG: f64 = 2.0;
+/// Steps of the pivot: 40 x 2 = 80 degrees either way at most.
+pub const PLACE_PIVOT_STEPS: usize = 40;
+/// Bisections of the bracketed roll: 2 degrees / 2^16, about 3e-5 degrees.
+pub const PLACE_PIVOT_BISECTIONS: usize = 16;
 /// Simulated seconds of the hold test.
 pub const HOLD_SECONDS: f64 = 3.0;
 /// Simulation steps per second.
@@ -408,12 +422,43 @@ impl PhysicsJudge {
             };
             Some((rot, ay, drop(1.0)?, drop(-1.0)?))
         };
-        for _ in 0..4 {
+        for _ in 0..PLACE_ROUNDS {
             let (_, ay, dl, dr) = touch(roll)?;
             let (hl, hr) = (z_start + ht * ay.z - dl, z_start - ht * ay.z - dr);
             roll = ((hl - hr) / (2.0 * ht)).clamp(-0.99, 0.99).asin();
         }
-        let (rot, _, dl, dr) = touch(roll)?;
+        let (mut rot, _, mut dl, mut dr) = touch(roll)?;
+        if (dl - dr).abs() > PLACE_ROLL_TOLERANCE_M {
+            // The rounds did not bring both wheels down (a wheel over an edge: the ground under its centre is far
+            // below where its rim rests). Lower the rover level and pivot it about the wheel that touches first
+            // until the other touches: the first root of `dl - dr` from roll 0, which grows with the roll.
+            let gap = |roll: f64| touch(roll).map(|(_, _, dl, dr)| dl - dr);
+            let g0 = gap(0.0)?;
+            let dir = if g0 > 0.0 { -1.0 } else { 1.0 };
+            let step = PLACE_PIVOT_STEP_DEG.to_radians();
+            let (mut a, mut ga) = (0.0, g0);
+            let mut b = None;
+            for k in 1..=PLACE_PIVOT_STEPS {
+                let r = dir * k as f64 * step;
+                let gr = gap(r)?;
+                if (gr > 0.0) != (ga > 0.0) {
+                    b = Some(r);
+                    break;
+                }
+                (a, ga) = (r, gr);
+            }
+            let mut b = b?;
+            for _ in 0..PLACE_PIVOT_BISECTIONS {
+                let m = 0.5 * (a + b);
+                let gm = gap(m)?;
+                if (gm > 0.0) == (ga > 0.0) {
+                    (a, ga) = (m, gm);
+                } else {
+                    b = m;
+                }
+            }
+            (rot, _, dl, dr) = touch(0.5 * (a + b))?;
+        }
         let axle = Vector::new(pose.x, pose.y, z_start - dl.min(dr) + PLACE_GAP_M);
         let body_shape = Cylinder::new(ht - 0.5 * WHEEL_WIDTH_M - 0.01, f64::from(self.rover.body_radius_m));
         if self.terrain.intersects(&Pose::from_parts(axle, rot), &body_shape) {

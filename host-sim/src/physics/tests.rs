@@ -161,3 +161,27 @@ fn the_rover_is_placed_on_a_dem_rendering_at_every_post() {
         assert!((z - 4.35).abs() < 0.01, "x = {x}: axle at z = {z}");
     }
 }
+
+#[test]
+fn a_rover_straddling_the_lip_rests_on_both_wheels() {
+    // Axle across the lip (heading along y): the -x wheel on the top, the +x wheel hanging against the 55-degree
+    // face. The ground under the hanging wheel's centre is 1.2 m below the top, so re-rolling through the heights
+    // under the wheel centres clamps the axle at 82 degrees with one wheel in the air; the pivot from level rests
+    // the hanging wheel's rim on the face.
+    let w = LedgeWorld::new();
+    let j = judge(&w);
+    let r = f64::from(RoverParams::AXEL.wheel_radius_m);
+    let pl = j.place(GroundPose { x: 0.35, y: 0.0, yaw: -core::f64::consts::FRAC_PI_2 }, [-6.4, 0.0, 6.35], BoomSetting::Inline)
+        .expect("placed");
+    let tilt = pl.axle_dir[2].abs().asin().to_degrees();
+    assert!((20.0..70.0).contains(&tilt), "axle tilt {tilt:.1} degrees: {pl:?}");
+    // both wheels touch: each wheel's cylinder, cast down from the placed pose, meets the terrain within the gap
+    let rot = PhysicsJudge::rotation(pl.frame_yaw, pl.axle_dir[2].asin());
+    let ht = 0.5 * f64::from(RoverParams::AXEL.track_m);
+    for side in [1.0, -1.0] {
+        let at = v3(pl.axle) + rot * Vector::new(0.0, side * ht, 0.0);
+        let drop = j.terrain().cast_shape(&Pose::from_parts(at, rot), j.wheel_shape().as_ref(), [0.0, 0.0, -1.0], 1.0);
+        let drop = drop.expect("ground under the wheel");
+        assert!(drop <= 2.0 * PLACE_GAP_M + 1e-6, "wheel {side}: {drop:.4} m above the terrain (r {r})");
+    }
+}
