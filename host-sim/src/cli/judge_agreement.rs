@@ -105,6 +105,8 @@ pub struct PoseRecord {
     pub physics: PhysicsVerdict,
     /// Physics: largest slide, metres.
     pub slide_m: f64,
+    /// Physics: the axle centre where the judge set the rover down (`None`: it could not be placed).
+    pub physics_axle: Option<[f64; 3]>,
 }
 
 /// A 3 x 4 confusion matrix: planner (stable, unstable, no settle) x physics (holds, falls, blocked, no tether).
@@ -265,7 +267,11 @@ pub fn run(a: &JudgeAgreementArgs) -> Result<Agreement, String> {
         let pose = match s {
             Some(s) => {
                 let a = s.axle();
-                GroundPose { x: f64::from(a.x), y: f64::from(a.y), yaw: f64::from(s.heading()) }
+                let (x, y) = (f64::from(a.x), f64::from(a.y));
+                // handed over by its axle: a heading alone names another pose where the ground bends under it
+                let axle = s.settled.pose.rotation * firmware::geom::Vec3::y();
+                let yaw = judge.heading_for_axle(x, y, [axle.x, axle.y, axle.z].map(f64::from));
+                GroundPose { x, y, yaw: yaw.unwrap_or(f64::from(s.heading())) }
             }
             None => GroundPose { x, y, yaw },
         };
@@ -277,8 +283,9 @@ pub fn run(a: &JudgeAgreementArgs) -> Result<Agreement, String> {
             let Some(t) = &tether else { break };
             anchor = t.last_anchor(&edges);
         }
+        let physics_axle = judge.axle_at(pose);
         let (physics, slide) = match &tether {
-            _ if judge.axle_at(pose).is_none() => (PhysicsVerdict::Blocked, 0.0),
+            _ if physics_axle.is_none() => (PhysicsVerdict::Blocked, 0.0),
             None => (PhysicsVerdict::NoTether, 0.0),
             Some(t) => {
                 let v = judge.hold(pose, &TetherSpec { anchor: t.last_anchor(&edges), free_length_m: None });
@@ -306,7 +313,7 @@ pub fn run(a: &JudgeAgreementArgs) -> Result<Agreement, String> {
         }
         out.map.add(m, physics);
         out.exact.add(e, physics);
-        out.poses.push(PoseRecord { sample: [x, y, yaw], map: m, exact: e, exact_margin: margin, physics, slide_m: slide });
+        out.poses.push(PoseRecord { sample: [x, y, yaw], map: m, exact: e, exact_margin: margin, physics, slide_m: slide, physics_axle });
     }
     if let Some(p) = &a.out {
         let json = serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?;
@@ -363,9 +370,18 @@ mod tests {
         };
         let a = run(&args).unwrap();
         assert_eq!(a.poses.len(), 6);
+        // the same poses on the bare wall, as the judge would see them without the rock
+        let sc = crate::scenario::load(&crate::cli::campaign::scenario_file("mission_corridor_rock")).unwrap();
+        let bare = PhysicsJudge::new(&*sc.build_world().unwrap(), RoverParams::AXEL).unwrap();
         for p in &a.poses {
             assert_eq!(p.exact, PlannerVerdict::NoSettle, "{p:?}");
-            assert_ne!(p.physics, PhysicsVerdict::Holds, "{p:?}");
+            // the rock blocks the rover or lifts it (a wheel perched on it), never the bare wall's pose
+            let [x, y, yaw] = p.sample;
+            let on_wall = bare.axle_at(GroundPose { x, y, yaw }).expect("the bare wall places every pose");
+            match p.physics_axle {
+                None => assert_eq!(p.physics, PhysicsVerdict::Blocked, "{p:?}"),
+                Some(axle) => assert!(axle[2] > on_wall[2] + 0.05, "{p:?} against the bare wall's {on_wall:?}"),
+            }
         }
     }
 }

@@ -97,6 +97,8 @@ pub const PLACE_PIVOT_STEP_DEG: f64 = 2.0;
 pub const PLACE_PIVOT_STEPS: usize = 40;
 /// Bisections of the bracketed roll: 2 degrees / 2^16, about 3e-5 degrees.
 pub const PLACE_PIVOT_BISECTIONS: usize = 16;
+/// Bisections of [`PhysicsJudge::heading_for_axle`]: 180 degrees / 2^30, far below a millidegree.
+pub const HEADING_BISECTIONS: usize = 30;
 /// Simulated seconds of the hold test.
 pub const HOLD_SECONDS: f64 = 3.0;
 /// Simulation steps per second.
@@ -381,6 +383,35 @@ impl PhysicsJudge {
             return pose.yaw;
         }
         (-a.x).atan2(a.y)
+    }
+
+    /// The heading (as [`GroundPose::yaw`]) whose frame ([`Self::frame_yaw`]) lays the axle's horizontal part
+    /// along `axle` (a world direction; only its horizontal part counts) at `(x, y)`: a pose handed over by its
+    /// axle, so the judge sets the rover in the same vertical plane as whoever chose the pose. Where the ground
+    /// is not one plane under the rover (straddling a lip), the rolling heading of two placements can differ by
+    /// tens of degrees for the same axle, so a heading alone does not name the same pose. Bisection of the
+    /// wrapped difference within 90 degrees either side of the axle's own normal; `None` if `axle` is vertical.
+    pub fn heading_for_axle(&self, x: f64, y: f64, axle: P3) -> Option<f64> {
+        if axle[0].hypot(axle[1]) < 1e-9 {
+            return None;
+        }
+        let target = (-axle[0]).atan2(axle[1]);
+        let wrap = |a: f64| (a + core::f64::consts::PI).rem_euclid(core::f64::consts::TAU) - core::f64::consts::PI;
+        let miss = |h: f64| wrap(self.frame_yaw(GroundPose { x, y, yaw: h }) - target);
+        let half = core::f64::consts::FRAC_PI_2;
+        let (mut lo, mut hi) = (target - half, target + half);
+        if miss(lo) > 0.0 || miss(hi) < 0.0 {
+            return Some(target);
+        }
+        for _ in 0..HEADING_BISECTIONS {
+            let m = 0.5 * (lo + hi);
+            if miss(m) <= 0.0 {
+                lo = m;
+            } else {
+                hi = m;
+            }
+        }
+        Some(wrap(0.5 * (lo + hi)))
     }
 
     /// The ground's upward normal under `(x, y)`: central differences of the terrain heights [`NORMAL_BASE_M`]
