@@ -1194,8 +1194,8 @@ mod tests {
         // on a plane of any slope, at any yaw, both rims lie on it: line contacts with the rim's moments
         for slope_deg in [0.0f32, 30.0, 55.0] {
             for yaw in [0.0f32, 1.0, 2.0] {
-                let SettleOutcome::Settled(s) = settle(&Plane::new(slope_deg.to_radians()), &Vec3::zeros(), yaw, &params)
-                else {
+                let plane = Plane::new(slope_deg.to_radians());
+                let SettleOutcome::Settled(s) = settle(&plane, &Vec3::zeros(), yaw, &params) else {
                     panic!("no settle at slope {slope_deg} yaw {yaw}");
                 };
                 assert_eq!(moments(&s), [params.wheel_mu_m; 2], "slope {slope_deg} yaw {yaw}");

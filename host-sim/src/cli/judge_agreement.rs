@@ -7,8 +7,8 @@
 //!   `TetherSpace::settle_state` then `stable_with` (the LP with the planner's minimum margin) with the anchor
 //!   history root + the true tether's contacts; verdicts *stable*, *unstable*, *no settle*;
 //! - the **physics judge** at the planner's settled pose (axle x, y and the axle's direction, converted by
-//!   `PhysicsJudge::heading_for_axle`; the yaw itself where the planner does not settle), with the true tether ([`crate::truth::taut`]) to the boom tip: *holds*, *falls*,
-//!   *blocked* (cannot be placed), or *no tether*.
+//!   `PhysicsJudge::heading_for_axle`; the yaw itself where the planner does not settle), with the true tether
+//!   ([`crate::truth::taut`]) to the boom tip: *holds*, *falls*, *blocked* (cannot be placed), or *no tether*.
 //!
 //! Output: a confusion matrix per field, the count of planner-stable poses that fall (must be 0 for poses whose
 //! margin is at least the planner's minimum margin: `stable` means exactly that), how conservative the planner is

@@ -31,11 +31,11 @@
 //! [`PLACE_ROUNDS`] rounds), [`PLACE_GAP_M`] (2 mm) above the first touch. Where the rounds leave one wheel in
 //! the air (a wheel over a ledge's lip: the ground under its centre is far below where its rim rests), the rover is
 //! lowered level and pivoted about the wheel that touches first until the other touches (the roll bracketed in
-//! [`PLACE_PIVOT_STEP_DEG`] steps, then bisected); a pose with no such roll within 80 degrees is blocked. The boom points at the anchor (inline, Paton IV-A) or
-//! is swept from there in 1-degree steps (refined to 0.01 degrees) until it touches the terrain (resting); an
-//! inline boom that overlaps the terrain is raised in 1-degree steps until clear (at most 180). A pose whose
-//! wheels or body overlap the terrain after placement, or whose boom finds no clear angle, is
-//! [`HoldOutcome::Blocked`].
+//! [`PLACE_PIVOT_STEP_DEG`] steps, then bisected); a pose with no such roll within 80 degrees is blocked. The boom
+//! points at the anchor (inline, Paton IV-A) or is swept from there in 1-degree steps (refined to 0.01 degrees)
+//! until it touches the terrain (resting); an inline boom that overlaps the terrain is raised in 1-degree steps
+//! until clear (at most 180). A pose whose wheels or body overlap the terrain after placement, or whose boom finds
+//! no clear angle, is [`HoldOutcome::Blocked`].
 //!
 //! # Hold test ([`PhysicsJudge::hold`])
 //! The rover chooses its boom angle (as the planner tries inline and in contact): the boom settings of

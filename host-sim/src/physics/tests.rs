@@ -171,8 +171,8 @@ fn a_rover_straddling_the_lip_rests_on_both_wheels() {
     let w = LedgeWorld::new();
     let j = judge(&w);
     let r = f64::from(RoverParams::AXEL.wheel_radius_m);
-    let pl = j.place(GroundPose { x: 0.35, y: 0.0, yaw: -core::f64::consts::FRAC_PI_2 }, [-6.4, 0.0, 6.35], BoomSetting::Inline)
-        .expect("placed");
+    let pose = GroundPose { x: 0.35, y: 0.0, yaw: -core::f64::consts::FRAC_PI_2 };
+    let pl = j.place(pose, [-6.4, 0.0, 6.35], BoomSetting::Inline).expect("placed");
     let tilt = pl.axle_dir[2].abs().asin().to_degrees();
     assert!((20.0..70.0).contains(&tilt), "axle tilt {tilt:.1} degrees: {pl:?}");
     // both wheels touch: each wheel's cylinder, cast down from the placed pose, meets the terrain within the gap
