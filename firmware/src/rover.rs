@@ -652,6 +652,19 @@ fn boom_entry_contact(
     None
 }
 
+/// Whether a wheel touches along its whole width (a line contact, which carries moments) rather than on one rim
+/// edge (a point, which carries none): the wheel's far edge, `wheel_width_m` along the `axle` from the touching
+/// one, stands off the contact plane (unit `normal`) by `wheel_width_m tan(tilt)` (`tilt` the axle's angle to the
+/// plane), and lies on it when that is within `contact_threshold_m`, the settle's own test of a contact. A wheel
+/// tilted against a face (straddling a ledge's lip with the other wheel on the top) touches on an edge; the
+/// physics judge's rigid cylinder then slid where the line's moment had held the planner's pose
+/// (`host-sim/doc/physics_judge.md`).
+fn rim_lies_flat(normal: &Vec3, axle: &Vec3, params: &RoverParams) -> bool {
+    let sin = libm::fabsf(normal.dot(axle)).min(1.0);
+    let cos = libm::sqrtf(1.0 - sin * sin);
+    params.wheel_width_m * sin <= params.contact_threshold_m * cos
+}
+
 /// The static-stability problem (section IV-C, Fig. 6) of a settled pose with the boom at `boom_angle`, the tether
 /// pulling from the boom tip towards `last_anchor` (`None`: slack tether), and an optional boom ground contact.
 pub fn stability_problem(
@@ -662,9 +675,15 @@ pub fn stability_problem(
     params: &RoverParams,
 ) -> StabilityProblem {
     let forward = settled.pose.rotation * Vec3::x();
+    let axle = settled.pose.rotation * Vec3::y();
     let mut contacts = heapless::Vec::new();
     for w in &settled.wheels {
-        let _ = contacts.push(Contact::line(w.point, w.normal, forward, params.wheel_mu, params.wheel_mu_m));
+        let c = if rim_lies_flat(&w.normal, &axle, params) {
+            Contact::line(w.point, w.normal, forward, params.wheel_mu, params.wheel_mu_m)
+        } else {
+            Contact::new(w.point, w.normal, forward, params.wheel_mu, 0.0)
+        };
+        let _ = contacts.push(c);
     }
     if let Some(b) = boom_contact {
         let _ = contacts.push(Contact::tip(b.point, b.normal, forward, params.boom_mu));
@@ -1163,6 +1182,34 @@ mod tests {
             }
         }
         assert!(on_edge >= 4, "only {on_edge} wheels rested on the edge; the test no longer exercises it");
+    }
+
+    #[test]
+    fn a_wheel_tilted_against_its_face_is_a_point_contact() {
+        let params = RoverParams::AXEL;
+        let moments = |s: &SettledPose| {
+            let p = stability_problem(s, 0.0, None, None, &params);
+            [p.contacts[0].mu_m, p.contacts[1].mu_m]
+        };
+        // on a plane of any slope, at any yaw, both rims lie on it: line contacts with the rim's moments
+        for slope_deg in [0.0f32, 30.0, 55.0] {
+            for yaw in [0.0f32, 1.0, 2.0] {
+                let plane = Plane::new(slope_deg.to_radians());
+                let SettleOutcome::Settled(s) = settle(&plane, &Vec3::zeros(), yaw, &params) else {
+                    panic!("no settle at slope {slope_deg} yaw {yaw}");
+                };
+                assert_eq!(moments(&s), [params.wheel_mu_m; 2], "slope {slope_deg} yaw {yaw}");
+            }
+        }
+        // axle across the lip: one wheel on the top, the other hanging against the 55-degree face; the axle
+        // tilts tens of degrees, so each wheel meets its face on one rim edge: points, no moments
+        let SettleOutcome::Settled(s) = settle(&Lip, &Vec3::new(0.3, 0.0, 0.0), core::f32::consts::FRAC_PI_2, &params)
+        else {
+            panic!("no settle across the lip");
+        };
+        let axle = s.pose.rotation * Vec3::y();
+        assert!(libm::fabsf(axle.z) > 0.3, "the axle should tilt across the lip: {axle:?}");
+        assert_eq!(moments(&s), [0.0; 2], "axle {axle:?}");
     }
 
     #[test]

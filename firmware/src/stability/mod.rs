@@ -12,9 +12,12 @@
 //! ground along a line parallel to the axle (contact-frame y), which carries moments about the rolling direction
 //! (its width) and the normal but none about the axle, so `M_y = 0` (eq. 5 with `mu_m = 0`). Paton's patch moment
 //! about the axle is the resistance of grousers dug into soil, which rigid wheels on rock do not have; poses the
-//! planner held only by it slid in the physics judge (`host-sim/doc/physics_judge.md`). The tether pulls at the exit point `r_t` along the unit direction to the last
-//! anchor with tension `0 <= T <= T_max` (a slack tether has `T = 0`). Force (7) and moment (8) balance include both
-//! body masses `m_1 g`, `m_2 g` at their centres of mass `r_1`, `r_2`. Moments are taken about the combined centre
+//! planner held only by it slid in the physics judge (`host-sim/doc/physics_judge.md`). A wheel whose axle is
+//! tilted against its contact plane touches it on one rim edge, a point: `rover::stability_problem` gives it no
+//! moments (the rim lies flat when its far edge is within the settle's contact threshold). The tether pulls at
+//! the exit point `r_t` along the unit direction to the last anchor with tension `0 <= T <= T_max` (a slack
+//! tether has `T = 0`). Force (7) and moment (8) balance include both body masses `m_1 g`, `m_2 g` at their
+//! centres of mass `r_1`, `r_2`. Moments are taken about the combined centre
 //! of mass; all forces are divided by the total weight `W = (m_1 + m_2) |g|`, so the numbers are O(1).
 //!
 //! # Friction: an octagon inscribed in Coulomb's cone
