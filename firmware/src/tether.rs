@@ -22,8 +22,9 @@
 //! surface (a pole) is caught as soon as it cuts in beyond the exclusion: successive anchors on a cylinder of radius
 //! `r` are then about `2 asin(PIVOT_EXCLUSION_M / 2r)` apart (0.4 rad on the 0.25 m test pole... see the tests).
 //! On a field that declares itself known everywhere and `L`-Lipschitz (`DistanceField::lipschitz_bound`: an exact
-//! world, not the onboard map), a sample at distance `d` proves the samples within `(d - c) / L` of it clear, and
-//! they are not queried: the same samples block, so the same anchors, with a fraction of the queries.
+//! world, not the onboard map), a sample at distance `d` proves the points within `(d - c) / L` of it clear: the
+//! samples of the same line and of the next sweep lines (which differ by a fraction of the motion) that lie there
+//! are not queried. The same samples block, so the same anchors, with a fraction of the queries.
 //!
 //! # Detachment (IV-B b, Fig. 5)
 //! Frame `F_d` at anchor `a_N`: `b` = unit(`a_N - a_{N-1}`) (the incoming tether), `z` = the anchor's gradient made
@@ -148,21 +149,52 @@ fn lerp(a: &Vec3, b: &Vec3, t: Real) -> Vec3 {
     a * (1.0 - t) + b * t
 }
 
+/// Samples on one sweep line: the near-pivot ones, then the uniform ones.
+const LINE_SAMPLES: usize = (NEAR_PIVOT_SAMPLES + SWEEP_SAMPLES_ALONG) as usize;
+
+/// What the sweep lines of one prediction have learnt on a Lipschitz field (`DistanceField::lipschitz_bound`): for
+/// each sample of a line, by its index, a point queried and the distance there (the sample's own last query, or the
+/// query whose clearance covered it). A sample within `(d - c) / L` of its witness cannot be within the contact
+/// distance `c`: consecutive sweep lines share the pivot and differ by a fraction of the motion, so the line before
+/// proves most of a line's samples clear. Without a bound nothing is remembered and every sample is queried.
+struct SweepMemo {
+    lipschitz: Option<Real>,
+    /// (witness point, its distance); the distance is minus infinity where there is none.
+    witness: [(Vec3, Real); LINE_SAMPLES],
+}
+
+impl SweepMemo {
+    fn new(map: &impl DistanceField) -> Self {
+        SweepMemo {
+            lipschitz: map.lipschitz_bound().filter(|l| l.is_finite() && *l > 0.0),
+            witness: [(Vec3::zeros(), Real::NEG_INFINITY); LINE_SAMPLES],
+        }
+    }
+}
+
+/// The lower bound on the distance at `p` that a witness `(at, d)` gives on an `l`-Lipschitz field, shrunk by 0.1 %
+/// and 0.1 mm for `f32` rounding.
+fn witnessed(l: Real, (at, d): &(Vec3, Real), p: &Vec3) -> Real {
+    d - 1.001 * l * crate::geom::norm3(&(p - at)) - 1e-4
+}
+
 /// Closest-to-terrain sample on the sweep line `pivot -> end` (its line parameter `s`, gradient and distance), if
 /// any sample is an obstacle.
 fn blocked_line(
     map: &impl DistanceField,
     pivot: &Vec3,
     end: &Vec3,
+    memo: &mut SweepMemo,
     stats: &mut PredictStats,
 ) -> Result<Option<(Real, Vec3, Real)>, TetherError> {
     let len = crate::geom::norm3(&(end - pivot));
     let mut best: Option<(Real, Vec3, Real)> = None;
-    // on a Lipschitz field (see `DistanceField::lipschitz_bound`) the last sample queried clears a stretch of the
-    // line around it: (line parameter, half-width), shrunk by 0.1 % for rounding; samples inside it cannot be within
-    // the contact distance and are not queried (the same answer with fewer queries)
-    let lipschitz = map.lipschitz_bound().filter(|l| l.is_finite() && *l > 0.0);
-    let mut cleared: Option<(Real, Real)> = None;
+    // on a Lipschitz field the last sample queried clears a stretch of the line around it: (line parameter,
+    // half-width, the sample, its distance), shrunk by 0.1 % for rounding; samples inside it, and samples whose
+    // witness from an earlier line proves them clear, cannot be within the contact distance and are not queried
+    // (the same answer with fewer queries)
+    let lipschitz = memo.lipschitz;
+    let mut cleared: Option<(Real, Real, Vec3, Real)> = None;
     let near = NEAR_PIVOT_SAMPLES;
     for k in 1..=(SWEEP_SAMPLES_ALONG + near) {
         // the first `near` samples cover [PIVOT_EXCLUSION_M, NEAR_PIVOT_RANGE_M] from the pivot finely (a tether
@@ -176,10 +208,17 @@ fn blocked_line(
         if s * len < PIVOT_EXCLUSION_M || s > 1.0 {
             continue;
         }
-        if cleared.is_some_and(|(sc, half)| libm::fabsf(s - sc) * len < half) {
-            continue;
-        }
         let p = lerp(pivot, end, s);
+        let witness = memo.witness.get_mut((k - 1) as usize);
+        if let (Some(l), Some(w)) = (lipschitz, witness) {
+            if witnessed(l, w, &p) > TETHER_CONTACT_DISTANCE_M {
+                continue;
+            }
+            if let Some((_, _, at, d)) = cleared.filter(|(sc, half, _, _)| libm::fabsf(s - sc) * len < *half) {
+                *w = (at, d);
+                continue;
+            }
+        }
         stats.queries += 1;
         match map.query(&p) {
             DistanceQuery::Unknown => return Err(TetherError::UnknownSpace),
@@ -188,7 +227,10 @@ fn blocked_line(
                     best = Some((s, gradient, distance));
                 }
                 if let Some(l) = lipschitz {
-                    cleared = Some((s, 0.999 * (distance - TETHER_CONTACT_DISTANCE_M) / l));
+                    cleared = Some((s, 0.999 * (distance - TETHER_CONTACT_DISTANCE_M) / l, p, distance));
+                    if let Some(w) = memo.witness.get_mut((k - 1) as usize) {
+                        *w = (p, distance);
+                    }
                 }
             }
         }
@@ -203,7 +245,7 @@ pub fn tether_touches(map: &impl DistanceField, pivot: &Vec3, end: &Vec3) -> Res
         return Err(TetherError::InvalidInput);
     }
     let mut stats = PredictStats::default();
-    Ok(blocked_line(map, pivot, end, &mut stats)?.is_some())
+    Ok(blocked_line(map, pivot, end, &mut SweepMemo::new(map), &mut stats)?.is_some())
 }
 
 /// Attachment search (IV-B a) for the tether pivoting about `pivot` while its end moves `x0 -> x1`. New anchors are
@@ -216,6 +258,7 @@ pub fn attach_anchors(
     out: &mut AnchorHistory,
     stats: &mut PredictStats,
 ) -> Result<u32, TetherError> {
+    let mut memo = SweepMemo::new(map);
     let mut piv = pivot.point;
     let mut start = *x0;
     for added in 0..MAX_ATTACH_PER_SWEEP as u32 {
@@ -224,7 +267,7 @@ pub fn attach_anchors(
         let mut t_prev = 0.0;
         for k in 0..=SWEEP_SAMPLES_ACROSS {
             let t = k as Real / SWEEP_SAMPLES_ACROSS as Real;
-            if blocked_line(map, &piv, &lerp(&start, x1, t), stats)?.is_some() {
+            if blocked_line(map, &piv, &lerp(&start, x1, t), &mut memo, stats)?.is_some() {
                 first = Some((t_prev, t));
                 break;
             }
@@ -239,7 +282,7 @@ pub fn attach_anchors(
         } else {
             for _ in 0..SWEEP_REFINE_STEPS {
                 let mid = 0.5 * (lo + hi);
-                if blocked_line(map, &piv, &lerp(&start, x1, mid), stats)?.is_some() {
+                if blocked_line(map, &piv, &lerp(&start, x1, mid), &mut memo, stats)?.is_some() {
                     hi = mid;
                 } else {
                     lo = mid;
@@ -248,7 +291,7 @@ pub fn attach_anchors(
         }
         let _ = lo;
         let end = lerp(&start, x1, hi);
-        let Some((s_best, g, d)) = blocked_line(map, &piv, &end, stats)? else {
+        let Some((s_best, g, d)) = blocked_line(map, &piv, &end, &mut memo, stats)? else {
             return Ok(added);
         };
         // refine the contact along the line: ternary search for the distance minimum between the neighbours
