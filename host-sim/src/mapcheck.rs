@@ -224,7 +224,7 @@ pub fn build_map(world: &dyn World, poses: &[Pose3], cfg: &CheckConfig, map: &mu
             eprintln!("scan {k}: {cpu:.1} ms CPU {e:?} blocks {}", map.blocks_used());
         }
         if std::env::var_os("TETHERBOT_ESDF_DIGEST").is_some() {
-            eprintln!("scan {k}: esdf digest {:016x}", esdf_digest(map));
+            eprintln!("scan {k}: esdf digest {:016x} tsdf digest {:016x}", esdf_digest(map), tsdf_digest(map));
         }
         if let Some(dir) = std::env::var_os("TETHERBOT_ESDF_DUMP") {
             let _ = std::fs::write(std::path::Path::new(&dir).join(format!("esdf_{k:03}.bin")), esdf_dump(map));
@@ -247,21 +247,26 @@ pub fn voxels_in_use<'m>(map: &'m Map<'_>) -> impl Iterator<Item = [i32; 3]> + '
     })
 }
 
+/// FNV-1a over the little-endian bytes of `words`.
+fn fnv1a(words: impl Iterator<Item = u32>) -> u64 {
+    words.flat_map(u32::to_le_bytes).fold(0xcbf2_9ce4_8422_2325, |h, b| (h ^ b as u64).wrapping_mul(0x0100_0000_01b3))
+}
+
 /// FNV-1a digest of every voxel's ESDF value and site distance (bit patterns) over the blocks in use, in slot
 /// order: two maps built by the same calls have the same digest exactly when their ESDFs are bit-identical
-/// (`TETHERBOT_ESDF_DIGEST=1 tetherbot map-check ...` prints it after every scan).
+/// (`TETHERBOT_ESDF_DIGEST=1 tetherbot map-check ...` prints it after every scan, with [`tsdf_digest`]).
 pub fn esdf_digest(map: &Map<'_>) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    let mut eat = |v: u32| {
-        for b in v.to_le_bytes() {
-            h = (h ^ b as u64).wrapping_mul(0x0100_0000_01b3);
-        }
-    };
-    for g in voxels_in_use(map) {
-        eat(map.esdf_voxel(g).map_or(u32::MAX, f32::to_bits));
-        eat(map.site_distance_voxels(g).map_or(u32::MAX, f32::to_bits));
-    }
-    h
+    fnv1a(voxels_in_use(map).flat_map(|g| {
+        [map.esdf_voxel(g).map_or(u32::MAX, f32::to_bits), map.site_distance_voxels(g).map_or(u32::MAX, f32::to_bits)]
+    }))
+}
+
+/// FNV-1a digest of every voxel's TSDF value and weight (bit patterns) over the blocks in use, in slot order, as
+/// [`esdf_digest`] for the ESDF: equal exactly when the integrations left bit-identical TSDFs.
+pub fn tsdf_digest(map: &Map<'_>) -> u64 {
+    fnv1a(voxels_in_use(map).flat_map(|g| {
+        map.tsdf_voxel(g).map_or([u32::MAX; 2], |(t, w)| [t.to_bits(), w.to_bits()])
+    }))
 }
 
 /// Every voxel of the blocks in use, slot order: coordinates (3 x i32), ESDF value and site distance (f32 bits,
