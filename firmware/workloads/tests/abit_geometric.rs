@@ -35,6 +35,10 @@ struct Run<const N: usize> {
     costs: StdVec<f64>,
 }
 
+// `Box::default()` builds the arena (1.5 MB at these capacities) on the stack before moving it: kept out of line
+// so that a test calling both this and `suspended_search` does not hold two arenas in one frame (the release build
+// inlined both into `a_batch_drawn_over_steps_is_the_batch_drawn_at_once` and overflowed the test thread's 2 MiB).
+#[inline(never)]
 fn run_with<const N: usize, const NV: usize, const NQ: usize>(
     p: &GeometricProblem<N>,
     seed: u64,
@@ -98,6 +102,7 @@ fn open_space_direct_edge_is_the_first_iteration() {
 /// The wall-gap problem `w2` on `seed` with `params`, the planner suspended and resumed on the same arena and
 /// generator after every `solve_until` call, which stops when `stop(counters at the call's start, counters)`, until
 /// 3000 iterations; returns the calls made, the counters, the best cost and the path.
+#[inline(never)] // one arena on the stack at a time (see `run_with`)
 fn suspended_search(
     w2: &GeometricProblem<2>,
     seed: u64,
