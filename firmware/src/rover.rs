@@ -73,7 +73,9 @@ use crate::config::rover::{
     RIM_REFINE_STEPS, SETTLE_MAX_ITERATIONS, SETTLE_ROLL_STEPS, WHEEL_CONTACT_POINTS, WHEEL_RIM_POINTS,
 };
 use crate::geom::{normalize3, Pose3, Real, Rot3, Vec3};
-use crate::map::{DistanceField, DistanceQuery};
+use crate::map::{
+    lipschitz_lower_bound, usable_lipschitz_bound, DistanceField, DistanceQuery, LIPSCHITZ_MARGIN_M, LIPSCHITZ_SLACK,
+};
 use crate::stability::{
     check_stability, check_stability_at_least, BodyMass, Contact, StabilityError, StabilityOutcome, StabilityProblem, TetherForce,
 };
@@ -187,15 +189,15 @@ impl GapMemo {
     fn new(map: &impl DistanceField, params: &RoverParams) -> Self {
         GapMemo {
             points: wheel_points(params),
-            lipschitz: map.lipschitz_bound().filter(|l| l.is_finite() && *l > 0.0),
+            lipschitz: usable_lipschitz_bound(map),
             at: [[Vec3::zeros(); WHEEL_CONTACT_POINTS]; 2],
             distance: [[Real::INFINITY; WHEEL_CONTACT_POINTS]; 2],
             nearest: [WHEEL_RIM_POINTS * 3 / 4; 2],
         }
     }
 
-    /// A lower bound on the distance at `q` of wheel `w`'s point `i`; minus infinity when nothing bounds it. Shrunk
-    /// by 0.1 % and 0.1 mm for `f32` rounding of the positions and distances.
+    /// A lower bound on the distance at `q` of wheel `w`'s point `i` ([`lipschitz_lower_bound`]); minus infinity when
+    /// nothing bounds it.
     fn lower_bound(&self, w: usize, i: usize, q: &Vec3) -> Real {
         let (Some(l), Some(d), Some(at)) =
             (self.lipschitz, self.distance.get(w).and_then(|d| d.get(i)), self.at.get(w).and_then(|a| a.get(i)))
@@ -205,7 +207,7 @@ impl GapMemo {
         if !d.is_finite() {
             return Real::NEG_INFINITY;
         }
-        d - 1.001 * l * crate::geom::norm3(&(q - at)) - 1e-4
+        lipschitz_lower_bound(l, *d, crate::geom::norm3(&(q - at)))
     }
 }
 
@@ -668,12 +670,13 @@ pub fn boom_swept_contact(
     let touch = params.contact_threshold_m * 2.0;
     // on a Lipschitz field (`DistanceField::lipschitz_bound`) a point of the boom `r` from the axle and `d` from the
     // terrain moves at most `r step` a step, so it cannot touch for the next `(d - touch) / (L r step)` steps: those
-    // steps are not queried (the same contact from fewer queries). Shrunk by 0.1 % and 0.1 mm for rounding.
-    let lipschitz = map.lipschitz_bound().filter(|l| l.is_finite() && *l > 0.0);
+    // steps are not queried (the same contact from fewer queries; the bound is `lipschitz_lower_bound`'s)
+    let lipschitz = usable_lipschitz_bound(map);
     let clear_steps = |d: Real, fraction: Real| -> u32 {
         match lipschitz {
             Some(l) => {
-                let steps = (d - touch - 1e-4) / (1.001 * l * fraction * params.boom_length_m * step);
+                let arc = fraction * params.boom_length_m * step;
+                let steps = (d - touch - LIPSCHITZ_MARGIN_M) / (LIPSCHITZ_SLACK * l * arc);
                 // the steps strictly inside the cleared arc (the last one may touch)
                 if steps.is_finite() && steps > 1.0 { (libm::ceilf(steps) as u32 - 1).min(BOOM_SWEEP_STEPS) } else { 0 }
             }

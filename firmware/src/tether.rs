@@ -166,16 +166,15 @@ struct SweepMemo {
 impl SweepMemo {
     fn new(map: &impl DistanceField) -> Self {
         SweepMemo {
-            lipschitz: map.lipschitz_bound().filter(|l| l.is_finite() && *l > 0.0),
+            lipschitz: crate::map::usable_lipschitz_bound(map),
             witness: [(Vec3::zeros(), Real::NEG_INFINITY); LINE_SAMPLES],
         }
     }
 }
 
-/// The lower bound on the distance at `p` that a witness `(at, d)` gives on an `l`-Lipschitz field, shrunk by 0.1 %
-/// and 0.1 mm for `f32` rounding.
+/// The lower bound on the distance at `p` that a witness `(at, d)` gives on an `l`-Lipschitz field.
 fn witnessed(l: Real, (at, d): &(Vec3, Real), p: &Vec3) -> Real {
-    d - 1.001 * l * crate::geom::norm3(&(p - at)) - 1e-4
+    crate::map::lipschitz_lower_bound(l, *d, crate::geom::norm3(&(p - at)))
 }
 
 /// Closest-to-terrain sample on the sweep line `pivot -> end` (its line parameter `s`, gradient and distance), if

@@ -103,6 +103,23 @@ pub trait DistanceField {
     }
 }
 
+/// `map`'s [`DistanceField::lipschitz_bound`] when it can be used (finite and positive), else `None`.
+pub fn usable_lipschitz_bound(map: &impl DistanceField) -> Option<Real> {
+    map.lipschitz_bound().filter(|l| l.is_finite() && *l > 0.0)
+}
+
+/// The slack of [`lipschitz_lower_bound`] for `f32` rounding: the bound `L` is taken 0.1 % larger.
+pub const LIPSCHITZ_SLACK: Real = 1.001;
+/// The margin of [`lipschitz_lower_bound`] for `f32` rounding of positions and distances: 0.1 mm.
+pub const LIPSCHITZ_MARGIN_M: Real = 1e-4;
+
+/// A lower bound on the distance at a point `moved` metres from one where it was `d`, on an `l`-Lipschitz field:
+/// `d - l moved`, shrunk by [`LIPSCHITZ_SLACK`] and [`LIPSCHITZ_MARGIN_M`]. The settle, the boom sweep and the
+/// tether's sweep lines skip the queries this proves cannot change their answers.
+pub fn lipschitz_lower_bound(l: Real, d: Real, moved: Real) -> Real {
+    d - LIPSCHITZ_SLACK * l * moved - LIPSCHITZ_MARGIN_M
+}
+
 /// A distance field whose unobserved space reads as free, [`UNOBSERVED_FREE_DISTANCE_M`] from any surface: for
 /// the tether's anchor prediction only, where the tether physically runs through space the sensor did not see
 /// (see `TetherSpaceParams::tether_through_unobserved`). Never for the rover's own footprint.
