@@ -80,7 +80,7 @@ pub struct EsdfOutcome {
 /// [`NO_SITE`].
 pub(crate) fn band_site(d: Real, band: Real, vs: Real) -> i8 {
     if libm::fabsf(d) < band {
-        (libm::roundf(d / vs * 100.0) as i32).clamp(-127, 127) as i8
+        crate::geom::round_i32(d / vs * 100.0).clamp(-127, 127) as i8
     } else {
         NO_SITE
     }

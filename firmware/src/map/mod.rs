@@ -514,7 +514,7 @@ impl<'a> Map<'a> {
     /// The voxel containing `p`.
     pub fn voxel_index(&self, p: &Vec3) -> VoxelIndex {
         let s = 1.0 / self.cfg.voxel_size;
-        [libm::floorf(p.x * s) as i32, libm::floorf(p.y * s) as i32, libm::floorf(p.z * s) as i32]
+        [crate::geom::floor_i32(p.x * s), crate::geom::floor_i32(p.y * s), crate::geom::floor_i32(p.z * s)]
     }
 
     /// Centre of voxel `g`, metres.
@@ -601,7 +601,7 @@ impl<'a> Map<'a> {
     pub(crate) fn quantize_tsdf(&self, sdf: Real) -> i16 {
         let t = self.cfg.truncation;
         let r = (crate::geom::clamp(sdf, -t, t) / t) * 32767.0;
-        libm::roundf(r) as i16
+        crate::geom::round_i32(r) as i16
     }
 
     pub(crate) fn dequantize_tsdf(&self, q: i16) -> Real {
@@ -610,7 +610,7 @@ impl<'a> Map<'a> {
 
     /// Site hysteresis in hundredths of a voxel.
     pub(crate) fn site_tolerance(&self) -> i32 {
-        libm::roundf(self.cfg.esdf_site_tolerance * 100.0) as i32
+        crate::geom::round_i32(self.cfg.esdf_site_tolerance * 100.0)
     }
 
     /// Bytes of storage per block (what the pool costs per allocated block, index share excluded).
@@ -624,7 +624,7 @@ pub(crate) const WEIGHT_SCALE: Real = 64.0;
 
 pub(crate) fn quantize_weight(w: Real, max_weight: Real) -> u16 {
     let w = if w.is_finite() { crate::geom::clamp(w, 0.0, max_weight) } else { 0.0 };
-    libm::roundf(w * WEIGHT_SCALE) as u16
+    crate::geom::round_i32(w * WEIGHT_SCALE).clamp(0, u16::MAX as i32) as u16
 }
 
 #[cfg(test)]

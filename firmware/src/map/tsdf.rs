@@ -10,7 +10,7 @@ use super::{
     cell_bit, local_index, quantize_weight, split, Map, MapError, Site, FLAG_TSDF_DIRTY, NO_SITE, WEIGHT_SCALE,
 };
 use crate::config::map::{MAX_VOXEL_COORD, MIN_INCIDENCE_COSINE};
-use crate::geom::{norm3, Pose3, Real, Vec3};
+use crate::geom::{floor_i32, norm3, round_i32, Pose3, Real, Vec3};
 
 /// What one call of [`Map::integrate_points`] did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -43,6 +43,7 @@ impl Map<'_> {
         // NaN is not "beyond" (it fails the comparison) and is rejected below as not finite; infinity is beyond.
         let beyond = |q: &Vec3| q.iter().any(|c| (c * inv).abs() > MAX_VOXEL_COORD);
         let origin_beyond = beyond(&origin);
+        let k = VoxelUpdate::new(self);
         for p in points {
             let pw = sensor_pose.transform_point(&(*p).into()).coords;
             if origin_beyond || beyond(&pw) {
@@ -57,13 +58,13 @@ impl Map<'_> {
                 continue;
             }
             let dir = v / depth;
-            self.integrate_ray(&origin, &dir, depth, &mut out);
+            self.integrate_ray(&k, &origin, &dir, depth, &mut out);
             out.points_integrated += 1;
         }
         out
     }
 
-    fn integrate_ray(&mut self, o: &Vec3, d: &Vec3, depth: Real, out: &mut IntegrationOutcome) {
+    fn integrate_ray(&mut self, k: &VoxelUpdate, o: &Vec3, d: &Vec3, depth: Real, out: &mut IntegrationOutcome) {
         let vs = self.cfg.voxel_size;
         let trunc = self.cfg.truncation;
         let t_end = depth + trunc;
@@ -78,11 +79,7 @@ impl Map<'_> {
         }
         let p0 = o + d * t_start;
         let inv = 1.0 / vs;
-        let mut g = [
-            libm::floorf(p0.x * inv) as i32,
-            libm::floorf(p0.y * inv) as i32,
-            libm::floorf(p0.z * inv) as i32,
-        ];
+        let mut g = [floor_i32(p0.x * inv), floor_i32(p0.y * inv), floor_i32(p0.z * inv)];
         let axis = |da: Real, pa: Real, ga: i32| -> (i32, Real, Real) {
             if da > 0.0 {
                 (1, t_start + ((ga as Real + 1.0) * vs - pa) / da, vs / da)
@@ -124,7 +121,7 @@ impl Map<'_> {
                     };
                     match slot {
                         Ok(s) => {
-                            self.update_voxel(s, local_index([lx, ly, lz]), sdf.min(trunc), w);
+                            self.update_voxel(k, s, local_index([lx, ly, lz]), sdf, w);
                             out.voxels_updated += 1;
                         }
                         Err(e) => {
@@ -168,7 +165,7 @@ impl Map<'_> {
     /// tangent plane (KinectFusion-style maps do the same with the normal of the depth image).
     fn incidence_cosine(&self, h: &Vec3, d: &Vec3) -> Real {
         let vs = self.cfg.voxel_size;
-        let g = [libm::floorf(h.x / vs) as i32, libm::floorf(h.y / vs) as i32, libm::floorf(h.z / vs) as i32];
+        let g = [floor_i32(h.x / vs), floor_i32(h.y / vs), floor_i32(h.z / vs)];
         let mut grad = [0.0 as Real; 3];
         for (axis, slot) in grad.iter_mut().enumerate() {
             let mut lo = g;
@@ -187,33 +184,32 @@ impl Map<'_> {
         }
     }
 
-    fn update_voxel(&mut self, slot: usize, li: usize, sdf: Real, w: Real) {
-        let max_w = self.cfg.max_weight;
-        let trunc = self.cfg.truncation;
-        let vs = self.cfg.voxel_size;
-        let band = self.cfg.esdf_band * vs;
-        let tol = self.site_tolerance();
+    fn update_voxel(&mut self, k: &VoxelUpdate, slot: usize, li: usize, sdf: Real, w: Real) {
         let Some(b) = self.blocks.get_mut(slot) else { return };
-        let (Some(tq), Some(wq), Some(&Site { off: so, w: sw })) =
-            (b.tsdf.get_mut(li), b.weight.get_mut(li), b.esdf.get(li))
-        else {
-            return;
-        };
+        let (Some(tq), Some(wq)) = (b.tsdf.get_mut(li), b.weight.get_mut(li)) else { return };
         let w_old = *wq as Real / WEIGHT_SCALE;
-        let d_old = *tq as Real * (trunc / 32767.0);
         let w_new = w_old + w;
-        let d_new = (d_old * w_old + sdf * w) / w_new;
-        let q = libm::roundf((crate::geom::clamp(d_new, -trunc, trunc) / trunc) * 32767.0) as i16;
-        let wn = quantize_weight(w_new, max_w).max(1);
+        let wn = quantize_weight(w_new, k.max_weight).max(1);
+        // Free space seen free again (most of a ray's carving): the TSDF stays +truncation, only the weight moves,
+        // and such a voxel is no site, so its site is not read (a voxel that was a site and left the band marked
+        // its block dirty on the way out, and `rebuild_sites` clears that flag only with the site).
+        if sdf >= k.truncation && *tq == i16::MAX && *wq > 0 && !k.saturated_is_site {
+            *wq = wn;
+            return;
+        }
+        let Some(&Site { off: so, w: sw }) = b.esdf.get(li) else { return };
+        let d_old = *tq as Real * k.tsdf_unit;
+        let d_new = (d_old * w_old + sdf.min(k.truncation) * w) / w_new;
+        let q = round_i32((crate::geom::clamp(d_new, -k.truncation, k.truncation) / k.truncation) * 32767.0) as i16;
         // The ESDF depends on: observed or not, the sign, and the fixed-band site value (with hysteresis).
         let was_observed = *wq > 0;
         let was_inside = *tq < 0;
         *tq = q;
         *wq = wn;
         let is_site = sw != NO_SITE && so == [0, 0, 0];
-        let nb = band_site(q as Real * (trunc / 32767.0), band, vs);
+        let nb = band_site(q as Real * k.tsdf_unit, k.band, k.voxel_size);
         let site_moved = match (is_site, nb != NO_SITE) {
-            (true, true) => (nb as i32 - sw as i32).abs() > tol,
+            (true, true) => (nb as i32 - sw as i32).abs() > k.site_tolerance,
             (false, false) => false,
             _ => true,
         };
@@ -223,6 +219,38 @@ impl Map<'_> {
         }
         if !was_observed || was_inside != (q < 0) || site_moved {
             b.flags |= FLAG_TSDF_DIRTY;
+        }
+    }
+}
+
+/// The map configuration as one voxel update needs it, worked out once per [`Map::integrate_points`] call.
+struct VoxelUpdate {
+    truncation: Real,
+    /// Metres per TSDF quantum (`truncation / 32767`).
+    tsdf_unit: Real,
+    max_weight: Real,
+    voxel_size: Real,
+    /// The fixed band's half-width, metres.
+    band: Real,
+    /// Site hysteresis, hundredths of a voxel.
+    site_tolerance: i32,
+    /// Whether a voxel at +truncation lies in the fixed band (a truncation under 1.25 voxels can make it so).
+    saturated_is_site: bool,
+}
+
+impl VoxelUpdate {
+    fn new(map: &Map<'_>) -> VoxelUpdate {
+        let c = &map.cfg;
+        let tsdf_unit = c.truncation / 32767.0;
+        let band = c.esdf_band * c.voxel_size;
+        VoxelUpdate {
+            truncation: c.truncation,
+            tsdf_unit,
+            max_weight: c.max_weight,
+            voxel_size: c.voxel_size,
+            band,
+            site_tolerance: map.site_tolerance(),
+            saturated_is_site: band_site(i16::MAX as Real * tsdf_unit, band, c.voxel_size) != NO_SITE,
         }
     }
 }
