@@ -449,6 +449,11 @@ pub struct MapCensus {
     pub unknown_fraction: f64,
     /// Plan-view area of the voxel columns with a surface crossing, m^2.
     pub footprint_m2: f64,
+    /// Observed voxels by TSDF: `[within the truncation band, free space at +truncation, inside at -truncation]`
+    /// (what a compact encoding could store with fewer bits).
+    pub voxels_by_tsdf: [usize; 3],
+    /// Blocks whose observed voxels are all free space at +truncation (no surface, no site, no inside).
+    pub free_only_blocks: usize,
 }
 
 /// Counts [`MapCensus`] over the blocks in use.
@@ -458,9 +463,13 @@ pub fn census(map: &Map<'_>) -> MapCensus {
     let mut c = MapCensus { blocks: map.blocks_used(), ..Default::default() };
     let mut unknown = 0usize;
     let mut columns = std::collections::BTreeSet::new();
+    let trunc = map.config().truncation;
+    // a TSDF within a thousandth of the truncation counts as saturated (its quantisation step is 1/32767 of it)
+    let saturated = |t: f32| (t.abs() - trunc).abs() <= 1e-3 * trunc;
     for slot in 0..map.blocks_used() {
         let Some(b) = map.block_coord(slot) else { break };
         let mut min_d = f64::INFINITY;
+        let mut free_only = true;
         for z in 0..e {
             for y in 0..e {
                 for x in 0..e {
@@ -468,6 +477,15 @@ pub fn census(map: &Map<'_>) -> MapCensus {
                     match map.esdf_voxel(g) {
                         Some(d) => min_d = min_d.min((d as f64).abs()),
                         None => unknown += 1,
+                    }
+                    if let Some((t, _)) = map.tsdf_voxel(g) {
+                        let k = match (saturated(t), t > 0.0) {
+                            (false, _) => 0,
+                            (true, true) => 1,
+                            (true, false) => 2,
+                        };
+                        c.voxels_by_tsdf[k] += 1;
+                        free_only &= k == 1;
                     }
                     if let (Some((t, _)), Some((u, _))) = (map.tsdf_voxel(g), map.tsdf_voxel([g[0], g[1], g[2] + 1])) {
                         if (t < 0.0) != (u < 0.0) {
@@ -485,6 +503,7 @@ pub fn census(map: &Map<'_>) -> MapCensus {
             _ => 4,
         };
         c.by_min_distance[k] += 1;
+        c.free_only_blocks += usize::from(free_only);
     }
     c.unknown_fraction = unknown as f64 / (c.blocks.max(1) * (e * e * e) as usize) as f64;
     c.footprint_m2 = columns.len() as f64 * vs * vs;

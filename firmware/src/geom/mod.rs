@@ -108,15 +108,19 @@ mod tests {
             16_777_217.0, 2_147_483_520.0, 2_147_483_648.0, -2_147_483_648.0, -2_147_483_904.0, 1e30, -1e30,
             f32::MIN_POSITIVE, -f32::MIN_POSITIVE, f32::INFINITY, f32::NEG_INFINITY, f32::NAN,
         ];
-        for x in specials {
-            assert_eq!(floor_i32(x), libm::floorf(x) as i32, "x = {x:e}");
-        }
-        // every 997th bit pattern of the whole f32 line
+        same_everywhere(&specials, floor_i32, |x| libm::floorf(x) as i32);
+    }
+
+    /// `ours(x) == reference(x)` for each of `specials` and every 997th bit pattern of the whole f32 line.
+    fn same_everywhere(specials: &[f32], ours: impl Fn(f32) -> i32, reference: impl Fn(f32) -> i32) {
         let mut bits: u32 = 0;
-        while let Some(next) = bits.checked_add(997) {
+        let patterns = core::iter::from_fn(|| {
             let x = f32::from_bits(bits);
-            assert_eq!(floor_i32(x), libm::floorf(x) as i32, "x = {x:e}");
-            bits = next;
+            bits = bits.checked_add(997)?;
+            Some(x)
+        });
+        for x in specials.iter().copied().chain(patterns) {
+            assert_eq!(ours(x), reference(x), "x = {x:e}");
         }
     }
 
@@ -128,16 +132,7 @@ mod tests {
             -2_147_483_648.0, -2_147_483_904.0, 1e30, -1e30, f32::MIN_POSITIVE, f32::INFINITY, f32::NEG_INFINITY,
             f32::NAN,
         ];
-        for x in specials {
-            assert_eq!(round_i32(x), libm::roundf(x) as i32, "x = {x:e}");
-        }
-        // every 997th bit pattern of the whole f32 line
-        let mut bits: u32 = 0;
-        while let Some(next) = bits.checked_add(997) {
-            let x = f32::from_bits(bits);
-            assert_eq!(round_i32(x), libm::roundf(x) as i32, "x = {x:e}");
-            bits = next;
-        }
+        same_everywhere(&specials, round_i32, |x| libm::roundf(x) as i32);
     }
 
     #[test]

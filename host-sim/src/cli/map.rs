@@ -218,6 +218,16 @@ pub fn map_check(a: &MapCheckArgs) -> Result<(), String> {
         c.footprint_m2,
         rep.bytes_used() as f64 / c.footprint_m2.max(1e-9)
     );
+    let known = c.voxels_by_tsdf.iter().sum::<usize>().max(1) as f64;
+    println!(
+        "observed voxels by TSDF: within the band {:.1} %, free at +truncation {:.1} %, inside at -truncation {:.1} %; \
+         blocks with free space only {} ({:.1} %)",
+        100.0 * c.voxels_by_tsdf[0] as f64 / known,
+        100.0 * c.voxels_by_tsdf[1] as f64 / known,
+        100.0 * c.voxels_by_tsdf[2] as f64 / known,
+        c.free_only_blocks,
+        100.0 * c.free_only_blocks as f64 / c.blocks.max(1) as f64
+    );
     // sized by the plan-view footprint: a work area is measured from above
     let need = rep.bytes_used() as f64 / c.footprint_m2.max(1e-9) * 400.0;
     let pool = (FLIGHT_BLOCKS * bb + FLIGHT_INDEX * 4) as f64;
