@@ -452,7 +452,7 @@ pub struct MapCensus {
     /// Observed voxels by TSDF: `[within the truncation band, free space at +truncation, inside at -truncation]`
     /// (what a compact encoding could store with fewer bits).
     pub voxels_by_tsdf: [usize; 3],
-    /// Blocks whose observed voxels are all free space at +truncation (no surface, no site, no inside).
+    /// Blocks with observed voxels, all of them free space at +truncation (no surface, no site, no inside).
     pub free_only_blocks: usize,
 }
 
@@ -469,7 +469,7 @@ pub fn census(map: &Map<'_>) -> MapCensus {
     for slot in 0..map.blocks_used() {
         let Some(b) = map.block_coord(slot) else { break };
         let mut min_d = f64::INFINITY;
-        let mut free_only = true;
+        let (mut observed, mut free_only) = (false, true);
         for z in 0..e {
             for y in 0..e {
                 for x in 0..e {
@@ -478,16 +478,18 @@ pub fn census(map: &Map<'_>) -> MapCensus {
                         Some(d) => min_d = min_d.min((d as f64).abs()),
                         None => unknown += 1,
                     }
-                    if let Some((t, _)) = map.tsdf_voxel(g) {
+                    let here = map.tsdf_voxel(g);
+                    if let Some((t, _)) = here {
                         let k = match (saturated(t), t > 0.0) {
                             (false, _) => 0,
                             (true, true) => 1,
                             (true, false) => 2,
                         };
                         c.voxels_by_tsdf[k] += 1;
+                        observed = true;
                         free_only &= k == 1;
                     }
-                    if let (Some((t, _)), Some((u, _))) = (map.tsdf_voxel(g), map.tsdf_voxel([g[0], g[1], g[2] + 1])) {
+                    if let (Some((t, _)), Some((u, _))) = (here, map.tsdf_voxel([g[0], g[1], g[2] + 1])) {
                         if (t < 0.0) != (u < 0.0) {
                             columns.insert((g[0], g[1]));
                         }
@@ -503,9 +505,37 @@ pub fn census(map: &Map<'_>) -> MapCensus {
             _ => 4,
         };
         c.by_min_distance[k] += 1;
-        c.free_only_blocks += usize::from(free_only);
+        c.free_only_blocks += usize::from(observed && free_only);
     }
     c.unknown_fraction = unknown as f64 / (c.blocks.max(1) * (e * e * e) as usize) as f64;
     c.footprint_m2 = columns.len() as f64 * vs * vs;
     c
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use firmware::geom::Pose3;
+
+    /// A level floor scanned from 1 m above: the census finds band voxels at every column of the floor, free space
+    /// above each, and blocks of free space only (the air under the sensor); with the unknown voxels the counts add
+    /// up to the blocks' voxels.
+    #[test]
+    fn the_census_sorts_a_scanned_floor_into_band_and_free_space() {
+        let (mut b, mut i) = host_storage(4096);
+        let cfg = firmware::config::map::MapConfig::with_voxel_size(0.05);
+        let mut map = Map::from_slices(cfg, &mut b, &mut i).unwrap();
+        let pts: Vec<Vec3> = (0..40 * 40)
+            .map(|k| Vec3::new(-1.0 + 0.05 * (k % 40) as f32, -1.0 + 0.05 * (k / 40) as f32, -1.0))
+            .collect();
+        let out = map.integrate_points(&Pose3::identity(), &pts);
+        assert_eq!(out.points_integrated, 1600);
+        map.update_esdf();
+        let c = census(&map);
+        let [band, free, inside] = c.voxels_by_tsdf;
+        assert!(band > 1600 && free > 1600 && inside == 0, "{:?}", c.voxels_by_tsdf);
+        let unknown = (c.unknown_fraction * (c.blocks * 64) as f64).round() as usize;
+        assert_eq!(band + free + inside + unknown, c.blocks * 64);
+        assert!(c.free_only_blocks > 0 && c.free_only_blocks < c.blocks, "{} of {}", c.free_only_blocks, c.blocks);
+    }
 }
