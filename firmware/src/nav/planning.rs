@@ -739,11 +739,12 @@ pub(crate) fn step<P: BorrowMut<NavPlanStorage>>(
         problem.finished = Some(state);
         let w = &problem.work;
         log::info!(
-            "nav: search ended {state:?} after {} iterations ({:?}): samples {} drawn / {} settled; motions {} checked / {} valid; invalid by reason: settle {} ({} collisions, {} steep contacts), unknown space {}, tether {}, unstable {}, too long {}",
+            "nav: search ended {state:?} after {} iterations ({:?}): samples {} drawn / {} settled / {} evicted; motions {} checked / {} valid; invalid by reason: settle {} ({} collisions, {} steep contacts), unknown space {}, tether {}, unstable {}, too long {}",
             problem.done,
             report.termination,
             w.samples_drawn,
             w.samples_settled,
+            report.counters.samples_evicted,
             w.motions,
             w.motions_valid,
             w.fail_settle,

@@ -405,6 +405,8 @@ pub struct Counters {
     pub rewirings: u32,
     /// Graph prunings.
     pub prunings: u32,
+    /// Unconnected samples freed to make room for a batch in the node arena (`AbitStar`'s batches).
+    pub samples_evicted: u32,
     /// Edges rejected because the end state's attachment was incompatible (Paton et al. V-A).
     pub incompatible_attachments: u32,
     /// Twins with undetermined history created for edges into vertices of another history.

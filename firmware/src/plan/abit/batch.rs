@@ -4,6 +4,7 @@
 
 use rand_core::Rng;
 
+use crate::config::abit as cfg;
 use crate::geom::unit_ball_measure;
 use crate::plan::space::{uniform01, Arena, InformedSample, OptimizationObjective, StateSpace, StateValidityChecker};
 use super::attachments::CatchHistories;
@@ -37,11 +38,28 @@ where
         }
     }
 
+    /// Before a batch (`evict_samples`): when the node arena could not hold [`cfg::ROOM_FOR_BATCHES`] more
+    /// batches (the samples to draw, and the goals and history twins their search creates), free unconnected
+    /// samples, the oldest batch's first, until it can. A sample that stayed out of the tree through its batches'
+    /// searches holds no work done; without this, a search that connects few of its samples (a steep face where
+    /// most motions are unstable) fills the arena after a few batches and ends `ArenaFull` long before its
+    /// iteration budget.
+    fn make_room(&mut self) {
+        let keep = NV.saturating_sub(cfg::ROOM_FOR_BATCHES.saturating_mul(self.st.params.samples_per_batch as usize));
+        if self.arena.graph.live() > keep {
+            let freed = self.arena.graph.free_oldest_samples(keep);
+            self.st.counters.samples_evicted = self.st.counters.samples_evicted.saturating_add(freed as u32);
+        }
+    }
+
     /// End the current search and start a batch: prune, draw the batch, and begin a search with the initial
     /// inflation factor from the start's edges.
     pub(super) fn start_batch(&mut self) {
         if self.st.params.pruning {
             self.prune();
+        }
+        if self.st.params.evict_samples {
+            self.make_room();
         }
         self.new_batch();
         self.continue_batch();
@@ -139,6 +157,7 @@ where
     /// `samples_per_batch` valid samples, some with a copied attachment.
     fn new_batch(&mut self) {
         self.st.counters.batches += 1;
+        self.arena.graph.set_batch(self.st.counters.batches);
         let batch = self.st.params.samples_per_batch as usize;
         // RGG terms for the number of states we have (OMPL: plus the batch on the very first batch).
         // OMPL counts the states before the recycled ones (vertices disconnected by the last pruning and kept

@@ -25,12 +25,14 @@ pub(super) struct ImplicitGraph<St, A, const NV: usize> {
     live: usize,
     /// The goal vertices: the sampled goal, its history twins and the fresh goals of Paton et al. V-A.
     goals: Vec<u32, { cfg::GOAL_CAPACITY }>,
+    /// The current batch (stamped on each new node as its `born`).
+    batch: u32,
 }
 
 impl<St, A, const NV: usize> ImplicitGraph<St, A, NV> {
     /// An empty graph (const, so the arena can be a `static`).
     pub(super) const fn new() -> Self {
-        Self { nodes: Vec::new(), free_head: NONE, live: 0, goals: Vec::new() }
+        Self { nodes: Vec::new(), free_head: NONE, live: 0, goals: Vec::new(), batch: 0 }
     }
 
     /// Forget every node.
@@ -39,6 +41,12 @@ impl<St, A, const NV: usize> ImplicitGraph<St, A, NV> {
         self.free_head = NONE;
         self.live = 0;
         self.goals.clear();
+        self.batch = 0;
+    }
+
+    /// The batch that new nodes belong to from now on.
+    pub(super) fn set_batch(&mut self, batch: u32) {
+        self.batch = batch;
     }
 
     /// The node in slot `i`, free slots included; `None` past the end.
@@ -82,6 +90,7 @@ impl<St, A, const NV: usize> ImplicitGraph<St, A, NV> {
     /// full.
     pub(super) fn alloc(&mut self, state: St, attachment: Option<A>, flags: u8, h: (Cost, Cost)) -> Option<u32> {
         let (h_come, h_go) = h;
+        let born = self.batch;
         let fresh = |generation: u32| Node {
             state,
             attachment,
@@ -97,6 +106,7 @@ impl<St, A, const NV: usize> ImplicitGraph<St, A, NV> {
             first_out: NONE,
             twin: NONE,
             twin_generation: 0,
+            born,
             flags,
         };
         let index = if self.free_head != NONE {
@@ -130,6 +140,43 @@ impl<St, A, const NV: usize> ImplicitGraph<St, A, NV> {
             self.free_head = i;
             self.live = self.live.saturating_sub(1);
         }
+    }
+
+    /// Frees unconnected samples, those of the oldest batch first (slot order within a batch), until at most
+    /// `target_live` nodes are live or no such sample is left; returns how many it freed. Never the start, a goal,
+    /// a tree vertex, or a state whose history twin is alive (edges into the state reach the twin through it; an
+    /// unconnected twin can go, and then its state). Each pass scans the slots once and frees the oldest batch's
+    /// samples, so there are at most as many passes as live nodes.
+    pub(super) fn free_oldest_samples(&mut self, target_live: usize) -> usize {
+        let mut freed = 0;
+        for _ in 0..NV {
+            if self.live <= target_live {
+                break;
+            }
+            let slots = 0..self.nodes.len() as u32;
+            let oldest = slots.filter(|&i| self.recyclable(i)).filter_map(|i| self.node(i)).map(|n| n.born).min();
+            let Some(oldest) = oldest else { break };
+            for i in 0..self.nodes.len() as u32 {
+                if self.live <= target_live {
+                    break;
+                }
+                if self.recyclable(i) && self.node(i).is_some_and(|n| n.born == oldest) {
+                    self.free(i);
+                    freed += 1;
+                }
+            }
+        }
+        freed
+    }
+
+    /// Is node `i` an unconnected sample that [`Self::free_oldest_samples`] may free?
+    fn recyclable(&self, i: u32) -> bool {
+        let Some(n) = self.node(i) else { return false };
+        if n.flags & (F_FREE | F_START | F_GOAL | F_IN_TREE) != 0 {
+            return false;
+        }
+        let twin_alive = self.node(n.twin).is_some_and(|t| t.generation == n.twin_generation && !t.has(F_FREE));
+        !twin_alive
     }
 
     /// A new goal vertex. `None` when the goal list (`GOAL_CAPACITY`) or the arena is full.

@@ -10,7 +10,7 @@ use rand_core::Rng;
 
 use super::graph::ImplicitGraph;
 use super::memo::{EdgeMemo, MemoCheck};
-use super::node::{F_FREE, F_IN_TREE, F_START, F_TWIN};
+use super::node::{F_FREE, F_GOAL, F_IN_TREE, F_START, F_TWIN};
 use super::queue::SearchQueue;
 use super::{Connection, NONE};
 use crate::config::abit::NEIGHBOUR_CAPACITY;
@@ -160,6 +160,57 @@ fn pruning_drops_samples_and_disconnects_vertices_that_cannot_improve_the_soluti
     assert_eq!(g.live(), 5);
     for i in [b, e] {
         assert_ne!(g.node(i).unwrap().generation, before[i as usize], "a disconnected vertex is a new node");
+    }
+}
+
+#[test]
+fn eviction_frees_the_oldest_unconnected_samples_and_keeps_the_tree_goals_and_twinned_states() {
+    // Batch 1: root, goal, vertex a, samples s1 and t (t twinned by a vertex); batch 2: samples s2 and s3 (s3
+    // twinned by an unconnected twin w); batch 3: sample s4.
+    let mut g = Graph::new();
+    g.set_batch(1);
+    let root = g.alloc(0.0, Some(()), F_START | F_IN_TREE, (0.0, 5.0)).unwrap();
+    g.node_mut(root).unwrap().cost = 0.0;
+    let goal = g.alloc(9.0, None, F_GOAL, (9.0, 0.0)).unwrap();
+    let a = g.alloc(1.0, None, 0, (1.0, 4.0)).unwrap();
+    g.link(root, a, 1.0, ());
+    let s1 = g.alloc(2.0, None, 0, (2.0, 3.0)).unwrap();
+    let t = g.alloc(3.0, None, 0, (3.0, 2.0)).unwrap();
+    let t_twin = g.alloc(3.0, None, F_TWIN | F_IN_TREE, (3.0, 2.0)).unwrap();
+    g.set_batch(2);
+    let s2 = g.alloc(4.0, None, 0, (4.0, 1.0)).unwrap();
+    let s3 = g.alloc(5.0, None, 0, (5.0, 1.0)).unwrap();
+    let w = g.alloc(5.0, None, F_TWIN, (5.0, 1.0)).unwrap();
+    g.set_batch(3);
+    let s4 = g.alloc(6.0, None, 0, (6.0, 1.0)).unwrap();
+    for (of, twin) in [(t, t_twin), (s3, w)] {
+        let generation = g.node(twin).unwrap().generation;
+        let n = g.node_mut(of).unwrap();
+        n.twin = twin;
+        n.twin_generation = generation;
+    }
+    assert_eq!(g.node(s4).unwrap().born, 3);
+    assert_eq!(g.live(), 10);
+    // Room for nothing to go: nothing is freed.
+    assert_eq!(g.free_oldest_samples(10), 0);
+    // One to go: batch 1's only unconnected sample without a live twin, s1.
+    assert_eq!(g.free_oldest_samples(9), 1);
+    assert!(g.node(s1).unwrap().has(F_FREE));
+    // Batch 4's s5 takes s1's slot, the lowest: age, not the slot, decides.
+    g.set_batch(4);
+    let s5 = g.alloc(7.0, None, 0, (7.0, 1.0)).unwrap();
+    assert_eq!(s5, s1);
+    // Two to go: batch 2's in slot order; s3 has a live twin (w), so s2, then w (an unconnected twin).
+    assert_eq!(g.free_oldest_samples(8), 2);
+    assert!(g.node(s2).unwrap().has(F_FREE) && g.node(w).unwrap().has(F_FREE));
+    assert!(!g.node(s3).unwrap().has(F_FREE), "w was still alive when s3's slot came");
+    assert!(!g.node(s5).unwrap().has(F_FREE), "the newest sample stays");
+    // As many as can go: s3 (its twin is gone now), s4, s5; never the start, the goal, the vertex a, or t, whose
+    // twin is a vertex.
+    assert_eq!(g.free_oldest_samples(0), 3);
+    assert_eq!(g.live(), 5);
+    for i in [root, goal, a, t, t_twin] {
+        assert!(!g.node(i).unwrap().has(F_FREE), "node {i} stays");
     }
 }
 
