@@ -6,9 +6,9 @@
 //! ABIT* defaults unless stated otherwise; they are collected in [`crate::plan::abit::AbitParams::ompl_defaults`].
 
 /// Default capacity of the node arena (start, goals, samples and tree vertices share one arena, like OMPL's
-/// `samples_` structure). 4096 nodes hold ~40 batches of 100 samples before pruning; beyond that, unconnected
-/// samples make room for new batches ([`ROOM_FOR_BATCHES`]), and an arena full all the same ends `solve` with
-/// `Termination::ArenaFull(Arena::Nodes)` and keeps the best solution.
+/// `samples_` structure). 4096 nodes hold ~40 batches of 100 samples before pruning; beyond that, before a
+/// solution, unconnected samples make room for new batches ([`ROOM_FOR_BATCHES`]), and a full arena ends `solve`
+/// with `Termination::ArenaFull(Arena::Nodes)` and keeps the best solution.
 pub const NODE_CAPACITY: usize = 4096;
 
 /// Default capacity of the edge queue. The queue holds at most `k` outgoing edges per expanded vertex
@@ -33,9 +33,10 @@ pub const NEIGHBOUR_CAPACITY: usize = 64;
 /// each improvement in non-Markovian spaces, Paton et al. V-A). 8 keeps the goal scan cheap.
 pub const GOAL_CAPACITY: usize = 8;
 
-/// Batches of samples the node arena keeps room for before each batch: 2, one to draw and one for the goals and
-/// history twins its search creates. Where the arena has less room, unconnected samples are freed, the oldest
-/// batch's first (`plan::abit`, "Memory"). OMPL's arena is unbounded and needs no such rule.
+/// Batches of samples the node arena keeps room for before each batch of a search without a solution: 2, one to
+/// draw and one for the goals and history twins its search creates. Where the arena has less room, unconnected
+/// samples are freed, the oldest batch's first (`plan::abit`, "Memory"). OMPL's arena is unbounded and needs no
+/// such rule.
 pub const ROOM_FOR_BATCHES: usize = 2;
 
 /// Samples per batch (OMPL `samples_per_batch`, default 100).

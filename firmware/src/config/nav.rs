@@ -7,8 +7,8 @@
 use crate::geom::Real;
 
 /// Nodes of the on-board ABIT* arena (start, goals, samples and tree vertices). Default 512: five batches of
-/// [`SAMPLES_PER_BATCH`] with room for goals and history twins; from the fourth batch on, unconnected samples make
-/// room for new ones (`config::abit::ROOM_FOR_BATCHES`). A tethered node carries its anchor history (~0.8 KiB),
+/// [`SAMPLES_PER_BATCH`] with room for goals and history twins; from the fourth batch on, before a solution,
+/// unconnected samples make room for new ones (`config::abit::ROOM_FOR_BATCHES`). A tethered node carries its anchor history (~0.8 KiB),
 /// so the 4096 of `config::abit` would need 4 MiB.
 pub const NODE_CAPACITY: usize = 512;
 /// Queued edges of the on-board ABIT* arena. Default 4096 (k-nearest with k ~ 15-20 at a few hundred states).

@@ -38,16 +38,22 @@ where
         }
     }
 
-    /// Before a batch (`evict_samples`): when the node arena could not hold [`cfg::ROOM_FOR_BATCHES`] more
-    /// batches (the samples to draw, and the goals and history twins their search creates), free unconnected
-    /// samples, the oldest batch's first, until it can. A sample that stayed out of the tree through its batches'
-    /// searches holds no work done; without this, a search that connects few of its samples (a steep face where
-    /// most motions are unstable) fills the arena after a few batches and ends `ArenaFull` long before its
-    /// iteration budget.
+    /// Before a batch without a solution (`evict_samples`): when the node arena could not hold
+    /// [`cfg::ROOM_FOR_BATCHES`] more batches (the samples to draw, and the goals and history twins their search
+    /// creates), free unconnected samples, the oldest batch's first, until it can. A sample that stayed out of the
+    /// tree through its batches' searches holds no work done; without this, a search that connects few of its
+    /// samples (a steep face where most motions are unstable) fills the arena after a few batches and ends
+    /// `ArenaFull` with nothing to drive, long before its iteration budget. With a solution, pruning makes the
+    /// room (OMPL's), and a full arena ends the search with the solution kept: batches after a solution are
+    /// short, and evicting for them would turn the rest of the iteration budget into batch after batch of
+    /// sample draws (each a settle and a stability check in the tethered space).
     fn make_room(&mut self) {
+        if self.has_solution() {
+            return;
+        }
         let keep = NV.saturating_sub(cfg::ROOM_FOR_BATCHES.saturating_mul(self.st.params.samples_per_batch as usize));
         if self.arena.graph.live() > keep {
-            let freed = self.arena.graph.free_oldest_samples(keep);
+            let freed = self.arena.graph.evict_oldest_samples(keep);
             self.st.counters.samples_evicted = self.st.counters.samples_evicted.saturating_add(freed as u32);
         }
     }

@@ -147,20 +147,20 @@ impl<St, A, const NV: usize> ImplicitGraph<St, A, NV> {
     /// a tree vertex, or a state whose history twin is alive (edges into the state reach the twin through it; an
     /// unconnected twin can go, and then its state). Each pass scans the slots once and frees the oldest batch's
     /// samples, so there are at most as many passes as live nodes.
-    pub(super) fn free_oldest_samples(&mut self, target_live: usize) -> usize {
+    pub(super) fn evict_oldest_samples(&mut self, target_live: usize) -> usize {
         let mut freed = 0;
         for _ in 0..NV {
             if self.live <= target_live {
                 break;
             }
             let slots = 0..self.nodes.len() as u32;
-            let oldest = slots.filter(|&i| self.recyclable(i)).filter_map(|i| self.node(i)).map(|n| n.born).min();
+            let oldest = slots.filter(|&i| self.evictable(i)).filter_map(|i| self.node(i)).map(|n| n.born).min();
             let Some(oldest) = oldest else { break };
             for i in 0..self.nodes.len() as u32 {
                 if self.live <= target_live {
                     break;
                 }
-                if self.recyclable(i) && self.node(i).is_some_and(|n| n.born == oldest) {
+                if self.evictable(i) && self.node(i).is_some_and(|n| n.born == oldest) {
                     self.free(i);
                     freed += 1;
                 }
@@ -169,8 +169,8 @@ impl<St, A, const NV: usize> ImplicitGraph<St, A, NV> {
         freed
     }
 
-    /// Is node `i` an unconnected sample that [`Self::free_oldest_samples`] may free?
-    fn recyclable(&self, i: u32) -> bool {
+    /// Is node `i` an unconnected sample that [`Self::evict_oldest_samples`] may free?
+    fn evictable(&self, i: u32) -> bool {
         let Some(n) = self.node(i) else { return false };
         if n.flags & (F_FREE | F_START | F_GOAL | F_IN_TREE) != 0 {
             return false;

@@ -121,7 +121,7 @@
 //! | `reveal_attachments` | true | revealing edges (above) |
 //! | `goal_edges` | true | goal edges (above) |
 //! | `catch_sample_fraction` | 0.1 | catch-boundary samples (above) |
-//! | `evict_samples` | true (OMPL's arena is unbounded) | free unconnected samples, oldest batch first, to keep room for `ROOM_FOR_BATCHES` batches (see Memory) |
+//! | `evict_samples` | true (OMPL's arena is unbounded) | before a batch without a solution, free unconnected samples, oldest batch first, to keep room for `ROOM_FOR_BATCHES` batches (see Memory) |
 //! | `draws_per_step` | 0 (OMPL: a whole batch in one iteration) | sample draws per `step` while a batch is drawn; the on-board navigator bounds it so that one executive step never draws a whole batch |
 //!
 //! The last five act only in non-Markovian spaces, so on R^n the planner is OMPL's ABIT* with OMPL's defaults.
@@ -131,8 +131,9 @@
 //!
 //! ## Memory
 //! Everything lives in an [`AbitArena`] lent by the caller: `NV` nodes (start, goals, samples, vertices),
-//! `NQ` queued edges, `NM` memo entries. Before each batch (`evict_samples`) the node arena keeps room for
-//! `ROOM_FOR_BATCHES` (2) batches: where it has less, unconnected samples are freed, the oldest batch's first
+//! `NQ` queued edges, `NM` memo entries. Before each batch without a solution (`evict_samples`) the node arena
+//! keeps room for `ROOM_FOR_BATCHES` (2) batches: where it has less, unconnected samples are freed, the oldest
+//! batch's first
 //! (counted in `Counters::samples_evicted`; they hold no work done, and the tree, the goals and every state a live
 //! history twin hangs from stay). A node arena still full, or a full edge queue, ends `solve` with
 //! `Termination::ArenaFull` and keeps the best solution; a full memo only costs repeated edge checks.

@@ -32,7 +32,7 @@ pub struct Node<St, A> {
     pub(super) first_out: u32,
     pub(super) twin: u32,
     pub(super) twin_generation: u32,
-    /// The batch during which the node was allocated (the age `ImplicitGraph::free_oldest_samples` frees by).
+    /// The batch during which the node was allocated (the age `ImplicitGraph::evict_oldest_samples` frees by).
     pub(super) born: u32,
     pub(super) flags: u8,
 }

@@ -67,10 +67,10 @@ pub struct AbitParams {
     /// `Counters::sampling_steps`), so a caller that bounds its work per call (the on-board navigator, per
     /// executive step) can stop between them; the search is the same draw for draw.
     pub draws_per_step: u32,
-    /// Before a batch, free unconnected samples (the oldest batch's first) until the node arena has room for
-    /// `config::abit::ROOM_FOR_BATCHES` batches. Off, a search that connects few samples ends `ArenaFull` once
-    /// the arena is full of them. OMPL's arena is unbounded, so this acts only where OMPL's would have outgrown
-    /// ours.
+    /// Before a batch while there is no solution, free unconnected samples (the oldest batch's first) until the
+    /// node arena has room for `config::abit::ROOM_FOR_BATCHES` batches. Off, a search that connects few samples
+    /// ends `ArenaFull` with nothing found once the arena is full of them. OMPL's arena is unbounded, so this acts
+    /// only where OMPL's would have outgrown ours.
     pub evict_samples: bool,
 }
 

@@ -192,22 +192,22 @@ fn eviction_frees_the_oldest_unconnected_samples_and_keeps_the_tree_goals_and_tw
     assert_eq!(g.node(s4).unwrap().born, 3);
     assert_eq!(g.live(), 10);
     // Room for nothing to go: nothing is freed.
-    assert_eq!(g.free_oldest_samples(10), 0);
+    assert_eq!(g.evict_oldest_samples(10), 0);
     // One to go: batch 1's only unconnected sample without a live twin, s1.
-    assert_eq!(g.free_oldest_samples(9), 1);
+    assert_eq!(g.evict_oldest_samples(9), 1);
     assert!(g.node(s1).unwrap().has(F_FREE));
     // Batch 4's s5 takes s1's slot, the lowest: age, not the slot, decides.
     g.set_batch(4);
     let s5 = g.alloc(7.0, None, 0, (7.0, 1.0)).unwrap();
     assert_eq!(s5, s1);
     // Two to go: batch 2's in slot order; s3 has a live twin (w), so s2, then w (an unconnected twin).
-    assert_eq!(g.free_oldest_samples(8), 2);
+    assert_eq!(g.evict_oldest_samples(8), 2);
     assert!(g.node(s2).unwrap().has(F_FREE) && g.node(w).unwrap().has(F_FREE));
     assert!(!g.node(s3).unwrap().has(F_FREE), "w was still alive when s3's slot came");
     assert!(!g.node(s5).unwrap().has(F_FREE), "the newest sample stays");
     // As many as can go: s3 (its twin is gone now), s4, s5; never the start, the goal, the vertex a, or t, whose
     // twin is a vertex.
-    assert_eq!(g.free_oldest_samples(0), 3);
+    assert_eq!(g.evict_oldest_samples(0), 3);
     assert_eq!(g.live(), 5);
     for i in [root, goal, a, t, t_twin] {
         assert!(!g.node(i).unwrap().has(F_FREE), "node {i} stays");
