@@ -120,6 +120,11 @@ pub struct MissionSection {
     /// lander's mast cannot see). Default none; at most [`MAX_WAYPOINTS`]; not with `homotopy` (its route has
     /// its own legs).
     pub waypoints: Vec<[f64; 3]>,
+    /// The operator ends the mission when the flight software has arrived at this many of `waypoints` (the rover
+    /// stands at the last one; the verdict is [`crate::mission::run::Verdict::Ended`]): a run of a long mission's
+    /// first part, such as the board's test of a watchdog bite behind the ledge's pole, which needs the bite and
+    /// the next waypoint, not the descent after them. Default none: the mission goes on to `[goal]`.
+    pub end_at_waypoint: Option<u32>,
 }
 
 /// Most operator waypoints of a mission (`MissionSection::waypoints`).
@@ -161,6 +166,7 @@ impl Default for MissionSection {
             friction: None,
             homotopy: None,
             waypoints: Vec::new(),
+            end_at_waypoint: None,
         }
     }
 }
@@ -258,6 +264,14 @@ impl MissionSection {
         if let Some(i) = self.waypoints.iter().position(|w| !w.iter().all(|v| v.is_finite())) {
             return Err((format!("waypoints[{i}]"), format!("must be three finite numbers, got {:?}", self.waypoints[i])));
         }
+        if let Some(n) = self.end_at_waypoint {
+            if n == 0 || n as usize > self.waypoints.len() {
+                return Err((
+                    "end_at_waypoint".into(),
+                    format!("must be between 1 and the number of waypoints ({}), got {n}", self.waypoints.len()),
+                ));
+            }
+        }
         if !self.waypoints.is_empty() && self.homotopy.is_some() {
             return Err(("waypoints".into(), "a homotopy goal has its own legs; give waypoints or homotopy, not both".into()));
         }
@@ -291,6 +305,9 @@ mod tests {
             (MissionSection { min_margin_n: Some(-1.0), ..Default::default() }, "min_margin_n"),
             (MissionSection { waypoints: vec![[0.0; 3], [f64::NAN, 0.0, 0.0]], ..Default::default() }, "waypoints[1]"),
             (MissionSection { waypoints: vec![[0.0; 3]; MAX_WAYPOINTS + 1], ..Default::default() }, "waypoints"),
+            (MissionSection { end_at_waypoint: Some(1), ..Default::default() }, "end_at_waypoint"),
+            (MissionSection { waypoints: vec![[0.0; 3]; 2], end_at_waypoint: Some(0), ..Default::default() }, "end_at_waypoint"),
+            (MissionSection { waypoints: vec![[0.0; 3]; 2], end_at_waypoint: Some(3), ..Default::default() }, "end_at_waypoint"),
             (
                 MissionSection {
                     waypoints: vec![[1.0, 2.0, 3.0]],

@@ -81,6 +81,9 @@ pub enum Verdict {
     /// The flight software sent nothing that moves the mission on (no drive command, no mission-state change)
     /// for [`QUIET_LIMIT_S`] of link time while not `Arrived` or `Safe`.
     FlightQuiet,
+    /// The operator ended the mission at a waypoint (`[mission] end_at_waypoint`), the flight software having
+    /// arrived there and the true rover within its tolerance.
+    Ended,
     /// The ground gave up a message the mission needs (`Configure` or the goal request: no answer after the
     /// retransmission policy's sends, `session::RetransmitPolicy`), so the flight software never got the goal; the
     /// rover was never commanded and stands where it started. The link is down, not the rover.
@@ -835,6 +838,11 @@ impl<L: FlightLink> Sim<'_, L> {
         let (Some(mut goal), Some(&next)) = (self.goal, self.legs.get(self.leg + 1)) else { return Ok(()) };
         self.leg += 1;
         self.rep.waypoints_reached += 1;
+        if self.m.end_at_waypoint.is_some_and(|n| self.rep.waypoints_reached >= n) {
+            log::info!("mission: waypoint {} of {} reached; the operator ends the mission here", self.leg, self.legs.len() - 1);
+            self.done = Some(Verdict::Ended);
+            return Ok(());
+        }
         log::info!("mission: waypoint {} of {} reached; on to ({:.2}, {:.2}, {:.2})", self.leg, self.legs.len() - 1, next[0], next[1], next[2]);
         goal.goal_id = goal.goal_id.wrapping_add(1);
         goal.position = Point3::new(next[0] as Real, next[1] as Real, next[2] as Real);

@@ -10,7 +10,7 @@ use crate::config::abit as cfg;
 
 use crate::plan::space::{uniform01, Arena, CatchSample, OptimizationObjective, StateSpace};
 use super::graph::ImplicitGraph;
-use super::node::{Node, F_FREE, F_GOAL, F_TWIN};
+use super::node::{Node, F_GOAL, F_TWIN};
 use super::AbitStar;
 
 /// The tree vertices whose histories a batch's catch-boundary samples follow (one per compatibility class).
@@ -117,13 +117,10 @@ where
             if fits {
                 return Some(cur);
             }
-            let (twin, twin_generation) = self.node(cur).map(|n| (n.twin, n.twin_generation))?;
-            let twin_alive = self.node(twin).is_some_and(|t| t.generation == twin_generation && !t.has(F_FREE));
-            if twin_alive {
-                cur = twin;
-                continue;
+            match self.arena.graph.live_twin(cur) {
+                Some(twin) => cur = twin,
+                None => return self.new_twin(cur),
             }
-            return self.new_twin(cur);
         }
         None
     }

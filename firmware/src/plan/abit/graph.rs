@@ -175,8 +175,13 @@ impl<St, A, const NV: usize> ImplicitGraph<St, A, NV> {
         if n.flags & (F_FREE | F_START | F_GOAL | F_IN_TREE) != 0 {
             return false;
         }
-        let twin_alive = self.node(n.twin).is_some_and(|t| t.generation == n.twin_generation && !t.has(F_FREE));
-        !twin_alive
+        self.live_twin(i).is_none()
+    }
+
+    /// Node `i`'s history twin, if it is still the node it was linked to (not freed, its slot not reused).
+    pub(super) fn live_twin(&self, i: u32) -> Option<u32> {
+        let n = self.node(i)?;
+        self.node(n.twin).is_some_and(|t| t.generation == n.twin_generation && !t.has(F_FREE)).then_some(n.twin)
     }
 
     /// A new goal vertex. `None` when the goal list (`GOAL_CAPACITY`) or the arena is full.
