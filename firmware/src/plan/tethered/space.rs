@@ -184,6 +184,17 @@ fn settle_checked(
         return Err(SettleFailure::InvalidInput);
     }
     let ground = surface_point(map, x, y, bounds.max[2], bounds.min[2]).ok_or(SettleFailure::NoSurface)?;
+    settle_on(map, rover, ground, theta, check_steep)
+}
+
+/// [`settle_checked`] on the surface point `ground` already found under the query position.
+fn settle_on(
+    map: &impl DistanceField,
+    rover: &RoverParams,
+    ground: Vec3,
+    theta: Real,
+    check_steep: bool,
+) -> Result<RoverState, SettleFailure> {
     match settle(map, &ground, theta, rover) {
         SettleOutcome::Settled(settled) if check_steep && settled.wheels.iter().any(|w| rests_on_steep_surface(map, w)) => {
             Err(SettleFailure::SteepContact)
@@ -436,14 +447,30 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
     /// Settle a state at the surface under `(x, y)` (counted).
     pub fn settle_state(&self, x: Real, y: Real, theta: Real) -> Result<RoverState, SettleFailure> {
         self.count(|s| s.settles += 1);
-        self.timed(Phase::Settle, || match (settle_at(self.map, &self.bounds, &self.rover, x, y, theta), self.escape) {
+        self.timed(Phase::Settle, || {
+            if !(x.is_finite() && y.is_finite() && theta.is_finite()) {
+                return Err(SettleFailure::InvalidInput);
+            }
+            let b = &self.bounds;
+            let ground = surface_point(self.map, x, y, b.max[2], b.min[2]).ok_or(SettleFailure::NoSurface)?;
+            self.settle_ground(ground, theta)
+        })
+    }
+    /// [`Self::settle_state`] on the surface point `ground` a sampler has already found (not traced again).
+    fn settle_state_on(&self, ground: Vec3, theta: Real) -> Result<RoverState, SettleFailure> {
+        self.count(|s| s.settles += 1);
+        self.timed(Phase::Settle, || self.settle_ground(ground, theta))
+    }
+    /// The settle of [`Self::settle_state`] at its surface point, with the start escape's relaxed rover near it.
+    fn settle_ground(&self, ground: Vec3, theta: Real) -> Result<RoverState, SettleFailure> {
+        match (settle_on(self.map, &self.rover, ground, theta, true), self.escape) {
             (Err(SettleFailure::Collision | SettleFailure::SteepContact), Some(e))
-                if libm::hypotf(x - e.x, y - e.y) <= e.radius_m =>
+                if libm::hypotf(ground.x - e.x, ground.y - e.y) <= e.radius_m =>
             {
-                settle_checked(self.map, &self.bounds, &e.rover, x, y, theta, !e.steep_ok)
+                settle_on(self.map, &e.rover, ground, theta, !e.steep_ok)
             }
             (r, _) => r,
-        })
+        }
     }
     /// The state whose settled axle centre stands horizontally at `(x, y)` with heading `heading` (a pose
     /// estimate: where the rover *is*). [`Self::settle_state`] takes the surface point and the yaw about the
@@ -508,7 +535,7 @@ impl<'m, D: DistanceField> TetherSpace<'m, D> {
             }
             _ => core::f32::consts::TAU * u - core::f32::consts::PI,
         };
-        let st = self.settle_state(px, py, theta).ok()?;
+        let st = self.settle_state_on(ground, theta).ok()?;
         self.count(|s| s.samples_settled += 1);
         Some(st)
     }
