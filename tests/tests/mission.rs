@@ -128,3 +128,23 @@ fn where_the_simple_statics_cannot_hold_the_physics_judge_decides() {
     let v = host_sim::mission::run::judge_hold(&judge, &truth, &rover);
     assert_eq!(v.outcome, host_sim::physics::HoldOutcome::Holds, "{v:?}");
 }
+
+/// The operator ends a mission at a waypoint (`[mission] end_at_waypoint`, a long mission's first part): the verdict
+/// is `Ended` once the flight software arrived there, the true rover stands within the tolerance (plus the
+/// localisation slack) of the waypoint, and the goal after it was never sent (the last status is the waypoint's).
+#[test]
+fn an_operator_ends_the_mission_at_a_waypoint() {
+    let mut sc = load("mission_smoke.toml");
+    let waypoint = [-0.9, 0.0, 1.85];
+    sc.mission.waypoints = vec![waypoint];
+    sc.mission.end_at_waypoint = Some(1);
+    let opts = MissionOptions { seed: 7, tracking: Tracking::ClosedLoop, noiseless: false, live: false, reset: None };
+    let rep = run_mission(mission_link(&sc).expect("link"), &sc, &opts).expect("mission runs");
+    check_truth(&rep);
+    assert_eq!((rep.verdict, rep.waypoints_reached), (Verdict::Ended, 1));
+    let end = rep.trace.last().expect("a trace").axle;
+    let off = ((end[0] - waypoint[0]).powi(2) + (end[1] - waypoint[1]).powi(2) + (end[2] - waypoint[2]).powi(2)).sqrt();
+    assert!(off <= sc.goal.tolerance_m + sc.mission.arrival_slack_m, "{off:.2} m from the waypoint");
+    assert!(rep.goal_error_m > sc.goal.tolerance_m, "the goal was reached: {:.2} m", rep.goal_error_m);
+    assert_eq!(rep.last_status.map(|s| s.goal_id), Some(1), "a goal after the waypoint was sent");
+}
