@@ -123,7 +123,7 @@ pub struct MissionSection {
     /// The operator ends the mission when the flight software has arrived at this many of `waypoints` (the rover
     /// stands at the last one; the verdict is [`crate::mission::run::Verdict::Ended`]): a run of a long mission's
     /// first part, such as the board's test of a watchdog bite behind the ledge's pole, which needs the bite and
-    /// the next waypoint, not the descent after them. Default none: the mission goes on to `[goal]`.
+    /// the waypoints after it, not the descent after them. Default none: the mission goes on to `[goal]`.
     pub end_at_waypoint: Option<u32>,
 }
 

@@ -82,7 +82,7 @@ pub enum Verdict {
     /// for [`QUIET_LIMIT_S`] of link time while not `Arrived` or `Safe`.
     FlightQuiet,
     /// The operator ended the mission at a waypoint (`[mission] end_at_waypoint`), the flight software having
-    /// arrived there and the true rover within its tolerance.
+    /// arrived there and the true rover within its tolerance plus `arrival_slack_m`.
     Ended,
     /// The ground gave up a message the mission needs (`Configure` or the goal request: no answer after the
     /// retransmission policy's sends, `session::RetransmitPolicy`), so the flight software never got the goal; the
