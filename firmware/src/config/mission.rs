@@ -46,6 +46,13 @@ pub const REPLAN_PROGRESS_M: f32 = 0.5;
 /// (a receding horizon, bounded by `MAX_REPLANS`). Default 0.25 m (half Axel's wheel base: less is not worth a
 /// drive).
 pub const MIN_APPROXIMATE_PROGRESS_M: f32 = 0.25;
+/// Columns checked for observed ground on the line from an approximate plan's end to the goal (the navigator
+/// searches on before driving an approximate plan over ground it has seen, `nav::mission`): one per voxel, at
+/// most this many. Default 128 (12.8 m at the missions' 10 cm voxels; a longer line is sampled more sparsely).
+pub const GROUND_TO_GOAL_SAMPLES: usize = 128;
+/// Voxels looked at down each of those columns, from the top of the planning bounds, for the terrain behind an
+/// observed surface. Default 512 (51 m at 10 cm, 25.6 m at 5 cm: deeper than any mission's bounds so far).
+pub const GROUND_COLUMN_VOXELS: usize = 512;
 /// Consecutive stalled motions before the mission stops safe with `MotionStalled` (each stall replans first).
 /// Default 2.
 pub const MAX_STALLS: u32 = 2;

@@ -11,7 +11,7 @@ use crate::config::tether as tcfg;
 use crate::config::nav::MAX_PLAN_ITERATIONS;
 use crate::exec::DriveStep;
 use crate::geom::{norm3, wrap_angle, Real, Vec3};
-use crate::map::{Block, DistanceField, DistanceQuery, Map, UnobservedAsFree};
+use crate::map::{Block, DistanceField, DistanceQuery, Map, UnobservedAsFree, VoxelState};
 use crate::plan::tethered::{surface_point, MotionFailure, RoverState, TetherSpace, TetherSpaceParams};
 use crate::stability::StabilityOutcome;
 use crate::protocol::{
@@ -484,19 +484,24 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
     }
 
     /// Planning finished with `state`, and nothing the mission could drive came of it (no path; an approximate
-    /// one not allowed or without `MIN_APPROXIMATE_PROGRESS_M` of progress): when the search only spent its
-    /// iterations, it goes on for another round of the goal's budget ([`planning::Problem::extend`], up to
-    /// `MAX_PLAN_ITERATIONS` in all) instead of stopping `NoSolution`. `true` when the search goes on.
+    /// one not allowed or without `MIN_APPROXIMATE_PROGRESS_M` of progress), or an approximate path over ground
+    /// the map shows all the way to the goal: when the search only spent its iterations, it goes on for another
+    /// round of the goal's budget ([`planning::Problem::extend`], up to `MAX_PLAN_ITERATIONS` in all) instead of
+    /// stopping `NoSolution` or driving. `true` when the search goes on. An approximate path that stops short of
+    /// unobserved ground is driven at once: the rover looks again from its end (the receding horizon). One with
+    /// the ground to the goal observed ended where the search ran short, and its end can be a dead end (on a slope
+    /// Axel holds only along the fall line, a goal beside the end is reached by going back up,
+    /// `host-sim/doc/mission.md`), so it is driven only when the rounds are spent.
     pub(super) fn mission_search_more(&mut self, state: PlanState) -> bool {
         if !self.mission.active() {
             return false;
         }
+        let approximate_ok = state == PlanState::ApproximateSolution
+            && self.mission.goal.is_some_and(|g| g.allow_approximate)
+            && self.approximate_progress_m() >= mcfg::MIN_APPROXIMATE_PROGRESS_M;
         let drivable = match state {
             PlanState::ExactSolution => true,
-            PlanState::ApproximateSolution => {
-                self.mission.goal.is_some_and(|g| g.allow_approximate)
-                    && self.approximate_progress_m() >= mcfg::MIN_APPROXIMATE_PROGRESS_M
-            }
+            PlanState::ApproximateSolution => approximate_ok && !self.ground_observed_to_goal(),
             PlanState::NoSolutionWithinBudget => false,
             _ => return false,
         };
@@ -508,7 +513,12 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
             return false;
         }
         self.stats.search_extensions = self.stats.search_extensions.saturating_add(1);
-        log::info!("mission: nothing to drive after {} iterations ({state:?}): the search goes on to {}", problem.done, problem.budget);
+        let (done, budget) = (problem.done, problem.budget);
+        if approximate_ok {
+            log::info!("mission: an approximate path over observed ground after {done} iterations: on to {budget}");
+        } else {
+            log::info!("mission: nothing to drive after {done} iterations ({state:?}): the search goes on to {budget}");
+        }
         true
     }
 
@@ -615,6 +625,30 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
             (Some((a, _)), Some((b, _))) => norm3(&(a.axle() - g)) - norm3(&(b.axle() - g)),
             _ => Real::NEG_INFINITY,
         }
+    }
+
+    /// Whether the map shows ground all the way from the stored plan's last state to the goal: an occupied voxel
+    /// (the terrain behind an observed surface) in every voxel column on the straight line between their axles,
+    /// one voxel apart (at most `mcfg::GROUND_TO_GOAL_SAMPLES` columns, spread evenly on a longer line), within
+    /// the planning bounds' heights (at most `mcfg::GROUND_COLUMN_VOXELS` voxels down each column). `false`
+    /// without a plan, goal or map.
+    fn ground_observed_to_goal(&mut self) -> bool {
+        let (Some(goal), Some((top, bottom))) =
+            (self.mission.goal, self.problem.as_ref().map(|p| (p.bounds.max[2], p.bounds.min[2])))
+        else {
+            return false;
+        };
+        let Some(end) = planning::path(&mut self.storage).last().map(|(s, _)| s.axle()) else { return false };
+        let Some(map) = self.map() else { return false };
+        let voxel = map.config().voxel_size;
+        let (dx, dy) = (goal.position.x - end.x, goal.position.y - end.y);
+        let columns = ((libm::hypotf(dx, dy) / voxel) as usize).clamp(1, mcfg::GROUND_TO_GOAL_SAMPLES);
+        let depth = (((top - bottom) / voxel) as usize).min(mcfg::GROUND_COLUMN_VOXELS);
+        (0..=columns).all(|k| {
+            let f = k as Real / columns as Real;
+            let [x, y, z] = map.voxel_index(&Vec3::new(end.x + f * dx, end.y + f * dy, top));
+            (0..=depth as i32).any(|j| map.voxel_state([x, y, z - j]) == VoxelState::Occupied)
+        })
     }
 
     fn arrived(&self) -> bool {

@@ -38,9 +38,10 @@
 //!   that reaches it ends within `tolerance_m`); searched again when a scan changes the map under it;
 //! - **budget**: `min(goal.max_iterations, MAX_PLAN_ITERATIONS)` iterations, and `time_budget_ms` of flight time
 //!   when non-zero; in a mission, a search that spends its iterations with nothing the mission can drive (no
-//!   path; an approximate one not allowed or short of `MIN_APPROXIMATE_PROGRESS_M`) goes on where it stopped for
-//!   further rounds of the same budget, up to `MAX_PLAN_ITERATIONS` in all, before the mission stops
-//!   `NoSolution` (`NavPlanStats::search_extensions` counts them); the sampler is SplitMix64 ([`crate::plan::SplitMix64`]) seeded from `Configure.planner.rng_seed` and the goal id;
+//!   path; an approximate one not allowed or short of `MIN_APPROXIMATE_PROGRESS_M`), or with only an approximate
+//!   path over ground the map shows all the way to the goal, goes on where it stopped for further rounds of the
+//!   same budget, up to `MAX_PLAN_ITERATIONS` in all, before the mission stops `NoSolution` or drives it
+//!   (`NavPlanStats::search_extensions` counts them); the sampler is SplitMix64 ([`crate::plan::SplitMix64`]) seeded from `Configure.planner.rng_seed` and the goal id;
 //!   `batch_size` is the samples per batch (at most `SAMPLES_PER_BATCH`); `goal_bias` has no meaning for ABIT*
 //!   (it samples no goal states) and is ignored.
 //!
@@ -143,7 +144,11 @@
 //! - **Approximate plans (a receding horizon)**: an approximate plan is driven only when the goal request allows
 //!   it and its last state is at least `MIN_APPROXIMATE_PROGRESS_M` nearer the goal than its start (else
 //!   `NoSolution`); at its last (safe) state the navigator replans from there, on the map its scans have grown
-//!   on the way (terrain beyond a rise or a lip is observed only from near it).
+//!   on the way (terrain beyond a rise or a lip is observed only from near it). When the map already shows the
+//!   ground from its end to the goal (an occupied voxel in every column on the line between them,
+//!   `GROUND_TO_GOAL_SAMPLES` columns at most), looking again cannot help, and the search goes on to
+//!   `MAX_PLAN_ITERATIONS` first (budget, above): on a steep slope an approximate end beside the goal can be a
+//!   dead end that Axel, which holds there only along the fall line, leaves only by going back up.
 //! - **Re-checks and replans**: after each report the next `RECHECK_AFTER_MOTION` segments are re-checked
 //!   (the current state's margin and the motion from it to the segment's end, then the planned motions, each a
 //!   full motion check on the current map: collision, settling, anchors, stability), after each scan the whole

@@ -326,6 +326,29 @@ mod planning {
         }
     }
 
+    /// An approximate plan over ground the map shows all the way to the goal means the search ran short (here: a
+    /// wall across the straight line), not that the map has yet to show the way: the mission searches on in rounds
+    /// of the goal's budget before it drives (`mission_search_more`; behind an unobserved gap, above, the first
+    /// round's approximate plan is driven).
+    #[test]
+    fn an_approximate_plan_over_observed_ground_is_searched_on_before_it_is_driven() {
+        let wall = |x: f32, y: f32| Some(if (x - 1.8).abs() < 0.25 && y.abs() < 0.4 { Z0 + 0.6 } else { Z0 });
+        let mut n = nav();
+        n.configure(&configure(5)).unwrap();
+        // near-vertical rays only (the scans' points are not occluded: a slanted ray would pass through the wall
+        // and carve its top away)
+        for k in 0..=24 {
+            scan_down(&mut n, k + 1, -1.0 + 0.25 * k as f32, 0.3, 2.0, &wall);
+        }
+        scan_down(&mut n, 26, 0.0, 0.3, 2.0, &wall);
+        assert_eq!(n.goal(&goal(3.5, 0.0, 3), Instant::from_micros(0)), PlanState::Accepted);
+        let (p, _, _) = run(&mut n, 8, 2000);
+        let PlanProgress::Finished { state, iterations, .. } = p else { unreachable!() };
+        assert_eq!(state, PlanState::ExactSolution, "{:?}", n.plan_stats());
+        assert!(iterations > 3 && n.stats.search_extensions >= 1, "{iterations} iterations");
+        assert_eq!(n.mission_status().map(|s| s.state), Some(crate::protocol::MissionState::Driving));
+    }
+
     /// A goal position on a rock (the rover does not settle there) is reached within its tolerance: the goal state
     /// is a position of the goal region where the rover settles, and the plan ends within the tolerance of the
     /// requested position. Before, the goal was refused (`GoalNotSettled`); a mission stopped `GoalRefused` when a
