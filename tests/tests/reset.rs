@@ -224,8 +224,8 @@ fn a_watchdog_bite_mid_descent_on_the_board_recovers_the_wrapped_tether_and_repl
 /// ground sends the survey and the rover's recent scans again, and the mission goes on round the pole to the next
 /// waypoints; the log replays identically. Seed 1: the test needs a mission that wraps the pole before the bite
 /// (it asserts so); seed 2 did until a wheel tilted against its face became a point contact, then seed 10 until the
-/// navigator searched on before driving an approximate plan over observed ground (2026-12-07); of seeds 1-10 and
-/// 21-28, seeds 1, 8, 22, 24 and 27 then wrap it, are bitten there and reach all four waypoints.
+/// navigator searched on before driving an approximate plan over observed ground (2026-12-07; `host-sim/doc/
+/// mission.md`, "The Mars Yard's goal").
 const LEDGE3_SEED: u64 = 1;
 
 fn ledge3_wrap() -> (host_sim::scenario::Scenario, MissionOptions) {

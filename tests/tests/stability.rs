@@ -54,7 +54,10 @@ fn random_problem(r: &mut Pcg64) -> StabilityProblem {
         // about half of the contacts that carry moments are wheel rims: a line contact, no moment about its y axis
         // (chosen by `mu_m` itself, so the random stream and the other instances stay as they were)
         let contact = if mu_m > 0.0 && mu_m < 0.08 { Contact::line } else { Contact::new };
-        let _ = contacts.push(contact(pos, n, unit(r, -1.0), mu, mu_m));
+        let mut c = contact(pos, n, unit(r, -1.0), mu, mu_m);
+        // and about a fifth of the point contacts are a boom's tip, outside the margin
+        c.in_margin = mu_m > 0.0 || mu < 1.0;
+        let _ = contacts.push(c);
     }
     let m1 = unif(r, 10.0, 40.0) as Real;
     let m2 = unif(r, 5.0, 20.0) as Real;

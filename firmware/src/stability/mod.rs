@@ -42,10 +42,10 @@
 //! squeezing forces and the LP becomes badly conditioned), and `s <= 1`.
 //!
 //! `s*` (the **margin**, a fraction of the rover's weight) is the largest friction headroom that every octagon facet
-//! of every contact can keep at once, the boom's tip ([`Contact::tip`]) included: a tip held at its friction limit
-//! is what the physics judge's rover slid from where the planner called a pose stable (the toe and edges of the
-//! ledge, `host-sim/doc/physics_judge.md`), so a rover resting on its boom has at most `mu` times the tip's load
-//! of margin. The pose is statically stable exactly when `s* >= 0` (the feasibility problem of
+//! of every contact can keep at once. The boom's tip ([`Contact::tip`]) is held to its octagon without `s`: it
+//! carries about the boom's share of the weight, and headroom taken from it would cap every margin of a rover resting
+//! on its boom at `mu` times that share (`host-sim/doc/physics_judge.md`). The verdict (`s* >= 0`) is the same
+//! either way; the LP is then infeasible when the tip cannot hold with its own friction (unstable too). The pose is statically stable exactly when `s* >= 0` (the feasibility problem of
 //! eqs. 1-8 is the `s = 0` slice), and the pose is stable with a safety buffer when `s* >= MIN_MARGIN`. A larger margin
 //! means the pose tolerates a larger error in the friction coefficients: lowering every `mu lambda_z` limit by
 //! `s* W` newtons keeps it stable. The LP is always feasible when the equilibrium equations can be met (take `s`
@@ -136,6 +136,9 @@ pub struct Contact {
     /// is the axle, and a rigid rim touches the ground along a line parallel to it, which carries no moment about
     /// it: 0 (see [`Contact::line`]).
     pub mu_m_y: Real,
+    /// Whether the margin's headroom is taken from this contact's friction (the wheels) or the contact only has to
+    /// hold with plain friction (the boom's tip, [`Contact::tip`]).
+    pub in_margin: bool,
 }
 
 impl Contact {
@@ -149,13 +152,15 @@ impl Contact {
             let t = alt - n * n.dot(&alt);
             crate::geom::normalize3(&t, 1e-9).unwrap_or(Vec3::x())
         });
-        Contact { position, normal: n, tangent: t, mu, mu_m, mu_m_y: mu_m }
+        Contact { position, normal: n, tangent: t, mu, mu_m, mu_m_y: mu_m, in_margin: true }
     }
 
-    /// The boom's tip on the ground: a point contact (no moments) with the boom's friction, which keeps the margin's
-    /// headroom like a wheel (module docs).
+    /// The boom's tip on the ground: a point contact (no moments) that must hold with plain friction but gives no
+    /// headroom to the margin. It carries a small share of the weight (about the boom's), and headroom taken from it
+    /// would cap every margin at `mu` times that share, so poses the rover holds with its boom down would all look
+    /// thin.
     pub fn tip(position: Vec3, normal: Vec3, hint: Vec3, mu: Real) -> Self {
-        Contact::new(position, normal, hint, mu, 0.0)
+        Contact { in_margin: false, ..Contact::new(position, normal, hint, mu, 0.0) }
     }
 
     /// The contact of a rigid wheel's rim: a line along the contact-frame y axis (the axle; x along `hint`, the
@@ -364,7 +369,9 @@ impl StabilityProblem {
                 mat_set(&mut lp.g, r0 + 1 + j, col, *ux);
                 mat_set(&mut lp.g, r0 + 1 + j, col + 1, *uy);
                 mat_set(&mut lp.g, r0 + 1 + j, col + 2, -OCTAGON_INSET * mu);
-                mat_set(&mut lp.g, r0 + 1 + j, S_COL, OCTAGON_INSET);
+                if c.in_margin {
+                    mat_set(&mut lp.g, r0 + 1 + j, S_COL, OCTAGON_INSET);
+                }
                 vec_set(&mut lp.h, r0 + 1 + j, 0.0);
             }
             // (4)-(6) with margin, only for the moments the contact carries
@@ -496,6 +503,7 @@ mod tests {
                 mu,
                 mu_m: 0.0,
                 mu_m_y: 0.0,
+                in_margin: true,
             });
             let p = StabilityProblem {
                 contacts,
