@@ -496,9 +496,8 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
         if !self.mission.active() {
             return false;
         }
-        let approximate_ok = state == PlanState::ApproximateSolution
-            && self.mission.goal.is_some_and(|g| g.allow_approximate)
-            && self.approximate_progress_m() >= mcfg::MIN_APPROXIMATE_PROGRESS_M;
+        let allowed = self.mission.goal.is_some_and(|g| g.allow_approximate);
+        let approximate_ok = state == PlanState::ApproximateSolution && self.approximate_drivable(allowed);
         let drivable = match state {
             PlanState::ExactSolution => true,
             PlanState::ApproximateSolution => approximate_ok && !self.ground_observed_to_goal(),
@@ -527,7 +526,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
         if !self.mission.active() {
             return;
         }
-        let progress = self.approximate_progress_m();
+        let approximate_ok = self.approximate_drivable(self.mission.goal.is_some_and(|g| g.allow_approximate));
         let m = &mut self.mission;
         m.seg = 0;
         m.next_open = 0;
@@ -536,7 +535,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
                 m.state = MissionState::Driving;
             }
             PlanState::ApproximateSolution => {
-                if m.goal.is_some_and(|g| g.allow_approximate) && progress >= mcfg::MIN_APPROXIMATE_PROGRESS_M {
+                if approximate_ok {
                     m.state = MissionState::Driving;
                 } else {
                     m.stop(StopReason::NoSolution);
@@ -615,9 +614,16 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
         Some(self.plan_from_here(now))
     }
 
+    /// Whether the mission may drive the stored approximate path: its goal allows one (`allowed`) and the path's
+    /// last state is at least `MIN_APPROXIMATE_PROGRESS_M` nearer the goal than its first. The one rule for
+    /// `mission_search_more`, `mission_planned` and a homotopy leg's failure.
+    pub(super) fn approximate_drivable(&mut self, allowed: bool) -> bool {
+        allowed && self.approximate_progress_m() >= mcfg::MIN_APPROXIMATE_PROGRESS_M
+    }
+
     /// How much nearer the goal the last state of the stored plan is than its start (axle to goal position),
     /// metres; negative infinity without a plan.
-    pub(super) fn approximate_progress_m(&mut self) -> Real {
+    fn approximate_progress_m(&mut self) -> Real {
         let Some(goal) = self.mission.goal else { return Real::NEG_INFINITY };
         let g = Vec3::new(goal.position.x, goal.position.y, goal.position.z);
         let path = planning::path(&mut self.storage);

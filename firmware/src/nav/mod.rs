@@ -488,10 +488,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
         let failed = match state {
             PlanState::NoSolutionWithinBudget => true,
             // the mission drives an approximate plan only when allowed and it makes progress (`mission_planned`)
-            PlanState::ApproximateSolution => {
-                !(h.goal.allow_approximate
-                    && self.approximate_progress_m() >= crate::config::mission::MIN_APPROXIMATE_PROGRESS_M)
-            }
+            PlanState::ApproximateSolution => !self.approximate_drivable(h.goal.allow_approximate),
             _ => false,
         };
         let legs = self.global.global_ref().map_or(0, |g| g.legs.len());
