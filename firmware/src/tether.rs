@@ -24,7 +24,10 @@
 //! On a field that declares itself known everywhere and `L`-Lipschitz (`DistanceField::lipschitz_bound`: an exact
 //! world, not the onboard map), a sample at distance `d` proves the points within `(d - c) / L` of it clear: the
 //! samples of the same line and of the next sweep lines (which differ by a fraction of the motion) that lie there
-//! are not queried. The same samples block, so the same anchors, with a fraction of the queries.
+//! are not queried. The same samples block, so the same anchors, with a fraction of the queries. On the onboard map
+//! (`DistanceField::cell_key`: trilinear cells) a query also bounds the distance over its interpolation cell; a
+//! sample of the next sweep line, or the next sample of the same line, in a cell bounded beyond the contact
+//! distance is not queried either (same anchors: the test `the_maps_cell_bounds_give_the_same_anchors_...`).
 //!
 //! # Detachment (IV-B b, Fig. 5)
 //! Frame `F_d` at anchor `a_N`: `b` = unit(`a_N - a_{N-1}`) (the incoming tether), `z` = the anchor's gradient made
@@ -43,7 +46,7 @@ use crate::config::tether::{
     SWEEP_SAMPLES_ACROSS, SWEEP_SAMPLES_ALONG, TETHER_CONTACT_DISTANCE_M,
 };
 use crate::geom::{normalize3, Real, Vec3};
-use crate::map::{DistanceField, DistanceQuery};
+use crate::map::{CellKey, DistanceField, DistanceQuery};
 
 /// A tether-terrain contact point: the point and the ESDF gradient there (Paton: `a_i = (p, g)`).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -157,10 +160,17 @@ const LINE_SAMPLES: usize = (NEAR_PIVOT_SAMPLES + SWEEP_SAMPLES_ALONG) as usize;
 /// query whose clearance covered it). A sample within `(d - c) / L` of its witness cannot be within the contact
 /// distance `c`: consecutive sweep lines share the pivot and differ by a fraction of the motion, so the line before
 /// proves most of a line's samples clear. Without a bound nothing is remembered and every sample is queried.
+///
+/// On a field that is piecewise over cells (`DistanceField::cell_key`: the onboard map's interpolation cells) it
+/// remembers, for each sample index, the last cell queried there and the lower bound on the distance over it: a
+/// sample of the next sweep line in the same cell, bounded beyond the contact distance, is clear (the samples of
+/// neighbouring lines are a fraction of a voxel apart).
 struct SweepMemo {
     lipschitz: Option<Real>,
     /// (witness point, its distance); the distance is minus infinity where there is none.
     witness: [(Vec3, Real); LINE_SAMPLES],
+    /// (cell, lower bound of the distance in it); the bound is minus infinity where there is none.
+    cells: [(CellKey, Real); LINE_SAMPLES],
 }
 
 impl SweepMemo {
@@ -168,6 +178,7 @@ impl SweepMemo {
         SweepMemo {
             lipschitz: crate::map::usable_lipschitz_bound(map),
             witness: [(Vec3::zeros(), Real::NEG_INFINITY); LINE_SAMPLES],
+            cells: [([0; 3], Real::NEG_INFINITY); LINE_SAMPLES],
         }
     }
 }
@@ -194,6 +205,8 @@ fn blocked_line(
     // (the same answer with fewer queries)
     let lipschitz = memo.lipschitz;
     let mut cleared: Option<(Real, Real, Vec3, Real)> = None;
+    // the cell of the last sample queried or skipped on this line, with its bound
+    let mut last_cell: (CellKey, Real) = ([0; 3], Real::NEG_INFINITY);
     let near = NEAR_PIVOT_SAMPLES;
     for k in 1..=(SWEEP_SAMPLES_ALONG + near) {
         // the first `near` samples cover [PIVOT_EXCLUSION_M, NEAR_PIVOT_RANGE_M] from the pivot finely (a tether
@@ -218,8 +231,27 @@ fn blocked_line(
                 continue;
             }
         }
+        // the same cell as this sample's on an earlier line (or the previous sample's on this one), bounded clear
+        let key = map.cell_key(&p);
+        let memo_cell = memo.cells.get_mut((k - 1) as usize);
+        if let (Some(key), Some(cell)) = (key, memo_cell) {
+            let clear = |(c, lower): &(CellKey, Real)| *c == key && *lower > TETHER_CONTACT_DISTANCE_M;
+            if clear(cell) {
+                last_cell = *cell;
+                continue;
+            }
+            if clear(&last_cell) {
+                *cell = last_cell;
+                continue;
+            }
+        }
         stats.queries += 1;
-        match map.query(&p) {
+        let (query, lower) = map.query_with_cell_bound(&p);
+        if let (Some(key), Some(cell)) = (key, memo.cells.get_mut((k - 1) as usize)) {
+            *cell = (key, lower.unwrap_or(Real::NEG_INFINITY));
+            last_cell = *cell;
+        }
+        match query {
             DistanceQuery::Unknown => return Err(TetherError::UnknownSpace),
             DistanceQuery::Known { distance, gradient } => {
                 if distance <= TETHER_CONTACT_DISTANCE_M && best.is_none_or(|b| distance < b.2) {
@@ -512,6 +544,89 @@ mod tests {
             }
         }
         assert!(attached > 0 && fewer > 0, "attached {attached}, fewer queries in {fewer} motions");
+    }
+
+    /// The cliff as the onboard map sees it: 0.2 m voxels over x in [-2, 4), y in [-1.2, 1.2), z in [-1, 6), the
+    /// voxels beyond x = `known_x` unobserved.
+    fn cliff_map<'a>(blocks: &'a mut [crate::map::Block], index: &'a mut [u32], known_x: Real) -> crate::map::Map<'a> {
+        let cfg = crate::config::map::MapConfig::with_voxel_size(0.2);
+        crate::map::map_of_field(&Cliff, cfg, (blocks, index), ([-10, -6, -5], [20, 6, 30]), |c| c.x <= known_x)
+    }
+
+    /// A field that hides its cells (`DistanceField::cell_key`): every sample is queried.
+    struct NoCells<'a, D>(&'a D);
+    impl<D: DistanceField> DistanceField for NoCells<'_, D> {
+        fn query(&self, p: &Vec3) -> DistanceQuery {
+            self.0.query(p)
+        }
+    }
+
+    /// The onboard map's cell bounds skip sweep-line samples (`SweepMemo::cells`): the same anchors (and the same
+    /// errors in unknown space) as querying every sample, with fewer queries; so also through `UnobservedAsFree`
+    /// on a map that has not seen all of the sweep.
+    #[test]
+    fn the_maps_cell_bounds_give_the_same_anchors_with_fewer_queries() {
+        let ends = [
+            Vec3::new(3.0, 0.0, 4.5),
+            Vec3::new(1.0, 0.0, 0.5),
+            Vec3::new(0.5, 0.6, 0.5),
+            Vec3::new(2.8, -0.5, 0.5),
+            Vec3::new(-1.0, 0.0, 4.5),
+            Vec3::new(2.0, 0.6, 3.0),
+        ];
+        let (mut attached, mut fewer, mut motions) = (0, 0, 0);
+        for known_x in [4.0 as Real, 2.0] {
+            let (mut blocks, mut index) = (std::vec![crate::map::Block::EMPTY; 1024], std::vec![0u32; 2048]);
+            let map = cliff_map(&mut blocks, &mut index, known_x);
+            let free = crate::map::UnobservedAsFree(&map);
+            let free_plain = crate::map::UnobservedAsFree(&NoCells(&map));
+            for root in [Vec3::new(-1.5, 0.0, 5.5), Vec3::new(-1.0, 0.8, 5.8)] {
+                let mut h = [AnchorHistory::new(Anchor::root(root)), AnchorHistory::new(Anchor::root(root))];
+                let mut hf = h.clone();
+                for w in ends.windows(2) {
+                    let (x0, x1) = (w[0], w[1]);
+                    let mut out: [AnchorHistory; 4] = Default::default();
+                    let [o0, o1, o2, o3] = &mut out;
+                    let results = [
+                        (
+                            predict_anchors(&NoCells(&map), &h[0], &x0, &x1, o0),
+                            predict_anchors(&map, &h[1], &x0, &x1, o1),
+                        ),
+                        (
+                            predict_anchors(&free_plain, &hf[0], &x0, &x1, o2),
+                            predict_anchors(&free, &hf[1], &x0, &x1, o3),
+                        ),
+                    ];
+                    let mut ok = [false; 2];
+                    for ((ra, rb), ok) in results.into_iter().zip(ok.iter_mut()) {
+                        motions += 1;
+                        match (ra, rb) {
+                            (Ok(sa), Ok(sb)) => {
+                                let at = (x0, x1);
+                                assert_eq!((sa.attached, sa.detached), (sb.attached, sb.detached), "{at:?}");
+                                assert!(sb.queries <= sa.queries);
+                                attached += sa.attached;
+                                fewer += u32::from(sb.queries < sa.queries);
+                                *ok = true;
+                            }
+                            (ra, rb) => assert_eq!(ra.err(), rb.err(), "{root:?} {x0:?} -> {x1:?}"),
+                        }
+                    }
+                    assert_eq!(out[0].as_slice(), out[1].as_slice(), "{known_x} {root:?} {x0:?} -> {x1:?}");
+                    assert_eq!(out[2].as_slice(), out[3].as_slice(), "{known_x} {root:?} {x0:?} -> {x1:?}");
+                    // after an error the next motion starts from the history before it
+                    let [o0, o1, o2, o3] = out;
+                    if ok[0] {
+                        h = [o0, o1];
+                    }
+                    if ok[1] {
+                        hf = [o2, o3];
+                    }
+                }
+            }
+        }
+        std::eprintln!("{motions} motions, {attached} anchors attached, fewer queries in {fewer}");
+        assert!(attached > 0 && fewer * 2 > motions, "attached {attached}, fewer queries in {fewer} of {motions}");
     }
 
     /// The cliff, but nobody has observed the space above x > 2.

@@ -101,7 +101,26 @@ pub trait DistanceField {
     fn lipschitz_bound(&self) -> Option<Real> {
         None
     }
+
+    /// The key of the cell that holds `p` when the field is piecewise over cells: inside a cell, whether a query is
+    /// `Unknown` depends only on the cell, and a known distance is a convex combination of values fixed per cell
+    /// (the onboard map's trilinear interpolation cells). `None` (the default) when `p` lies in no such cell.
+    fn cell_key(&self, _p: &Vec3) -> Option<CellKey> {
+        None
+    }
+
+    /// [`Self::query`] at `p`, with a lower bound on the distance everywhere in `p`'s cell ([`Self::cell_key`])
+    /// when the cell is known, already shrunk for rounding. A sample whose cell an earlier query bounded beyond the
+    /// contact distance cannot block the tether's sweep line ([`crate::tether`]): the same answer, without the
+    /// query. Default: the query and `None`.
+    fn query_with_cell_bound(&self, p: &Vec3) -> (DistanceQuery, Option<Real>) {
+        (self.query(p), None)
+    }
 }
+
+/// A cell of a field that is piecewise over cells ([`DistanceField::cell_key`]): the onboard map's interpolation
+/// cell, by its lowest voxel.
+pub type CellKey = [i32; 3];
 
 /// `map`'s [`DistanceField::lipschitz_bound`] when it can be used (finite and positive), else `None`.
 pub fn usable_lipschitz_bound(map: &impl DistanceField) -> Option<Real> {
@@ -134,6 +153,21 @@ impl<D: DistanceField> DistanceField for UnobservedAsFree<'_, D> {
             DistanceQuery::Unknown if crate::geom::is_finite3(p) => {
                 DistanceQuery::Known { distance: UNOBSERVED_FREE_DISTANCE_M, gradient: Vec3::zeros() }
             }
+            q => q,
+        }
+    }
+
+    fn cell_key(&self, p: &Vec3) -> Option<CellKey> {
+        self.0.cell_key(p)
+    }
+
+    /// The inner field's bound; a cell the inner field does not know at all reads as free throughout.
+    fn query_with_cell_bound(&self, p: &Vec3) -> (DistanceQuery, Option<Real>) {
+        match self.0.query_with_cell_bound(p) {
+            (DistanceQuery::Unknown, _) if crate::geom::is_finite3(p) => (
+                DistanceQuery::Known { distance: UNOBSERVED_FREE_DISTANCE_M, gradient: Vec3::zeros() },
+                self.0.cell_key(p).map(|_| UNOBSERVED_FREE_DISTANCE_M),
+            ),
             q => q,
         }
     }
@@ -625,6 +659,31 @@ pub(crate) const WEIGHT_SCALE: Real = 64.0;
 pub(crate) fn quantize_weight(w: Real, max_weight: Real) -> u16 {
     let w = if w.is_finite() { crate::geom::clamp(w, 0.0, max_weight) } else { 0.0 };
     crate::geom::round_i32(w * WEIGHT_SCALE).clamp(0, u16::MAX as i32) as u16
+}
+
+/// For the other modules' tests: the onboard map of an exact `field`, its voxels in the box `lo..hi` (voxel indices)
+/// set from the field's distance where `observed(voxel centre)`, the rest unobserved, and its ESDF updated.
+#[cfg(test)]
+pub(crate) fn map_of_field<'a>(
+    field: &impl DistanceField,
+    cfg: MapConfig,
+    (blocks, index): (&'a mut [Block], &'a mut [u32]),
+    (lo, hi): (VoxelIndex, VoxelIndex),
+    observed: impl Fn(&Vec3) -> bool,
+) -> Map<'a> {
+    let mut map = Map::from_slices(cfg, blocks, index).unwrap_or_else(|e| panic!("{e:?}"));
+    for x in lo[0]..hi[0] {
+        for y in lo[1]..hi[1] {
+            for z in lo[2]..hi[2] {
+                let c = map.voxel_center([x, y, z]);
+                if let (true, DistanceQuery::Known { distance, .. }) = (observed(&c), field.query(&c)) {
+                    map.set_voxel([x, y, z], distance, 1.0).unwrap_or_else(|e| panic!("{e:?}"));
+                }
+            }
+        }
+    }
+    assert!(map.update_esdf().converged);
+    map
 }
 
 #[cfg(test)]

@@ -2,8 +2,8 @@
 
 use super::esdf::site_distance;
 use super::{
-    local_coords, local_index, split, DistanceField, DistanceQuery, Map, Site, VoxelIndex, BLOCK_EDGE, BLOCK_VOXELS,
-    NO_SITE,
+    local_coords, local_index, split, CellKey, DistanceField, DistanceQuery, Map, Site, VoxelIndex, BLOCK_EDGE,
+    BLOCK_VOXELS, NO_SITE,
 };
 use crate::config::map::BELOW_SURFACE_FILL_VOXELS;
 use crate::geom::{floor_i32, normalize3, Real, Vec3};
@@ -218,16 +218,15 @@ impl Map<'_> {
         None
     }
 
-    /// [`Self::trilinear`] of the ESDF with unknown voxels filled in where it can be
-    /// ([`Self::esdf_filled`]).
-    fn trilinear_filled(&self, p: &Vec3) -> Option<(Real, Vec3)> {
-        let (g0, t) = self.interpolation_cell(p);
+    /// The 8 values of the interpolation cell whose lowest corner is `g0`, unknown voxels filled in where they can
+    /// be ([`Self::esdf_filled`]).
+    fn filled_cell_values(&self, g0: VoxelIndex) -> Option<[Real; 8]> {
         let mut v = [0.0 as Real; 8];
         for (k, vk) in v.iter_mut().enumerate() {
             let g = [g0[0] + (k & 1) as i32, g0[1] + ((k >> 1) & 1) as i32, g0[2] + ((k >> 2) & 1) as i32];
             *vk = self.esdf_filled(g)?;
         }
-        Some(self.interpolate(&v, t))
+        Some(v)
     }
 
     /// Interpolated TSDF at `p` (metres) with its gradient, `None` if any of the 8 voxels is unknown.
@@ -288,17 +287,46 @@ impl Map<'_> {
     }
 }
 
+impl Map<'_> {
+    /// The interpolated ESDF at `p` (filled where it can be), its gradient, and the smallest of the cell's 8 values
+    /// (a lower bound on the interpolant anywhere in the cell, before rounding).
+    fn esdf_interpolated(&self, p: &Vec3) -> Option<(Real, Vec3, Real)> {
+        let (g0, t) = self.interpolation_cell(p);
+        let v = self.cell_values(g0, |s, i| self.esdf_at(s, i)).or_else(|| self.filled_cell_values(g0))?;
+        let (distance, gradient) = self.interpolate(&v, t);
+        Some((distance, gradient, v.iter().fold(Real::INFINITY, |m, x| m.min(*x))))
+    }
+}
+
+/// What the trilinear interpolant may lose to `f32` rounding below the smallest of its 8 values: 0.1 mm, hundreds
+/// of ulps of the ESDF's values (at most `esdf_max_distance`, metres).
+const CELL_BOUND_MARGIN_M: Real = 1e-4;
+
 impl DistanceField for Map<'_> {
     fn query(&self, p: &Vec3) -> DistanceQuery {
+        self.query_with_cell_bound(p).0
+    }
+
+    /// The interpolation cell of `p` while `p`'s fractions in it are within `[0, 1]` (the interpolant is then a
+    /// convex combination of the cell's 8 values).
+    fn cell_key(&self, p: &Vec3) -> Option<CellKey> {
         if !crate::geom::is_finite3(p) {
-            return DistanceQuery::Unknown;
+            return None;
         }
-        let q = self.trilinear(p, |s, i| self.esdf_at(s, i)).or_else(|| self.trilinear_filled(p));
-        match q {
-            Some((distance, gr)) => {
-                DistanceQuery::Known { distance, gradient: normalize3(&gr, 1e-6).unwrap_or_else(Vec3::zeros) }
-            }
-            None => DistanceQuery::Unknown,
+        let (g0, t) = self.interpolation_cell(p);
+        t.iter().all(|f| (0.0..=1.0).contains(f)).then_some(g0)
+    }
+
+    fn query_with_cell_bound(&self, p: &Vec3) -> (DistanceQuery, Option<Real>) {
+        if !crate::geom::is_finite3(p) {
+            return (DistanceQuery::Unknown, None);
+        }
+        match self.esdf_interpolated(p) {
+            Some((distance, gr, min)) => (
+                DistanceQuery::Known { distance, gradient: normalize3(&gr, 1e-6).unwrap_or_else(Vec3::zeros) },
+                Some(min - CELL_BOUND_MARGIN_M),
+            ),
+            None => (DistanceQuery::Unknown, None),
         }
     }
 }

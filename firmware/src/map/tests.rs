@@ -727,3 +727,57 @@ fn far_apart_changes_are_raised_exactly_through_the_coarse_region_map() {
         assert!(max_err < 1.0 && inexact * 100 <= total, "cluster at {o:?}: {max_err} {inexact}");
     }
 }
+
+/// The cell bound (`DistanceField::query_with_cell_bound`), which lets the tether's sweep lines skip samples: on a
+/// grazing slope's map (cells observed, filled under the surface and between rays, and unknown), every point of a
+/// sample's cell is of the same kind as the sample (known or unknown), and no known point of the cell is closer
+/// than the bound; so also through `UnobservedAsFree`, where an unknown cell reads free throughout.
+#[test]
+fn the_cell_bound_holds_everywhere_in_the_cell() {
+    let cfg = MapConfig::with_voxel_size(0.05);
+    let vs = cfg.voxel_size;
+    let (mut b, mut i) = slices(2048, 4096);
+    let mut map = Map::from_slices(cfg, &mut b, &mut i).unwrap();
+    grazing_plane_map(&mut map, (35.0 as Real).to_radians(), 0.4);
+    let mut rng = rand_pcg::Pcg32::new(5, 9);
+    let mut unit = || (rng.next_u32() >> 8) as Real / (1u32 << 24) as Real;
+    let (mut known, mut unknown, mut filled) = (0, 0, 0);
+    for _ in 0..3000 {
+        // around the observed square, above and below the plane and beyond it
+        let p = Vec3::new(-0.9 + 1.8 * unit(), -0.9 + 1.8 * unit(), -0.8 + 1.3 * unit());
+        let Some(key) = map.cell_key(&p) else { panic!("{p:?} has no cell") };
+        let (q, lower) = map.query_with_cell_bound(&p);
+        assert_eq!(q, map.query(&p));
+        let free = UnobservedAsFree(&map);
+        let (qf, lower_free) = free.query_with_cell_bound(&p);
+        assert_eq!((qf, free.cell_key(&p)), (free.query(&p), Some(key)));
+        match q {
+            DistanceQuery::Known { .. } => known += 1,
+            DistanceQuery::Unknown => unknown += 1,
+        }
+        filled += usize::from(
+            (0..8).any(|k| map.esdf_voxel([key[0] + (k & 1), key[1] + ((k >> 1) & 1), key[2] + (k >> 2)]).is_none())
+                && matches!(q, DistanceQuery::Known { .. }),
+        );
+        assert_eq!(lower.is_some(), matches!(q, DistanceQuery::Known { .. }), "{p:?}");
+        assert!(lower_free.is_some(), "{p:?}: every cell is known through UnobservedAsFree");
+        for _ in 0..20 {
+            // a point of the same cell: between the voxel centres of its lowest and highest corners
+            let at = |c: i32, f: Real| (c as Real + 0.5 + f) * vs;
+            let p2 = Vec3::new(at(key[0], unit()), at(key[1], unit()), at(key[2], unit()));
+            assert_eq!(map.cell_key(&p2), Some(key), "{p2:?}");
+            for (q2, q, lower) in [(map.query(&p2), q, lower), (free.query(&p2), qf, lower_free)] {
+                match (q2, q) {
+                    (DistanceQuery::Known { distance, .. }, DistanceQuery::Known { .. }) => {
+                        let lower = lower.unwrap_or(Real::INFINITY);
+                        assert!(distance >= lower, "{p2:?}: {distance} below the cell's bound {lower} from {p:?}");
+                    }
+                    (DistanceQuery::Unknown, DistanceQuery::Unknown) => {}
+                    _ => panic!("{p2:?} is {q2:?}, {p:?} in the same cell is {q:?}"),
+                }
+            }
+        }
+    }
+    std::eprintln!("{known} known ({filled} of them on filled cells), {unknown} unknown samples");
+    assert!(known > 300 && unknown > 300 && filled > 10, "{known} known, {filled} filled, {unknown} unknown");
+}
