@@ -90,9 +90,53 @@ pub(crate) fn band_site(d: Real, band: Real, vs: Real) -> i8 {
 /// `off` with signed value `w`: `|off| + sign * w` (see the module docs), at least 0.
 #[inline]
 pub(crate) fn site_distance(w: i8, off: [i32; 3], inside: bool) -> Real {
-    let n2 = (off[0] * off[0] + off[1] * off[1] + off[2] * off[2]) as Real;
+    let n2 = off[0] * off[0] + off[1] * off[1] + off[2] * off[2];
     let t = w as Real * 0.01;
-    (libm::sqrtf(n2) + if inside { -t } else { t }).max(0.0)
+    (integer_sqrt(n2) + if inside { -t } else { t }).max(0.0)
+}
+
+/// `sqrt(n)` for a squared voxel offset `n >= 0`, correctly rounded (the bits of `libm::sqrtf(n as f32)`): from
+/// [`SQRT_OF_INTEGERS`] below its end, else `libm::sqrtf`. Each query reads 8 site distances, and the flight
+/// computer's `libm::sqrtf` is a software routine of about 60 instructions (no `vsqrt` without `unsafe`).
+#[inline]
+pub(crate) fn integer_sqrt(n: i32) -> Real {
+    match SQRT_OF_INTEGERS.get(n as usize) {
+        Some(r) => *r,
+        None => libm::sqrtf(n as Real),
+    }
+}
+
+/// `sqrt(n)` for `n` in `0..1024` (offsets up to 32 voxels, beyond the default ESDF reach of 30 voxels at 5 cm),
+/// correctly rounded to `f32`, built at compile time (4 KiB of flash). The indexing runs in the compiler (`get_mut`
+/// is not `const`): an index out of range fails the build, not the flight.
+#[allow(clippy::indexing_slicing)]
+static SQRT_OF_INTEGERS: [Real; 1024] = {
+    let mut table = [0.0 as Real; 1024];
+    let mut n = 1;
+    while n < table.len() {
+        table[n] = rounded_sqrt(n as u32);
+        n += 1;
+    }
+    table
+};
+
+/// `sqrt(n)` rounded to the nearest `f32` (`0 < n < 2^24`): the 24-bit significand `m = round(sqrt(n 2^(2s)))`
+/// with `2^23 <= m < 2^24`, from the integer square root (no ties: `m^2 + m + 1/4` is never an integer).
+pub(crate) const fn rounded_sqrt(n: u32) -> Real {
+    // s: the shift that puts sqrt(n 2^(2s)) in [2^23, 2^24), i.e. n 2^(2s) in [2^46, 2^48)
+    let mut s: u32 = 0;
+    while ((n as u64) << (2 * s)) < (1u64 << 46) {
+        s += 1;
+    }
+    let big = (n as u64) << (2 * s);
+    let mut m = big.isqrt();
+    if big - m * m > m {
+        m += 1;
+    }
+    // m may round up to 2^24: the exponent then grows by one (m = 2^24 has a zero significand field)
+    let exponent = if m >> 24 != 0 { 24 - s } else { 23 - s };
+    let significand = if m >> 24 != 0 { (m >> 1) & 0x7f_ffff } else { m & 0x7f_ffff };
+    Real::from_bits(((exponent + 127) << 23) | significand as u32)
 }
 
 /// Cells of the coarse bit map of [`Map::mark_raise_region`] (8 KiB on its stack).

@@ -781,3 +781,18 @@ fn the_cell_bound_holds_everywhere_in_the_cell() {
     std::eprintln!("{known} known ({filled} of them on filled cells), {unknown} unknown samples");
     assert!(known > 300 && unknown > 300 && filled > 10, "{known} known, {filled} filled, {unknown} unknown");
 }
+
+/// The site distances' square roots (`esdf::integer_sqrt`: a compile-time table, then `libm::sqrtf`) have the bits
+/// of `libm::sqrtf` for every squared offset up to 3 * 127^2 (the largest an `i8` offset can make), and the
+/// table's own rounding (`rounded_sqrt`) is right up to 2^24.
+#[test]
+fn the_site_square_roots_are_libms_bit_for_bit() {
+    for n in 0..=3 * 127 * 127 {
+        let (got, want) = (esdf::integer_sqrt(n), libm::sqrtf(n as Real));
+        assert_eq!(got.to_bits(), want.to_bits(), "sqrt({n}): {got} vs {want}");
+    }
+    for n in (1..1u32 << 24).step_by(997).chain([(1 << 24) - 1, 4_194_303, 16_769_025]) {
+        let (got, want) = (esdf::rounded_sqrt(n), libm::sqrtf(n as Real));
+        assert_eq!(got.to_bits(), want.to_bits(), "rounded_sqrt({n}): {got} vs {want}");
+    }
+}
