@@ -179,7 +179,7 @@ fn wheel_points(params: &RoverParams) -> [[Vec3; WHEEL_CONTACT_POINTS]; 2] {
 /// ([`DistanceField::lipschitz_bound`]: an exact world, not the onboard map) a point last `d` from the terrain and
 /// moved by `m` since is at least `d - L m` from it, and [`wheel_gaps`] does not query a point that cannot be its
 /// wheel's nearest: the same gaps from fewer queries (the drop translates every point alike, so on a plane only the
-/// nearest is queried again). Without a bound every point is queried, as before.
+/// nearest is queried again). The onboard map has no such bound; its cells bound the points instead (`cells`).
 struct GapMemo {
     /// The contact points in the rover frame ([`wheel_points`]).
     points: [[Vec3; WHEEL_CONTACT_POINTS]; 2],

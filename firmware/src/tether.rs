@@ -159,7 +159,7 @@ const LINE_SAMPLES: usize = (NEAR_PIVOT_SAMPLES + SWEEP_SAMPLES_ALONG) as usize;
 /// each sample of a line, by its index, a point queried and the distance there (the sample's own last query, or the
 /// query whose clearance covered it). A sample within `(d - c) / L` of its witness cannot be within the contact
 /// distance `c`: consecutive sweep lines share the pivot and differ by a fraction of the motion, so the line before
-/// proves most of a line's samples clear. Without a bound nothing is remembered and every sample is queried.
+/// proves most of a line's samples clear. Without a bound no witness is kept.
 ///
 /// On a field that is piecewise over cells (`DistanceField::cell_key`: the onboard map's interpolation cells) it
 /// remembers, for each sample index, the last cell queried there and the lower bound on the distance over it: a

@@ -96,8 +96,8 @@ pub trait DistanceField {
     /// `Some(L)` when the field is known everywhere (never `Unknown` at a finite point) and `L`-Lipschitz:
     /// `|d(p) - d(q)| <= L |p - q|` (an exact signed distance field has `L = 1`). A sample at distance `d` then
     /// proves every point closer than `(d - c) / L` farther than `c` from the terrain, and the tether's sweep lines
-    /// skip them ([`crate::tether`]). Default `None`: every sample is queried (the onboard map: its unknown space
-    /// must be seen, and its interpolated field carries no such bound).
+    /// skip them ([`crate::tether`]). Default `None` (the onboard map: its unknown space must be seen, and its
+    /// interpolated field carries no such bound; it bounds each cell instead, [`Self::query_with_cell_bound`]).
     fn lipschitz_bound(&self) -> Option<Real> {
         None
     }
