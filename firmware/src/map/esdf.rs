@@ -120,12 +120,16 @@ static SQRT_OF_INTEGERS: [Real; 1024] = {
     table
 };
 
-/// `sqrt(n)` rounded to the nearest `f32` (`0 < n < 2^24`): the 24-bit significand `m = round(sqrt(n 2^(2s)))`
-/// with `2^23 <= m < 2^24`, from the integer square root (no ties: `m^2 + m + 1/4` is never an integer).
+/// `sqrt(n)` rounded to the nearest `f32` for `n < 2^24` (0 for `n = 0`): the 24-bit significand
+/// `m = round(sqrt(n 2^(2s)))` with `2^23 <= m < 2^24`, from the integer square root (no ties: `m^2 + m + 1/4` is
+/// never an integer).
 pub(crate) const fn rounded_sqrt(n: u32) -> Real {
-    // s: the shift that puts sqrt(n 2^(2s)) in [2^23, 2^24), i.e. n 2^(2s) in [2^46, 2^48)
+    if n == 0 || n >= 1 << 24 {
+        return if n == 0 { 0.0 } else { Real::NAN };
+    }
+    // s: the shift that puts sqrt(n 2^(2s)) in [2^23, 2^24), i.e. n 2^(2s) in [2^46, 2^48); at most 23 for n >= 1
     let mut s: u32 = 0;
-    while ((n as u64) << (2 * s)) < (1u64 << 46) {
+    while s < 23 && ((n as u64) << (2 * s)) < (1u64 << 46) {
         s += 1;
     }
     let big = (n as u64) << (2 * s);

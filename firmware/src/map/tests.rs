@@ -795,4 +795,7 @@ fn the_site_square_roots_are_libms_bit_for_bit() {
         let (got, want) = (esdf::rounded_sqrt(n), libm::sqrtf(n as Real));
         assert_eq!(got.to_bits(), want.to_bits(), "rounded_sqrt({n}): {got} vs {want}");
     }
+    // outside its domain it returns at once: 0 for 0, NaN from 2^24 on
+    assert_eq!(esdf::rounded_sqrt(0).to_bits(), 0);
+    assert!(esdf::rounded_sqrt(1 << 24).is_nan() && esdf::rounded_sqrt(u32::MAX).is_nan());
 }
