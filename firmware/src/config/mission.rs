@@ -53,6 +53,15 @@ pub const GROUND_TO_GOAL_SAMPLES: usize = 128;
 /// Voxels looked at down each of those columns, from the top of the planning bounds, for the terrain behind an
 /// observed surface. Default 512 (51 m at 10 cm, 25.6 m at 5 cm: deeper than any mission's bounds so far).
 pub const GROUND_COLUMN_VOXELS: usize = 512;
+/// Looks at an unobserved goal per goal: when planning ends with nothing the mission could drive and the goal's
+/// voxel column is unobserved, the rover turns in place to face the goal, so its next scan sees it, and plans again
+/// (`nav::mission`, `look_at_goal`). The range sensor looks ahead only, and a plan driven in reverse (Axel drives
+/// either way) leaves the goal behind it. Default 2: one look, and one more from wherever the next plan ends.
+pub const MAX_LOOKS: u32 = 2;
+/// A look turns only when the goal's bearing is at least this far from the heading, radians. Default 0.35 (20
+/// degrees: well inside any forward range sensor's horizontal field of view, so a rover facing the goal this
+/// closely has already looked at it).
+pub const LOOK_MIN_TURN_RAD: f32 = 0.35;
 /// Consecutive stalled motions before the mission stops safe with `MotionStalled` (each stall replans first).
 /// Default 2.
 pub const MAX_STALLS: u32 = 2;

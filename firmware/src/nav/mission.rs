@@ -129,6 +129,10 @@ pub struct Mission {
     margin_n: f32,
     cross_track_m: f32,
     replans: u32,
+    /// A look at the goal in progress: the heading to turn to before planning again (`Navigator::look_at_goal`).
+    look_yaw: Option<Real>,
+    /// Looks left for the current goal (`mcfg::MAX_LOOKS` per goal).
+    looks_left: u32,
     /// Replans since the rover last came `REPLAN_PROGRESS_M` nearer the goal (the `ReplanLimit` count).
     replans_stuck: u32,
     /// The tracked pose's least horizontal distance to the goal when `replans_stuck` was last reset, metres.
@@ -185,6 +189,8 @@ impl Mission {
             margin_n: 0.0,
             cross_track_m: 0.0,
             replans: 0,
+            look_yaw: None,
+            looks_left: 0,
             replans_stuck: 0,
             progress_mark_m: f32::INFINITY,
             motions_done: 0,
@@ -472,6 +478,8 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
         m.recheck_left = 0;
         m.cross_track_m = 0.0;
         m.reason = StopReason::None;
+        m.look_yaw = None;
+        m.looks_left = mcfg::MAX_LOOKS;
         if accepted {
             m.state = MissionState::Planning;
             // plan from the tracked tether, not a straight one from the root
@@ -534,15 +542,15 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
             PlanState::ExactSolution => {
                 m.state = MissionState::Driving;
             }
-            PlanState::ApproximateSolution => {
-                if approximate_ok {
-                    m.state = MissionState::Driving;
-                } else {
-                    m.stop(StopReason::NoSolution);
-                }
+            PlanState::ApproximateSolution if approximate_ok => {
+                m.state = MissionState::Driving;
             }
             PlanState::InvalidInput => m.stop(StopReason::GoalRefused),
-            _ => m.stop(StopReason::NoSolution),
+            _ => {
+                if !self.look_at_goal() {
+                    self.mission.stop(StopReason::NoSolution);
+                }
+            }
         }
         if self.mission.state == MissionState::Driving && self.arrived() {
             self.mission_arrived();
@@ -649,12 +657,65 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
         let voxel = map.config().voxel_size;
         let (dx, dy) = (goal.position.x - end.x, goal.position.y - end.y);
         let columns = ((libm::hypotf(dx, dy) / voxel) as usize).clamp(1, mcfg::GROUND_TO_GOAL_SAMPLES);
-        let depth = (((top - bottom) / voxel) as usize).min(mcfg::GROUND_COLUMN_VOXELS);
         (0..=columns).all(|k| {
             let f = k as Real / columns as Real;
-            let [x, y, z] = map.voxel_index(&Vec3::new(end.x + f * dx, end.y + f * dy, top));
-            (0..=depth as i32).any(|j| map.voxel_state([x, y, z - j]) == VoxelState::Occupied)
+            column_observed(&map, end.x + f * dx, end.y + f * dy, top, bottom)
         })
+    }
+
+    /// Planning ended with nothing to drive: when the goal's voxel column is unobserved and the goal's bearing is
+    /// more than `LOOK_MIN_TURN_RAD` from the heading, turn in place to face it (a motion check on the current map
+    /// with the tracked tether first), so the next scan looks there, then plan again (`mission_drive`). At most
+    /// `MAX_LOOKS` per goal. `true` when a look starts (the mission drives it); `false`: the mission stops.
+    fn look_at_goal(&mut self) -> bool {
+        let m = &self.mission;
+        let start = self.plan_start().map(|s| BodyPose { position: s.axle(), yaw: s.heading() });
+        let (Some(goal), Some(b), Some(problem)) = (m.goal, m.body.or(start), self.problem) else { return false };
+        let bearing = libm::atan2f(goal.position.y - b.position.y, goal.position.x - b.position.x);
+        if m.looks_left == 0 || libm::fabsf(wrap_angle(bearing - b.yaw)) < mcfg::LOOK_MIN_TURN_RAD {
+            return false;
+        }
+        let (cfg, used) = (self.cfg, self.used);
+        let Ok(map) = Map::reattach(cfg, self.blocks.borrow_mut(), self.index.borrow_mut(), used) else {
+            return false;
+        };
+        let (top, bottom) = (problem.bounds.max[2], problem.bounds.min[2]);
+        if column_observed(&map, goal.position.x, goal.position.y, top, bottom) {
+            return false;
+        }
+        let Some(space) = problem.space(&map) else { return false };
+        let (x, y) = (b.position.x, b.position.y);
+        let Ok(cur) = space.settle_under_axle(x, y, b.yaw) else { return false };
+        let full = wrap_angle(bearing - b.yaw);
+        // the whole turn, else the largest part of it that passes (a turn towards the goal widens the view)
+        let mut look = None;
+        for quarters in (1..=4u8).rev() {
+            let yaw = b.yaw + full * Real::from(quarters) / 4.0;
+            if libm::fabsf(full) * Real::from(quarters) / 4.0 < mcfg::LOOK_MIN_TURN_RAD {
+                break;
+            }
+            let to = space.settle_under_axle(x, y, yaw).map_err(MotionFailure::Settle);
+            match to.and_then(|to| space.check(&cur, &m.tracked, &to)) {
+                Ok(_) => {
+                    look = Some(yaw);
+                    break;
+                }
+                Err(e) => log::info!("mission: a turn {quarters}/4 of the way to the goal fails on the map: {e:?}"),
+            }
+        }
+        let Some(bearing) = look else { return false };
+        log::info!("mission: nothing to drive and the goal's column unobserved: turning to heading {bearing} to look");
+        planning::clear_plan(&mut self.storage);
+        self.stats.looks = self.stats.looks.saturating_add(1);
+        let m = &mut self.mission;
+        if m.body.is_none() {
+            m.body = Some(b);
+            m.remember_executed(b.position);
+        }
+        m.looks_left = m.looks_left.saturating_sub(1);
+        m.look_yaw = Some(bearing);
+        m.state = MissionState::Driving;
+        true
     }
 
     fn arrived(&self) -> bool {
@@ -974,6 +1035,19 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
         if self.mission.state == MissionState::Verifying {
             return self.recheck_one(now);
         }
+        if let (Some(yaw), Some(b)) = (self.mission.look_yaw.take(), self.mission.body) {
+            // one turn (where it ends is near enough: the look needs no precision), then a plan on the map the
+            // scan after it grows
+            let e = wrap_angle(yaw - b.yaw);
+            if libm::fabsf(e) <= mcfg::HEADING_TOLERANCE_RAD {
+                return self.replan(now);
+            }
+            let dir = (libm::cosf(b.yaw), libm::sinf(b.yaw));
+            let pull = lateral_pull(&self.mission.tracked, &b.position, dir);
+            self.mission.in_flight = Some(InFlight { from: b, pull, dir, reach_m: 0.0 });
+            self.replan_pending = true;
+            return DriveStep::Motion(Motion::Turn { yaw_rad: e });
+        }
         let next = match self.mission.cfg.tracking {
             Tracking::OpenLoop => self.open_loop_motion(),
             Tracking::ClosedLoop => self.closed_loop_motion(),
@@ -1224,6 +1298,7 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
             return DriveStep::Finished;
         };
         planning::clear_plan(&mut self.storage);
+        self.mission.look_yaw = None;
         let budget = goal.max_iterations.min(MAX_PLAN_ITERATIONS);
         let floor = f64::from((self.mission.cfg.min_margin_n / self.mission.weight_n).max(0.0));
         let tracked = &self.mission.tracked;
@@ -1258,6 +1333,14 @@ impl<B: BorrowMut<[Block]>, I: BorrowMut<[u32]>, P: BorrowMut<NavPlanStorage>, H
         log::info!("mission: replan {} from ({}, {})", self.mission.replans, pose.position.x, pose.position.y);
         DriveStep::Replan
     }
+}
+
+/// The map shows ground in the voxel column at `(x, y)`: an occupied voxel (the terrain behind an observed surface)
+/// between heights `top` and `bottom`, at most `mcfg::GROUND_COLUMN_VOXELS` voxels down from `top`.
+fn column_observed(map: &Map<'_>, x: Real, y: Real, top: Real, bottom: Real) -> bool {
+    let depth = (((top - bottom) / map.config().voxel_size) as usize).min(mcfg::GROUND_COLUMN_VOXELS);
+    let [x, y, z] = map.voxel_index(&Vec3::new(x, y, top));
+    (0..=depth as i32).any(|j| map.voxel_state([x, y, z - j]) == VoxelState::Occupied)
 }
 
 /// The motion from `cur` with history `tracked` to the end of the plan's segment `k` passes one motion check on

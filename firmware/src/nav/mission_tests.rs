@@ -763,3 +763,33 @@ fn a_search_with_nothing_to_drive_goes_on_to_the_plan_cap_before_no_solution() {
     assert_eq!((state, iterations, nav.stats.search_extensions), (PlanState::ApproximateSolution, 200, 0));
     assert_eq!(nav.mission_status().unwrap().state, MissionState::Driving);
 }
+
+#[test]
+fn with_nothing_to_drive_the_rover_turns_to_look_at_an_unobserved_goal_behind_it() {
+    // A band of ground unobserved across x in [-1.7, -1.3] (no scan comes in the run); the rover at the origin faces
+    // +x. The goal in that band behind the rover: no plan reaches it, and the rover turns to face it (the next scan
+    // would look there), plans again from there and stops. The same band ahead of the rover, the goal in it: it
+    // faces the goal already, and stops without turning.
+    for (band, gx, behind) in [((-1.7, -1.3), -1.5, true), ((1.3, 1.7), 1.5, false)] {
+        let seen = |x: f32| !(band.0..=band.1).contains(&x);
+        let mut nav = mapped_where(ROOT, MissionConfig::DEFAULT, &seen);
+        let mut g = goal(1, gx, 0.0);
+        g.max_iterations = 60;
+        assert_eq!(nav.goal(&g, Instant::from_micros(0)), PlanState::Accepted);
+        let mut world = World::new(ROOT, 0.0);
+        let run = drive(&mut nav, &mut world, 400, &mut |_, _, _| {});
+        let st = nav.mission_status().unwrap();
+        let looks = nav.stats.looks;
+        std::println!("goal x {gx}: {run:?}, looks {looks}, pose ({}, {}, {}), {st:?}", world.x, world.y, world.yaw);
+        assert_eq!((st.state, st.reason), (MissionState::Safe, StopReason::NoSolution));
+        assert_eq!((world.x, world.y), (0.0, 0.0), "the rover drove");
+        if behind {
+            assert_eq!((nav.stats.looks, run.replans), (1, 1), "no look at the goal behind the rover");
+            // facing the goal (bearing pi), or turned at least a quarter of the way (the part the map allows)
+            let off = libm::fabsf(crate::geom::wrap_angle(core::f32::consts::PI - world.yaw));
+            assert!(off <= 0.75 * core::f32::consts::PI + 1e-3, "the look turned away: yaw {}", world.yaw);
+        } else {
+            assert_eq!((nav.stats.looks, run.motions, world.yaw), (0, 0, 0.0), "a look at a goal the rover faces");
+        }
+    }
+}

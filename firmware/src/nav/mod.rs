@@ -149,6 +149,13 @@
 //!   `GROUND_TO_GOAL_SAMPLES` columns at most), looking again cannot help, and the search goes on to
 //!   `MAX_PLAN_ITERATIONS` first (budget, above): on a steep slope an approximate end beside the goal can be a
 //!   dead end that Axel, which holds there only along the fall line, leaves only by going back up.
+//! - **Looking at an unobserved goal**: when planning ends with nothing the mission could drive (`NoSolution`, or
+//!   an approximate plan it may not drive) while the goal's voxel column is unobserved and the goal's bearing is
+//!   more than `LOOK_MIN_TURN_RAD` from the heading, the rover turns in place to face the goal (the turn passes a
+//!   motion check on the current map with the tracked tether first), its next scan looks there, and it plans again,
+//!   at most `MAX_LOOKS` times per goal. The range sensor looks ahead only, and a plan driven in reverse (Axel drives
+//!   either way) leaves the goal behind it; without the look the mission stopped `NoSolution` in front of ground it
+//!   had never turned towards.
 //! - **Re-checks and replans**: after each report the next `RECHECK_AFTER_MOTION` segments are re-checked
 //!   (the current state's margin and the motion from it to the segment's end, then the planned motions, each a
 //!   full motion check on the current map: collision, settling, anchors, stability), after each scan the whole
@@ -176,7 +183,8 @@
 //!   from the tracked pose is not integrated (`scans_rejected`); counters in `MissionStatus` and
 //!   [`MissionCounters`].
 //! - Parameters (`config::mission`): `TRACK_SEGMENT_M` 0.5, `HEADING_TOLERANCE_RAD` 0.03, `SEGMENT_DONE_M` 0.08,
-//!   `MAX_REPLANS` 8, `REPLAN_PROGRESS_M` 0.5, `MIN_APPROXIMATE_PROGRESS_M` 0.25, `MAX_STALLS` 2,
+//!   `MAX_REPLANS` 8, `REPLAN_PROGRESS_M` 0.5, `MIN_APPROXIMATE_PROGRESS_M` 0.25, `MAX_LOOKS` 2,
+//!   `LOOK_MIN_TURN_RAD` 0.35, `MAX_STALLS` 2,
 //!   `POSE_JUMP_BASE_M` 0.5, `POSE_JUMP_PER_M` 0.5, `POSE_JUMP_YAW_RAD` 0.6,
 //!   `MAX_POSE_JUMPS` 3, `SCAN_POSE_TOLERANCE_M` 2.0, `MAX_SCAN_REJECTS` 3, `MAX_PAYOUT_RATE_M_PER_S` 1.0,
 //!   `PAYOUT_JUMP_SLACK_M` 0.3, `RECHECK_AFTER_MOTION` 2, `EXECUTED_CAPACITY` 64, `REESTIMATE_PER_STEP` 4,

@@ -185,6 +185,8 @@ pub struct NavPlanStats {
     /// Search rounds added to a mission's search that had spent its budget with nothing the mission could drive
     /// ([`Problem::extend`]).
     pub search_extensions: u32,
+    /// Turns in place to look at an unobserved goal (`nav::mission`, `look_at_goal`).
+    pub looks: u32,
 }
 
 impl NavPlanStats {
