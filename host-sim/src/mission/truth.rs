@@ -4,17 +4,16 @@
 //! tether prediction or stability LP (`firmware::tether`, `firmware::stability`): the judge is independent.
 //!
 //! ## True tether
-//! - **Ledge worlds** (tests 1-3, no mission rocks): [`crate::truth::tether`]'s closed forms (straight, over the
-//!   lip or the back edge, around the pole in either wrap direction). Of the candidates that exist, the one whose
-//!   length is closest to the previous increment's, and whose first contact is closest to the previous one's, is
-//!   kept: the tether's length and its contacts move continuously along a motion, so this follows its homotopy
-//!   class (a wrap round the pole stays a wrap, on the side it came from: right behind the pole both directions
-//!   have nearly the same length). At the first increment, the shortest.
-//!   **The gap**: one candidate shape at a time, and a pole wrap of at most half a turn
-//!   (`truth::tether::around`): the tether of Paton's test 3 after the loop (round the pole by ~220 degrees, then
-//!   over the lip) is none of them, so behind and past the pole the truth falls back to another candidate. The
-//!   general true tether (`truth::taut::TautTether`, used by the physics judge's path checks) has no such limit;
-//!   the mission does not use it yet.
+//! - **Ledge worlds** (tests 1-3 and the variants, no mission rocks): the general true tether
+//!   ([`crate::truth::taut::TautTether`], the physics judge's): the previous increment's tether continued to the
+//!   rover's new position ([`TautTether::update`]: contacts caught on the ledge's edges and the pole's, tightened,
+//!   released), so it follows its homotopy class through any wrap (the loop round the pole of Paton's test 3,
+//!   then over the lip); from scratch ([`TautTether::shortest`]) at the first increment or when the update cannot
+//!   go on. Only if the wrap edges cannot be built or neither gives a tether: [`crate::truth::tether`]'s closed
+//!   forms (straight, over the lip or the back edge, around the pole in either wrap direction, at most half a
+//!   turn), of which the candidate whose length and first contact are nearest the previous increment's is kept.
+//!   (The closed forms alone were the mission's truth before 2026-12-07: after the loop round the pole they fell
+//!   back to a candidate off the pole, and the payout jumped by metres; `host-sim/doc/mission.md`.)
 //! - **Every other world** (DEMs, the crater wall, meshes, or a ledge with mission rocks): the taut tether in the
 //!   vertical plane through the root and the rover: the upper convex hull of the terrain profile under the
 //!   segment (sampled every `PROFILE_STEP_M`), from the root to the rover. Its interior vertices are the
@@ -44,6 +43,8 @@ use firmware::geom::p3::{add_scaled, dist, dot, norm, scale, sub, P3};
 use firmware::geom::Real;
 
 use super::world::MissionWorld;
+#[cfg(feature = "sim")]
+use crate::truth::taut::{TautTether, SHORTEST_SAMPLE_M};
 use crate::truth::tether::{true_tether as ledge_tether, Wrap};
 use crate::world::World;
 
@@ -57,7 +58,16 @@ pub struct TrueTether {
     pub contacts: Vec<P3>,
     /// Length from the root to the rover, metres.
     pub length_m: f64,
+    /// The general true tether's state (ledge worlds), which the next increment continues.
+    pub taut: Option<TautState>,
 }
+
+/// The general true tether's state ([`crate::truth::taut`], built with the `sim` feature; without it there is none).
+#[cfg(feature = "sim")]
+pub type TautState = TautTether;
+/// The general true tether's state (without the `sim` feature there is none).
+#[cfg(not(feature = "sim"))]
+pub type TautState = core::convert::Infallible;
 
 impl TrueTether {
     /// The point the last straight piece leaves from.
@@ -71,7 +81,7 @@ pub fn profile_tether(world: &dyn World, root: P3, end: P3) -> TrueTether {
     let (dx, dy) = (end[0] - root[0], end[1] - root[1]);
     let l = (dx * dx + dy * dy).sqrt();
     if l < 1e-6 {
-        return TrueTether { contacts: vec![], length_m: dist(root, end) };
+        return TrueTether { contacts: vec![], length_m: dist(root, end), taut: None };
     }
     let n = (l / PROFILE_STEP_M).ceil() as usize;
     // (s, z) points: root, terrain samples strictly between, end
@@ -104,16 +114,26 @@ pub fn profile_tether(world: &dyn World, root: P3, end: P3) -> TrueTether {
     let chain: Vec<P3> = hull.iter().map(|p| to3(*p)).collect();
     let length_m = chain.windows(2).map(|w| dist(w[0], w[1])).sum();
     let contacts = chain.get(1..chain.len().saturating_sub(1)).unwrap_or(&[]).to_vec();
-    TrueTether { contacts, length_m }
+    TrueTether { contacts, length_m, taut: None }
 }
 
 /// The true tether from `root` to `end` (module docs); `prev` is the previous increment's, for continuity.
 pub fn true_tether(world: &MissionWorld, root: P3, end: P3, prev: Option<&TrueTether>) -> TrueTether {
+    #[cfg(feature = "sim")]
+    if let (Some(edges), false) = (world.ledge_edges(), world.has_present_rocks()) {
+        // the general true tether: the previous increment's continued to `end`, else the shortest from scratch
+        let continued = prev.and_then(|p| p.taut.clone()).and_then(|mut t| t.update(edges, end).ok().map(|()| t));
+        if let Some(t) = continued.or_else(|| TautTether::shortest(edges, root, end, SHORTEST_SAMPLE_M).ok()) {
+            let points = t.points(edges);
+            let contacts = points.get(1..points.len().saturating_sub(1)).unwrap_or(&[]).to_vec();
+            return TrueTether { contacts, length_m: t.length(edges), taut: Some(t) };
+        }
+    }
     if let (Some(ledge), false) = (world.ledge(), world.has_present_rocks()) {
         let mut cands: Vec<TrueTether> = Vec::new();
         for wrap in [None, Some(Wrap::Ccw), Some(Wrap::Cw)] {
             if let Some(t) = ledge_tether(ledge, root, end, wrap) {
-                cands.push(TrueTether { contacts: t.contacts, length_m: t.length });
+                cands.push(TrueTether { contacts: t.contacts, length_m: t.length, taut: None });
             }
         }
         // Continuity: the candidate whose length is nearest the previous one's, and, while both touch the terrain,
@@ -270,6 +290,47 @@ mod tests {
         }
         assert!(wrapped, "the path never wrapped the pole");
         assert!(prev.unwrap().contacts.is_empty(), "back on the -y side the tether comes off the pole");
+    }
+
+    /// Ledge-3 wrap's loop round the pole (behind it from its +y side, to its -y side, forward and over the lip),
+    /// in 5 cm increments, the tether end 0.35 m above the true ground: the true tether stays round the back of the
+    /// pole from its +y side to its -y side, and its length moves by at most what the end moved (a taut tether's
+    /// length is 1-Lipschitz in its end). The closed-form candidates cannot hold the wrap with the lip and jumped by
+    /// metres there (payout 12 -> 7.5 m in one 0.2 s reading).
+    #[test]
+    fn the_tether_stays_wrapped_round_the_pole_through_the_whole_loop() {
+        let base: Box<dyn crate::world::World> = Box::new(LedgeWorld::with_pole());
+        let world = MissionWorld::new(base, Some(LedgeWorld::with_pole()), Vec::new());
+        let root = crate::world::ledge::ROOT_ANCHOR_TEST2;
+        let corners: [[f64; 2]; 8] = [[-1.5, 0.0], [-1.8, 1.1], [-3.7, 1.4], [-4.2, 0.0], [-3.7, -1.4], [-1.0, -1.2], [-0.3, -0.8], [0.6, -0.6]];
+        let (pole, radius) = (crate::world::ledge::POLE_CENTRE_XY, crate::world::ledge::POLE_RADIUS_M);
+        let mut prev: Option<TrueTether> = None;
+        let view = world.truth();
+        let above = |x: f64, y: f64| {
+            let h = crate::world::World::height_at(&view, x as Real, y as Real).expect("on the world");
+            [x, y, f64::from(h) + 0.35]
+        };
+        let mut last_end = above(corners[0][0], corners[0][1]);
+        for w in corners.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            let n = ((b[0] - a[0]).hypot(b[1] - a[1]) / 0.05).ceil() as usize;
+            for k in 1..=n {
+                let f = k as f64 / n as f64;
+                let end = above(a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1]));
+                let t = true_tether(&world, root, end, prev.as_ref());
+                if let Some(p) = &prev {
+                    let moved = dist(end, last_end);
+                    assert!((t.length_m - p.length_m).abs() <= moved + 1e-3, "length jumped at {end:?}: {p:?} -> {t:?}");
+                }
+                prev = Some(t);
+                last_end = end;
+            }
+        }
+        let t = prev.expect("a tether");
+        let on_pole: Vec<&P3> = t.contacts.iter().filter(|c| ((c[0] - pole[0]).hypot(c[1] - pole[1]) - radius).abs() < 0.01).collect();
+        // round the back of the pole (its -x side, away from the root) from its +y side to its -y side
+        let side = |sign: f64| on_pole.iter().any(|c| sign * (c[1] - pole[1]) > 0.8 * radius);
+        assert!(side(1.0) && side(-1.0) && on_pole.iter().any(|c| c[0] < pole[0] - 0.8 * radius), "not wrapped: {t:?}");
     }
 
     #[test]

@@ -10,6 +10,8 @@ use firmware::geom::{Real, Vec3};
 use firmware::map::{DistanceField, DistanceQuery};
 
 use super::params::ObstacleSpec;
+#[cfg(feature = "sim")]
+use crate::truth::taut::WrapEdges;
 use crate::world::ledge::LedgeWorld;
 use crate::truth::solid::{ExactGeometry, Solid};
 use crate::world::{Aabb, World};
@@ -19,6 +21,10 @@ pub struct MissionWorld {
     base: Box<dyn World>,
     /// The same terrain as an analytic ledge, when it is one (the closed-form true tether needs it).
     ledge: Option<LedgeWorld>,
+    /// The ledge's wrap edges for the general true tether ([`crate::truth::taut`]), built with the world (`None`
+    /// for other terrains, or when they cannot be built: the closed forms then stand alone).
+    #[cfg(feature = "sim")]
+    ledge_edges: Option<WrapEdges>,
     rocks: Vec<ObstacleSpec>,
     present: Vec<bool>,
 }
@@ -28,7 +34,28 @@ impl MissionWorld {
     /// `appears_after_m = 0` are present at once.
     pub fn new(base: Box<dyn World>, ledge: Option<LedgeWorld>, rocks: Vec<ObstacleSpec>) -> Self {
         let present = rocks.iter().map(|r| r.appears_after_m <= 0.0).collect();
-        MissionWorld { base, ledge, rocks, present }
+        #[cfg(feature = "sim")]
+        let ledge_edges = ledge.as_ref().and_then(|l| {
+            let b = l.bounds();
+            let f = |v: Vec3| [f64::from(v.x), f64::from(v.y), f64::from(v.z)];
+            WrapEdges::new(&l.exact_geometry(), (f(b.min), f(b.max)))
+                .map_err(|e| log::warn!("mission truth: the ledge's wrap edges: {e}; the closed-form tethers stand alone"))
+                .ok()
+        });
+        MissionWorld {
+            base,
+            ledge,
+            #[cfg(feature = "sim")]
+            ledge_edges,
+            rocks,
+            present,
+        }
+    }
+
+    /// The analytic ledge's wrap edges for the general true tether, if the terrain is one.
+    #[cfg(feature = "sim")]
+    pub fn ledge_edges(&self) -> Option<&WrapEdges> {
+        self.ledge_edges.as_ref()
     }
 
     /// The analytic ledge, if the terrain is one.
