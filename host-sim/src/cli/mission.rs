@@ -270,6 +270,12 @@ pub fn summary(rep: &MissionReport) -> String {
         "  min true margin {:.1} N, max tension {:.0} N, max payout {:.2} m, cross-track from the plan {:.3} m mean / {:.3} m max\n",
         rep.min_true_margin_n, rep.max_tension_n, rep.max_payout_m, rep.mean_cross_track_m, rep.max_cross_track_m
     ));
+    if rep.truth_tether_fallbacks > 0 {
+        s.push_str(&format!(
+            "  true tether: {} increments fell back from the taut tether to the closed forms or the vertical profile\n",
+            rep.truth_tether_fallbacks
+        ));
+    }
     for (k, p) in rep.plans.iter().enumerate() {
         s.push_str(&format!(
             "  plan {k}: {} at t {:.1} s, {} iterations, {:.2} s host time, {} waypoints\n",

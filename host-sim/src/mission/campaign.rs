@@ -211,6 +211,11 @@ pub fn table(name: &str, reports: &[MissionReport]) -> String {
         mean(&|r| f64::from(r.slips))
     );
     let _ = writeln!(s, "  min true margin on the path  {min_margin:.1} N");
+    let fallbacks: u32 = reports.iter().map(|r| r.truth_tether_fallbacks).sum();
+    if fallbacks > 0 {
+        let why = "closed forms or vertical profile; mission::truth";
+        let _ = writeln!(s, "  true tether fallbacks        {fallbacks} increments ({why})");
+    }
     let _ = writeln!(
         s,
         "  max tension / payout         {max_t:.0} N / {max_p:.2} m"

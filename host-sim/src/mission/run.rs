@@ -41,7 +41,7 @@ use super::params::MissionSection;
 use super::sensing::{
     gaussian, overview_scan, overview_sensor, rover_scan, tether_reading, Localiser,
 };
-use super::truth::{true_tether, Body};
+use super::truth::{true_tether, Body, TETHER_REGION_MARGIN_M};
 use super::world::MissionWorld;
 use crate::physics::{GroundPose, HoldOutcome, HoldVerdict, PhysicsJudge, TetherSpec};
 use crate::link::{FlightLink, ResetCause};
@@ -258,6 +258,9 @@ pub struct MissionReport {
     pub physics_fall: Option<String>,
     /// Increments the simple statics could not hold and the physics judge held (`physics_falls`): not falls.
     pub statics_overruled: u32,
+    /// Increments whose true tether fell back from the general taut tether to the closed forms or the vertical
+    /// profile (`mission::truth`: the rover outside the tether region, or the taut tether stuck).
+    pub truth_tether_fallbacks: u32,
     /// The last warning or error the flight software forwarded (`Log` at `Warn` or `Error`): a refused goal's
     /// reason, a planning stop's, a safe stop's.
     pub flight_warning: Option<String>,
@@ -370,7 +373,19 @@ pub fn truth_for(sc: &Scenario, cfg: &Configure, m: &MissionSection) -> Result<M
         WorldSpec::Ledge { shape, poles } => crate::world::ledge::LedgeWorld::custom(shape, &poles).ok(),
         _ => None,
     };
-    let world = MissionWorld::new(base, ledge, m.obstacles.clone());
+    // The tether region: the box of the root, the start, the waypoints and the goal, widened by
+    // `TETHER_REGION_MARGIN_M` across (the rover's excursions, and wraps round what stands beside its way), every
+    // height; the wrap edges of a DEM or a mesh are built only there.
+    let pts = [sc.tether.root_anchor, sc.rover.start, sc.goal.position];
+    let (inf, ninf) = (f64::INFINITY, f64::NEG_INFINITY);
+    let (mut lo, mut hi) = ([inf, inf, ninf], [ninf, ninf, inf]);
+    for p in pts.iter().chain(&m.waypoints) {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k] - TETHER_REGION_MARGIN_M);
+            hi[k] = hi[k].max(p[k] + TETHER_REGION_MARGIN_M);
+        }
+    }
+    let world = MissionWorld::new(base, ledge, m.obstacles.clone()).with_tether_region((lo, hi));
     let mut rover = RoverParams::AXEL;
     rover.wheel_radius_m = cfg.rover.wheel_radius_m;
     rover.track_m = cfg.rover.axle_length_m;
@@ -909,8 +924,12 @@ impl<L: FlightLink> Sim<'_, L> {
                 p => p,
             };
             stepped = true;
+            #[cfg(feature = "sim")]
+            if self.truth.world.tether_edges().is_some() && self.rover.tether.taut.is_none() {
+                self.rep.truth_tether_fallbacks += 1;
+            }
             self.loc.moved(self.rover.driven_m - before);
-            if self.truth.world.advance(self.rover.driven_m) > 0 {
+            if self.truth.world.advance(self.rover.driven_m, &mut self.rover.tether) > 0 {
                 log::info!("a rock appeared after {:.2} m", self.rover.driven_m);
                 if self.judge.is_some() {
                     self.judge = Some(PhysicsJudge::new(&self.truth.world.truth(), self.truth.rover).map_err(|e| MissionError::Setup(format!("physics judge: {e}")))?);
@@ -1108,6 +1127,7 @@ pub fn run_mission_from(
         physics_fall: None,
         flight_warning: None,
         statics_overruled: 0,
+        truth_tether_fallbacks: 0,
         waypoints_reached: 0,
         scans_resent: 0,
     };

@@ -4,22 +4,26 @@
 //! tether prediction or stability LP (`firmware::tether`, `firmware::stability`): the judge is independent.
 //!
 //! ## True tether
-//! - **Ledge worlds** (tests 1-3 and the variants, no mission rocks): the general true tether
-//!   ([`crate::truth::taut::TautTether`], the physics judge's): the previous increment's tether continued to the
-//!   rover's new position ([`TautTether::update`]: contacts caught on the ledge's edges and the pole's, tightened,
-//!   released), so it follows its homotopy class through any wrap (the loop round the pole of Paton's test 3,
-//!   then over the lip); from scratch ([`TautTether::shortest`]) at the first increment or when the update cannot
-//!   go on. Only if the wrap edges cannot be built or neither gives a tether: [`crate::truth::tether`]'s closed
-//!   forms (straight, over the lip or the back edge, around the pole in either wrap direction, at most half a
-//!   turn), of which the candidate whose length and first contact are nearest the previous increment's is kept.
-//!   (The closed forms alone were the mission's truth before 2026-12-07: after the loop round the pole they fell
-//!   back to a candidate off the pole, and the payout jumped by metres; `host-sim/doc/mission.md`.)
-//! - **Every other world** (DEMs, the crater wall, meshes, or a ledge with mission rocks): the taut tether in the
-//!   vertical plane through the root and the rover: the upper convex hull of the terrain profile under the
-//!   segment (sampled every `PROFILE_STEP_M`), from the root to the rover. Its interior vertices are the
-//!   contacts. This is exact for a tether over edges, crests and rocks in that plane; **the gap**: it cannot wrap
-//!   round the side of a rock or pole (no lateral contacts), which the general true tether of the physical-truth
-//!   work will add.
+//! The general true tether ([`crate::truth::taut::TautTether`], the physics judge's) on every world: the terrain's
+//! convex edges (a ledge's lip and back edge, a pole's side, a DEM's or a mesh's creases, a crater wall's rim) and
+//! the present rocks' meshes, within the mission's tether region ([`MissionWorld::with_tether_region`]). Each
+//! increment continues the previous increment's tether to the rover's new position ([`TautTether::update`]:
+//! contacts caught, tightened, released), so it follows its homotopy class through any wrap (the loop round the
+//! pole of Paton's test 3, then over the lip; round the side of a rock). From scratch ([`TautTether::shortest`])
+//! at the first increment or when the update cannot go on. When a rock appears the edges are rebuilt and the
+//! contacts carried over ([`TrueTether::carry_over`]).
+//!
+//! Only if the wrap edges cannot be built or neither gives a tether (the rover outside the tether region):
+//! - on a ledge, [`crate::truth::tether`]'s closed forms (straight, over the lip or the back edge, around the pole
+//!   in either wrap direction, at most half a turn), of which the candidate whose length and first contact are
+//!   nearest the previous increment's is kept;
+//! - elsewhere, the taut tether in the vertical plane through the root and the rover: the upper convex hull of the
+//!   terrain profile under the segment (sampled every `PROFILE_STEP_M`), which cannot wrap round the side of
+//!   anything.
+//!
+//! (Before 2026-12-07 the closed forms were the ledges' truth and the profile every other world's: after the loop
+//! round the pole the closed forms fell back to a candidate off the pole and the payout jumped by metres, and the
+//! profile tether passed over the top of a rock a taut tether wraps round; `host-sim/doc/mission.md`.)
 //! - The tether ends at the axle centre (the boom's orifice is not modelled separately), as the flight software's
 //!   predicted payout does.
 //!
@@ -44,12 +48,15 @@ use firmware::geom::Real;
 
 use super::world::MissionWorld;
 #[cfg(feature = "sim")]
-use crate::truth::taut::{TautTether, SHORTEST_SAMPLE_M};
+use crate::truth::taut::{TautTether, WrapEdges, SHORTEST_SAMPLE_M};
 use crate::truth::tether::{true_tether as ledge_tether, Wrap};
 use crate::world::World;
 
 /// Sampling step of the terrain profile under the tether, metres.
 pub const PROFILE_STEP_M: f64 = 0.05;
+/// How far across the tether region reaches beyond the box of the root, the start, the waypoints and the goal,
+/// metres (`mission::run::truth_for`).
+pub const TETHER_REGION_MARGIN_M: f64 = 10.0;
 
 /// The true tether now.
 #[derive(Debug, Clone, PartialEq)]
@@ -58,7 +65,7 @@ pub struct TrueTether {
     pub contacts: Vec<P3>,
     /// Length from the root to the rover, metres.
     pub length_m: f64,
-    /// The general true tether's state (ledge worlds), which the next increment continues.
+    /// The general true tether's state, which the next increment continues.
     pub taut: Option<TautState>,
 }
 
@@ -73,6 +80,28 @@ impl TrueTether {
     /// The point the last straight piece leaves from.
     pub fn last_anchor(&self, root: P3) -> P3 {
         self.contacts.last().copied().unwrap_or(root)
+    }
+
+    /// The wrap edges changed from `old` to `new` (a rock appeared): the general tether's contacts move to the same
+    /// edges in `new` (found by their ends, which the rebuild reproduces exactly); when one is not there, the state
+    /// is dropped and the next increment starts from scratch.
+    #[cfg(feature = "sim")]
+    pub fn carry_over(&mut self, old: Option<&WrapEdges>, new: Option<&WrapEdges>) {
+        let carried = match (self.taut.take(), old, new) {
+            (Some(mut t), Some(old), Some(new)) => t
+                .contacts
+                .iter_mut()
+                .all(|c| match old.edges.get(c.edge).and_then(|e| new.find(e)) {
+                    Some(k) => {
+                        c.edge = k;
+                        true
+                    }
+                    None => false,
+                })
+                .then_some(t),
+            _ => None,
+        };
+        self.taut = carried;
     }
 }
 
@@ -120,13 +149,14 @@ pub fn profile_tether(world: &dyn World, root: P3, end: P3) -> TrueTether {
 /// The true tether from `root` to `end` (module docs); `prev` is the previous increment's, for continuity.
 pub fn true_tether(world: &MissionWorld, root: P3, end: P3, prev: Option<&TrueTether>) -> TrueTether {
     #[cfg(feature = "sim")]
-    if let (Some(edges), false) = (world.ledge_edges(), world.has_present_rocks()) {
+    if let Some(edges) = world.tether_edges() {
         // the general true tether: the previous increment's continued to `end`, else the shortest from scratch
         let continued = prev.and_then(|p| p.taut.clone()).and_then(|mut t| t.update(edges, end).ok().map(|()| t));
         if let Some(t) = continued.or_else(|| TautTether::shortest(edges, root, end, SHORTEST_SAMPLE_M).ok()) {
             let points = t.points(edges);
+            let length_m = points.windows(2).map(|p| dist(p[0], p[1])).sum();
             let contacts = points.get(1..points.len().saturating_sub(1)).unwrap_or(&[]).to_vec();
-            return TrueTether { contacts, length_m: t.length(edges), taut: Some(t) };
+            return TrueTether { contacts, length_m, taut: Some(t) };
         }
     }
     if let (Some(ledge), false) = (world.ledge(), world.has_present_rocks()) {
@@ -271,13 +301,21 @@ mod tests {
         assert!((straight.length_m - dist(root, [-1.5, 0.0, 4.35])).abs() < 1e-9);
     }
 
+    /// Ledge test 3's world with the general true tether built over all of it.
+    fn ledge3_world() -> MissionWorld {
+        let base: Box<dyn crate::world::World> = Box::new(LedgeWorld::with_pole());
+        let b = base.bounds();
+        let f = |v: firmware::geom::Vec3| [f64::from(v.x), f64::from(v.y), f64::from(v.z)];
+        let region = (f(b.min), f(b.max));
+        MissionWorld::new(base, Some(LedgeWorld::with_pole()), Vec::new()).with_tether_region(region)
+    }
+
     /// A rover passing behind the test-3 pole from its -y side, a few centimetres past the root-pole line and back:
     /// there both wrap directions have (nearly) the same length, and length continuity alone let the tether jump to
     /// the pole's other side (through the pole). It stays on the side it came from, and comes off the pole again.
     #[test]
     fn the_tether_behind_the_pole_stays_on_the_side_it_came_from() {
-        let base: Box<dyn crate::world::World> = Box::new(LedgeWorld::with_pole());
-        let world = MissionWorld::new(base, Some(LedgeWorld::with_pole()), Vec::new());
+        let world = ledge3_world();
         let root = crate::world::ledge::ROOT_ANCHOR_TEST2;
         let path = [[-3.6, -0.8], [-3.9, -0.3], [-4.0, -0.05], [-4.0, 0.0], [-4.0, 0.03], [-4.0, 0.06], [-3.95, -0.2], [-3.9, -0.45], [-3.8, -0.9]];
         let mut prev: Option<TrueTether> = None;
@@ -299,8 +337,7 @@ mod tests {
     /// metres there (payout 12 -> 7.5 m in one 0.2 s reading).
     #[test]
     fn the_tether_stays_wrapped_round_the_pole_through_the_whole_loop() {
-        let base: Box<dyn crate::world::World> = Box::new(LedgeWorld::with_pole());
-        let world = MissionWorld::new(base, Some(LedgeWorld::with_pole()), Vec::new());
+        let world = ledge3_world();
         let root = crate::world::ledge::ROOT_ANCHOR_TEST2;
         let corners: [[f64; 2]; 8] = [[-1.5, 0.0], [-1.8, 1.1], [-3.7, 1.4], [-4.2, 0.0], [-3.7, -1.4], [-1.0, -1.2], [-0.3, -0.8], [0.6, -0.6]];
         let (pole, radius) = (crate::world::ledge::POLE_CENTRE_XY, crate::world::ledge::POLE_RADIUS_M);
@@ -331,6 +368,83 @@ mod tests {
         // round the back of the pole (its -x side, away from the root) from its +y side to its -y side
         let side = |sign: f64| on_pole.iter().any(|c| sign * (c[1] - pole[1]) > 0.8 * radius);
         assert!(side(1.0) && side(-1.0) && on_pole.iter().any(|c| c[0] < pole[0] - 0.8 * radius), "not wrapped: {t:?}");
+    }
+
+    /// The rim of a crater wall (rim at z = 1.5 m for x < 0) with a tall spherical rock (radius 1 m, centre on the
+    /// rim's surface at (-2, 0)) between a low root and the rover, and a small rock on the wall far from the tether
+    /// that appears after 1 m; the rocks listed with the late one first, so its appearance moves every edge of the
+    /// tall rock in the list.
+    fn rim_with_a_tall_rock() -> MissionWorld {
+        let params = crate::world::crater::CraterWallParams {
+            rim_height_m: 1.5,
+            wall_angle_deg: 35.0,
+            rim_length_m: 5.0,
+            floor_length_m: 7.0,
+            width_m: 8.0,
+            rocks: 0,
+            ..Default::default()
+        };
+        let base: Box<dyn World> = Box::new(crate::world::crater::CraterWall::new(params).expect("crater"));
+        use super::super::params::ObstacleSpec as Rock;
+        let rocks = vec![
+            Rock { centre: [2.0, 3.0, 0.3], radius_m: 0.2, appears_after_m: 1.0, visible: true },
+            Rock { centre: [-2.0, 0.0, 1.5], radius_m: 1.0, appears_after_m: 0.0, visible: true },
+        ];
+        let region = ([-5.0, -4.0, f64::NEG_INFINITY], [6.0, 4.0, f64::INFINITY]);
+        MissionWorld::new(base, None, rocks).with_tether_region(region)
+    }
+
+    /// The rover drives across behind a rock too tall for the tether to pass over (root 1.8 m, rock top 2.5 m):
+    /// the true tether is caught on the rock's side and stays there (the vertical-profile tether, the truth on such
+    /// worlds before, runs over the rock's top instead), the rock that appears meanwhile leaves it where it was,
+    /// and driving back unwraps it; its length never moves by more than the rover did.
+    #[test]
+    fn the_tether_wraps_round_the_side_of_a_tall_rock_and_unwraps() {
+        let mut world = rim_with_a_tall_rock();
+        let root = [-4.0, 0.0, 1.8];
+        let (centre, radius) = ([-2.0, 0.0, 1.5], 1.0);
+        let on_rock = |c: &P3| (dist(*c, centre) - radius).abs() < 0.05;
+        let mut prev: Option<TrueTether> = None;
+        let mut driven = 0.0;
+        let mut appeared = false;
+        let mut step = |world: &mut MissionWorld, prev: &mut Option<TrueTether>, y: f64| {
+            let end = [-0.5, y, 1.85];
+            let t = true_tether(world, root, end, prev.as_ref());
+            assert!(t.taut.is_some(), "the general tether fell back at y = {y}");
+            if let Some(p) = prev.as_ref() {
+                assert!((t.length_m - p.length_m).abs() <= 0.05 + 1e-3, "length jumped at y = {y}: {p:?} -> {t:?}");
+                driven += 0.05;
+            }
+            *prev = Some(t);
+            if let Some(t) = prev.as_mut() {
+                let before = t.clone();
+                if world.advance(driven, t) > 0 {
+                    // carried over to the rebuilt edges: the same points, on edges that moved in the list
+                    let (edges, taut) = (world.tether_edges().expect("edges"), t.taut.as_ref().expect("carried over"));
+                    let p = taut.points(edges);
+                    assert_eq!(p.get(1..p.len() - 1), Some(&before.contacts[..]), "{before:?} -> {t:?}");
+                    assert_ne!(taut.contacts, before.taut.as_ref().expect("taut").contacts, "the edges did not move");
+                    appeared = true;
+                }
+            }
+        };
+        for k in 0..=64 {
+            step(&mut world, &mut prev, -2.0 + 0.05 * f64::from(k));
+        }
+        assert!(world.rocks().all(|(_, p)| p), "the late rock did not appear");
+        let t = prev.clone().expect("a tether");
+        assert!(!t.contacts.is_empty() && t.contacts.iter().all(on_rock), "not caught on the rock: {t:?}");
+        // round the -y side (it rides up the sphere's flank, never over the 2.5 m top)
+        assert!(t.contacts.iter().all(|c| c[1] < -0.2 && c[2] < 2.4), "not round the rock's -y side: {t:?}");
+        let over = profile_tether(&world.truth(), root, [-0.5, 1.2, 1.85]);
+        assert!(over.contacts.iter().any(|c| c[2] > 1.95), "the profile tether should pass over the top: {over:?}");
+        assert!(t.length_m > dist(root, [-0.5, 1.2, 1.85]) + 0.3, "{t:?}");
+        for k in (0..64).rev() {
+            step(&mut world, &mut prev, -2.0 + 0.05 * f64::from(k));
+        }
+        assert!(appeared, "the late rock's appearance was not seen by the tether");
+        let back = prev.expect("a tether");
+        assert!(back.contacts.is_empty(), "back where it started the tether is straight again: {back:?}");
     }
 
     #[test]

@@ -11,51 +11,72 @@ use firmware::map::{DistanceField, DistanceQuery};
 
 use super::params::ObstacleSpec;
 #[cfg(feature = "sim")]
+use super::truth::TrueTether;
+#[cfg(feature = "sim")]
 use crate::truth::taut::WrapEdges;
 use crate::world::ledge::LedgeWorld;
 use crate::truth::solid::{ExactGeometry, Solid};
 use crate::world::{Aabb, World};
+
+/// The region the true tether's wrap edges are built in (min, max corners), metres.
+pub type TetherRegion = ([f64; 3], [f64; 3]);
 
 /// The scenario's terrain with the mission's rocks.
 pub struct MissionWorld {
     base: Box<dyn World>,
     /// The same terrain as an analytic ledge, when it is one (the closed-form true tether needs it).
     ledge: Option<LedgeWorld>,
-    /// The ledge's wrap edges for the general true tether ([`crate::truth::taut`]), built with the world (`None`
-    /// for other terrains, or when they cannot be built: the closed forms then stand alone).
+    /// Where the true tether's height-grid and mesh wrap edges are built: a DEM has millions of edges, and the
+    /// tether touches only those near the root and the rover.
     #[cfg(feature = "sim")]
-    ledge_edges: Option<WrapEdges>,
+    tether_region: TetherRegion,
+    /// The wrap edges of the terrain and the present rocks for the general true tether ([`crate::truth::taut`]),
+    /// rebuilt when a rock appears (`None` when they cannot be built: the closed forms and the profile then stand
+    /// alone).
+    #[cfg(feature = "sim")]
+    tether_edges: Option<WrapEdges>,
     rocks: Vec<ObstacleSpec>,
     present: Vec<bool>,
 }
 
 impl MissionWorld {
     /// Wraps `base`; `ledge` is the same world as a [`LedgeWorld`] when the scenario is a ledge. Rocks with
-    /// `appears_after_m = 0` are present at once.
+    /// `appears_after_m = 0` are present at once. No general true tether until [`MissionWorld::with_tether_region`].
     pub fn new(base: Box<dyn World>, ledge: Option<LedgeWorld>, rocks: Vec<ObstacleSpec>) -> Self {
         let present = rocks.iter().map(|r| r.appears_after_m <= 0.0).collect();
-        #[cfg(feature = "sim")]
-        let ledge_edges = ledge.as_ref().and_then(|l| {
-            let b = l.bounds();
-            let f = |v: Vec3| [f64::from(v.x), f64::from(v.y), f64::from(v.z)];
-            WrapEdges::new(&l.exact_geometry(), (f(b.min), f(b.max)))
-                .map_err(|e| log::warn!("mission truth: the ledge's wrap edges: {e}; the closed-form tethers stand alone"))
-                .ok()
-        });
         MissionWorld {
             base,
             ledge,
             #[cfg(feature = "sim")]
-            ledge_edges,
+            tether_region: ([0.0; 3], [0.0; 3]),
+            #[cfg(feature = "sim")]
+            tether_edges: None,
             rocks,
             present,
         }
     }
 
-    /// The analytic ledge's wrap edges for the general true tether, if the terrain is one.
+    /// The same world with the general true tether's wrap edges built in `region` (the height-grid and mesh edges
+    /// that touch it; prism, cylinder and rock edges are all kept).
     #[cfg(feature = "sim")]
-    pub fn ledge_edges(&self) -> Option<&WrapEdges> {
-        self.ledge_edges.as_ref()
+    #[must_use]
+    pub fn with_tether_region(mut self, region: TetherRegion) -> Self {
+        self.tether_region = region;
+        self.build_tether_edges();
+        self
+    }
+
+    #[cfg(feature = "sim")]
+    fn build_tether_edges(&mut self) {
+        self.tether_edges = WrapEdges::new(&self.exact_geometry_with(false), self.tether_region)
+            .map_err(|e| log::warn!("mission truth: the wrap edges: {e}; the closed forms and the profile stand alone"))
+            .ok();
+    }
+
+    /// The wrap edges of the terrain and the present rocks for the general true tether.
+    #[cfg(feature = "sim")]
+    pub fn tether_edges(&self) -> Option<&WrapEdges> {
+        self.tether_edges.as_ref()
     }
 
     /// The analytic ledge, if the terrain is one.
@@ -79,7 +100,7 @@ impl MissionWorld {
     }
 
     /// Makes the rocks whose `appears_after_m` has been driven present; returns how many appeared now.
-    pub fn advance(&mut self, driven_m: f64) -> usize {
+    fn appear(&mut self, driven_m: f64) -> usize {
         let mut n = 0;
         for (r, p) in self.rocks.iter().zip(self.present.iter_mut()) {
             if !*p && driven_m >= r.appears_after_m {
@@ -88,6 +109,25 @@ impl MissionWorld {
             }
         }
         n
+    }
+
+    /// Makes the rocks whose `appears_after_m` has been driven present; returns how many appeared now. The wrap
+    /// edges are rebuilt with them, and `tether`'s contacts carried over to the new edges.
+    #[cfg(feature = "sim")]
+    pub fn advance(&mut self, driven_m: f64, tether: &mut TrueTether) -> usize {
+        let n = self.appear(driven_m);
+        if n > 0 && self.tether_edges.is_some() {
+            let old = self.tether_edges.take();
+            self.build_tether_edges();
+            tether.carry_over(old.as_ref(), self.tether_edges.as_ref());
+        }
+        n
+    }
+
+    /// Makes the rocks whose `appears_after_m` has been driven present; returns how many appeared now.
+    #[cfg(not(feature = "sim"))]
+    pub fn advance(&mut self, driven_m: f64) -> usize {
+        self.appear(driven_m)
     }
 
     /// What the rover and the tether meet.
@@ -298,8 +338,9 @@ mod tests {
         assert!(w.sensed().height_at(3.0, 0.0).unwrap().abs() < 1e-5);
         // the late rock is absent until 2 m are driven
         assert!((w.truth().raycast(&above(5.0), &down, 5.0).unwrap() - 2.0).abs() < 1e-5);
-        assert_eq!(w.advance(1.0), 0);
-        assert_eq!(w.advance(2.5), 1);
+        let mut t = TrueTether { contacts: vec![], length_m: 0.0, taut: None };
+        assert_eq!(w.advance(1.0, &mut t), 0);
+        assert_eq!(w.advance(2.5, &mut t), 1);
         assert!((w.sensed().raycast(&above(5.0), &down, 5.0).unwrap() - 1.6).abs() < 1e-5);
         match w.truth().query(&Vec3::new(5.0, 0.0, 1.0)) {
             DistanceQuery::Known { distance, gradient } => {

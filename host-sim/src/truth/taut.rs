@@ -30,7 +30,7 @@
 //! 3. **release**: a contact the tether no longer presses into the edge (the sum of the unit vectors to its
 //!    neighbours points out of the edge's outward direction) is removed.
 //!
-//! [`TautTether::shortest`] starts a tether from scratch: the straight segment if free, otherwise Dijkstra over a
+//! [`TautTether::shortest`] starts a tether from scratch: the straight segment if free, otherwise A* over a
 //! visibility graph of points sampled along the wrap edges ([`SHORTEST_SAMPLE_M`] apart), then tightened.
 
 use core::cmp::Ordering;
@@ -254,6 +254,14 @@ impl WrapEdges {
         Ok(WrapEdges { edges, terrain, at_vertex })
     }
 
+    /// The index of the edge with the same ends as `e` (to the micrometre), if there is one.
+    pub fn find(&self, e: &WrapEdge) -> Option<usize> {
+        let (ka, kb) = (vertex_key(e.a), vertex_key(e.b));
+        let at_a = self.at_vertex.get(&ka)?;
+        let same = |k: usize| self.edges.get(k).is_some_and(|f| vertex_key(f.a) == ka && vertex_key(f.b) == kb);
+        at_a.iter().copied().find(|&k| same(k))
+    }
+
     /// True when the segment misses the terrain.
     pub fn free(&self, a: P3, b: P3) -> bool {
         self.terrain.segment_free(a, b)
@@ -312,6 +320,26 @@ fn segment_triangle_distance(p: P3, q: P3, a: P3, b: P3, c: P3) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
+/// The axis-aligned bounding box of `pts` (min, max corners).
+fn bounding_box(pts: &[P3]) -> (P3, P3) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in pts {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    (lo, hi)
+}
+
+/// The distance between two axis-aligned boxes (0 when they overlap): a lower bound of the distance between any
+/// two point sets inside them.
+fn box_gap(alo: P3, ahi: P3, blo: P3, bhi: P3) -> f64 {
+    let g: [f64; 3] = core::array::from_fn(|k| (blo[k] - ahi[k]).max(alo[k] - bhi[k]).max(0.0));
+    norm(g)
+}
+
 #[derive(PartialEq)]
 struct Item(f64, usize);
 impl Eq for Item {}
@@ -359,8 +387,8 @@ impl TautTether {
         Ok(t)
     }
 
-    /// Dijkstra over the visibility graph of root, end and points `sample_m` apart on every wrap edge: the
-    /// path's points and its contacts.
+    /// A* over the visibility graph of root, end and points `sample_m` apart on every wrap edge: the path's
+    /// points and its contacts.
     fn visibility_path(w: &WrapEdges, root: P3, end: P3, sample_m: f64) -> Result<(Vec<P3>, Vec<Contact>), TautError> {
         let mut nodes: Vec<(P3, Option<Contact>)> = vec![(root, None), (end, None)];
         for (k, e) in w.edges.iter().enumerate() {
@@ -375,9 +403,12 @@ impl TautTether {
         let mut prev = vec![usize::MAX; n];
         let mut done = vec![false; n];
         let mut heap = BinaryHeap::new();
+        // A*: the straight distance to the end is a consistent heuristic, so a node's first pop is its shortest
+        // distance, and only nodes near the shortest path are expanded (a DEM's edges are many).
+        let to_end: Vec<f64> = nodes.iter().map(|(p, _)| dist(*p, end)).collect();
         best[0] = 0.0;
-        heap.push(Item(0.0, 0));
-        while let Some(Item(d, i)) = heap.pop() {
+        heap.push(Item(to_end[0], 0));
+        while let Some(Item(_, i)) = heap.pop() {
             if done[i] {
                 continue;
             }
@@ -385,6 +416,7 @@ impl TautTether {
             if i == 1 {
                 break;
             }
+            let d = best[i];
             for j in 0..n {
                 if done[j] || j == i {
                     continue;
@@ -393,7 +425,7 @@ impl TautTether {
                 if nd < best[j] && w.free(nodes[i].0, nodes[j].0) {
                     best[j] = nd;
                     prev[j] = i;
-                    heap.push(Item(nd, j));
+                    heap.push(Item(nd + to_end[j], j));
                 }
             }
         }
@@ -479,11 +511,16 @@ impl TautTether {
             let mut best: Option<(f64, bool, Contact)> = None;
             // The edges of the segment's own ends cannot route round what blocks it.
             let own = [i.checked_sub(1).and_then(|j| self.contacts.get(j)).map(|c| c.edge), self.contacts.get(i).map(|c| c.edge)];
+            let (lo, hi) = bounding_box(&[a, b, swept]);
             for (k, e) in w.edges.iter().enumerate() {
                 if own.contains(&Some(k)) {
                     continue;
                 }
-                if segment_triangle_distance(e.a, e.b, a, b, swept) > CATCH_RADIUS_M {
+                // The boxes' gap bounds the distance from below: a cheap exact rejection before the sampled one.
+                let (elo, ehi) = bounding_box(&[e.a, e.b]);
+                if box_gap(lo, hi, elo, ehi) > CATCH_RADIUS_M
+                    || segment_triangle_distance(e.a, e.b, a, b, swept) > CATCH_RADIUS_M
+                {
                     continue;
                 }
                 let t = best_t(e, a, b);

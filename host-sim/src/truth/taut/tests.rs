@@ -71,7 +71,7 @@ fn shortest_matches_brute_force_among_rocks() {
     let (root, end) = ([0.0, 0.1, 1.2], [5.0, 0.0, 0.35]);
     assert!(!w.free(root, end));
     let t = TautTether::shortest(&w, root, end, SHORTEST_SAMPLE_M).expect("tether");
-    // Brute force: Dijkstra over points 4 cm apart on every edge, no tightening.
+    // Brute force: the shortest path (A*) over points 4 cm apart on every edge, no tightening.
     let brute = TautTether::shortest_untightened(&w, root, end, 0.04).expect("brute");
     let len = t.length(&w);
     assert!(len <= brute + 0.003, "{len} vs brute force {brute}");
