@@ -21,11 +21,8 @@
 //!   terrain profile under the segment (sampled every `PROFILE_STEP_M`), which cannot wrap round the side of
 //!   anything.
 //!
-//! (Before 2026-12-07 the closed forms were the ledges' truth and the profile every other world's: after the loop
-//! round the pole the closed forms fell back to a candidate off the pole and the payout jumped by metres, and the
-//! profile tether passed over the top of a rock a taut tether wraps round; `host-sim/doc/mission.md`.)
-//! - The tether ends at the axle centre (the boom's orifice is not modelled separately), as the flight software's
-//!   predicted payout does.
+//! The tether ends at the axle centre (the boom's orifice is not modelled separately), as the flight software's
+//! predicted payout does.
 //!
 //! ## Statics (the fall judge, interim)
 //! The rover is one rigid body of mass `m` on its settled pose (normal `n`: the settled pose's up axis), pulled
